@@ -1,0 +1,226 @@
+"""The PZT disk on its cable: the RC model of Eq. 5-6 and the calibration analysis.
+
+The disk (charge constant d33, free permittivity eps33^T, area A, height h)
+has the capacitance Cp = eps33^T A / h. In parallel with the cable
+capacitance Cc and the DAQ input resistance R it obeys
+
+.. math::  C \\dot V + V / R = d_{33} \\dot F, \\qquad C = C_p + C_c,
+
+Eq. 5 of the paper with the cable added to Cp, as the paper does in Sec.
+III-B. Compression is counted positive and produces a positive voltage (the
+paper's minus sign is the electrode polarity). The sinusoidal steady state is
+
+.. math::  H(j\\omega) = \\frac{d_{33}}{C} \\frac{j\\omega\\tau}{1 + j\\omega\\tau},\\quad \\tau = RC.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.constants import epsilon_0
+from scipy.signal import find_peaks, lfilter
+
+
+@dataclass(frozen=True)
+class SensorCircuit:
+    """PZT disk, cable and DAQ input.
+
+    Parameters
+    ----------
+    pzt_diameter_m, pzt_height_m : float
+        Disk diameter and height [m].
+    d33_C_per_N : float
+        Charge constant d33 [C/N].
+    eps33_T_rel : float
+        Relative permittivity at constant stress eps33^T / eps0 [-].
+    cable_length_m : float
+        Coaxial cable length [m].
+    cable_capacitance_F_per_m : float
+        Cable capacitance per length [F/m].
+    resistance_ohm : float
+        DAQ input resistance R [Ohm].
+    extra_capacitance_F : float
+        Capacitance across the electrodes beyond Cp and the cable [F].
+    """
+
+    pzt_diameter_m: float = 4.7e-3
+    pzt_height_m: float = 3.4e-3
+    d33_C_per_N: float = 400e-12
+    eps33_T_rel: float = 1800.0
+    cable_length_m: float = 2.0
+    cable_capacitance_F_per_m: float = 90e-12
+    resistance_ohm: float = 50e6
+    extra_capacitance_F: float = 0.0
+
+    @property
+    def area_m2(self) -> float:
+        return np.pi * self.pzt_diameter_m**2 / 4
+
+    @property
+    def pzt_capacitance_F(self) -> float:
+        """Cp = eps33^T A / h [F]."""
+        return self.eps33_T_rel * epsilon_0 * self.area_m2 / self.pzt_height_m
+
+    @property
+    def cable_capacitance_F(self) -> float:
+        return self.cable_capacitance_F_per_m * self.cable_length_m
+
+    @property
+    def capacitance_F(self) -> float:
+        """Total C = Cp + Ccable + extra [F]."""
+        return self.pzt_capacitance_F + self.cable_capacitance_F + self.extra_capacitance_F
+
+    @property
+    def tau_s(self) -> float:
+        """Time constant R C [s]."""
+        return self.resistance_ohm * self.capacitance_F
+
+    @property
+    def open_circuit_gain_V_per_N(self) -> float:
+        """d33 / C: the high-frequency (open-circuit) sensitivity [V/N]."""
+        return self.d33_C_per_N / self.capacitance_F
+
+    @property
+    def free_disk_gain_V_per_N(self) -> float:
+        """Eq. 3 without cable: h d33 / (eps33^T A) = d33 / Cp [V/N]."""
+        return self.d33_C_per_N / self.pzt_capacitance_F
+
+    def with_resistance(self, resistance_ohm: float) -> "SensorCircuit":
+        return replace(self, resistance_ohm=float(resistance_ohm))
+
+    @classmethod
+    def from_config(cls, sensor: dict, resistance_ohm: float) -> "SensorCircuit":
+        """Build from the validated ``sensor`` config section."""
+        return cls(
+            pzt_diameter_m=sensor["pzt_diameter_m"],
+            pzt_height_m=sensor["pzt_height_m"],
+            d33_C_per_N=sensor["d33_C_per_N"],
+            eps33_T_rel=sensor["eps33_T_rel"],
+            cable_length_m=sensor["cable_length_m"],
+            cable_capacitance_F_per_m=sensor["cable_capacitance_F_per_m"],
+            resistance_ohm=float(resistance_ohm),
+        )
+
+
+def rc_voltage(force_N: np.ndarray, dt_s: float, gain_V_per_N: float, tau_s: float) -> np.ndarray:
+    """Voltage of the first-order high-pass tau dV/dt + V = gain tau dF/dt.
+
+    Exact for a force that is piecewise linear between samples: on each step
+    dF/dt is the constant slope s_k and
+
+    .. math::  V_{k+1} = a V_k + g\\,\\frac{\\tau}{h}(1 - a)(F_{k+1} - F_k),\\quad a = e^{-h/\\tau}.
+
+    The system starts at rest (V_0 = 0) with the force at F_0.
+    """
+    f = np.asarray(force_N, dtype=float)
+    a = np.exp(-dt_s / tau_s)
+    b = gain_V_per_N * (tau_s / dt_s) * (-np.expm1(-dt_s / tau_s))
+    df = np.diff(f, prepend=f[0])
+    return lfilter([b], [1.0, -a], df)
+
+
+def circuit_voltage(force_N: np.ndarray, dt_s: float, circuit: SensorCircuit) -> np.ndarray:
+    """Voltage of ``circuit`` for the sampled force (Eq. 6, exact discretisation)."""
+    return rc_voltage(force_N, dt_s, circuit.open_circuit_gain_V_per_N, circuit.tau_s)
+
+
+def frequency_response(frequency_Hz: np.ndarray, circuit: SensorCircuit) -> np.ndarray:
+    """Complex V/F [V/N] of the RC model at the given frequencies."""
+    jwt = 2j * np.pi * np.asarray(frequency_Hz, dtype=float) * circuit.tau_s
+    return circuit.open_circuit_gain_V_per_N * jwt / (1 + jwt)
+
+
+# --------------------------------------------------------------------------- impulses
+
+
+@dataclass(frozen=True)
+class Impulse:
+    """One detected impulse: sample indices of its window and its peaks."""
+
+    start: int
+    stop: int
+    force_peak_index: int
+    voltage_peak_index: int
+    force_peak_N: float
+    voltage_peak_V: float
+
+    @property
+    def sensitivity_V_per_N(self) -> float:
+        return self.voltage_peak_V / self.force_peak_N
+
+
+def detect_impulses(
+    force_N: np.ndarray,
+    voltage_V: np.ndarray,
+    dt_s: float,
+    min_prominence_fraction: float = 0.2,
+    min_separation_s: float = 0.5,
+) -> list[Impulse]:
+    """Find the impulses of a calibration record.
+
+    Force peaks must rise above ``min_prominence_fraction`` of the record's
+    force range and lie ``min_separation_s`` apart. Each impulse's window runs
+    from the midpoint after the previous peak to the midpoint before the next,
+    and its voltage peak is the voltage maximum in that window.
+    """
+    f = np.asarray(force_N, dtype=float)
+    v = np.asarray(voltage_V, dtype=float)
+    span = float(np.ptp(f))
+    if span <= 0:
+        return []
+    peaks, _ = find_peaks(
+        f, prominence=min_prominence_fraction * span, distance=max(1, int(round(min_separation_s / dt_s)))
+    )
+    bounds = np.concatenate([[0], (peaks[:-1] + peaks[1:]) // 2, [len(f)]])
+    out = []
+    for k, p in enumerate(peaks):
+        lo, hi = int(bounds[k]), int(bounds[k + 1])
+        iv = lo + int(np.argmax(v[lo:hi]))
+        out.append(Impulse(lo, hi, int(p), iv, float(f[p]), float(v[iv])))
+    return out
+
+
+def polarity_votes(force_N: np.ndarray, voltage_V: np.ndarray, impulses: list[Impulse]) -> int:
+    """How many impulses have their largest voltage excursion negative.
+
+    With compression positive, the rising force of an impulse drives the
+    voltage positive; a record where most impulses swing negative has its
+    leads swapped.
+    """
+    v = np.asarray(voltage_V, dtype=float)
+    n = 0
+    for imp in impulses:
+        seg = v[imp.start : imp.stop]
+        if -seg.min() > seg.max():
+            n += 1
+    return n
+
+
+def sensitivity_summary(impulses: list[Impulse], time_s: np.ndarray) -> dict:
+    """Mean, standard deviation and 95% interval of the per-impulse sensitivity [V/N].
+
+    The interval is the Student-t interval of the mean.
+    """
+    from scipy.stats import t as student_t
+
+    s = np.array([imp.sensitivity_V_per_N for imp in impulses])
+    n = len(s)
+    mean = float(s.mean())
+    std = float(s.std(ddof=1)) if n > 1 else float("nan")
+    half = float(student_t.ppf(0.975, n - 1) * std / np.sqrt(n)) if n > 1 else float("nan")
+    return {
+        "sensitivity_V_per_N": mean,
+        "sensitivity_std_V_per_N": std,
+        "sensitivity_ci95_V_per_N": [mean - half, mean + half],
+        "n_impulses": n,
+        "impulses": [
+            {
+                "time_force_peak_s": float(time_s[imp.force_peak_index]),
+                "force_peak_N": imp.force_peak_N,
+                "voltage_peak_V": imp.voltage_peak_V,
+                "sensitivity_V_per_N": imp.sensitivity_V_per_N,
+            }
+            for imp in impulses
+        ],
+    }

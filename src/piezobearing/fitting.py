@@ -1,0 +1,135 @@
+"""Bounded nonlinear least squares with parameter objects and a fit report.
+
+In the spirit of lmfit: each free parameter has a value, bounds, a unit and a
+scale (``log`` for quantities that span decades, such as a resistance). The
+fit runs in the internal coordinates (log10 for ``log`` parameters), and the
+covariance from the Jacobian is carried back to the physical values.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Sequence
+
+import numpy as np
+from scipy.optimize import least_squares
+from scipy.stats import t as student_t
+
+
+@dataclass(frozen=True)
+class Param:
+    """A model parameter.
+
+    Parameters
+    ----------
+    name : str
+        Identifier with a unit suffix, e.g. ``resistance_ohm``.
+    value : float
+        Initial (or fixed) value in physical units.
+    lower, upper : float
+        Bounds in physical units.
+    log : bool
+        Fit log10(value) instead of the value (requires lower > 0).
+    vary : bool
+        Whether the fit may change it.
+    """
+
+    name: str
+    value: float
+    lower: float = -np.inf
+    upper: float = np.inf
+    log: bool = False
+    vary: bool = True
+
+    def to_internal(self, x: float) -> float:
+        return float(np.log10(x)) if self.log else float(x)
+
+    def to_physical(self, u: float) -> float:
+        return float(10.0**u) if self.log else float(u)
+
+
+@dataclass
+class FitResult:
+    """Outcome of :func:`fit`: values, uncertainties and goodness of fit."""
+
+    values: dict[str, float]
+    stderr: dict[str, float]
+    ci95: dict[str, list[float]]
+    correlation: dict[str, dict[str, float]]
+    residual: np.ndarray = field(repr=False)
+    n_data: int = 0
+    n_free: int = 0
+    chi2: float = float("nan")
+    success: bool = True
+    message: str = ""
+
+    def report(self) -> dict:
+        """JSON-ready summary (no arrays)."""
+        return {
+            "values": self.values,
+            "stderr": self.stderr,
+            "ci95": self.ci95,
+            "correlation": self.correlation,
+            "n_data": self.n_data,
+            "n_free": self.n_free,
+            "chi2": self.chi2,
+            "success": self.success,
+            "message": self.message,
+        }
+
+
+def fit(
+    residual_fn: Callable[[dict[str, float]], np.ndarray],
+    params: Sequence[Param],
+    max_nfev: int | None = None,
+) -> FitResult:
+    """Minimise sum(residual_fn(values)**2) over the free parameters.
+
+    ``residual_fn`` takes a dict of physical values (free and fixed) and
+    returns the residual vector. The 95% intervals are Student-t intervals
+    from the Gauss-Newton covariance s^2 (J^T J)^-1 in internal coordinates,
+    mapped to physical units (asymmetric for ``log`` parameters); they assume
+    white residuals, which the diagnostics check.
+    """
+    free = [p for p in params if p.vary]
+    fixed = {p.name: float(p.value) for p in params if not p.vary}
+
+    def unpack(u: np.ndarray) -> dict[str, float]:
+        vals = dict(fixed)
+        vals.update({p.name: p.to_physical(ui) for p, ui in zip(free, u)})
+        return vals
+
+    if not free:
+        r = np.asarray(residual_fn(unpack(np.array([]))), dtype=float)
+        return FitResult(fixed, {}, {}, {}, r, r.size, 0, float(r @ r))
+
+    u0 = np.array([p.to_internal(p.value) for p in free])
+    lo = np.array([p.to_internal(p.lower) if np.isfinite(p.lower) else -np.inf for p in free])
+    hi = np.array([p.to_internal(p.upper) if np.isfinite(p.upper) else np.inf for p in free])
+    u0 = np.clip(u0, np.where(np.isfinite(lo), lo, u0), np.where(np.isfinite(hi), hi, u0))
+    sol = least_squares(lambda u: residual_fn(unpack(u)), u0, bounds=(lo, hi), x_scale="jac", max_nfev=max_nfev)
+    r = sol.fun
+    n, k = r.size, len(free)
+    dof = max(n - k, 1)
+    s2 = float(r @ r) / dof
+    jtj = sol.jac.T @ sol.jac
+    cov = np.linalg.pinv(jtj) * s2
+    sd = np.sqrt(np.clip(np.diag(cov), 0, None))
+    tq = float(student_t.ppf(0.975, dof))
+    values = unpack(sol.x)
+    stderr, ci95, corr = {}, {}, {}
+    for i, p in enumerate(free):
+        lo_i, hi_i = p.to_physical(sol.x[i] - tq * sd[i]), p.to_physical(sol.x[i] + tq * sd[i])
+        ci95[p.name] = [lo_i, hi_i]
+        # first-order physical standard error
+        stderr[p.name] = float(sd[i] * (np.log(10) * values[p.name] if p.log else 1.0))
+        corr[p.name] = {
+            q.name: float(cov[i, j] / (sd[i] * sd[j])) if sd[i] > 0 and sd[j] > 0 else float("nan")
+            for j, q in enumerate(free)
+        }
+    return FitResult(values, stderr, ci95, corr, r, n, k, float(r @ r), bool(sol.success), str(sol.message))
+
+
+def nrmse(residual: np.ndarray, measured: np.ndarray) -> float:
+    """rms(residual) / rms(measured)."""
+    return float(np.sqrt(np.mean(np.square(residual)) / np.mean(np.square(measured))))

@@ -1,0 +1,210 @@
+"""Material data of the paper and the one conversion the FEM needs.
+
+Every constant here comes from the paper (Table I, Eq. 7-9) unless its
+docstring says otherwise. Voigt orders:
+
+* datasheet / paper order: 11 22 33 23 13 12 (Eq. 8 has d15 on row 5 and
+  d24 on row 4, which is this order);
+* sfepy order: 11 22 33 12 13 23.
+
+The conversion between them lives in :func:`to_sfepy_voigt` and nowhere else.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.constants import epsilon_0
+
+#: Permutation that takes a datasheet-ordered Voigt index to sfepy's order.
+#: sfepy position k holds datasheet component ``_DATASHEET_TO_SFEPY[k]``.
+_DATASHEET_TO_SFEPY = np.array([0, 1, 2, 5, 4, 3])
+
+
+@dataclass(frozen=True)
+class IsotropicMaterial:
+    """Linear elastic isotropic solid.
+
+    Parameters
+    ----------
+    name : str
+    young_Pa : float
+        Young's modulus E [Pa].
+    poisson : float
+        Poisson's ratio nu [-].
+    density_kg_per_m3 : float
+        Mass density rho [kg/m^3].
+    """
+
+    name: str
+    young_Pa: float
+    poisson: float
+    density_kg_per_m3: float
+
+    @property
+    def lame(self) -> tuple[float, float]:
+        """Lamé constants (lambda, mu) [Pa]."""
+        e, nu = self.young_Pa, self.poisson
+        lam = e * nu / ((1 + nu) * (1 - 2 * nu))
+        mu = e / (2 * (1 + nu))
+        return lam, mu
+
+    def stiffness_voigt(self) -> np.ndarray:
+        """6x6 stiffness [Pa]; the same in every Voigt order."""
+        lam, mu = self.lame
+        c = np.zeros((6, 6))
+        c[:3, :3] = lam
+        c[np.arange(3), np.arange(3)] += 2 * mu
+        c[np.arange(3, 6), np.arange(3, 6)] = mu
+        return c
+
+
+@dataclass(frozen=True)
+class PiezoMaterial:
+    """Poled piezoceramic in strain-charge form, datasheet Voigt order.
+
+    Parameters
+    ----------
+    name : str
+    c_E_Pa : ndarray (6, 6)
+        Stiffness at constant electric field [Pa], order 11 22 33 23 13 12.
+    d_C_per_N : ndarray (3, 6)
+        Piezoelectric charge constants d_ip [C/N], same order.
+    eps_T_F_per_m : ndarray (3, 3)
+        Permittivity at constant stress [F/m].
+    density_kg_per_m3 : float
+        Mass density [kg/m^3].
+    """
+
+    name: str
+    c_E_Pa: np.ndarray = field(repr=False)
+    d_C_per_N: np.ndarray = field(repr=False)
+    eps_T_F_per_m: np.ndarray = field(repr=False)
+    density_kg_per_m3: float = 7700.0
+
+    @property
+    def d33_C_per_N(self) -> float:
+        return float(self.d_C_per_N[2, 2])
+
+    @property
+    def eps33_T_F_per_m(self) -> float:
+        return float(self.eps_T_F_per_m[2, 2])
+
+
+def to_sfepy_voigt(a: np.ndarray) -> np.ndarray:
+    """Reorder the Voigt axes of ``a`` from datasheet to sfepy order.
+
+    Works on a 6x6 stiffness (both axes) and on a 3x6 coupling matrix (last
+    axis). Shear components keep their engineering-strain scaling, which is
+    the same in both conventions.
+    """
+    a = np.asarray(a, dtype=float)
+    p = _DATASHEET_TO_SFEPY
+    if a.shape == (6, 6):
+        return a[np.ix_(p, p)]
+    if a.shape == (3, 6):
+        return a[:, p]
+    raise ValueError(f"expected a (6, 6) or (3, 6) Voigt array, got {a.shape}")
+
+
+@dataclass(frozen=True)
+class StressChargeForm:
+    """Piezoelectric constants in stress-charge form, sfepy Voigt order.
+
+    ``c_E_Pa`` (6, 6), ``e_C_per_m2`` (3, 6), ``eps_S_F_per_m`` (3, 3).
+    """
+
+    c_E_Pa: np.ndarray
+    e_C_per_m2: np.ndarray
+    eps_S_F_per_m: np.ndarray
+
+
+def stress_charge_form(pzt: PiezoMaterial) -> StressChargeForm:
+    """Convert strain-charge data (d, eps^T, c^E) to stress-charge (e, eps^S).
+
+    .. math::  e = d\\,c^E, \\qquad \\varepsilon^S = \\varepsilon^T - d\\,c^E d^T
+
+    The products are formed in the datasheet order and the result is then
+    reordered once to sfepy's order with :func:`to_sfepy_voigt`.
+    """
+    c, d = pzt.c_E_Pa, pzt.d_C_per_N
+    e = d @ c
+    eps_s = pzt.eps_T_F_per_m - d @ c @ d.T
+    if np.any(np.linalg.eigvalsh(eps_s) <= 0):
+        raise ValueError(f"{pzt.name}: eps^S is not positive definite; check d, c^E and eps^T")
+    return StressChargeForm(to_sfepy_voigt(c), to_sfepy_voigt(e), eps_s)
+
+
+def transverse_isotropy_report(c_E_Pa: np.ndarray, rtol: float = 0.02) -> dict:
+    """Check a datasheet-ordered stiffness for the symmetry of a poled ceramic.
+
+    A ceramic poled along 3 is transversely isotropic (class 6mm): c11 = c22,
+    c13 = c23, c44 = c55 and c66 = (c11 - c12) / 2. Returns each relation with
+    both sides and whether it holds within ``rtol``.
+    """
+    c = np.asarray(c_E_Pa, dtype=float)
+    rel = {
+        "c11=c22": (c[0, 0], c[1, 1]),
+        "c13=c23": (c[0, 2], c[1, 2]),
+        "c44=c55": (c[3, 3], c[4, 4]),
+        "c66=(c11-c12)/2": (c[5, 5], 0.5 * (c[0, 0] - c[0, 1])),
+        "symmetric": (float(np.abs(c - c.T).max()), 0.0),
+    }
+    out = {}
+    for name, (lhs, rhs) in rel.items():
+        scale = max(abs(lhs), abs(rhs), 1e-30) if name != "symmetric" else np.abs(c).max()
+        out[name] = {"lhs": float(lhs), "rhs": float(rhs), "holds": abs(lhs - rhs) <= rtol * scale}
+    return out
+
+
+def paper_pzt(c66_rule: str = "isotropy", density_kg_per_m3: float = 7700.0) -> PiezoMaterial:
+    """APC 850 as printed in the paper, Eq. 7-9.
+
+    Parameters
+    ----------
+    c66_rule : {"isotropy", "paper"}
+        The paper prints c66 = 2.12e11 Pa, ten times (c11 - c12)/2 = 0.21e11 Pa,
+        which a poled ceramic must have (see :func:`transverse_isotropy_report`).
+        ``"isotropy"`` (default) uses (c11 - c12)/2, reading the printed value
+        as a misplaced decimal point; ``"paper"`` keeps 2.12e11 Pa as printed.
+        c66 only enters in-plane shear, which an axial load hardly excites.
+    density_kg_per_m3 : float
+        The paper gives no density; 7700 kg/m^3 is the APC 850 datasheet value
+        (APC International, "Physical and piezoelectric properties of APC
+        materials").
+
+    Notes
+    -----
+    Eq. 7 writes eps0 as 8.85e-12 F/m; we use scipy's epsilon_0
+    (8.8541878128e-12 F/m), a 0.05% difference.
+    """
+    c = 1e11 * np.array(
+        [
+            [1.47, 1.05, 0.93, 0, 0, 0],
+            [1.05, 1.47, 0.93, 0, 0, 0],
+            [0.93, 0.93, 1.13, 0, 0, 0],
+            [0, 0, 0, 0.23, 0, 0],
+            [0, 0, 0, 0, 0.23, 0],
+            [0, 0, 0, 0, 0, 2.12],
+        ]
+    )
+    if c66_rule == "isotropy":
+        c[5, 5] = 0.5 * (c[0, 0] - c[0, 1])
+    elif c66_rule != "paper":
+        raise ValueError(f"c66_rule must be 'isotropy' or 'paper', got {c66_rule!r}")
+    d = 1e-12 * np.array(
+        [
+            [0, 0, 0, 0, 590, 0],
+            [0, 0, 0, 590, 0, 0],
+            [-175, -175, 400, 0, 0, 0],
+        ]
+    )
+    eps_t = 1800 * epsilon_0 * np.eye(3)
+    return PiezoMaterial("APC 850", c, d, eps_t, density_kg_per_m3)
+
+
+#: Table I of the paper.
+CAST_IRON = IsotropicMaterial("cast iron (housing)", 110e9, 0.28, 7200.0)
+STEEL = IsotropicMaterial("steel (outer ring)", 200e9, 0.30, 7800.0)
+ALUMINA = IsotropicMaterial("alumina (sensor protection disks)", 330e9, 0.22, 3900.0)
