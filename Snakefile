@@ -1,0 +1,20 @@
+# piezobearing: rebuild every figure and number of the paper from code alone.
+# Stages live in workflow/rules/*.smk; physics lives in src/piezobearing.
+from snakemake.utils import min_version
+
+min_version("9.0")
+
+
+configfile: "config/config.yaml"
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/calibration.smk"
+include: "workflow/rules/figures.smk"
+include: "workflow/rules/scorecard.smk"
+
+
+rule all:
+    input:
+        final_outputs(),
+    default_target: True
