@@ -1,0 +1,1 @@
+"""Stage functions: one per Snakemake rule. They read inputs, call the physics, write outputs."""
