@@ -1,0 +1,81 @@
+# Calibration chain (paper Sec. II, III-B/C): synthetic or measured record,
+# impulse sensitivity (Fig. 5), resistance fit (Fig. 6), low-frequency
+# sensitivity (Fig. 8a).
+
+SCORECARD_PARTS.append(f"{RESULTS}/scorecard/calibration.csv")
+TARGETS.extend(
+    [
+        f"{RESULTS}/calibration/sensitivity.json",
+        f"{RESULTS}/calibration/resistance.json",
+        f"{RESULTS}/sensor/lowfreq.json",
+    ]
+)
+
+
+rule synthesize_calibration:
+    output:
+        csv=f"{RESULTS}/calibration/measurement.csv",
+    params:
+        seed=config["seed"],
+        sensor=config["sensor"],
+        synthesis=config["synthesis"],
+    log:
+        f"{RESULTS}/logs/synthesize_calibration.log",
+    script:
+        "../scripts/synthesize_calibration.py"
+
+
+rule extract_sensitivity:
+    input:
+        measurement=measurement_csv(),
+    output:
+        json=f"{RESULTS}/calibration/sensitivity.json",
+    params:
+        calibration=config["calibration"],
+    log:
+        f"{RESULTS}/logs/extract_sensitivity.log",
+    script:
+        "../scripts/extract_sensitivity.py"
+
+
+rule fit_resistance:
+    input:
+        measurement=measurement_csv(),
+    output:
+        json=f"{RESULTS}/calibration/resistance.json",
+        csv=f"{RESULTS}/calibration/fit.csv",
+    params:
+        sensor=config["sensor"],
+        calibration=config["calibration"],
+    log:
+        f"{RESULTS}/logs/fit_resistance.log",
+    script:
+        "../scripts/fit_resistance.py"
+
+
+rule lowfreq_sensitivity:
+    input:
+        resistance=f"{RESULTS}/calibration/resistance.json",
+    output:
+        json=f"{RESULTS}/sensor/lowfreq.json",
+        csv=f"{RESULTS}/sensor/lowfreq.csv",
+    params:
+        sensor=config["sensor"],
+        lowfreq=config["lowfreq"],
+    log:
+        f"{RESULTS}/logs/lowfreq_sensitivity.log",
+    script:
+        "../scripts/lowfreq_sensitivity.py"
+
+
+rule scorecard_calibration:
+    input:
+        sensitivity=f"{RESULTS}/calibration/sensitivity.json",
+        resistance=f"{RESULTS}/calibration/resistance.json",
+        lowfreq=f"{RESULTS}/sensor/lowfreq.json",
+    output:
+        csv=f"{RESULTS}/scorecard/calibration.csv",
+    log:
+        f"{RESULTS}/logs/scorecard_calibration.log",
+    script:
+        "../scripts/scorecard_calibration.py"

@@ -1,0 +1,49 @@
+# Paper figures of the calibration chain: one papermill notebook each; the
+# executed notebook is kept under results/notebooks/.
+
+FIGURES.extend([f"{RESULTS}/figures/{n}.png" for n in ("fig05", "fig06", "fig08a")])
+
+
+rule fig05:
+    input:
+        notebook="notebooks/fig05_calibration_impulses.ipynb",
+        measurement=measurement_csv(),
+        sensitivity=f"{RESULTS}/calibration/sensitivity.json",
+    output:
+        figure=f"{RESULTS}/figures/fig05.png",
+        notebook=f"{RESULTS}/notebooks/fig05_calibration_impulses.ipynb",
+    log:
+        f"{RESULTS}/logs/fig05.log",
+    shell:
+        "papermill {input.notebook} {output.notebook} -k python3 -p measurement {input.measurement}"
+        " -p sensitivity {input.sensitivity} -p figure {output.figure} > {log} 2>&1"
+
+
+rule fig06:
+    input:
+        notebook="notebooks/fig06_resistance_fit.ipynb",
+        fit=f"{RESULTS}/calibration/fit.csv",
+        resistance=f"{RESULTS}/calibration/resistance.json",
+    output:
+        figure=f"{RESULTS}/figures/fig06.png",
+        notebook=f"{RESULTS}/notebooks/fig06_resistance_fit.ipynb",
+    log:
+        f"{RESULTS}/logs/fig06.log",
+    shell:
+        "papermill {input.notebook} {output.notebook} -k python3 -p fit {input.fit}"
+        " -p resistance {input.resistance} -p figure {output.figure} > {log} 2>&1"
+
+
+rule fig08a:
+    input:
+        notebook="notebooks/fig08a_lowfreq_sensitivity.ipynb",
+        curve=f"{RESULTS}/sensor/lowfreq.csv",
+        lowfreq=f"{RESULTS}/sensor/lowfreq.json",
+    output:
+        figure=f"{RESULTS}/figures/fig08a.png",
+        notebook=f"{RESULTS}/notebooks/fig08a_lowfreq_sensitivity.ipynb",
+    log:
+        f"{RESULTS}/logs/fig08a.log",
+    shell:
+        "papermill {input.notebook} {output.notebook} -k python3 -p curve {input.curve}"
+        " -p lowfreq {input.lowfreq} -p figure {output.figure} > {log} 2>&1"

@@ -1,0 +1,7 @@
+import sys
+
+sys.stderr = open(snakemake.log[0], "w")
+
+from piezobearing.scorecard import assemble
+
+assemble(snakemake.input.parts, snakemake.output.csv, snakemake.output.md)
