@@ -181,18 +181,23 @@ def detect_impulses(
     return out
 
 
-def polarity_votes(force_N: np.ndarray, voltage_V: np.ndarray, impulses: list[Impulse]) -> int:
-    """How many impulses have their largest voltage excursion negative.
+def polarity_votes(force_N: np.ndarray, voltage_V: np.ndarray, dt_s: float, impulses: list[Impulse],
+                   circuit: SensorCircuit) -> int:
+    """How many impulses have a voltage anti-correlated with the RC model's prediction.
 
-    With compression positive, the rising force of an impulse drives the
-    voltage positive; a record where most impulses swing negative has its
-    leads swapped.
+    The prediction is :func:`circuit_voltage` of the measured force with the
+    nominal ``circuit``; whatever R it assumes, the predicted and the true
+    voltage correlate positively within an impulse when the leads are right
+    (compression positive), so a record where most impulses correlate
+    negatively has its polarity inverted. Comparing the positive and negative
+    swings instead would misfire on presses released faster than applied.
     """
     v = np.asarray(voltage_V, dtype=float)
+    pred = circuit_voltage(force_N, dt_s, circuit)
     n = 0
     for imp in impulses:
-        seg = v[imp.start : imp.stop]
-        if -seg.min() > seg.max():
+        a, b = pred[imp.start : imp.stop], v[imp.start : imp.stop]
+        if np.dot(a - a.mean(), b - b.mean()) < 0:
             n += 1
     return n
 

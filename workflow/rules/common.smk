@@ -3,6 +3,8 @@
 # Each stage's .smk file registers what `rule all` must build by appending to
 # FIGURES, SCORECARD_PARTS and TARGETS; the lists are read lazily, after every
 # include, so adding a stage is adding one .smk file and its include line.
+import sys
+
 from snakemake.utils import validate
 
 
@@ -26,3 +28,20 @@ def final_outputs():
         + TARGETS
         + [f"{RESULTS}/scorecard.md", f"{RESULTS}/scorecard.csv"]
     )
+
+
+def check_measurement():
+    """Stop before any job runs when the configured measurement cannot be used (one line, no traceback)."""
+    if not config["calibration"]["measurement"]:
+        return
+    from piezobearing.io import MeasurementError
+    from piezobearing.stages.calibration import load_record
+
+    try:
+        load_record(config["calibration"]["measurement"], config)
+    except MeasurementError as e:
+        print(f"piezobearing: {e}", file=sys.stderr)
+        sys.exit(1)
+
+
+check_measurement()

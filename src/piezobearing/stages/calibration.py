@@ -55,11 +55,12 @@ def load_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]
             f"{path}: column force_N: {len(imps)} impulse(s) found, at least 2 are needed; record more presses "
             "or lower calibration.min_prominence_fraction / min_separation_s"
         )
-    neg = cal.polarity_votes(m.force_N, m.voltage_V, imps)
+    nominal = nominal_circuit(config, c["initial_resistance_ohm"])
+    neg = cal.polarity_votes(m.force_N, m.voltage_V, m.dt_s, imps, nominal)
     if neg > len(imps) / 2:
         raise MeasurementError(
-            f"{path}: column voltage_V: polarity inverted ({neg} of {len(imps)} impulses swing negative under "
-            "compression); swap the electrode leads or negate voltage_V in a copy of the file"
+            f"{path}: column voltage_V: polarity inverted (in {neg} of {len(imps)} impulses the voltage "
+            "is anti-correlated with the model's); swap the electrode leads or negate voltage_V in a copy of the file"
         )
     return m, imps
 

@@ -1,0 +1,530 @@
+"""From sensor voltage to fault detection (paper Sec. IV, Fig. 9 and 10).
+
+The chain for one record ``x`` (voltage [V], uniform step ``dt`` [s]):
+
+1. **Noise at a given SNR.** White Gaussian noise of variance
+   sigma^2 = P_s / 10^(SNR/10), with P_s = mean(x^2) the mean-square value
+   of the whole record (MATLAB's ``awgn(x, snr, 'measured')``); SNR in dB.
+2. **Whole periods.** The record is cut to the largest whole number m of
+   fault periods 1/f0, so the DFT bin spacing is f0/m and every harmonic
+   k f0 falls on bin k m (exactly when f0 dt is rational with the record,
+   as for the paper's dt = 1/(36 BPFO)).
+3. **Band.** Either a configured band or the kurtogram's: the band of a
+   1/3-binary filter bank (bandwidths Nyquist/{1.5, 2, 3, 4, 6, ...}, half
+   overlapping, none reaching down to 0 Hz, none narrower than a minimum
+   bandwidth) where the spectral kurtosis of the complex band signal z,
+   SK = <|z|^4> / <|z|^2>^2 - 2, is largest (Antoni & Randall 2006).
+   SK is 0 for Gaussian noise, -1 for one sinusoid, and large for an
+   impulse train: the band where the defect's impulses stand out most.
+4. **Envelope.** z is the analytic signal of x band-passed with the zero-phase
+   magnitude |H|^2 of a Butterworth band-pass (what ``sosfiltfilt`` does),
+   applied in the frequency domain on the whole-period record (no edge
+   transient: the record is one period of its periodic extension). The
+   envelope is |z|.
+5. **Envelope spectrum.** A(f) = 2 |DFT(|z| - mean |z|)| / N [V], single-sided.
+6. **Fault indicator.** For k = 1..K, r_k = A(k f0)^2 / mean A^2 over the
+   local floor (bins within ``floor_halfwidth`` f0 of k f0, except the
+   ``guard_bins`` next to any harmonic of f0). The indicator is
+   I = sum_k r_k; the fault is detected when I exceeds the threshold of a
+   constant-false-alarm-rate test on the noise floor (see
+   :func:`indicator_threshold`).
+
+Why a band-pass before the envelope: the healthy sensor force is itself
+periodic at BPFO (every roller passing the sensor gives a smooth load bump),
+so any BPFO line in the raw spectrum or in a broadband envelope fires for the
+healthy bearing too. The bumps are smooth, so their harmonics die out within
+a few multiples of BPFO; a defect adds short impulses whose spectrum is flat
+up to the Nyquist frequency. In a band above the bumps' harmonics the healthy
+signal is just noise (its envelope spectrum is flat), while the faulty one is
+an impulse train at BPFO (its envelope has lines at k BPFO).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import butter, sosfreqz
+from scipy.stats import f as f_dist
+
+#: Stable codes of the cases, used to derive independent noise streams.
+CASE_CODES = {"healthy": 0, "faulty": 1}
+
+
+# --------------------------------------------------------------------------- settings
+
+
+@dataclass(frozen=True)
+class EnvelopeSettings:
+    """How the band of the envelope is chosen.
+
+    Parameters
+    ----------
+    band_rule : str
+        ``"kurtogram"`` (largest spectral kurtosis of the filter bank) or
+        ``"fixed"`` (``band_Hz``).
+    band_Hz : tuple of float
+        The band [low, high] for ``band_rule = "fixed"`` [Hz].
+    min_bandwidth_Hz : float
+        Narrowest band of the kurtogram's filter bank [Hz].
+    filter_order : int
+        Order of the Butterworth band-pass (applied forward and backward) [-].
+    """
+
+    band_rule: str = "kurtogram"
+    band_Hz: tuple[float, float] = (500.0, 1200.0)
+    min_bandwidth_Hz: float = 300.0
+    filter_order: int = 4
+
+    @classmethod
+    def from_config(cls, sig: dict) -> "EnvelopeSettings":
+        return cls(
+            band_rule=sig["band_rule"],
+            band_Hz=tuple(sig["band_Hz"]),
+            min_bandwidth_Hz=sig["kurtogram_min_bandwidth_Hz"],
+            filter_order=sig["filter_order"],
+        )
+
+
+@dataclass(frozen=True)
+class IndicatorSettings:
+    """The fault indicator and its threshold.
+
+    Parameters
+    ----------
+    n_harmonics : int
+        Harmonics k = 1..K of the fault frequency summed in the indicator [-].
+    floor_halfwidth : float
+        Half-width of the local noise-floor window, as a fraction of the fault frequency [-].
+    guard_bins : int
+        Bins next to each harmonic of the fault frequency left out of the floor [-].
+    false_alarm_probability : float
+        Probability that noise alone exceeds the threshold [-].
+    """
+
+    n_harmonics: int = 3
+    floor_halfwidth: float = 0.5
+    guard_bins: int = 2
+    false_alarm_probability: float = 1e-3
+
+    @classmethod
+    def from_config(cls, sig: dict) -> "IndicatorSettings":
+        return cls(
+            n_harmonics=sig["n_harmonics"],
+            floor_halfwidth=sig["floor_halfwidth"],
+            guard_bins=sig["floor_guard_bins"],
+            false_alarm_probability=sig["false_alarm_probability"],
+        )
+
+
+# --------------------------------------------------------------------------- noise
+
+
+def signal_power_V2(x: np.ndarray) -> float:
+    """Mean-square value of the whole record, P_s = mean(x^2) [V^2]."""
+    x = np.asarray(x, dtype=float)
+    return float(np.mean(x * x))
+
+
+def noise_std_for_snr(x: np.ndarray, snr_dB: float) -> float:
+    """Standard deviation of white noise that gives ``snr_dB`` = 10 log10(P_s / sigma^2) [V]."""
+    return float(np.sqrt(signal_power_V2(x) / 10.0 ** (snr_dB / 10.0)))
+
+
+def noise_rng(master_seed: int, case: str, replicate: int) -> np.random.Generator:
+    """The noise generator of one record: independent streams per case and replicate."""
+    return np.random.default_rng([int(master_seed), 6, CASE_CODES[case], int(replicate)])
+
+
+def add_white_noise(x: np.ndarray, snr_dB: float, rng: np.random.Generator) -> tuple[np.ndarray, float]:
+    """Add white Gaussian noise at ``snr_dB`` (signal power of the whole record over noise power).
+
+    Returns
+    -------
+    noisy : ndarray
+        x + n [V].
+    sigma : float
+        Standard deviation of the added noise [V].
+    """
+    x = np.asarray(x, dtype=float)
+    sigma = noise_std_for_snr(x, snr_dB)
+    return x + sigma * rng.standard_normal(x.size), sigma
+
+
+# --------------------------------------------------------------------------- record length
+
+
+def whole_period_samples(n_samples: int, dt_s: float, f0_Hz: float) -> int:
+    """Number of samples spanning the largest whole number of periods 1/f0 in the record.
+
+    m = floor(n dt f0) periods take round(m / (f0 dt)) samples; the DFT of that
+    many samples has f0 on bin m to within |round(m/(f0 dt)) - m/(f0 dt)| f0 dt
+    of a bin.
+    """
+    per = 1.0 / (f0_Hz * dt_s)  # samples per period
+    m = int(np.floor(n_samples / per + 1e-9))
+    if m < 1:
+        raise ValueError(
+            f"record of {n_samples} samples ({n_samples * dt_s:.4g} s) is shorter than one fault period "
+            f"{1 / f0_Hz:.4g} s; simulate a longer record"
+        )
+    return min(n_samples, int(round(m * per)))
+
+
+# --------------------------------------------------------------------------- band-pass and envelope
+
+
+def band_gain(frequency_Hz: np.ndarray, fs_Hz: float, band_Hz: tuple[float, float], order: int) -> np.ndarray:
+    """Zero-phase gain |H(f)|^2 of a Butterworth band-pass (a high-pass if the band reaches Nyquist) [-]."""
+    nyq = fs_Hz / 2
+    lo, hi = float(band_Hz[0]), float(band_Hz[1])
+    if not 0 < lo < hi <= nyq * (1 + 1e-9):
+        raise ValueError(f"band {band_Hz} Hz must satisfy 0 < low < high <= Nyquist = {nyq:.6g} Hz")
+    if hi >= nyq * (1 - 1e-6):
+        sos = butter(order, lo, btype="highpass", fs=fs_Hz, output="sos")
+    else:
+        sos = butter(order, [lo, hi], btype="bandpass", fs=fs_Hz, output="sos")
+    _, h = sosfreqz(sos, worN=np.asarray(frequency_Hz, dtype=float), fs=fs_Hz)
+    return np.abs(h) ** 2
+
+
+def analytic_band_signal(
+    x: np.ndarray, dt_s: float, band_Hz: tuple[float, float], order: int = 4, spectrum: np.ndarray | None = None
+) -> np.ndarray:
+    """Analytic signal z of x band-passed by :func:`band_gain` (periodic extension of the record).
+
+    ``spectrum`` may pass ``numpy.fft.rfft(x)`` to save the transform when many
+    bands are tried on one record.
+    """
+    x = np.asarray(x, dtype=float)
+    n = x.size
+    X = np.fft.rfft(x) if spectrum is None else spectrum
+    f = np.fft.rfftfreq(n, dt_s)
+    Y = X * band_gain(f, 1.0 / dt_s, band_Hz, order)
+    Z = np.zeros(n, dtype=complex)
+    Z[: Y.size] = Y
+    Z[1 : (n + 1) // 2] *= 2.0  # positive frequencies doubled; DC and (even n) Nyquist kept once
+    return np.fft.ifft(Z)
+
+
+def spectral_kurtosis(z: np.ndarray) -> float:
+    """SK = <|z|^4> / <|z|^2>^2 - 2 of a complex band signal [-] (0 for Gaussian noise)."""
+    p = np.abs(z) ** 2
+    return float(np.mean(p * p) / np.mean(p) ** 2 - 2.0)
+
+
+def kurtogram_bands(fs_Hz: float, min_bandwidth_Hz: float) -> list[tuple[float, float]]:
+    """The filter bank of the kurtogram: bandwidths Nyquist/{1.5, 2, 3, 4, 6, 8, ...}, half overlapping.
+
+    Bands that would start at 0 Hz are left out (their envelope would carry
+    the low-frequency content itself, not a modulation).
+    """
+    nyq = fs_Hz / 2
+    bands = []
+    level = 0
+    while True:
+        div = (1.5 if level % 2 == 0 else 2.0) * 2 ** (level // 2)  # 1.5, 2, 3, 4, 6, 8, ...
+        bw = nyq / div
+        if bw < min_bandwidth_Hz * (1 - 1e-9):
+            break
+        j = 1
+        while j * bw / 2 + bw <= nyq * (1 + 1e-9):
+            bands.append((j * bw / 2, min(j * bw / 2 + bw, nyq)))
+            j += 1
+        level += 1
+    if not bands:
+        raise ValueError(
+            f"kurtogram: no band of width >= {min_bandwidth_Hz} Hz fits below Nyquist {nyq:.6g} Hz; "
+            "lower signals.kurtogram_min_bandwidth_Hz"
+        )
+    return bands
+
+
+@dataclass(frozen=True)
+class Kurtogram:
+    """Spectral kurtosis of each band of the filter bank.
+
+    Attributes
+    ----------
+    low_Hz, high_Hz : ndarray
+        Band edges [Hz].
+    kurtosis : ndarray
+        Spectral kurtosis of the band signal [-].
+    """
+
+    low_Hz: np.ndarray
+    high_Hz: np.ndarray
+    kurtosis: np.ndarray
+
+    @property
+    def best_band_Hz(self) -> tuple[float, float]:
+        i = int(np.argmax(self.kurtosis))
+        return float(self.low_Hz[i]), float(self.high_Hz[i])
+
+
+def kurtogram(x: np.ndarray, dt_s: float, min_bandwidth_Hz: float, order: int = 4) -> Kurtogram:
+    """Spectral kurtosis over the filter bank of :func:`kurtogram_bands`."""
+    X = np.fft.rfft(np.asarray(x, dtype=float))
+    bands = kurtogram_bands(1.0 / dt_s, min_bandwidth_Hz)
+    sk = [spectral_kurtosis(analytic_band_signal(x, dt_s, b, order, spectrum=X)) for b in bands]
+    lo, hi = np.array(bands).T
+    return Kurtogram(lo, hi, np.array(sk))
+
+
+def choose_band(x: np.ndarray, dt_s: float, settings: EnvelopeSettings) -> tuple[tuple[float, float], Kurtogram | None]:
+    """The band of the envelope by the configured rule, and the kurtogram if it was used."""
+    if settings.band_rule == "fixed":
+        return (float(settings.band_Hz[0]), float(settings.band_Hz[1])), None
+    if settings.band_rule == "kurtogram":
+        kg = kurtogram(x, dt_s, settings.min_bandwidth_Hz, settings.filter_order)
+        return kg.best_band_Hz, kg
+    raise ValueError(f"signals.band_rule: unknown rule '{settings.band_rule}'; use 'kurtogram' or 'fixed'")
+
+
+@dataclass(frozen=True)
+class EnvelopeSpectrum:
+    """Single-sided amplitude spectrum of the envelope.
+
+    Attributes
+    ----------
+    frequency_Hz : ndarray
+        Frequencies, spacing 1 / (N dt) [Hz].
+    amplitude_V : ndarray
+        Amplitude of the envelope's (mean-removed) sinusoidal components [V].
+    band_Hz : tuple of float
+        The band-pass before the envelope [Hz].
+    n_samples : int
+        Samples of the analysed record [-].
+    """
+
+    frequency_Hz: np.ndarray
+    amplitude_V: np.ndarray
+    band_Hz: tuple[float, float]
+    n_samples: int
+
+    @property
+    def resolution_Hz(self) -> float:
+        return float(self.frequency_Hz[1] - self.frequency_Hz[0])
+
+
+def envelope(x: np.ndarray, dt_s: float, band_Hz: tuple[float, float], order: int = 4) -> np.ndarray:
+    """Hilbert envelope |z| of x in the band [V]."""
+    return np.abs(analytic_band_signal(x, dt_s, band_Hz, order))
+
+
+def envelope_spectrum(x: np.ndarray, dt_s: float, band_Hz: tuple[float, float], order: int = 4) -> EnvelopeSpectrum:
+    """Band-pass, Hilbert envelope, amplitude spectrum 2|DFT(e - mean e)|/N of the whole record given."""
+    e = envelope(x, dt_s, band_Hz, order)
+    n = e.size
+    amp = 2.0 * np.abs(np.fft.rfft(e - e.mean())) / n
+    if n % 2 == 0:
+        amp[-1] /= 2.0  # the Nyquist bin is not mirrored
+    return EnvelopeSpectrum(np.fft.rfftfreq(n, dt_s), amp, (float(band_Hz[0]), float(band_Hz[1])), n)
+
+
+# --------------------------------------------------------------------------- indicator
+
+
+def indicator_threshold(false_alarm_probability: float, n_harmonics: int, n_floor_bins: int) -> float:
+    """Threshold of I = sum_k r_k for a given false-alarm probability.
+
+    Under noise alone each envelope-spectrum bin is, by the central limit
+    theorem over many envelope correlation lengths, a circular complex
+    Gaussian: A^2 is exponential about the local mean power, and the mean of
+    M floor bins is Gamma(M)/M distributed. With one common floor estimate,
+    I = sum_k X_k / Y is exactly K F(2K, 2M); with a separate floor per
+    harmonic (independent denominators) the tail of I is lighter, so
+    K F_{1-pfa}(2K, 2M), with M the smallest floor count, is a conservative
+    threshold (the false-alarm rate is at most ``false_alarm_probability``).
+    """
+    if not 0 < false_alarm_probability < 1:
+        raise ValueError("signals.false_alarm_probability must lie in (0, 1)")
+    return float(n_harmonics * f_dist.isf(false_alarm_probability, 2 * n_harmonics, 2 * n_floor_bins))
+
+
+def harmonic_ratios(spec: EnvelopeSpectrum, f0_Hz: float, settings: IndicatorSettings) -> list[dict]:
+    """Envelope amplitude at k f0 over the local noise floor, k = 1..K.
+
+    Each entry: k, frequency_Hz (of the bin), bin_offset (distance of k f0
+    from the bin, in bins), amplitude_V, floor_V (root-mean-square amplitude
+    of the floor bins), ratio (power ratio r_k = A^2 / floor^2), ratio_dB,
+    n_floor_bins.
+    """
+    f, a = spec.frequency_Hz, spec.amplitude_V
+    df = spec.resolution_Hz
+    g = settings.guard_bins
+    near_harmonic = np.zeros(f.size, dtype=bool)
+    kmax = int(f[-1] / f0_Hz) + 1
+    for j in range(1, kmax + 1):
+        near_harmonic |= np.abs(f - j * f0_Hz) <= (g + 0.5) * df
+    out = []
+    for k in range(1, settings.n_harmonics + 1):
+        fk = k * f0_Hz
+        i = int(round(fk / df))
+        if i >= f.size - 1:
+            raise ValueError(
+                f"harmonic {k} of {f0_Hz:.6g} Hz lies above the spectrum's top {f[-1]:.6g} Hz; "
+                "lower signals.n_harmonics"
+            )
+        win = (np.abs(f - fk) <= settings.floor_halfwidth * f0_Hz) & ~near_harmonic & (f > 0)
+        nfl = int(win.sum())
+        if nfl < 4:
+            raise ValueError(
+                f"only {nfl} noise-floor bins around {fk:.6g} Hz; lengthen the record or widen "
+                "signals.floor_halfwidth"
+            )
+        floor = float(np.sqrt(np.mean(a[win] ** 2)))
+        r = float(a[i] ** 2 / floor**2) if floor > 0 else float("inf")
+        out.append(
+            {
+                "k": k,
+                "frequency_Hz": float(f[i]),
+                "bin_offset": float(fk / df - i),
+                "amplitude_V": float(a[i]),
+                "floor_V": floor,
+                "ratio": r,
+                "ratio_dB": float(10 * np.log10(r)) if r > 0 else float("-inf"),
+                "n_floor_bins": nfl,
+            }
+        )
+    return out
+
+
+def fault_indicator(spec: EnvelopeSpectrum, f0_Hz: float, settings: IndicatorSettings) -> dict:
+    """The indicator I = sum_k r_k, its threshold and the decision (see the module docstring)."""
+    harm = harmonic_ratios(spec, f0_Hz, settings)
+    value = float(sum(h["ratio"] for h in harm))
+    m = min(h["n_floor_bins"] for h in harm)
+    thr = indicator_threshold(settings.false_alarm_probability, settings.n_harmonics, m)
+    return {
+        "fault_frequency_Hz": float(f0_Hz),
+        "harmonics": harm,
+        "indicator": value,
+        "threshold": thr,
+        "detected": bool(value > thr),
+        "false_alarm_probability": settings.false_alarm_probability,
+        "band_Hz": list(spec.band_Hz),
+        "resolution_Hz": spec.resolution_Hz,
+    }
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """Everything :func:`analyse` found for one record."""
+
+    spectrum: EnvelopeSpectrum
+    kurtogram: Kurtogram | None
+    result: dict
+
+
+def analyse(
+    x: np.ndarray, dt_s: float, f0_Hz: float, envelope_settings: EnvelopeSettings, indicator_settings: IndicatorSettings
+) -> Analysis:
+    """Whole periods, band, envelope spectrum and fault indicator of one record."""
+    n = whole_period_samples(len(x), dt_s, f0_Hz)
+    xw = np.asarray(x, dtype=float)[:n]
+    band, kg = choose_band(xw, dt_s, envelope_settings)
+    spec = envelope_spectrum(xw, dt_s, band, envelope_settings.filter_order)
+    return Analysis(spec, kg, fault_indicator(spec, f0_Hz, indicator_settings))
+
+
+# --------------------------------------------------------------------------- SNR study
+
+
+def snr_sweep(
+    voltage_V: np.ndarray,
+    dt_s: float,
+    f0_Hz: float,
+    case: str,
+    snr_dB: list[float],
+    n_seeds: int,
+    master_seed: int,
+    envelope_settings: EnvelopeSettings,
+    indicator_settings: IndicatorSettings,
+) -> list[dict]:
+    """Detection of one noiseless record over SNRs and noise seeds.
+
+    Replicate j uses the generator :func:`noise_rng` (master_seed, case, j)
+    at every SNR (common random numbers: the same noise shape, scaled), so
+    replicate 0 at the configured SNR is the record of the ``noisy`` stage.
+    """
+    rows = []
+    for j in range(n_seeds):
+        shape = noise_rng(master_seed, case, j).standard_normal(len(voltage_V))
+        for s in snr_dB:
+            y = voltage_V + noise_std_for_snr(voltage_V, s) * shape
+            r = analyse(y, dt_s, f0_Hz, envelope_settings, indicator_settings).result
+            rows.append(
+                {
+                    "case": case,
+                    "snr_dB": float(s),
+                    "seed": j,
+                    "band_low_Hz": r["band_Hz"][0],
+                    "band_high_Hz": r["band_Hz"][1],
+                    "indicator": r["indicator"],
+                    "threshold": r["threshold"],
+                    "detected": r["detected"],
+                    **{f"ratio_{h['k']}_dB": h["ratio_dB"] for h in r["harmonics"]},
+                }
+            )
+    return rows
+
+
+def detection_limit_dB(snr_dB: np.ndarray, rate: np.ndarray, required_rate: float) -> float:
+    """Lowest SNR of the grid from which upward the detection rate stays >= ``required_rate`` [dB].
+
+    NaN if even the highest SNR falls short.
+    """
+    order = np.argsort(snr_dB)
+    s, r = np.asarray(snr_dB)[order], np.asarray(rate)[order]
+    ok = r >= required_rate
+    if not ok[-1]:
+        return float("nan")
+    i = len(ok) - 1
+    while i > 0 and ok[i - 1]:
+        i -= 1
+    return float(s[i])
+
+
+# --------------------------------------------------------------------------- sensor model and events
+
+
+def fem_correction(frequency_Hz: np.ndarray, fem_V_per_N: np.ndarray, rc_V_per_N: np.ndarray, f_max_Hz: float) -> dict:
+    """Constant gain that carries the RC model over to the sensor FEM in the analysed band.
+
+    The ratio |H_FEM| / |H_RC| is taken at the FEM frequencies up to
+    ``f_max_Hz`` (the Nyquist frequency of the signal); if fewer than two lie
+    there, at the two lowest FEM frequencies. Returns the median ratio
+    ("factor") and its spread (min, max) over those frequencies, so a
+    frequency-dependent correction would show as a wide spread.
+    """
+    f = np.asarray(frequency_Hz, dtype=float)
+    ratio = np.abs(np.asarray(fem_V_per_N, dtype=float)) / np.abs(np.asarray(rc_V_per_N))
+    sel = f <= f_max_Hz
+    if sel.sum() < 2:
+        sel = np.zeros(f.size, dtype=bool)
+        sel[np.argsort(f)[:2]] = True
+    r = ratio[sel]
+    return {
+        "factor": float(np.median(r)),
+        "min": float(r.min()),
+        "max": float(r.max()),
+        "frequencies_Hz": [float(f[sel].min()), float(f[sel].max())],
+        "n_frequencies": int(sel.sum()),
+    }
+
+
+def defect_event_times(
+    faulty_V: np.ndarray, healthy_V: np.ndarray, dt_s: float, f0_Hz: float, t0_s: float = 0.0
+) -> np.ndarray:
+    """Times of the defect impulses: per fault period, the largest |faulty - healthy| [s].
+
+    Both records must share their time base (same start and roller positions);
+    the difference is then the defect's own contribution.
+    """
+    d = np.abs(np.asarray(faulty_V, dtype=float) - np.asarray(healthy_V, dtype=float))
+    per = 1.0 / (f0_Hz * dt_s)
+    m = int(np.floor(d.size / per + 1e-9))
+    edges = np.round(np.arange(m + 1) * per).astype(int)
+    idx = [a + int(np.argmax(d[a:b])) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+    return t0_s + np.array(idx) * dt_s
