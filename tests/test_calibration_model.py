@@ -63,4 +63,5 @@ def test_paper_constants():
     # open circuit (R -> infinity): the voltage follows the force, V = (d33/C) F
     big = c.with_resistance(1e15)
     f = np.sin(np.linspace(0, 3, 300)) ** 2
-    np.testing.assert_allclose(circuit_voltage(f, 1e-3, big), c.open_circuit_gain_V_per_N * f, rtol=1e-5, atol=1e-9)
+    leak = c.open_circuit_gain_V_per_N * f.max() * 0.3 / big.tau_s  # discharge over the 0.3 s record
+    np.testing.assert_allclose(circuit_voltage(f, 1e-3, big), c.open_circuit_gain_V_per_N * f, atol=leak)
