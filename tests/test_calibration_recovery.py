@@ -35,7 +35,9 @@ def test_impulse_sensitivity_near_paper_by_construction(paper_record, paper_conf
     # The synthetic presses were chosen to land near 74.4 mV/N (see synthesis.py); 5% tolerance.
     c = paper_config["calibration"]
     m = paper_record
-    imps = cal.detect_impulses(m.force_N, m.voltage_V, m.dt_s, c["min_prominence_fraction"], c["min_separation_s"])
+    imps = cal.detect_impulses(
+        m.force_N, m.voltage_V, m.dt_s, c["min_prominence_fraction"], c["min_separation_s"]
+    )
     assert len(imps) == paper_config["synthesis"]["n_impulses"]
     s = cal.sensitivity_summary(imps, m.time_s)
     assert s["sensitivity_V_per_N"] == pytest.approx(74.4e-3, rel=0.05)

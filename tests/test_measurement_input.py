@@ -126,7 +126,11 @@ def test_workflow_stops_with_one_line_and_no_traceback(good, tmp_path):
     cfg.write_text(f"calibration:\n  measurement: {p}\n")
     snakemake = Path(sys.executable).with_name("snakemake")
     out = subprocess.run(
-        [str(snakemake), "-n", "--configfile", str(cfg)], cwd=REPO, capture_output=True, text=True, timeout=120
+        [str(snakemake), "-n", "--configfile", str(cfg)],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=120,
     )
     assert out.returncode != 0
     err = [line for line in out.stderr.splitlines() if line.startswith("piezobearing:")]

@@ -181,8 +181,9 @@ def detect_impulses(
     return out
 
 
-def polarity_votes(force_N: np.ndarray, voltage_V: np.ndarray, dt_s: float, impulses: list[Impulse],
-                   circuit: SensorCircuit) -> int:
+def polarity_votes(
+    force_N: np.ndarray, voltage_V: np.ndarray, dt_s: float, impulses: list[Impulse], circuit: SensorCircuit
+) -> int:
     """How many impulses have a voltage anti-correlated with the RC model's prediction.
 
     The prediction is :func:`circuit_voltage` of the measured force with the
@@ -241,8 +242,9 @@ def resistance_param(initial_ohm: float) -> "Param":
     return Param("resistance_ohm", float(initial_ohm), 1e3, 1e12, log=True)
 
 
-def fit_resistance(force_N: np.ndarray, voltage_V: np.ndarray, dt_s: float, circuit: SensorCircuit,
-                   initial_ohm: float):
+def fit_resistance(
+    force_N: np.ndarray, voltage_V: np.ndarray, dt_s: float, circuit: SensorCircuit, initial_ohm: float
+):
     """Fit R of Eq. 6 to a measured voltage by nonlinear least squares.
 
     The voltage is simulated from the measured force with

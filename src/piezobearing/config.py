@@ -42,7 +42,9 @@ def validate(config: dict, source: str = "config") -> dict:
     if errors:
         e = errors[0]
         key = ".".join(str(p) for p in e.path) or "(top level)"
-        raise ConfigError(f"{source}: key '{key}': {e.message}; see config/schema.yaml for the allowed values")
+        raise ConfigError(
+            f"{source}: key '{key}': {e.message}; see config/schema.yaml for the allowed values"
+        )
     return config
 
 

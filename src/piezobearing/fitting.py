@@ -96,7 +96,7 @@ def fit(
 
     def unpack(u: np.ndarray) -> dict[str, float]:
         vals = dict(fixed)
-        vals.update({p.name: p.to_physical(ui) for p, ui in zip(free, u)})
+        vals.update({p.name: p.to_physical(ui) for p, ui in zip(free, u, strict=True)})
         return vals
 
     if not free:
@@ -107,7 +107,9 @@ def fit(
     lo = np.array([p.to_internal(p.lower) if np.isfinite(p.lower) else -np.inf for p in free])
     hi = np.array([p.to_internal(p.upper) if np.isfinite(p.upper) else np.inf for p in free])
     u0 = np.clip(u0, np.where(np.isfinite(lo), lo, u0), np.where(np.isfinite(hi), hi, u0))
-    sol = least_squares(lambda u: residual_fn(unpack(u)), u0, bounds=(lo, hi), x_scale="jac", max_nfev=max_nfev)
+    sol = least_squares(
+        lambda u: residual_fn(unpack(u)), u0, bounds=(lo, hi), x_scale="jac", max_nfev=max_nfev
+    )
     r = sol.fun
     n, k = r.size, len(free)
     dof = max(n - k, 1)

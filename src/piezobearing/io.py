@@ -71,7 +71,9 @@ def read_measurement(path: str | Path, resample_to_uniform: bool = False) -> Mea
         raw = pd.read_csv(path, dtype=str, skipinitialspace=True)
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as e:
         first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-        raise MeasurementError(f"{path}: not a readable CSV ({first}); save it as comma-separated text") from None
+        raise MeasurementError(
+            f"{path}: not a readable CSV ({first}); save it as comma-separated text"
+        ) from None
     raw.columns = [str(c).strip() for c in raw.columns]
     missing = [c for c in COLUMNS if c not in raw.columns]
     if missing:

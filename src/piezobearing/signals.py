@@ -526,5 +526,5 @@ def defect_event_times(
     per = 1.0 / (f0_Hz * dt_s)
     m = int(np.floor(d.size / per + 1e-9))
     edges = np.round(np.arange(m + 1) * per).astype(int)
-    idx = [a + int(np.argmax(d[a:b])) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+    idx = [a + int(np.argmax(d[a:b])) for a, b in zip(edges[:-1], edges[1:], strict=True) if b > a]
     return t0_s + np.array(idx) * dt_s

@@ -15,12 +15,12 @@ TARGETS.extend(
 rule synthesize_calibration:
     output:
         csv=f"{RESULTS}/calibration/measurement.csv",
+    log:
+        f"{RESULTS}/logs/synthesize_calibration.log",
     params:
         seed=config["seed"],
         sensor=config["sensor"],
         synthesis=config["synthesis"],
-    log:
-        f"{RESULTS}/logs/synthesize_calibration.log",
     script:
         "../scripts/synthesize_calibration.py"
 
@@ -30,10 +30,10 @@ rule extract_sensitivity:
         measurement=measurement_csv(),
     output:
         json=f"{RESULTS}/calibration/sensitivity.json",
-    params:
-        calibration=config["calibration"],
     log:
         f"{RESULTS}/logs/extract_sensitivity.log",
+    params:
+        calibration=config["calibration"],
     script:
         "../scripts/extract_sensitivity.py"
 
@@ -44,11 +44,11 @@ rule fit_resistance:
     output:
         json=f"{RESULTS}/calibration/resistance.json",
         csv=f"{RESULTS}/calibration/fit.csv",
+    log:
+        f"{RESULTS}/logs/fit_resistance.log",
     params:
         sensor=config["sensor"],
         calibration=config["calibration"],
-    log:
-        f"{RESULTS}/logs/fit_resistance.log",
     script:
         "../scripts/fit_resistance.py"
 
@@ -59,11 +59,11 @@ rule lowfreq_sensitivity:
     output:
         json=f"{RESULTS}/sensor/lowfreq.json",
         csv=f"{RESULTS}/sensor/lowfreq.csv",
+    log:
+        f"{RESULTS}/logs/lowfreq_sensitivity.log",
     params:
         sensor=config["sensor"],
         lowfreq=config["lowfreq"],
-    log:
-        f"{RESULTS}/logs/lowfreq_sensitivity.log",
     script:
         "../scripts/lowfreq_sensitivity.py"
 

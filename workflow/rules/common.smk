@@ -7,7 +7,6 @@ import sys
 
 from snakemake.utils import validate
 
-
 validate(config, schema="../../config/schema.yaml")
 
 RESULTS = "results"
@@ -23,11 +22,7 @@ def measurement_csv():
 
 
 def final_outputs():
-    return (
-        FIGURES
-        + TARGETS
-        + [f"{RESULTS}/scorecard.md", f"{RESULTS}/scorecard.csv"]
-    )
+    return FIGURES + TARGETS + [f"{RESULTS}/scorecard.md", f"{RESULTS}/scorecard.csv"]
 
 
 def check_measurement():

@@ -18,9 +18,14 @@ def fig05_impulses(record: pd.DataFrame, sensitivity: dict):
             ax.axvspan(*imp["window_s"], color="0.5", alpha=0.06 if k % 2 else 0.12, lw=0)
         ax_f.plot(imp["time_force_peak_s"], imp["force_peak_N"], "v", color="C0", ms=5)
         ax_v.plot(imp["time_voltage_peak_s"], 1e3 * imp["voltage_peak_V"], "v", color="C1", ms=5)
-        ax_v.annotate(f"{1e3 * imp['sensitivity_V_per_N']:.0f}", (imp["time_voltage_peak_s"],
-                      1e3 * imp["voltage_peak_V"]), textcoords="offset points", xytext=(0, 6),
-                      ha="center", fontsize=7)
+        ax_v.annotate(
+            f"{1e3 * imp['sensitivity_V_per_N']:.0f}",
+            (imp["time_voltage_peak_s"], 1e3 * imp["voltage_peak_V"]),
+            textcoords="offset points",
+            xytext=(0, 6),
+            ha="center",
+            fontsize=7,
+        )
     s = sensitivity
     lo, hi = s["sensitivity_ci95_V_per_N"]
     ax_f.set_ylabel("force [N]")
@@ -35,7 +40,9 @@ def fig05_impulses(record: pd.DataFrame, sensitivity: dict):
 
 def fig06_fit(fit: pd.DataFrame, resistance: dict):
     """Measured and simulated voltage with the residual below (paper Fig. 6)."""
-    fig, (ax, ax_r) = plt.subplots(2, 1, sharex=True, figsize=(7.0, 4.8), gridspec_kw={"height_ratios": [3, 1]})
+    fig, (ax, ax_r) = plt.subplots(
+        2, 1, sharex=True, figsize=(7.0, 4.8), gridspec_kw={"height_ratios": [3, 1]}
+    )
     t = fit["time_s"]
     ax.plot(t, 1e3 * fit["voltage_V"], color="0.4", lw=0.8, label="measured")
     ax.plot(t, 1e3 * fit["simulated_voltage_V"], color="C1", lw=1.0, label="Eq. 6, fitted R")

@@ -49,7 +49,9 @@ def load_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]
     """
     c = config["calibration"]
     m = read_measurement(path, resample_to_uniform=c["resample_to_uniform"])
-    imps = cal.detect_impulses(m.force_N, m.voltage_V, m.dt_s, c["min_prominence_fraction"], c["min_separation_s"])
+    imps = cal.detect_impulses(
+        m.force_N, m.voltage_V, m.dt_s, c["min_prominence_fraction"], c["min_separation_s"]
+    )
     if len(imps) < 2:
         raise MeasurementError(
             f"{path}: column force_N: {len(imps)} impulse(s) found, at least 2 are needed; record more presses "
@@ -69,12 +71,14 @@ def extract_sensitivity(measurement_csv: str, out_json: str, config: dict) -> No
     """Peak voltage over peak force per impulse → results/calibration/sensitivity.json."""
     m, imps = load_record(measurement_csv, config)
     out = cal.sensitivity_summary(imps, m.time_s)
-    for d, imp in zip(out["impulses"], imps):
+    for d, imp in zip(out["impulses"], imps, strict=True):
         d.update(
             time_voltage_peak_s=float(m.time_s[imp.voltage_peak_index]),
             window_s=[float(m.time_s[imp.start]), float(m.time_s[imp.stop - 1])],
         )
-    out.update(source=m.source, sample_rate_Hz=m.sample_rate_Hz, config={"calibration": config["calibration"]})
+    out.update(
+        source=m.source, sample_rate_Hz=m.sample_rate_Hz, config={"calibration": config["calibration"]}
+    )
     write_json(out, out_json)
 
 
@@ -82,7 +86,9 @@ def fit_resistance(measurement_csv: str, out_json: str, out_csv: str, config: di
     """Fit R of Eq. 6 → resistance.json and the simulated voltage (fit.csv)."""
     m, _ = load_record(measurement_csv, config)
     circuit = nominal_circuit(config)
-    res = cal.fit_resistance(m.force_N, m.voltage_V, m.dt_s, circuit, config["calibration"]["initial_resistance_ohm"])
+    res = cal.fit_resistance(
+        m.force_N, m.voltage_V, m.dt_s, circuit, config["calibration"]["initial_resistance_ohm"]
+    )
     r = res.values["resistance_ohm"]
     fitted = circuit.with_resistance(r)
     sim = cal.circuit_voltage(m.force_N, m.dt_s, fitted)
@@ -149,7 +155,9 @@ PAPER = {
 }
 
 
-def scorecard(sensitivity_json: str, resistance_json: str, lowfreq_json: str, out_csv: str, config: dict) -> None:
+def scorecard(
+    sensitivity_json: str, resistance_json: str, lowfreq_json: str, out_csv: str, config: dict
+) -> None:
     """The calibration rows of the scorecard, with the arithmetic where the paper cannot hold."""
     sens, res, lf = read_json(sensitivity_json), read_json(resistance_json), read_json(lowfreq_json)
     synthetic = config["calibration"]["measurement"] is None
@@ -162,30 +170,65 @@ def scorecard(sensitivity_json: str, resistance_json: str, lowfreq_json: str, ou
     lo, hi = res["resistance_ci95_ohm"]
     rows = [
         Row(
-            "III-B", "impulse-peak sensitivity at ~0.5 Hz", PAPER["sensitivity_V_per_N"],
-            sens["sensitivity_V_per_N"], "V/N",
+            "III-B",
+            "impulse-peak sensitivity at ~0.5 Hz",
+            PAPER["sensitivity_V_per_N"],
+            sens["sensitivity_V_per_N"],
+            "V/N",
             "synthetic presses with rise times chosen so that (d33/C) tau pi/(2 T_r) is near 74 mV/N: "
-            "agreement by construction, not a prediction" if synthetic else f"measured: {sens['source']}",
+            "agreement by construction, not a prediction"
+            if synthetic
+            else f"measured: {sens['source']}",
         ),
         Row(
-            "III-B", "circuit resistance R (fitted)", PAPER["resistance_ohm"], res["resistance_ohm"], "Ohm",
+            "III-B",
+            "circuit resistance R (fitted)",
+            PAPER["resistance_ohm"],
+            res["resistance_ohm"],
+            "Ohm",
             f"least squares, 95% CI [{lo:.4g}, {hi:.4g}] Ohm, NRMSE {res['nrmse']:.3f}"
             + ("; the synthetic truth is 50 MOhm, so this checks recovery" if synthetic else ""),
         ),
-        Row("III-B", "cable capacitance", PAPER["cable_capacitance_F_per_m"],
-            config["sensor"]["cable_capacitance_F_per_m"], "F/m", "input (PCB-003 datasheet, as in the paper)"),
         Row(
-            "II", "PZT capacitance Cp = eps33^T A / h", None, c.pzt_capacitance_F, "F",
+            "III-B",
+            "cable capacitance",
+            PAPER["cable_capacitance_F_per_m"],
+            config["sensor"]["cable_capacitance_F_per_m"],
+            "F/m",
+            "input (PCB-003 datasheet, as in the paper)",
+        ),
+        Row(
+            "II",
+            "PZT capacitance Cp = eps33^T A / h",
+            None,
+            c.pzt_capacitance_F,
+            "F",
             f"not stated in the paper; with the 2 m cable C = {c.capacitance_F * 1e12:.1f} pF, "
             f"tau = RC = {c.tau_s * 1e3:.2f} ms, d33/C = {c.open_circuit_gain_V_per_N:.3f} V/N",
         ),
-        Row("III-C", "onset of linearity (deviation < 5%)", PAPER["linear_from_Hz"], lf["linear_from_Hz"], "Hz",
-            "deviation = relative change to the next sweep frequency; within 5% of the asymptote d33/C only "
-            f"from {lf['asymptote_within_threshold_from_Hz']:.1f} Hz"),
-        Row("III-C", "deviation threshold", PAPER["deviation_threshold"], lf["deviation_threshold"], "-", "input"),
         Row(
-            "III-C", "reference sensitivity at the onset", PAPER["reference_sensitivity_V_per_N"],
-            lf["reference_sensitivity_V_per_N"], "V/N",
+            "III-C",
+            "onset of linearity (deviation < 5%)",
+            PAPER["linear_from_Hz"],
+            lf["linear_from_Hz"],
+            "Hz",
+            "deviation = relative change to the next sweep frequency; within 5% of the asymptote d33/C only "
+            f"from {lf['asymptote_within_threshold_from_Hz']:.1f} Hz",
+        ),
+        Row(
+            "III-C",
+            "deviation threshold",
+            PAPER["deviation_threshold"],
+            lf["deviation_threshold"],
+            "-",
+            "input",
+        ),
+        Row(
+            "III-C",
+            "reference sensitivity at the onset",
+            PAPER["reference_sensitivity_V_per_N"],
+            lf["reference_sensitivity_V_per_N"],
+            "V/N",
             f"S(30 Hz) = d33/C x omega tau/sqrt(1+(omega tau)^2) = {c.open_circuit_gain_V_per_N:.3f} x {x:.3f}; "
             f"0.36 V/N would need C = {c_needed * 1e12:.0f} pF at the same tau, or R = {r_needed / 1e6:.1f} MOhm "
             "(and then the response would not be linear at 30 Hz): the paper's 0.36 V/N, 50 MOhm and "

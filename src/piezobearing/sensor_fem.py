@@ -1,0 +1,545 @@
+r"""The sensor stack in finite elements: sfepy matrices, scipy solves.
+
+Weak form (time-harmonic, :math:`e^{j\omega t}`), displacement :math:`u` on
+the whole stack, electric potential :math:`\phi` on the PZT only
+(:math:`T = c^E \varepsilon + e^T\nabla\phi`, :math:`D = e\,\varepsilon -
+\varepsilon^S \nabla\phi`):
+
+.. math::
+    \int_\Omega \varepsilon(v) : c : \varepsilon(u)
+    - \omega^2 \int_\Omega \rho\, v\cdot u
+    + \int_{\Omega_p} e_{kij}\varepsilon_{ij}(v)\nabla_k\phi
+    = \int_{\Gamma_F} v\cdot t ,
+
+    \int_{\Omega_p} e_{kij}\varepsilon_{ij}(u)\nabla_k q
+    - \int_{\Omega_p} \varepsilon^S_{kl}\nabla_k q \nabla_l\phi
+    = -\sum_{\rm electrodes} Q\, q|_{\rm electrode} ,
+
+assembled with sfepy's ``dw_lin_elastic``, ``dw_dot``, ``dw_piezo_coupling``
+and ``dw_diffusion`` into :math:`K, M, G, K_{\phi\phi}`. The top PZT face
+(the clamped side, the housing) is grounded, :math:`\phi = 0`; the bottom
+face is the hot electrode, one unknown potential :math:`V` shared by all its
+nodes. Its row is the electrode's full charge balance (piezoelectric and
+dielectric parts alike, because it is the weak form's own residual):
+
+.. math::
+    g^T u - k^T\phi_I - k_{EE} V = -Q, \qquad
+    -Q = \frac{Y(\omega)}{j\omega} V = \Big(C_{\rm cable} + \frac{1}{j\omega R}\Big) V ,
+
+with the measuring circuit's admittance :math:`Y = 1/R + j\omega C_{\rm cable}`
+(charge leaves the electrode through the circuit). Eliminating the interior
+potentials (no inertia, so exactly) gives the short-circuit stiffness
+:math:`K_s = K + G_I K_{II}^{-1} G_I^T`, the coupling vector
+:math:`b = g - G_I K_{II}^{-1}k` and the blocked capacitance
+:math:`c_0 = k_{EE} - k^T K_{II}^{-1} k`:
+
+.. math::
+    \Big(K_s - \omega^2 M + \frac{b\,b^T}{c_0 + Y/(j\omega)}\Big) u = f ,\qquad
+    V = \frac{b^T u}{c_0 + Y/(j\omega)} .
+
+The circuit is a rank-one update of the real short-circuit problem: open
+circuit is :math:`Y = 0`, short circuit :math:`V = 0`. With
+:math:`\alpha = b^T (K_s-\omega^2M)^{-1} f` and
+:math:`\beta = b^T (K_s-\omega^2M)^{-1} b`, Sherman-Morrison gives
+:math:`V = \alpha / (c_0 + \beta + Y/(j\omega))`; :math:`\alpha, \beta` come
+from a real modal reduction (short-circuit modes plus the two static
+vectors :math:`K_s^{-1}f, K_s^{-1}b`), which is exact at zero frequency.
+
+Only a quarter of the stack is meshed (:mod:`piezobearing.sensor_mesh`). The
+planes x = 0 and y = 0 carry symmetric (S: normal displacement zero,
+potential free) or antisymmetric (A: in-plane displacements and potential
+zero) conditions; SS holds every axisymmetric mode (all that a centred axial
+force excites), SA/AS the bending/rocking pairs, AA the torsion modes. In
+every family but SS the hot electrode's potential is forced to zero by the
+antisymmetry, so its short- and open-circuit frequencies coincide. All
+energies, charges and capacitances of the quarter are a quarter of the full
+stack's; the circuit admittance is scaled accordingly.
+
+The potential unknowns are scaled by :math:`s = \sqrt{\max K / \max K_{\phi\phi}}`
+(about 1e9) before any direct solve, since the two blocks differ by ~1e19.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from piezobearing.materials import IsotropicMaterial, StressChargeForm
+from piezobearing.sensor_mesh import GROUP_BOTTOM_DISK, GROUP_PZT, GROUP_TOP_DISK, StackMesh
+
+log = logging.getLogger(__name__)
+
+#: Fraction of the full stack represented by the quarter mesh.
+SECTOR_FRACTION = 0.25
+
+
+# --------------------------------------------------------------------------- assembly
+
+
+@dataclass(frozen=True)
+class StackMaterials:
+    """Material data the FEM needs.
+
+    ``pzt`` in stress-charge form (sfepy order), ``pzt_density_kg_per_m3``,
+    and the alumina of the two disks.
+    """
+
+    pzt: StressChargeForm
+    pzt_density_kg_per_m3: float
+    alumina: IsotropicMaterial
+
+
+@dataclass
+class Assembled:
+    """Unconstrained matrices of the quarter stack, sfepy's DOF order.
+
+    ``K`` (nu, nu) stiffness [N/m], ``M`` (nu, nu) mass [kg], ``G`` (nu, np)
+    piezoelectric coupling [C/m = N/V], ``Kpp`` (np, np) dielectric [F];
+    ``u_coors`` (nu/3, 3) displacement node coordinates (DOFs are
+    node-major: x, y, z of node 0, then node 1, ...), ``p_coors`` (np, 3)
+    potential node coordinates [m]; ``load`` (nu,) consistent nodal forces of
+    a unit total force on the load face of the full stack, i.e. 0.25 N on
+    the quarter, pointing into the stack [N].
+    """
+
+    K: sp.csr_matrix
+    M: sp.csr_matrix
+    G: sp.csr_matrix
+    Kpp: sp.csr_matrix
+    u_coors: np.ndarray
+    p_coors: np.ndarray
+    load: np.ndarray
+    mesh: StackMesh = field(repr=False)
+
+    @property
+    def n_u(self) -> int:
+        return self.K.shape[0]
+
+
+def _sfepy_quiet():
+    from sfepy.base.base import output
+
+    output.set_output(quiet=True)
+
+
+def assemble(mesh: StackMesh, mat: StackMaterials, order: int = 2, load_face: str = "bottom") -> Assembled:
+    """Assemble K, M, G, Kpp and the load vector with sfepy.
+
+    Parameters
+    ----------
+    mesh : StackMesh
+        Quarter hexahedral mesh (groups 1, 2, 3: bottom disk, PZT, top disk).
+    mat : StackMaterials
+    order : int
+        Lagrange approximation order of both fields (2: 27-node hexahedra).
+    load_face : {"bottom", "top"}
+        Face carrying the unit force (uniform traction), directed into the
+        body: +z on the bottom face, -z on the top face.
+    """
+    from sfepy.discrete import Equation, Equations, FieldVariable, Integral, Material, Problem
+    from sfepy.discrete.fem import FEDomain, Field, Mesh
+    from sfepy.terms import Term
+
+    _sfepy_quiet()
+    smesh = Mesh.from_data(
+        "stack", mesh.coors, None, [mesh.cells.astype(np.int32)], [mesh.groups.astype(np.int32)], ["3_8"]
+    )
+    domain = FEDomain("stack", smesh)
+    omega = domain.create_region("Omega", "all")
+    present = set(np.unique(mesh.groups))
+    regions = {
+        g: domain.create_region(f"G{g}", f"cells of group {g}")
+        for g in (GROUP_BOTTOM_DISK, GROUP_PZT, GROUP_TOP_DISK)
+        if g in present
+    }
+    zmin, zmax = mesh.coors[:, 2].min(), mesh.coors[:, 2].max()
+    tol = 1e-9 * (zmax - zmin)
+    if load_face == "bottom":
+        face = domain.create_region("LoadFace", f"vertices in (z < {zmin + tol:.15e})", "facet")
+        direction = 1.0
+    elif load_face == "top":
+        face = domain.create_region("LoadFace", f"vertices in (z > {zmax - tol:.15e})", "facet")
+        direction = -1.0
+    else:
+        raise ValueError(f"load_face must be 'bottom' or 'top', got {load_face!r}")
+
+    fu = Field.from_args("fu", np.float64, "vector", omega, approx_order=order)
+    fp = Field.from_args("fp", np.float64, "scalar", regions[GROUP_PZT], approx_order=order)
+    u = FieldVariable("u", "unknown", fu)
+    v = FieldVariable("v", "test", fu, primary_var_name="u")
+    p = FieldVariable("p", "unknown", fp)
+    q = FieldVariable("q", "test", fp, primary_var_name="p")
+    integral = Integral("i", order=2 * order)
+
+    alu = mat.alumina
+    m_alu = Material("alu", D=alu.stiffness_voigt(), rho=alu.density_kg_per_m3)
+    m_pzt = Material(
+        "pzt",
+        D=mat.pzt.c_E_Pa,
+        rho=mat.pzt_density_kg_per_m3,
+        e=mat.pzt.e_C_per_m2,
+        kappa=mat.pzt.eps_S_F_per_m,
+    )
+    area_quarter = float(np.pi * (mesh.geometry.radii_m[0] if load_face == "bottom" else 0.0) ** 2)
+    # The traction is set so that the total force on the quarter is SECTOR_FRACTION N; the face
+    # area is measured from the mesh (it equals the circle's area by construction).
+    t_stiff, t_mass = [], []
+    for g, reg in regions.items():
+        mm = m_pzt if g == GROUP_PZT else m_alu
+        t_stiff.append(Term.new(f"dw_lin_elastic({mm.name}.D, v, u)", integral, reg, **{mm.name: mm}, v=v, u=u))
+        t_mass.append(Term.new(f"dw_dot({mm.name}.rho, v, u)", integral, reg, **{mm.name: mm}, v=v, u=u))
+    reg_p = regions[GROUP_PZT]
+    t_g = Term.new("dw_piezo_coupling(pzt.e, v, p)", integral, reg_p, pzt=m_pzt, v=v, p=p)
+    t_gt = Term.new("dw_piezo_coupling(pzt.e, u, q)", integral, reg_p, pzt=m_pzt, u=u, q=q)
+    t_d = Term.new("dw_diffusion(pzt.kappa, q, p)", integral, reg_p, pzt=m_pzt, q=q, p=p)
+    eq_k = Equation("K", sum(t_stiff[1:], t_stiff[0]))
+    eq_m = Equation("M", sum(t_mass[1:], t_mass[0]))
+    eq_g = Equation("G", t_g + t_gt)
+    eq_d = Equation("D", t_d)
+    pb = Problem("stack", equations=Equations([eq_k, eq_m, eq_g, eq_d]), domain=domain)
+    pb.time_update()
+    pb.update_materials()
+    template = pb.mtx_a
+
+    def mat_of(eq):
+        a = template.copy()
+        a.data[:] = 0.0
+        return eq.evaluate(mode="weak", dw_mode="matrix", asm_obj=a).tocsr()
+
+    full_k, full_m, full_g, full_d = (mat_of(e) for e in (eq_k, eq_m, eq_g, eq_d))
+    adi = pb.equations.variables.adi
+    su, spp = adi.indx["u"], adi.indx["p"]
+    K = full_k[su, su]
+    M = full_m[su, su]
+    G = full_g[su, spp]
+    Gt = full_g[spp, su]
+    if abs(G - Gt.T).max() > 1e-9 * abs(G).max():
+        raise RuntimeError("dw_piezo_coupling blocks are not transposes of each other")
+    Kpp = full_d[spp, spp]
+
+    # Consistent load: unit traction integrated by sfepy, rescaled to a total of SECTOR_FRACTION N.
+    m_load = Material("load", val=np.array([[0.0], [0.0], [direction]]))
+    t_l = Term.new("dw_surface_ltr(load.val, v)", integral, face, load=m_load, v=v)
+    load_eq = Equation("L", t_l)
+    pb_l = Problem("load", equations=Equations([load_eq]), domain=domain)
+    pb_l.time_update()
+    pb_l.update_materials()
+    vec = np.zeros(pb_l.equations.variables.adi.n_dof_total)
+    vec = load_eq.evaluate(mode="weak", dw_mode="vector", asm_obj=vec)
+    fvec = np.asarray(vec)[pb_l.equations.variables.adi.indx["u"]]
+    face_area = abs(fvec[2::3].sum())  # quarter face area [m^2] (unit traction)
+    del area_quarter
+    load = fvec * (SECTOR_FRACTION / face_area)
+    return Assembled(
+        K=K, M=M, G=G, Kpp=Kpp, u_coors=fu.get_coor().copy(), p_coors=fp.get_coor().copy(), load=load, mesh=mesh
+    )
+
+
+# --------------------------------------------------------------------------- constraints
+
+
+@dataclass(frozen=True)
+class BoundaryConditions:
+    """Mechanical and electrical conditions of one analysis.
+
+    Parameters
+    ----------
+    symmetry : str
+        Two letters for the planes x = 0 and y = 0: "S" (mirror symmetric) or
+        "A" (antisymmetric).
+    clamped : tuple of (face, components)
+        Faces ("top": z = z_max, "bottom": z = z_min) and the displacement
+        components (0, 1, 2) held at zero there.
+    hot_z_m, ground_z_m : float
+        z of the hot (floating) and the grounded electrode faces of the PZT [m].
+    """
+
+    symmetry: str = "SS"
+    clamped: tuple = (("top", (0, 1, 2)),)
+    hot_z_m: float = 0.0
+    ground_z_m: float = 0.0
+
+
+def _select(coors, value, axis, tol):
+    return np.flatnonzero(np.abs(coors[:, axis] - value) < tol)
+
+
+def _face_dofs(asm: Assembled, face: str, comps, tol) -> np.ndarray:
+    z = asm.u_coors[:, 2]
+    zz = z.max() if face == "top" else z.min()
+    nodes = _select(asm.u_coors, zz, 2, tol)
+    return np.concatenate([3 * nodes + c for c in comps]) if len(nodes) else np.array([], int)
+
+
+@dataclass
+class ReducedSystem:
+    """The constrained, potential-scaled problem of one symmetry family.
+
+    Holds the free displacement blocks (``K``, ``M``, load ``f``), the
+    interior potential blocks, the coupling vector ``b`` and blocked
+    capacitance ``c0`` of the hot electrode (quarter model, [C/m] and [F]),
+    and a factorization of the short-circuit saddle matrix.
+    """
+
+    asm: Assembled = field(repr=False)
+    bc: BoundaryConditions
+    free_u: np.ndarray
+    K: sp.csr_matrix = field(repr=False)
+    M: sp.csr_matrix = field(repr=False)
+    G_I: sp.csr_matrix = field(repr=False)
+    Kpp_II: sp.csr_matrix = field(repr=False)
+    g: np.ndarray = field(repr=False)
+    k_I: np.ndarray = field(repr=False)
+    k_EE: float
+    f: np.ndarray = field(repr=False)
+    scale: float
+    electrode_active: bool
+
+    @cached_property
+    def _saddle_lu(self):
+        s = self.scale
+        a = sp.bmat([[self.K, s * self.G_I], [s * self.G_I.T, -(s * s) * self.Kpp_II]], format="csc")
+        log.info("factorizing saddle matrix n=%d nnz=%d", a.shape[0], a.nnz)
+        return spla.splu(a, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+
+    @cached_property
+    def _kpp_lu(self):
+        return spla.splu(self.Kpp_II.tocsc(), permc_spec="MMD_AT_PLUS_A")
+
+    def solve_short(self, y: np.ndarray) -> np.ndarray:
+        """K_s^{-1} y for one or more columns y (free displacement DOFs)."""
+        y = np.asarray(y, dtype=float)
+        one = y.ndim == 1
+        y2 = y[:, None] if one else y
+        rhs = np.vstack([y2, np.zeros((self.G_I.shape[1], y2.shape[1]))])
+        x = self._saddle_lu.solve(rhs)[: self.K.shape[0]]
+        return x[:, 0] if one else x
+
+    def potential_of(self, u: np.ndarray) -> np.ndarray:
+        """Interior potentials [V] of the short-circuited electrode for displacements u."""
+        if self.G_I.shape[1] == 0:
+            return np.zeros(0)
+        return self._kpp_lu.solve(self.G_I.T @ u)
+
+    def ks_matvec(self, x: np.ndarray) -> np.ndarray:
+        """K_s x = K x + G_I K_II^{-1} G_I^T x."""
+        return self.K @ x + self.G_I @ self.potential_of(x)
+
+    @cached_property
+    def _w(self) -> np.ndarray:
+        return self._kpp_lu.solve(self.k_I) if len(self.k_I) else np.zeros(0)
+
+    @cached_property
+    def b(self) -> np.ndarray:
+        """Coupling vector of the hot electrode b = g - G_I K_II^{-1} k [C/m] (quarter)."""
+        if not self.electrode_active:
+            return np.zeros(self.K.shape[0])
+        return self.g - self.G_I @ self._w
+
+    @cached_property
+    def c0(self) -> float:
+        """Blocked (clamped-strain) capacitance of the hot electrode [F] (quarter)."""
+        if not self.electrode_active:
+            return np.inf
+        return float(self.k_EE - self.k_I @ self._w)
+
+    @cached_property
+    def ks_inv_b(self) -> np.ndarray:
+        return self.solve_short(self.b)
+
+    @cached_property
+    def ks_inv_f(self) -> np.ndarray:
+        return self.solve_short(self.f)
+
+    @property
+    def static_capacitance_F(self) -> float:
+        """Capacitance with the mechanical conditions, zero force: c0 + b^T K_s^{-1} b [F] (quarter)."""
+        return self.c0 + float(self.b @ self.ks_inv_b)
+
+    def static_open_voltage_V(self) -> float:
+        """Open-circuit voltage under the unit force [V] (full stack, 1 N)."""
+        return float(self.b @ self.ks_inv_f) / self.static_capacitance_F
+
+    def solve_open(self, y: np.ndarray) -> np.ndarray:
+        """(K_s + b b^T / c0)^{-1} y: the open-circuit (floating electrode) stiffness inverse."""
+        x = self.solve_short(y)
+        if not self.electrode_active:
+            return x
+        return x - np.outer(self.ks_inv_b, self.b @ x).reshape(x.shape) / self.static_capacitance_F
+
+    def full_u(self, x: np.ndarray) -> np.ndarray:
+        """Free-DOF displacements to all DOFs of the quarter (constrained ones zero), shape (n_nodes, 3)."""
+        out = np.zeros(self.asm.n_u)
+        out[self.free_u] = x
+        return out.reshape(-1, 3)
+
+
+def reduce(asm: Assembled, bc: BoundaryConditions) -> ReducedSystem:
+    """Apply the conditions of ``bc`` and split the potential into interior and electrodes."""
+    if len(bc.symmetry) != 2 or set(bc.symmetry) - {"S", "A"}:
+        raise ValueError(f"symmetry must be two letters S/A, got {bc.symmetry!r}")
+    span = np.ptp(asm.u_coors, axis=0).max()
+    tol = 1e-8 * span
+    fixed = []
+    p_fixed = []
+    for axis, kind in enumerate(bc.symmetry):
+        nodes = _select(asm.u_coors, 0.0, axis, tol)
+        if kind == "S":
+            fixed.append(3 * nodes + axis)
+        else:
+            others = [c for c in range(3) if c != axis]
+            fixed += [3 * nodes + c for c in others]
+            p_fixed.append(_select(asm.p_coors, 0.0, axis, tol))
+    for face, comps in bc.clamped:
+        fixed.append(_face_dofs(asm, face, comps, tol))
+    fixed = np.unique(np.concatenate(fixed))
+    free_u = np.setdiff1d(np.arange(asm.n_u), fixed)
+
+    ground = _select(asm.p_coors, bc.ground_z_m, 2, tol)
+    hot = _select(asm.p_coors, bc.hot_z_m, 2, tol)
+    if len(ground) == 0 or len(hot) == 0:
+        raise ValueError("no potential nodes on the electrode faces; check hot_z_m / ground_z_m")
+    p_zero = np.unique(np.concatenate([ground] + p_fixed))
+    electrode_active = not np.intersect1d(hot, p_zero).size
+    hot_free = hot if electrode_active else np.array([], int)
+    interior = np.setdiff1d(np.arange(asm.p_coors.shape[0]), np.concatenate([p_zero, hot]))
+
+    K = asm.K[free_u][:, free_u].tocsr()
+    M = asm.M[free_u][:, free_u].tocsr()
+    G = asm.G[free_u]
+    G_I = G[:, interior].tocsr()
+    Kpp_II = asm.Kpp[interior][:, interior].tocsr()
+    ones = np.ones(len(hot_free))
+    g = np.asarray(G[:, hot_free] @ ones).ravel()
+    k_I = np.asarray(asm.Kpp[interior][:, hot_free] @ ones).ravel()
+    k_EE = float(ones @ (asm.Kpp[hot_free][:, hot_free] @ ones))
+    kmax = abs(K.diagonal()).max()
+    pmax = abs(Kpp_II.diagonal()).max() if Kpp_II.shape[0] else 1.0
+    scale = float(np.sqrt(kmax / pmax))
+    return ReducedSystem(
+        asm=asm, bc=bc, free_u=free_u, K=K, M=M, G_I=G_I, Kpp_II=Kpp_II, g=g, k_I=k_I, k_EE=k_EE,
+        f=asm.load[free_u], scale=scale, electrode_active=electrode_active,
+    )
+
+
+# --------------------------------------------------------------------------- modes
+
+
+@dataclass(frozen=True)
+class Modes:
+    """Mass-normalised modes of one family: frequencies [Hz], shapes (n_free, k)."""
+
+    frequency_Hz: np.ndarray
+    shapes: np.ndarray
+
+
+def modes(rs: ReducedSystem, n: int, circuit: str = "short") -> Modes:
+    """The n lowest modes with the electrode short- or open-circuited (floating, zero net charge).
+
+    Shift-invert Lanczos (ARPACK) about zero, the inverse applied through the
+    short-circuit saddle factorization (open circuit: plus a rank-one update).
+    """
+    n_free = rs.K.shape[0]
+    solve = rs.solve_short if circuit == "short" else rs.solve_open
+    if circuit not in ("short", "open"):
+        raise ValueError(f"circuit must be 'short' or 'open', got {circuit!r}")
+    op = spla.LinearOperator((n_free, n_free), matvec=solve, dtype=float)
+    a = spla.LinearOperator((n_free, n_free), matvec=rs.ks_matvec, dtype=float)
+    k = min(n, n_free - 2)
+    lam, vec = spla.eigsh(a, k=k, M=rs.M, sigma=0.0, OPinv=op, which="LM", tol=1e-10)
+    order = np.argsort(lam)
+    lam, vec = lam[order], vec[:, order]
+    vec = vec / np.sqrt(np.einsum("ik,ik->k", vec, rs.M @ vec))
+    return Modes(np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi), vec)
+
+
+def modes_below(rs: ReducedSystem, f_max_Hz: float, circuit: str = "short", n_start: int = 8) -> Modes:
+    """All modes below ``f_max_Hz`` (asks for more until one lies above)."""
+    n = n_start
+    while True:
+        m = modes(rs, n, circuit)
+        if m.frequency_Hz[-1] > f_max_Hz or n >= rs.K.shape[0] - 3:
+            keep = m.frequency_Hz < f_max_Hz
+            return Modes(m.frequency_Hz[keep], m.shapes[:, keep])
+        n *= 2
+
+
+# --------------------------------------------------------------------------- mode labels
+
+
+def _test_fields(coors: np.ndarray, kind: str) -> np.ndarray:
+    """Columns of displacement fields (n_nodes*3, k) spanning a symmetry type, low-order polynomials."""
+    x, y, z = coors.T
+    zs = (z - z.mean()) / np.ptp(z)
+    rs2 = (x**2 + y**2) / (x**2 + y**2).max()
+    polys = [np.ones_like(x), zs, zs**2, rs2, zs * rs2, zs**3, rs2**2]
+    cols = []
+    for pfun in polys:
+        u = np.zeros((len(x), 3))
+        if kind == "axial":
+            u[:, 2] = pfun
+        elif kind == "radial":
+            u[:, 0], u[:, 1] = x * pfun, y * pfun
+        elif kind == "torsion":
+            u[:, 0], u[:, 1] = -y * pfun, x * pfun
+        elif kind == "lateral":  # translation/rotation family of the SA planes: along y, rocking about x
+            u[:, 1] = pfun
+            u[:, 2] = y * pfun
+        cols.append(u.ravel())
+    return np.column_stack(cols)
+
+
+def _captured(rs: ReducedSystem, shape: np.ndarray, kind: str) -> float:
+    """Fraction of the mode's M-norm in the span of the test fields of ``kind``."""
+    t = _test_fields(rs.asm.u_coors, kind)[rs.free_u]
+    mt = rs.M @ t
+    gram = t.T @ mt
+    rhs = mt.T @ shape
+    coef = np.linalg.lstsq(gram, rhs, rcond=1e-12)[0]
+    return float(rhs @ coef / (shape @ (rs.M @ shape)))
+
+
+def kinetic_fractions(rs: ReducedSystem, shape: np.ndarray) -> dict:
+    """Share of the mode's (lumped) kinetic energy in radial, circumferential and axial motion."""
+    lumped = np.asarray(rs.asm.M.sum(axis=1)).ravel().reshape(-1, 3)[:, 0]
+    u = rs.full_u(shape)
+    x, y = rs.asm.u_coors[:, 0], rs.asm.u_coors[:, 1]
+    r = np.hypot(x, y)
+    c, s = np.where(r > 0, x / np.where(r > 0, r, 1), 1.0), np.where(r > 0, y / np.where(r > 0, r, 1), 0.0)
+    ur = c * u[:, 0] + s * u[:, 1]
+    ut = -s * u[:, 0] + c * u[:, 1]
+    e = np.array([(lumped * ur**2).sum(), (lumped * ut**2).sum(), (lumped * u[:, 2] ** 2).sum()])
+    e = e / e.sum()
+    return {"radial": float(e[0]), "circumferential": float(e[1]), "axial": float(e[2])}
+
+
+def label_mode(rs: ReducedSystem, shape: np.ndarray) -> tuple[str, dict]:
+    """Label a mode from its shape: axial, radial, torsion, bending/rocking, or n>=2.
+
+    The symmetry family fixes the circumferential character (SS: n = 0 or 2,
+    AA: torsion or n = 2, SA/AS: n = 1, bending/rocking); within SS and AA
+    the mode's share in axisymmetric (resp. torsional) polynomial fields
+    separates n = 0 from n = 2, and for n = 0 the larger of the axial and
+    radial kinetic energies names it.
+    """
+    fam = rs.bc.symmetry
+    kin = kinetic_fractions(rs, shape)
+    info = {"kinetic": kin}
+    if fam == "SS":
+        ax, ra = _captured(rs, shape, "axial"), _captured(rs, shape, "radial")
+        both = _test_fields(rs.asm.u_coors, "axial"), _test_fields(rs.asm.u_coors, "radial")
+        del both
+        info["axisymmetric_fraction"] = ax + ra
+        if ax + ra < 0.05:
+            return "radial (n=2)", info
+        return ("axial" if kin["axial"] >= kin["radial"] else "radial"), info
+    if fam == "AA":
+        tor = _captured(rs, shape, "torsion")
+        info["torsion_fraction"] = tor
+        return ("torsion" if tor >= 0.05 else "circumferential (n=2)"), info
+    return "bending/rocking", info
