@@ -1,0 +1,112 @@
+"""Figures of the fault-detection chain: Fig. 9, Fig. 10 and the SNR study."""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+
+#: Reference frequencies drawn in Fig. 10 besides BPFO: (key, label, colour, line style).
+REFERENCE_LINES = (("bpfi_Hz", "BPFI", "C2", (0, (4, 2))), ("ftf_Hz", "FTF", "C3", (0, (1, 1.5))),
+                   ("bsf_Hz", "BSF", "C4", (0, (6, 2, 1, 2))))
+
+
+def fig09_voltage(healthy: pd.DataFrame, faulty: pd.DataFrame, events: pd.DataFrame, kinematics: dict,
+                  window_s: tuple[float, float] | None = None):
+    """Sensor voltage against time, healthy above faulty, the defect impulses marked (paper Fig. 9).
+
+    ``window_s`` limits the time axis (default: the whole record). Thin grey
+    lines mark the roller passages at the sensor's period 1/BPFO.
+    """
+    fig, axes = plt.subplots(2, 1, sharex=True, sharey=True, figsize=(7.0, 4.8))
+    t0, t1 = window_s if window_s is not None else (healthy["time_s"].iloc[0], healthy["time_s"].iloc[-1])
+    for ax, df, name, col in ((axes[0], healthy, "healthy", "C0"), (axes[1], faulty, "faulty", "C1")):
+        m = (df["time_s"] >= t0) & (df["time_s"] <= t1)
+        ax.plot(df["time_s"][m], 1e3 * df["voltage_V"][m], color=col, lw=0.9, marker=".", ms=2.0)
+        ax.set_ylabel("voltage [mV]")
+        ax.set_title(f"{name} bearing", loc="left")
+    e = events[(events["time_s"] >= t0) & (events["time_s"] <= t1)]
+    axes[1].plot(e["time_s"], 1e3 * e["voltage_V"], "v", color="k", ms=5, mfc="none",
+                 label="defect impulses (largest |faulty - healthy| per 1/BPFO)")
+    axes[1].legend(loc="lower right")
+    axes[1].set_xlabel("time [s]")
+    axes[1].set_xlim(t0, t1)
+    f0 = kinematics["bpfo_Hz"]
+    axes[0].text(0.99, 0.97, f"rollers pass the sensor at BPFO = {f0:.2f} Hz (period {1e3 / f0:.2f} ms)",
+                 transform=axes[0].transAxes, ha="right", va="top", fontsize=8)
+    return fig
+
+
+def _markers(ax, kinematics: dict, fmax: float, n_bpfo: int) -> None:
+    f0 = kinematics["bpfo_Hz"]
+    for k in range(1, n_bpfo + 1):
+        if k * f0 <= fmax:
+            ax.axvline(k * f0, color="C1", lw=0.8, alpha=0.6, ls="--", label="k BPFO" if k == 1 else None)
+    for key, lab, col, ls in REFERENCE_LINES:
+        f = kinematics[key]
+        if f <= fmax:
+            ax.axvline(f, color=col, lw=0.9, ls=ls, alpha=0.8, label=f"{lab} {f:.1f} Hz")
+
+
+def fig10_envelope(healthy: pd.DataFrame, faulty: pd.DataFrame, indicator: dict, kinematics: dict,
+                   fmax_Hz: float = 500.0, n_bpfo: int = 7):
+    """Envelope spectra of the noisy voltage, healthy above faulty, with k BPFO marked (paper Fig. 10).
+
+    The harmonics in the indicator are circled; the noiseless record's
+    envelope spectrum (same band) is drawn thin and grey for reference.
+    """
+    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(7.0, 5.2))
+    top = 0.0
+    for ax, df, case, col in ((axes[0], healthy, "healthy", "C0"), (axes[1], faulty, "faulty", "C1")):
+        r = indicator[case]
+        m = df["frequency_Hz"] <= fmax_Hz
+        ax.plot(df["frequency_Hz"][m], 1e3 * df["noiseless_amplitude_V"][m], color="0.6", lw=0.7,
+                label="noiseless")
+        ax.plot(df["frequency_Hz"][m], 1e3 * df["amplitude_V"][m], color=col, lw=0.9,
+                label=f"SNR {r['snr_dB']:g} dB")
+        for h in r["harmonics"]:
+            ax.plot(h["frequency_Hz"], 1e3 * h["amplitude_V"], "o", mfc="none", color="k", ms=7)
+            ax.plot([h["frequency_Hz"] - 0.5 * kinematics["bpfo_Hz"], h["frequency_Hz"] + 0.5 * kinematics["bpfo_Hz"]],
+                    [1e3 * h["floor_V"]] * 2, color="k", lw=0.8, alpha=0.7,
+                    label="local floor (rms)" if h["k"] == 1 else None)
+        _markers(ax, kinematics, fmax_Hz, n_bpfo)
+        verdict = "fault detected" if r["detected"] else "no fault detected"
+        ax.set_title(
+            f"{case}: band {r['band_Hz'][0]:.0f}-{r['band_Hz'][1]:.0f} Hz; indicator {r['indicator']:.1f} "
+            f"vs threshold {r['threshold']:.1f} -> {verdict}", loc="left")
+        ax.set_ylabel("envelope amplitude [mV]")
+        top = max(top, float(1e3 * df["amplitude_V"][m].max()))
+    for ax in axes:
+        ax.set_ylim(0, 1.1 * top)
+    axes[0].legend(loc="upper right", fontsize=7, ncol=2)
+    axes[1].set_xlabel("frequency [Hz]")
+    axes[1].set_xlim(0, fmax_Hz)
+    return fig
+
+
+def snr_study(summary: pd.DataFrame, study: dict):
+    """Detection rate against SNR, healthy and faulty, over the noise seeds."""
+    fig, (ax, ax_i) = plt.subplots(2, 1, sharex=True, figsize=(7.0, 5.0), gridspec_kw={"height_ratios": [1, 1]})
+    for case, col in (("healthy", "C0"), ("faulty", "C1")):
+        c = summary[summary["case"] == case].sort_values("snr_dB")
+        ax.plot(c["snr_dB"], c["detection_rate"], "o-", color=col, ms=3, label=case)
+        ax_i.plot(c["snr_dB"], c["indicator_median"], "-", color=col, label=f"{case}: median")
+        ax_i.fill_between(c["snr_dB"], c["indicator_min"], c["indicator_max"], color=col, alpha=0.2, lw=0,
+                          label=f"{case}: min-max")
+    thr = summary["threshold"].min()
+    ax_i.axhline(thr, color="k", lw=0.9, ls="--", label=f"threshold {thr:.1f}")
+    ax_i.set_yscale("log")
+    lim = study["faulty"]["detection_limit_dB"]
+    for a in (ax, ax_i):
+        a.axvline(study["snr_dB"], color="0.5", lw=0.8, ls=":")
+        if np.isfinite(lim):
+            a.axvline(lim, color="C1", lw=0.8, ls="-.")
+    ax.set_ylabel("detection rate")
+    ax.set_ylim(-0.03, 1.03)
+    ax.set_title(f"{study['n_seeds']} noise seeds per SNR; faulty detected at rate >= "
+                 f"{study['required_detection_rate']:g} from {lim:g} dB up", loc="left")
+    ax.legend(loc="center right")
+    ax_i.set_ylabel("indicator")
+    ax_i.set_xlabel("SNR [dB]")
+    ax_i.legend(loc="upper left", fontsize=7, ncol=2)
+    return fig

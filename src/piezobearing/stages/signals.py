@@ -1,0 +1,377 @@
+"""Stage functions from the sensor force to fault detection (Sec. IV; Fig. 9, 10).
+
+sensor_voltage (force -> voltage through the calibrated RC model, optionally
+scaled to the sensor FEM), noisy (white noise at the configured SNR),
+envelope (band, envelope spectrum), indicator (fault_indicator.json),
+snr_study (detection against SNR over noise seeds), defect_events (Fig. 9
+markers) and the scorecard rows.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .. import signals as sig
+from ..calibration import SensorCircuit, circuit_voltage, frequency_response
+from ..scorecard import Row, write_part
+
+#: Largest relative deviation of a time step from the mean step of a record.
+UNIFORM_RTOL = 1e-3
+#: The paper's numbers of Sec. IV.
+PAPER = {"bpfo_Hz": 70.8, "snr": 10.0}
+
+
+class SignalFileError(ValueError):
+    """A time series or result file that cannot be used as it is."""
+
+
+def write_json(obj: dict, path: str | Path) -> None:
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    Path(path).write_text(json.dumps(obj, indent=2, allow_nan=True) + "\n")
+
+
+def read_json(path: str | Path) -> dict:
+    return json.loads(Path(path).read_text())
+
+
+def write_csv(df: pd.DataFrame, path: str | Path) -> None:
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    df.to_csv(path, index=False, float_format="%.10g")
+
+
+def read_series(path: str | Path, column: str) -> tuple[np.ndarray, np.ndarray, float]:
+    """Read ``time_s`` and ``column`` of a CSV on a uniform clock.
+
+    Returns time [s], the column's values and the step dt = (t_end - t_0)/(n - 1) [s].
+    """
+    path = Path(path)
+    if not path.exists():
+        raise SignalFileError(f"{path}: file not found; run the stage that writes it")
+    df = pd.read_csv(path)
+    for c in ("time_s", column):
+        if c not in df.columns:
+            raise SignalFileError(f"{path}: column '{c}' missing (header: {', '.join(df.columns)}); "
+                                  f"write time_s,{column}")
+    t = df["time_s"].to_numpy(dtype=float)
+    x = df[column].to_numpy(dtype=float)
+    bad = np.flatnonzero(~(np.isfinite(t) & np.isfinite(x)))
+    if bad.size:
+        raise SignalFileError(f"{path}: line {int(bad[0]) + 2}: not a finite number ({bad.size} rows); "
+                              "fix the stage that writes it")
+    if t.size < 8:
+        raise SignalFileError(f"{path}: only {t.size} rows; a signal needs a time series")
+    dt = float((t[-1] - t[0]) / (t.size - 1))
+    off = np.flatnonzero(np.abs(np.diff(t) - dt) > UNIFORM_RTOL * dt)
+    if dt <= 0 or off.size:
+        i = int(off[0]) + 1 if off.size else 1
+        raise SignalFileError(f"{path}: line {i + 2}, column time_s: uneven or decreasing time step; "
+                              "the signal stages need a uniform clock")
+    return t, x, dt
+
+
+def kinematics(path: str | Path) -> dict:
+    """The bearing's kinematic frequencies [Hz] (shaft, FTF, BPFO, BPFI, BSF)."""
+    k = read_json(path)
+    need = ("shaft_Hz", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz")
+    miss = [n for n in need if n not in k]
+    if miss:
+        raise SignalFileError(f"{path}: key '{miss[0]}' missing; kinematics.json needs {', '.join(need)}")
+    return {n: float(k[n]) for n in need}
+
+
+# --------------------------------------------------------------------------- sensor voltage
+
+
+def sensor_circuit(config: dict, resistance_json: str) -> tuple[SensorCircuit, dict]:
+    """The calibrated sensor circuit (R from the fit) and the resistance record."""
+    res = read_json(resistance_json)
+    if "resistance_ohm" not in res:
+        raise SignalFileError(f"{resistance_json}: key 'resistance_ohm' missing; rerun rule fit_resistance")
+    return SensorCircuit.from_config(config["sensor"], res["resistance_ohm"]), res
+
+
+def read_harmonic(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """Frequencies [Hz] and |V/F| [V/N] of the sensor FEM's harmonic response."""
+    df = pd.read_csv(path)
+    for c in ("frequency_Hz", "voltage_per_force_V_per_N"):
+        if c not in df.columns:
+            raise SignalFileError(f"{path}: column '{c}' missing; the sensor FEM writes frequency_Hz, "
+                                  "voltage_per_force_V_per_N, phase")
+    return df["frequency_Hz"].to_numpy(dtype=float), np.abs(df["voltage_per_force_V_per_N"].to_numpy(dtype=float))
+
+
+def sensor_voltage(
+    force_csv: str, resistance_json: str, harmonic_csv: str | None, out_csv: str, out_json: str, config: dict
+) -> None:
+    """Sensor force through the calibrated sensor model → voltage_{case}.{csv,json}.
+
+    The RC model of Eq. 6 with the fitted R and the cable (exact for a
+    piecewise-linear force). With ``signals.sensor_fem_correction`` the voltage
+    is scaled by the median |H_FEM| / |H_RC| below the Nyquist frequency
+    (the FEM is flat there: its first resonance is near 100 kHz).
+    """
+    s = config["signals"]
+    t, force, dt = read_series(force_csv, "force_N")
+    skip = int(round(s["skip_s"] / dt))
+    if skip >= t.size - 8:
+        raise SignalFileError(f"{force_csv}: signals.skip_s = {s['skip_s']} s leaves no record; lower it")
+    t, force = t[skip:], force[skip:]
+    circuit, res = sensor_circuit(config, resistance_json)
+    v = circuit_voltage(force, dt, circuit)
+    corr = None
+    if harmonic_csv:
+        f_fem, h_fem = read_harmonic(harmonic_csv)
+        corr = sig.fem_correction(f_fem, h_fem, np.abs(frequency_response(f_fem, circuit)), 0.5 / dt)
+        v = v * corr["factor"]
+    write_csv(pd.DataFrame({"time_s": t, "force_N": force, "voltage_V": v}), out_csv)
+    write_json(
+        {
+            "dt_s": dt,
+            "sample_rate_Hz": 1.0 / dt,
+            "n_samples": int(t.size),
+            "duration_s": float(t.size * dt),
+            "resistance_ohm": circuit.resistance_ohm,
+            "capacitance_F": circuit.capacitance_F,
+            "tau_s": circuit.tau_s,
+            "open_circuit_gain_V_per_N": circuit.open_circuit_gain_V_per_N,
+            "fem_correction": corr,
+            "voltage_rms_V": float(np.sqrt(np.mean(v**2))),
+            "voltage_peak_to_peak_V": float(np.ptp(v)),
+            "force_mean_N": float(force.mean()),
+            "force_peak_to_peak_N": float(np.ptp(force)),
+            "source": str(force_csv),
+            "config": {"sensor": config["sensor"], "signals": s},
+        },
+        out_json,
+    )
+
+
+# --------------------------------------------------------------------------- noise
+
+
+def noisy(voltage_csv: str, case: str, out_csv: str, out_json: str, config: dict) -> None:
+    """White Gaussian noise at signals.snr_dB → noisy_{case}.{csv,json}.
+
+    SNR = 10 log10(P_s / sigma^2), P_s the mean square of the whole noiseless record.
+    """
+    s = config["signals"]
+    t, v, dt = read_series(voltage_csv, "voltage_V")
+    y, sigma = sig.add_white_noise(v, s["snr_dB"], sig.noise_rng(config["seed"], case, 0))
+    n = y - v
+    write_csv(pd.DataFrame({"time_s": t, "voltage_V": y}), out_csv)
+    write_json(
+        {
+            "case": case,
+            "snr_dB": s["snr_dB"],
+            "snr_definition": "10 log10(mean(v^2) / sigma^2) over the whole noiseless record",
+            "signal_power_V2": sig.signal_power_V2(v),
+            "noise_std_V": sigma,
+            "realised_snr_dB": float(10 * np.log10(sig.signal_power_V2(v) / np.mean(n**2))),
+            "seed": [config["seed"], 6, sig.CASE_CODES[case], 0],
+            "config": {"seed": config["seed"], "signals": s},
+        },
+        out_json,
+    )
+
+
+# --------------------------------------------------------------------------- envelope
+
+
+def envelope(
+    noisy_csv: str, voltage_csv: str, kinematics_json: str, out_csv: str, out_json: str, config: dict
+) -> None:
+    """Band (kurtogram or fixed), envelope spectrum → envelope_{case}.{csv,json}.
+
+    The CSV holds the envelope spectrum of the noisy record and, for
+    reference, of the noiseless one in the same band.
+    """
+    s = config["signals"]
+    kin = kinematics(kinematics_json)
+    f0 = kin["bpfo_Hz"]
+    _, y, dt = read_series(noisy_csv, "voltage_V")
+    _, v, _ = read_series(voltage_csv, "voltage_V")
+    es = sig.EnvelopeSettings.from_config(s)
+    a = sig.analyse(y, dt, f0, es, sig.IndicatorSettings.from_config(s))
+    spec = a.spectrum
+    clean = sig.envelope_spectrum(v[: spec.n_samples], dt, spec.band_Hz, es.filter_order)
+    write_csv(
+        pd.DataFrame(
+            {"frequency_Hz": spec.frequency_Hz, "amplitude_V": spec.amplitude_V,
+             "noiseless_amplitude_V": clean.amplitude_V}
+        ),
+        out_csv,
+    )
+    kg = a.kurtogram
+    write_json(
+        {
+            "band_Hz": list(spec.band_Hz),
+            "band_rule": s["band_rule"],
+            "n_samples": spec.n_samples,
+            "n_periods": int(round(spec.n_samples * dt * f0)),
+            "duration_s": spec.n_samples * dt,
+            "resolution_Hz": spec.resolution_Hz,
+            "bpfo_Hz": f0,
+            "bpfo_bin_offset": float(f0 / spec.resolution_Hz - round(f0 / spec.resolution_Hz)),
+            "kurtogram": None if kg is None else {
+                "low_Hz": kg.low_Hz.tolist(), "high_Hz": kg.high_Hz.tolist(), "kurtosis": kg.kurtosis.tolist()
+            },
+            "config": {"signals": s},
+        },
+        out_json,
+    )
+
+
+def read_spectrum(csv: str, json_path: str, column: str = "amplitude_V") -> sig.EnvelopeSpectrum:
+    df = pd.read_csv(csv)
+    meta = read_json(json_path)
+    return sig.EnvelopeSpectrum(
+        df["frequency_Hz"].to_numpy(float), df[column].to_numpy(float), tuple(meta["band_Hz"]), meta["n_samples"]
+    )
+
+
+def indicator(envelopes: dict, kinematics_json: str, noisy_jsons: dict, out_json: str, config: dict) -> None:
+    """Envelope amplitudes at k BPFO over the local floor, indicator, threshold → fault_indicator.json.
+
+    ``envelopes`` maps each case to its (csv, json) pair.
+    """
+    s = config["signals"]
+    kin = kinematics(kinematics_json)
+    ins = sig.IndicatorSettings.from_config(s)
+    out = {}
+    for case, (csv, js) in envelopes.items():
+        r = sig.fault_indicator(read_spectrum(csv, js), kin["bpfo_Hz"], ins)
+        r["noiseless"] = sig.fault_indicator(read_spectrum(csv, js, "noiseless_amplitude_V"), kin["bpfo_Hz"], ins)
+        r["snr_dB"] = read_json(noisy_jsons[case])["snr_dB"]
+        out[case] = r
+    out["definition"] = (
+        "r_k = A(k BPFO)^2 / mean A^2 of the local floor (bins within floor_halfwidth BPFO of k BPFO, guard bins "
+        "around every BPFO harmonic left out); indicator = sum_k r_k, k = 1..n_harmonics; threshold = "
+        "n_harmonics F_{1-pfa}(2 n_harmonics, 2 M), M = smallest floor count (CFAR under Gaussian noise); "
+        "the 'noiseless' entries apply the same test to the noiseless record in the same band (reference only)"
+    )
+    out["kinematics"] = kin
+    out["config"] = {"seed": config["seed"], "signals": s}
+    write_json(out, out_json)
+
+
+# --------------------------------------------------------------------------- SNR study
+
+
+def snr_grid(s: dict) -> list[float]:
+    lo, hi, step = s["study_snr_min_dB"], s["study_snr_max_dB"], s["study_snr_step_dB"]
+    if hi < lo:
+        raise ValueError("signals.study_snr_max_dB must not be below signals.study_snr_min_dB")
+    grid = list(np.round(np.arange(lo, hi + step / 2, step), 9))
+    if not any(abs(g - s["snr_dB"]) < 1e-9 for g in grid):
+        grid = sorted(grid + [float(s["snr_dB"])])  # the configured SNR is always on the grid
+    return [float(g) for g in grid]
+
+
+def snr_study(voltages: dict, kinematics_json: str, out_csv: str, out_summary: str, out_json: str, config: dict):
+    """Detection against SNR over noise seeds, healthy and faulty → snr_study{,_summary}.csv, snr_study.json."""
+    s = config["signals"]
+    f0 = kinematics(kinematics_json)["bpfo_Hz"]
+    es, ins = sig.EnvelopeSettings.from_config(s), sig.IndicatorSettings.from_config(s)
+    grid = snr_grid(s)
+    rows = []
+    for case, path in voltages.items():
+        _, v, dt = read_series(path, "voltage_V")
+        print(f"snr_study: {case}, {len(grid)} SNRs x {s['study_n_seeds']} seeds", flush=True)
+        rows += sig.snr_sweep(v, dt, f0, case, grid, s["study_n_seeds"], config["seed"], es, ins)
+    df = pd.DataFrame(rows)
+    write_csv(df, out_csv)
+    summ = (
+        df.groupby(["case", "snr_dB"])
+        .agg(detection_rate=("detected", "mean"), n_seeds=("detected", "size"),
+             indicator_median=("indicator", "median"), indicator_min=("indicator", "min"),
+             indicator_max=("indicator", "max"), threshold=("threshold", "min"))
+        .reset_index()
+    )
+    write_csv(summ, out_summary)
+    need = s["study_required_detection_rate"]
+    out = {"snr_grid_dB": grid, "n_seeds": s["study_n_seeds"], "required_detection_rate": need}
+    at = np.isclose(df["snr_dB"], s["snr_dB"])
+    for case in voltages:
+        c = summ[summ["case"] == case]
+        out[case] = {
+            "detection_rate_at_snr": float(df[at & (df["case"] == case)]["detected"].mean()),
+            "detected_all_seeds_at_snr": bool(df[at & (df["case"] == case)]["detected"].all()),
+            "detected_no_seed_at_snr": bool(not df[at & (df["case"] == case)]["detected"].any()),
+            "detection_limit_dB": sig.detection_limit_dB(c["snr_dB"].to_numpy(), c["detection_rate"].to_numpy(), need),
+            "snr_50pct_dB": _crossing(c["snr_dB"].to_numpy(), c["detection_rate"].to_numpy(), 0.5),
+            "max_rate": float(c["detection_rate"].max()),
+        }
+    out["snr_dB"] = s["snr_dB"]
+    out["definition"] = ("detection_limit_dB: lowest grid SNR from which upward the detection rate stays >= "
+                         "required_detection_rate; snr_50pct_dB: SNR where the rate first rises through 0.5 "
+                         "(linear interpolation)")
+    out["config"] = {"seed": config["seed"], "signals": s}
+    write_json(out, out_json)
+
+
+def _crossing(x: np.ndarray, y: np.ndarray, level: float) -> float:
+    """Last upward crossing of ``level`` by y(x), linearly interpolated (NaN if none)."""
+    o = np.argsort(x)
+    x, y = x[o], y[o]
+    if y[-1] < level:
+        return float("nan")
+    if y[0] >= level:
+        return float(x[0])
+    i = int(np.flatnonzero(y < level)[-1])
+    return float(x[i] + (level - y[i]) * (x[i + 1] - x[i]) / (y[i + 1] - y[i]))
+
+
+def snr_study_figure(summary_csv: str, study_json: str, out_png: str) -> None:
+    """Plot the detection rate against SNR → results/figures/snr_study.png."""
+    from ..plotting import save, use_style
+    from ..plotting.signals import snr_study as plot
+
+    use_style()
+    save(plot(pd.read_csv(summary_csv), read_json(study_json)), out_png)
+
+
+# --------------------------------------------------------------------------- events and scorecard
+
+
+def defect_events(healthy_csv: str, faulty_csv: str, kinematics_json: str, out_csv: str) -> None:
+    """Times of the defect impulses (largest |faulty - healthy| per BPFO period) → defect_events.csv."""
+    th, vh, dt = read_series(healthy_csv, "voltage_V")
+    tf, vf, _ = read_series(faulty_csv, "voltage_V")
+    if th.size != tf.size or abs(th[0] - tf[0]) > UNIFORM_RTOL * dt:
+        raise SignalFileError(f"{faulty_csv}: time base differs from {healthy_csv}; simulate both cases alike")
+    f0 = kinematics(kinematics_json)["bpfo_Hz"]
+    times = sig.defect_event_times(vf, vh, dt, f0, th[0])
+    idx = np.round((times - th[0]) / dt).astype(int)
+    write_csv(pd.DataFrame({"time_s": times, "voltage_V": vf[idx], "difference_V": vf[idx] - vh[idx]}), out_csv)
+
+
+def scorecard(indicator_json: str, study_json: str, kinematics_json: str, out_csv: str) -> None:
+    """The Sec. IV rows of the scorecard → results/scorecard/signals.csv."""
+    ind, st, kin = read_json(indicator_json), read_json(study_json), kinematics(kinematics_json)
+    snr = st["snr_dB"]
+    h, f = ind["healthy"], ind["faulty"]
+    n = st["n_seeds"]
+    rows = [
+        Row("IV", "BPFO (11 rollers, 1000 rpm)", PAPER["bpfo_Hz"], kin["bpfo_Hz"], "Hz",
+            "from the bearing's kinematics (results/bearing/kinematics.json)"),
+        Row("IV", "SNR of the added white noise", PAPER["snr"], snr, "dB",
+            "the paper's 'SNR of 10' read as 10 dB; SNR = mean square of the whole noiseless voltage record "
+            "over the noise variance"),
+        Row("IV", "outer-ring fault detected, faulty bearing (1 = yes)", 1.0, float(f["detected"]), "-",
+            f"envelope-spectrum indicator {f['indicator']:.1f} against threshold {f['threshold']:.1f} "
+            f"(pfa {f['false_alarm_probability']:g}), band {f['band_Hz'][0]:.0f}-{f['band_Hz'][1]:.0f} Hz"),
+        Row("IV", "outer-ring fault detected, healthy bearing (1 = yes)", 0.0, float(h["detected"]), "-",
+            f"indicator {h['indicator']:.1f} against threshold {h['threshold']:.1f}"),
+        Row("IV", f"detection rate, faulty, {n} noise seeds at the SNR", None,
+            st["faulty"]["detection_rate_at_snr"], "-", "the paper shows one noise realisation"),
+        Row("IV", f"false-alarm rate, healthy, {n} noise seeds at the SNR", None,
+            st["healthy"]["detection_rate_at_snr"], "-", ""),
+        Row("IV", "lowest SNR with reliable detection (faulty)", None, st["faulty"]["detection_limit_dB"], "dB",
+            f"detection rate >= {st['required_detection_rate']:g} at this and every higher grid SNR; "
+            f"50% detection at {st['faulty']['snr_50pct_dB']:.1f} dB; not studied in the paper"),
+    ]
+    write_part(rows, out_csv)

@@ -1,0 +1,186 @@
+# From sensor force to fault detection (paper Sec. IV, Fig. 9 and 10): voltage
+# through the calibrated sensor model, white noise at the configured SNR,
+# envelope spectrum, fault indicator, detection against SNR.
+
+FIGURES.extend([f"{RESULTS}/figures/{n}.png" for n in ("fig09", "fig10", "snr_study")])
+SCORECARD_PARTS.append(f"{RESULTS}/scorecard/signals.csv")
+TARGETS.extend(
+    [
+        f"{RESULTS}/signals/fault_indicator.json",
+        f"{RESULTS}/signals/snr_study.csv",
+    ]
+)
+
+
+def sensor_voltage_inputs(wildcards):
+    """The force, the fitted R and, with signals.sensor_fem_correction, the sensor FEM's response."""
+    inputs = {
+        "force": f"{RESULTS}/bearing/sensor_force_{wildcards.case}.csv",
+        "resistance": f"{RESULTS}/calibration/resistance.json",
+    }
+    if config["signals"]["sensor_fem_correction"]:
+        inputs["harmonic"] = f"{RESULTS}/sensor/harmonic.csv"
+    return inputs
+
+
+rule sensor_voltage:
+    input:
+        unpack(sensor_voltage_inputs),
+    output:
+        csv=f"{RESULTS}/signals/voltage_{{case}}.csv",
+        json=f"{RESULTS}/signals/voltage_{{case}}.json",
+    log:
+        f"{RESULTS}/logs/sensor_voltage_{{case}}.log",
+    wildcard_constraints:
+        case="healthy|faulty",
+    params:
+        sensor=config["sensor"],
+        signals=config["signals"],
+    script:
+        "../scripts/sensor_voltage.py"
+
+
+rule noisy:
+    input:
+        voltage=f"{RESULTS}/signals/voltage_{{case}}.csv",
+    output:
+        csv=f"{RESULTS}/signals/noisy_{{case}}.csv",
+        json=f"{RESULTS}/signals/noisy_{{case}}.json",
+    log:
+        f"{RESULTS}/logs/noisy_{{case}}.log",
+    wildcard_constraints:
+        case="healthy|faulty",
+    params:
+        seed=config["seed"],
+        snr_dB=config["signals"]["snr_dB"],
+    script:
+        "../scripts/noisy.py"
+
+
+rule envelope:
+    input:
+        noisy=f"{RESULTS}/signals/noisy_{{case}}.csv",
+        voltage=f"{RESULTS}/signals/voltage_{{case}}.csv",
+        kinematics=f"{RESULTS}/bearing/kinematics.json",
+    output:
+        csv=f"{RESULTS}/signals/envelope_{{case}}.csv",
+        json=f"{RESULTS}/signals/envelope_{{case}}.json",
+    log:
+        f"{RESULTS}/logs/envelope_{{case}}.log",
+    wildcard_constraints:
+        case="healthy|faulty",
+    params:
+        signals=config["signals"],
+    script:
+        "../scripts/envelope.py"
+
+
+rule fault_indicator:
+    input:
+        healthy_csv=f"{RESULTS}/signals/envelope_healthy.csv",
+        healthy_json=f"{RESULTS}/signals/envelope_healthy.json",
+        faulty_csv=f"{RESULTS}/signals/envelope_faulty.csv",
+        faulty_json=f"{RESULTS}/signals/envelope_faulty.json",
+        healthy_noisy=f"{RESULTS}/signals/noisy_healthy.json",
+        faulty_noisy=f"{RESULTS}/signals/noisy_faulty.json",
+        kinematics=f"{RESULTS}/bearing/kinematics.json",
+    output:
+        json=f"{RESULTS}/signals/fault_indicator.json",
+    log:
+        f"{RESULTS}/logs/fault_indicator.log",
+    params:
+        signals=config["signals"],
+    script:
+        "../scripts/fault_indicator.py"
+
+
+rule snr_study:
+    input:
+        healthy=f"{RESULTS}/signals/voltage_healthy.csv",
+        faulty=f"{RESULTS}/signals/voltage_faulty.csv",
+        kinematics=f"{RESULTS}/bearing/kinematics.json",
+    output:
+        csv=f"{RESULTS}/signals/snr_study.csv",
+        summary=f"{RESULTS}/signals/snr_study_summary.csv",
+        json=f"{RESULTS}/signals/snr_study.json",
+    log:
+        f"{RESULTS}/logs/snr_study.log",
+    params:
+        seed=config["seed"],
+        signals=config["signals"],
+    script:
+        "../scripts/snr_study.py"
+
+
+rule snr_study_figure:
+    input:
+        summary=f"{RESULTS}/signals/snr_study_summary.csv",
+        json=f"{RESULTS}/signals/snr_study.json",
+    output:
+        figure=f"{RESULTS}/figures/snr_study.png",
+    log:
+        f"{RESULTS}/logs/snr_study_figure.log",
+    script:
+        "../scripts/snr_study_figure.py"
+
+
+rule defect_events:
+    input:
+        healthy=f"{RESULTS}/signals/voltage_healthy.csv",
+        faulty=f"{RESULTS}/signals/voltage_faulty.csv",
+        kinematics=f"{RESULTS}/bearing/kinematics.json",
+    output:
+        csv=f"{RESULTS}/signals/defect_events.csv",
+    log:
+        f"{RESULTS}/logs/defect_events.log",
+    script:
+        "../scripts/defect_events.py"
+
+
+rule fig09:
+    input:
+        notebook="notebooks/fig09_voltage.ipynb",
+        healthy=f"{RESULTS}/signals/voltage_healthy.csv",
+        faulty=f"{RESULTS}/signals/voltage_faulty.csv",
+        events=f"{RESULTS}/signals/defect_events.csv",
+        kinematics=f"{RESULTS}/bearing/kinematics.json",
+    output:
+        figure=f"{RESULTS}/figures/fig09.png",
+        notebook=f"{RESULTS}/notebooks/fig09_voltage.ipynb",
+    log:
+        f"{RESULTS}/logs/fig09.log",
+    shell:
+        "papermill {input.notebook} {output.notebook} -k python3 -p healthy {input.healthy}"
+        " -p faulty {input.faulty} -p events {input.events} -p kinematics {input.kinematics}"
+        " -p figure {output.figure} > {log} 2>&1"
+
+
+rule fig10:
+    input:
+        notebook="notebooks/fig10_envelope.ipynb",
+        healthy=f"{RESULTS}/signals/envelope_healthy.csv",
+        faulty=f"{RESULTS}/signals/envelope_faulty.csv",
+        indicator=f"{RESULTS}/signals/fault_indicator.json",
+        kinematics=f"{RESULTS}/bearing/kinematics.json",
+    output:
+        figure=f"{RESULTS}/figures/fig10.png",
+        notebook=f"{RESULTS}/notebooks/fig10_envelope.ipynb",
+    log:
+        f"{RESULTS}/logs/fig10.log",
+    shell:
+        "papermill {input.notebook} {output.notebook} -k python3 -p healthy {input.healthy}"
+        " -p faulty {input.faulty} -p indicator {input.indicator} -p kinematics {input.kinematics}"
+        " -p figure {output.figure} > {log} 2>&1"
+
+
+rule scorecard_signals:
+    input:
+        indicator=f"{RESULTS}/signals/fault_indicator.json",
+        study=f"{RESULTS}/signals/snr_study.json",
+        kinematics=f"{RESULTS}/bearing/kinematics.json",
+    output:
+        csv=f"{RESULTS}/scorecard/signals.csv",
+    log:
+        f"{RESULTS}/logs/scorecard_signals.log",
+    script:
+        "../scripts/scorecard_signals.py"
