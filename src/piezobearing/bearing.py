@@ -77,7 +77,7 @@ class BearingGeometry:
     @property
     def diameter_ratio(self) -> float:
         """D_r cos(alpha) / D_p [-]."""
-        return self.roller_diameter_m * np.cos(np.radians(self.contact_angle_deg)) / self.pitch_diameter_m
+        return float(self.roller_diameter_m * np.cos(np.radians(self.contact_angle_deg)) / self.pitch_diameter_m)
 
     @property
     def outer_raceway_radius_m(self) -> float:
