@@ -12,6 +12,7 @@ include: "workflow/rules/common.smk"
 include: "workflow/rules/calibration.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/scorecard.smk"
+include: "workflow/rules/studies.smk"
 
 
 rule all:

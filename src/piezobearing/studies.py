@@ -1,0 +1,65 @@
+"""Parameter studies: a table of cases, each column a config key.
+
+A study table (``config/studies/*.tsv``) has one row per case; each column
+names a config key by its path with ``__`` between levels
+(``synthesis__resistance_ohm`` is ``config["synthesis"]["resistance_ohm"]``).
+A case's config is the workflow's config with the row's values merged in and
+validated against the schema, so a study can vary any key the workflow has.
+"""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .config import ConfigError, validate
+
+SEP = "__"
+
+
+def read_table(path: str | Path, config: dict) -> pd.DataFrame:
+    """Read a study table and check that every column is a config key."""
+    path = Path(path)
+    if not path.exists():
+        raise ConfigError(f"{path}: study table not found; fix the path under studies in the config")
+    df = pd.read_csv(path, sep="\t", comment="#")
+    if df.empty:
+        raise ConfigError(f"{path}: the study table has no cases")
+    for col in df.columns:
+        node = config
+        for key in col.split(SEP):
+            if not isinstance(node, dict) or key not in node:
+                raise ConfigError(
+                    f"{path}: column '{col}' is not a config key; name columns by their config path with "
+                    f"'{SEP}' between levels, e.g. synthesis{SEP}resistance_ohm"
+                )
+            node = node[key]
+    return df
+
+
+def _plain(value):
+    """numpy scalars to Python scalars (YAML/JSON-friendly, schema-valid)."""
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and value.is_integer() and abs(value) < 2**53:
+        return value  # keep floats floats: the schema types integers separately
+    return value
+
+
+def case_config(config: dict, overrides: dict, source: str = "study case") -> dict:
+    """The workflow's config with one case's overrides merged in, validated."""
+    out = copy.deepcopy(config)
+    for col, value in overrides.items():
+        keys = col.split(SEP)
+        node = out
+        for key in keys[:-1]:
+            node = node[key]
+        old = node[keys[-1]]
+        value = _plain(value)
+        if isinstance(old, int) and not isinstance(old, bool) and isinstance(value, float) and value.is_integer():
+            value = int(value)
+        node[keys[-1]] = value
+    return validate(out, source=source)
