@@ -59,7 +59,12 @@ def case_config(config: dict, overrides: dict, source: str = "study case") -> di
             node = node[key]
         old = node[keys[-1]]
         value = _plain(value)
-        if isinstance(old, int) and not isinstance(old, bool) and isinstance(value, float) and value.is_integer():
+        if (
+            isinstance(old, int)
+            and not isinstance(old, bool)
+            and isinstance(value, float)
+            and value.is_integer()
+        ):
             value = int(value)
         node[keys[-1]] = value
     return validate(out, source=source)

@@ -17,10 +17,10 @@ STUDIES = {
 rule study_case:
     output:
         json=f"{RESULTS}/studies/{{study}}/{{case}}/summary.json",
-    params:
-        overrides=lambda wc: dict(STUDIES[wc.study].instance(wc)),
     log:
         f"{RESULTS}/logs/studies/{{study}}/{{case}}.log",
+    params:
+        overrides=lambda wc: dict(STUDIES[wc.study].instance(wc)),
     script:
         "../scripts/study_case.py"
 

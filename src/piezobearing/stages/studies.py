@@ -12,7 +12,14 @@ from pathlib import Path
 import pandas as pd
 
 from ..studies import case_config
-from .calibration import extract_sensitivity, fit_resistance, lowfreq, read_json, synthesize_calibration, write_json
+from .calibration import (
+    extract_sensitivity,
+    fit_resistance,
+    lowfreq,
+    read_json,
+    synthesize_calibration,
+    write_json,
+)
 
 
 def calibration_circuit_case(config: dict, outdir: Path) -> dict:
@@ -21,7 +28,9 @@ def calibration_circuit_case(config: dict, outdir: Path) -> dict:
     synthesize_calibration(config, str(meas))
     extract_sensitivity(str(meas), str(outdir / "sensitivity.json"), config)
     fit_resistance(str(meas), str(outdir / "resistance.json"), str(outdir / "fit.csv"), config)
-    lowfreq(str(outdir / "resistance.json"), str(outdir / "lowfreq.json"), str(outdir / "lowfreq.csv"), config)
+    lowfreq(
+        str(outdir / "resistance.json"), str(outdir / "lowfreq.json"), str(outdir / "lowfreq.csv"), config
+    )
     s, r, lf = (read_json(outdir / n) for n in ("sensitivity.json", "resistance.json", "lowfreq.json"))
     return {
         "impulse_sensitivity_V_per_N": s["sensitivity_V_per_N"],
