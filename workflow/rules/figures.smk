@@ -10,7 +10,11 @@ rule fig05:
         measurement=measurement_csv(),
         sensitivity=f"{RESULTS}/calibration/sensitivity.json",
     output:
-        figure=f"{RESULTS}/figures/fig05.png",
+        figure=report(
+            f"{RESULTS}/figures/fig05.png",
+            caption="../report/fig05.rst",
+            category="Calibration",
+        ),
         notebook=f"{RESULTS}/notebooks/fig05_calibration_impulses.ipynb",
     log:
         f"{RESULTS}/logs/fig05.log",
@@ -25,7 +29,11 @@ rule fig06:
         fit=f"{RESULTS}/calibration/fit.csv",
         resistance=f"{RESULTS}/calibration/resistance.json",
     output:
-        figure=f"{RESULTS}/figures/fig06.png",
+        figure=report(
+            f"{RESULTS}/figures/fig06.png",
+            caption="../report/fig06.rst",
+            category="Calibration",
+        ),
         notebook=f"{RESULTS}/notebooks/fig06_resistance_fit.ipynb",
     log:
         f"{RESULTS}/logs/fig06.log",
@@ -40,7 +48,11 @@ rule fig08a:
         curve=f"{RESULTS}/sensor/lowfreq.csv",
         lowfreq=f"{RESULTS}/sensor/lowfreq.json",
     output:
-        figure=f"{RESULTS}/figures/fig08a.png",
+        figure=report(
+            f"{RESULTS}/figures/fig08a.png",
+            caption="../report/fig08a.rst",
+            category="Calibration",
+        ),
         notebook=f"{RESULTS}/notebooks/fig08a_lowfreq_sensitivity.ipynb",
     log:
         f"{RESULTS}/logs/fig08a.log",

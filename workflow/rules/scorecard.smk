@@ -6,7 +6,11 @@ rule scorecard:
         parts=lambda wildcards: SCORECARD_PARTS,
     output:
         csv=f"{RESULTS}/scorecard.csv",
-        md=f"{RESULTS}/scorecard.md",
+        md=report(
+            f"{RESULTS}/scorecard.md",
+            caption="../report/scorecard.rst",
+            category="Scorecard",
+        ),
     log:
         f"{RESULTS}/logs/scorecard.log",
     script:

@@ -33,7 +33,12 @@ rule study_summary:
         ),
     output:
         csv=f"{RESULTS}/studies/{{study}}/summary.csv",
-        figure=f"{RESULTS}/studies/{{study}}/summary.png",
+        figure=report(
+            f"{RESULTS}/studies/{{study}}/summary.png",
+            caption="../report/study.rst",
+            category="Studies",
+            subcategory="{study}",
+        ),
     log:
         f"{RESULTS}/logs/studies/{{study}}_summary.log",
     script:
