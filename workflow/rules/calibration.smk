@@ -15,6 +15,8 @@ TARGETS.extend(
 rule synthesize_calibration:
     output:
         csv=f"{RESULTS}/calibration/measurement.csv",
+    conda:
+        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/synthesize_calibration.log",
     params:
@@ -30,6 +32,8 @@ rule extract_sensitivity:
         measurement=measurement_csv(),
     output:
         json=f"{RESULTS}/calibration/sensitivity.json",
+    conda:
+        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/extract_sensitivity.log",
     params:
@@ -44,6 +48,8 @@ rule fit_resistance:
     output:
         json=f"{RESULTS}/calibration/resistance.json",
         csv=f"{RESULTS}/calibration/fit.csv",
+    conda:
+        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/fit_resistance.log",
     params:
@@ -59,6 +65,8 @@ rule lowfreq_sensitivity:
     output:
         json=f"{RESULTS}/sensor/lowfreq.json",
         csv=f"{RESULTS}/sensor/lowfreq.csv",
+    conda:
+        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/lowfreq_sensitivity.log",
     params:
@@ -75,6 +83,8 @@ rule scorecard_calibration:
         lowfreq=f"{RESULTS}/sensor/lowfreq.json",
     output:
         csv=f"{RESULTS}/scorecard/calibration.csv",
+    conda:
+        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/scorecard_calibration.log",
     script:

@@ -16,6 +16,8 @@ rule fig05:
             category="Calibration",
         ),
         notebook=f"{RESULTS}/notebooks/fig05_calibration_impulses.ipynb",
+    conda:
+        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/fig05.log",
     shell:
@@ -35,6 +37,8 @@ rule fig06:
             category="Calibration",
         ),
         notebook=f"{RESULTS}/notebooks/fig06_resistance_fit.ipynb",
+    conda:
+        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/fig06.log",
     shell:
@@ -54,6 +58,8 @@ rule fig08a:
             category="Calibration",
         ),
         notebook=f"{RESULTS}/notebooks/fig08a_lowfreq_sensitivity.ipynb",
+    conda:
+        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/fig08a.log",
     shell:

@@ -11,6 +11,8 @@ rule scorecard:
             caption="../report/scorecard.rst",
             category="Scorecard",
         ),
+    conda:
+        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/scorecard.log",
     script:

@@ -17,6 +17,8 @@ STUDIES = {
 rule study_case:
     output:
         json=f"{RESULTS}/studies/{{study}}/{{case}}/summary.json",
+    conda:
+        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/studies/{{study}}/{{case}}.log",
     params:
@@ -39,6 +41,8 @@ rule study_summary:
             category="Studies",
             subcategory="{study}",
         ),
+    conda:
+        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/studies/{{study}}_summary.log",
     script:
