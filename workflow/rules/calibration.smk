@@ -15,10 +15,10 @@ TARGETS.extend(
 rule synthesize_calibration:
     output:
         csv=f"{RESULTS}/calibration/measurement.csv",
-    conda:
-        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/synthesize_calibration.log",
+    conda:
+        "../envs/piezobearing.yaml"
     params:
         seed=config["seed"],
         sensor=config["sensor"],
@@ -32,10 +32,10 @@ rule extract_sensitivity:
         measurement=measurement_csv(),
     output:
         json=f"{RESULTS}/calibration/sensitivity.json",
-    conda:
-        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/extract_sensitivity.log",
+    conda:
+        "../envs/piezobearing.yaml"
     params:
         calibration=config["calibration"],
     script:
@@ -48,10 +48,10 @@ rule fit_resistance:
     output:
         json=f"{RESULTS}/calibration/resistance.json",
         csv=f"{RESULTS}/calibration/fit.csv",
-    conda:
-        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/fit_resistance.log",
+    conda:
+        "../envs/piezobearing.yaml"
     params:
         sensor=config["sensor"],
         calibration=config["calibration"],
@@ -65,10 +65,10 @@ rule lowfreq_sensitivity:
     output:
         json=f"{RESULTS}/sensor/lowfreq.json",
         csv=f"{RESULTS}/sensor/lowfreq.csv",
-    conda:
-        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/lowfreq_sensitivity.log",
+    conda:
+        "../envs/piezobearing.yaml"
     params:
         sensor=config["sensor"],
         lowfreq=config["lowfreq"],
@@ -83,9 +83,9 @@ rule scorecard_calibration:
         lowfreq=f"{RESULTS}/sensor/lowfreq.json",
     output:
         csv=f"{RESULTS}/scorecard/calibration.csv",
-    conda:
-        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/scorecard_calibration.log",
+    conda:
+        "../envs/piezobearing.yaml"
     script:
         "../scripts/scorecard_calibration.py"

@@ -16,10 +16,10 @@ rule fig05:
             category="Calibration",
         ),
         notebook=f"{RESULTS}/notebooks/fig05_calibration_impulses.ipynb",
-    conda:
-        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/fig05.log",
+    conda:
+        "../envs/piezobearing.yaml"
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p measurement {input.measurement}"
         " -p sensitivity {input.sensitivity} -p figure {output.figure} > {log} 2>&1"
@@ -37,10 +37,10 @@ rule fig06:
             category="Calibration",
         ),
         notebook=f"{RESULTS}/notebooks/fig06_resistance_fit.ipynb",
-    conda:
-        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/fig06.log",
+    conda:
+        "../envs/piezobearing.yaml"
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p fit {input.fit}"
         " -p resistance {input.resistance} -p figure {output.figure} > {log} 2>&1"
@@ -58,10 +58,10 @@ rule fig08a:
             category="Calibration",
         ),
         notebook=f"{RESULTS}/notebooks/fig08a_lowfreq_sensitivity.ipynb",
-    conda:
-        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/fig08a.log",
+    conda:
+        "../envs/piezobearing.yaml"
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p curve {input.curve}"
         " -p lowfreq {input.lowfreq} -p figure {output.figure} > {log} 2>&1"

@@ -11,9 +11,9 @@ rule scorecard:
             caption="../report/scorecard.rst",
             category="Scorecard",
         ),
-    conda:
-        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/scorecard.log",
+    conda:
+        "../envs/piezobearing.yaml"
     script:
         "../scripts/scorecard.py"

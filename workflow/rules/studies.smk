@@ -17,10 +17,10 @@ STUDIES = {
 rule study_case:
     output:
         json=f"{RESULTS}/studies/{{study}}/{{case}}/summary.json",
-    conda:
-        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/studies/{{study}}/{{case}}.log",
+    conda:
+        "../envs/piezobearing.yaml"
     params:
         overrides=lambda wc: dict(STUDIES[wc.study].instance(wc)),
     script:
@@ -41,10 +41,10 @@ rule study_summary:
             category="Studies",
             subcategory="{study}",
         ),
-    conda:
-        "../envs/piezobearing.yaml"
     log:
         f"{RESULTS}/logs/studies/{{study}}_summary.log",
+    conda:
+        "../envs/piezobearing.yaml"
     script:
         "../scripts/study_summary.py"
 
