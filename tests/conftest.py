@@ -52,11 +52,13 @@ def _copy_repo(dest: Path) -> Path:
     return dest
 
 
-def run_workflow(workdir: Path, *args: str, timeout: int = 1200) -> subprocess.CompletedProcess:
-    """Run snakemake (from this interpreter's environment) in ``workdir``."""
+def run_workflow(
+    workdir: Path, *args: str, configfiles: tuple[str, ...] = ("config/ci.yaml",), timeout: int = 1200
+) -> subprocess.CompletedProcess:
+    """Run snakemake (from this interpreter's environment) in ``workdir`` with the CI config."""
     exe = Path(sys.executable).with_name("snakemake")
     return subprocess.run(
-        [str(exe), "--cores", "2", "--configfile", "config/ci.yaml", *args],
+        [str(exe), "--cores", "2", *args, "--configfile", *configfiles],
         cwd=workdir,
         capture_output=True,
         text=True,

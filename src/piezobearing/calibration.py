@@ -21,6 +21,8 @@ import numpy as np
 from scipy.constants import epsilon_0
 from scipy.signal import find_peaks, lfilter
 
+from .fitting import FitResult, Param, fit
+
 
 @dataclass(frozen=True)
 class SensorCircuit:
@@ -235,24 +237,20 @@ def sensitivity_summary(impulses: list[Impulse], time_s: np.ndarray) -> dict:
 # --------------------------------------------------------------------------- resistance fit
 
 
-def resistance_param(initial_ohm: float) -> "Param":
+def resistance_param(initial_ohm: float) -> Param:
     """The free parameter R of the baseline model, fitted on a log scale (1 kOhm to 1 TOhm)."""
-    from .fitting import Param
-
     return Param("resistance_ohm", float(initial_ohm), 1e3, 1e12, log=True)
 
 
 def fit_resistance(
     force_N: np.ndarray, voltage_V: np.ndarray, dt_s: float, circuit: SensorCircuit, initial_ohm: float
-):
+) -> FitResult:
     """Fit R of Eq. 6 to a measured voltage by nonlinear least squares.
 
     The voltage is simulated from the measured force with
     :func:`circuit_voltage` (all other constants fixed at ``circuit``) and R
     is varied on a log scale. Returns a :class:`piezobearing.fitting.FitResult`.
     """
-    from .fitting import fit
-
     v = np.asarray(voltage_V, dtype=float)
 
     def residual(p: dict) -> np.ndarray:

@@ -1,0 +1,81 @@
+"""Quality gates and workflow behaviour: lint, formatting, incremental rebuilds, report."""
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from conftest import REPO, run_workflow
+
+BIN = Path(sys.executable).parent
+
+
+def run(*cmd, cwd=REPO, timeout=300):
+    return subprocess.run([str(c) for c in cmd], cwd=cwd, capture_output=True, text=True, timeout=timeout)
+
+
+def test_ruff_is_clean():
+    out = run(BIN / "ruff", "check", "src", "tests")
+    assert out.returncode == 0, out.stdout[-3000:]
+
+
+def test_snakefmt_is_clean():
+    out = run(BIN / "snakefmt", "--check", "Snakefile", "workflow")
+    assert out.returncode == 0, out.stderr[-3000:]
+
+
+def test_snakemake_lint_is_clean():
+    out = run(BIN / "snakemake", "--lint", "--configfile", "config/ci.yaml")
+    assert out.returncode == 0, (out.stdout + out.stderr)[-3000:]
+
+
+def test_slurm_profile_dry_run():
+    out = run(
+        BIN / "snakemake", "-n", "--profile", "workflow/profiles/slurm", "--configfile", "config/ci.yaml",
+        "--forceall", "all", "study_all",
+    )
+    assert out.returncode == 0, out.stderr[-3000:]
+    assert "study_case" in out.stdout
+
+
+def _jobs(dry_run_stdout: str) -> set[str]:
+    table = dry_run_stdout.split("Job stats:")[-1]
+    return {m.group(1) for m in re.finditer(r"^(\w+)\s+\d+$", table, re.M)} - {"total", "job"}
+
+
+@pytest.mark.slow
+def test_changing_one_parameter_reruns_only_what_depends_on_it(ci_run: Path):
+    override = ci_run / "threshold.yaml"
+    override.write_text("lowfreq:\n  deviation_threshold: 0.04\n")
+    out = run_workflow(ci_run, "-n", configfiles=("config/ci.yaml", str(override)))
+    assert out.returncode == 0, out.stderr[-3000:]
+    jobs = _jobs(out.stdout)
+    assert "lowfreq_sensitivity" in jobs and "fig08a" in jobs
+    assert not {"synthesize_calibration", "extract_sensitivity", "fit_resistance", "fig05", "fig06"} & jobs
+
+
+@pytest.mark.slow
+def test_study_runs_and_gathers_its_summary(ci_run: Path):
+    out = run_workflow(ci_run, "study_all")
+    assert out.returncode == 0, out.stderr[-3000:]
+    import pandas as pd
+
+    df = pd.read_csv(ci_run / "results/studies/calibration_circuit/summary.csv")
+    assert len(df) == 2
+    # each case recovers its own resistance
+    assert (abs(df["resistance_fitted_ohm"] / df["synthesis__resistance_ohm"] - 1) < 0.05).all()
+    assert (ci_run / "results/studies/calibration_circuit/summary.png").stat().st_size > 0
+
+
+@pytest.mark.slow
+def test_report_holds_every_figure_with_its_caption(ci_run: Path):
+    out = run(BIN / "snakemake", "--configfile", "config/ci.yaml", "--report", "report.html", cwd=ci_run)
+    assert out.returncode == 0, out.stderr[-3000:]
+    html = (ci_run / "report.html").read_text()
+    figures = sorted(p.name for p in (ci_run / "results/figures").glob("*.png"))
+    assert figures
+    for name in figures:
+        assert name in html, name
+    for caption in sorted((REPO / "workflow/report").glob("fig*.rst")):
+        assert f"Fig. {caption.stem[3:].lstrip('0')}" in html, caption.name
