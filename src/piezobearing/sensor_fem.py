@@ -185,9 +185,6 @@ def assemble(mesh: StackMesh, mat: StackMaterials, order: int = 2, load_face: st
         e=mat.pzt.e_C_per_m2,
         kappa=mat.pzt.eps_S_F_per_m,
     )
-    area_quarter = float(np.pi * (mesh.geometry.radii_m[0] if load_face == "bottom" else 0.0) ** 2)
-    # The traction is set so that the total force on the quarter is SECTOR_FRACTION N; the face
-    # area is measured from the mesh (it equals the circle's area by construction).
     t_stiff, t_mass = [], []
     for g, reg in regions.items():
         mm = m_pzt if g == GROUP_PZT else m_alu
@@ -233,7 +230,6 @@ def assemble(mesh: StackMesh, mat: StackMaterials, order: int = 2, load_face: st
     vec = load_eq.evaluate(mode="weak", dw_mode="vector", asm_obj=vec)
     fvec = np.asarray(vec)[pb_l.equations.variables.adi.indx["u"]]
     face_area = abs(fvec[2::3].sum())  # quarter face area [m^2] (unit traction)
-    del area_quarter
     load = fvec * (SECTOR_FRACTION / face_area)
     return Assembled(
         K=K, M=M, G=G, Kpp=Kpp, u_coors=fu.get_coor().copy(), p_coors=fp.get_coor().copy(), load=load, mesh=mesh
@@ -532,8 +528,6 @@ def label_mode(rs: ReducedSystem, shape: np.ndarray) -> tuple[str, dict]:
     info = {"kinetic": kin}
     if fam == "SS":
         ax, ra = _captured(rs, shape, "axial"), _captured(rs, shape, "radial")
-        both = _test_fields(rs.asm.u_coors, "axial"), _test_fields(rs.asm.u_coors, "radial")
-        del both
         info["axisymmetric_fraction"] = ax + ra
         if ax + ra < 0.05:
             return "radial (n=2)", info
@@ -543,3 +537,216 @@ def label_mode(rs: ReducedSystem, shape: np.ndarray) -> tuple[str, dict]:
         info["torsion_fraction"] = tor
         return ("torsion" if tor >= 0.05 else "circumferential (n=2)"), info
     return "bending/rocking", info
+
+
+# --------------------------------------------------------------------------- harmonic response
+
+
+@dataclass(frozen=True)
+class MeasuringCircuit:
+    """What hangs across the electrodes: resistance R [Ohm] parallel to a capacitance [F] (the cable)."""
+
+    resistance_ohm: float
+    capacitance_F: float
+
+    def admittance_over_jw(self, f_Hz: np.ndarray) -> np.ndarray:
+        """Y / (j omega) = C + 1 / (j omega R) [F] for the full stack."""
+        w = 2 * np.pi * np.asarray(f_Hz, dtype=float)
+        return self.capacitance_F + 1.0 / (1j * w * self.resistance_ohm)
+
+
+@dataclass(frozen=True)
+class ReducedModel:
+    """Real Ritz model of the SS family, enough for every harmonic quantity.
+
+    ``omega2`` (k,) Ritz eigenvalues [rad^2/s^2]; ``b_k``, ``f_k`` (k,) the
+    coupling vector and the load projected on the M-normalised Ritz vectors;
+    ``c0_F`` blocked capacitance; all of the quarter model (multiply charges
+    and capacitances by 1/SECTOR_FRACTION for the full stack).
+    """
+
+    omega2: np.ndarray
+    b_k: np.ndarray
+    f_k: np.ndarray
+    c0_F: float
+    damping_ratio: float = 0.0
+
+    def alpha_beta(self, f_Hz) -> tuple[np.ndarray, np.ndarray]:
+        """alpha = b^T H f and beta = b^T H b, H = (K_s - w^2 M + j 2 zeta w_k w)^-1 (quarter)."""
+        w = 2 * np.pi * np.atleast_1d(np.asarray(f_Hz, dtype=float))[:, None]
+        wk = np.sqrt(self.omega2)[None, :]
+        den = self.omega2[None, :] - w**2 + 2j * self.damping_ratio * wk * w
+        alpha = (self.b_k * self.f_k / den).sum(axis=1)
+        beta = (self.b_k**2 / den).sum(axis=1)
+        return alpha, beta
+
+    def voltage_per_force(self, f_Hz, circuit: MeasuringCircuit | None) -> np.ndarray:
+        """Complex V/F [V/N] of the full stack; ``None`` = open circuit (no circuit at all)."""
+        alpha, beta = self.alpha_beta(f_Hz)
+        load = 0.0 if circuit is None else SECTOR_FRACTION * circuit.admittance_over_jw(np.atleast_1d(f_Hz))
+        return alpha / (self.c0_F + beta + load)
+
+    @property
+    def charge_per_force_C_per_N(self) -> float:
+        """Short-circuit charge per newton at zero frequency, b^T K_s^-1 f (the stack's effective d33) [C/N]."""
+        return float((self.b_k * self.f_k / self.omega2).sum()) / SECTOR_FRACTION
+
+    @property
+    def static_capacitance_F(self) -> float:
+        """Electrode capacitance with the mechanical conditions, zero force: c0 + b^T K_s^-1 b [F] (full)."""
+        return float(self.c0_F + (self.b_k**2 / self.omega2).sum()) / SECTOR_FRACTION
+
+
+def reduced_model(rs: ReducedSystem, short_modes: Modes, damping_ratio: float = 0.0) -> ReducedModel:
+    """Ritz reduction on [short-circuit modes, K_s^-1 f, K_s^-1 b], exact at zero frequency."""
+    cols = [short_modes.shapes, rs.ks_inv_f[:, None]]
+    if rs.electrode_active:
+        cols.append(rs.ks_inv_b[:, None])
+    t = np.hstack(cols)
+    t = t / np.sqrt(np.einsum("ik,ik->k", t, rs.M @ t))
+    kt = np.column_stack([rs.ks_matvec(t[:, k]) for k in range(t.shape[1])])
+    kr = 0.5 * (t.T @ kt + (t.T @ kt).T)
+    mr = t.T @ (rs.M @ t)
+    mr = 0.5 * (mr + mr.T)
+    from scipy.linalg import eigh
+
+    lam, y = eigh(kr, mr)
+    psi = t @ y
+    return ReducedModel(
+        omega2=lam, b_k=psi.T @ rs.b, f_k=psi.T @ rs.f, c0_F=rs.c0, damping_ratio=damping_ratio
+    )
+
+
+def direct_voltage_per_force(rs: ReducedSystem, f_Hz: float, circuit: MeasuringCircuit | None) -> complex:
+    """V/F [V/N] from one direct (complex, undamped) solve of the full coupled system; for verification."""
+    s = rs.scale
+    w2 = (2 * np.pi * f_Hz) ** 2
+    load = 0.0 if circuit is None else SECTOR_FRACTION * complex(circuit.admittance_over_jw(f_Hz))
+    n_i = rs.G_I.shape[1]
+    a = sp.bmat(
+        [
+            [rs.K - w2 * rs.M, s * rs.G_I, s * sp.csr_matrix(rs.g[:, None])],
+            [s * rs.G_I.T, -(s * s) * rs.Kpp_II, -(s * s) * sp.csr_matrix(rs.k_I[:, None])],
+            [s * sp.csr_matrix(rs.g[None, :]), -(s * s) * sp.csr_matrix(rs.k_I[None, :]),
+             sp.csr_matrix(np.array([[-(s * s) * (rs.k_EE + load)]]))],
+        ],
+        format="csc",
+    ).astype(complex)
+    rhs = np.concatenate([rs.f, np.zeros(n_i + 1)]).astype(complex)
+    x = spla.spsolve(a, rhs)
+    return complex(s * x[-1])
+
+
+# --------------------------------------------------------------------------- analyses of the stack
+
+#: The symmetry families of the quarter model; AS is the mirror image of SA
+#: (the mesh is symmetric under x <-> y), so its modes are SA's partners.
+FAMILIES = ("SS", "SA", "AA")
+
+
+def stack_conditions(z_interfaces_m, family: str = "SS") -> BoundaryConditions:
+    """The sensor's conditions: top face clamped, PZT bottom face hot, PZT top face grounded."""
+    z = np.asarray(z_interfaces_m)
+    return BoundaryConditions(family, (("top", (0, 1, 2)),), hot_z_m=float(z[1]), ground_z_m=float(z[2]))
+
+
+@dataclass(frozen=True)
+class ModeRecord:
+    """One mode of the full stack: family, label, short/open frequencies [Hz], shape measures."""
+
+    family: str
+    multiplicity: int
+    label: str
+    frequency_short_Hz: float
+    frequency_open_Hz: float
+    kinetic: dict
+    coupling_factor: float
+
+
+@dataclass
+class ModalSurvey:
+    """Every mode below ``f_max_Hz`` and the SS family's system and modes (for the harmonic analysis)."""
+
+    records: list
+    ss_system: ReducedSystem = field(repr=False)
+    ss_short: Modes = field(repr=False)
+
+    @property
+    def first_axial(self) -> ModeRecord:
+        ax = [r for r in self.records if r.label == "axial"]
+        if not ax:
+            raise RuntimeError("no axial mode below the modal frequency limit; raise modal_max_frequency_Hz")
+        return ax[0]
+
+
+def modal_survey(asm: Assembled, z_interfaces_m, f_max_Hz: float) -> ModalSurvey:
+    """Modes of every symmetry family below ``f_max_Hz``, short- and open-circuited, labelled by shape.
+
+    SS modes are paired short/open by index: the open circuit is a rank-one
+    stiffening, so its eigenvalues interlace the short-circuit ones.
+    """
+    records = []
+    ss_sys = ss_short = None
+    for fam in FAMILIES:
+        rs = reduce(asm, stack_conditions(z_interfaces_m, fam))
+        short = modes_below(rs, f_max_Hz, "short")
+        if fam == "SS":
+            ss_sys = rs
+            n_all = len(short.frequency_Hz) + 4
+            ss_short = modes(rs, n_all, "short")
+            f_open = modes(rs, n_all, "open").frequency_Hz[: len(short.frequency_Hz)]
+        else:
+            f_open = short.frequency_Hz
+        for k, f_s in enumerate(short.frequency_Hz):
+            label, info = label_mode(rs, short.shapes[:, k])
+            keff = float(np.sqrt(max(0.0, 1 - (f_s / f_open[k]) ** 2)))
+            records.append(
+                ModeRecord(fam, 2 if fam == "SA" else 1, label, float(f_s), float(f_open[k]), info["kinetic"], keff)
+            )
+    records.sort(key=lambda r: r.frequency_short_Hz)
+    return ModalSurvey(records, ss_sys, ss_short)
+
+
+def first_axial_shape(survey: ModalSurvey) -> np.ndarray:
+    """Short-circuit shape (free DOFs) of the first axial mode of the SS family, max |u| = 1."""
+    rs, short = survey.ss_system, survey.ss_short
+    f_ax = survey.first_axial.frequency_short_Hz
+    k = int(np.argmin(np.abs(short.frequency_Hz - f_ax)))
+    u = short.shapes[:, k]
+    uz = rs.full_u(u)[:, 2]
+    sign = np.sign(uz[np.argmax(np.abs(uz))])
+    return sign * u / np.abs(rs.full_u(u)).max()
+
+
+def loaded_resonance_Hz(model: ReducedModel, circuit: MeasuringCircuit, f_lo_Hz: float, f_hi_Hz: float) -> float:
+    """Frequency of the largest |V/F| in [f_lo, f_hi]: the first axial resonance with the circuit attached."""
+    from scipy.optimize import minimize_scalar
+
+    grid = np.linspace(f_lo_Hz, f_hi_Hz, 2001)
+    h = np.abs(model.voltage_per_force(grid, circuit))
+    k = int(np.argmax(h))
+    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
+    res = minimize_scalar(
+        lambda f: -abs(model.voltage_per_force(f, circuit)[0]), bounds=(lo, hi), method="bounded",
+        options={"xatol": 1e-6 * hi},
+    )
+    return float(res.x)
+
+
+def band_edge_Hz(
+    model: ReducedModel, circuit: MeasuringCircuit, ratio: float, reference_V_per_N: float, f_lo_Hz: float,
+    f_peak_Hz: float,
+) -> float:
+    """Frequency in (f_lo, f_peak) where |V/F| first reaches ``ratio`` times the reference (root-found)."""
+    from scipy.optimize import brentq
+
+    def g(f):
+        return abs(model.voltage_per_force(f, circuit)[0]) / reference_V_per_N - ratio
+
+    if g(f_lo_Hz) >= 0 or g(f_peak_Hz) <= 0:
+        raise ValueError(f"the response does not cross {ratio:.4g} x reference between {f_lo_Hz} and {f_peak_Hz} Hz")
+    # Bracket on a log grid first: the response is monotonic there, but this guards the root.
+    grid = np.geomspace(f_lo_Hz, f_peak_Hz, 400)
+    vals = np.array([g(f) for f in grid])
+    k = int(np.flatnonzero(vals >= 0)[0])
+    return float(brentq(g, grid[k - 1], grid[k], xtol=1e-9 * grid[k], rtol=1e-12))

@@ -85,7 +85,7 @@ class StackMesh:
     cells: np.ndarray
     groups: np.ndarray
     geometry: StackGeometry
-    level: int
+    level: float
 
     @property
     def n_cells(self) -> int:
@@ -201,25 +201,31 @@ def cross_section(radii: list[float], n_core: int, n_rings: list[int], grading: 
     return np.array(pts, dtype=float), np.array(quads, dtype=int), np.array(qrad)
 
 
-def stack_mesh(geometry: StackGeometry, density: MeshDensity = MeshDensity(), level: int = 1) -> StackMesh:
+def divisions(base: int, multiplier: float) -> int:
+    """Division count ``base`` scaled by the refinement ``multiplier`` (at least one)."""
+    return max(1, int(np.floor(base * multiplier + 0.5)))
+
+
+def stack_mesh(geometry: StackGeometry, density: MeshDensity = MeshDensity(), level: float = 1.0) -> StackMesh:
     """Quarter hexahedral mesh of the stack at refinement multiplier ``level``.
 
-    Every division count of ``density`` is multiplied by ``level``.
+    Every division count of ``density`` is multiplied by ``level`` and rounded.
     """
-    if level < 1:
-        raise ValueError(f"mesh level must be >= 1, got {level}")
+    if level <= 0:
+        raise ValueError(f"mesh refinement multiplier must be > 0, got {level}")
     r_b, r_p, r_t = geometry.radii_m
     radii = sorted({r_b, r_p, r_t})
     if len(radii) != 3:
         raise ValueError("the three disk diameters must differ")
-    n_rings = [level * k for k in density.n_rings]
-    corners = [r_b, r_p] if r_b < r_p else [r_p]
-    pts2, quads2, qrad = cross_section(radii, level * density.n_core, n_rings, density.grading, corners)
+    n_rings = [divisions(k, level) for k in density.n_rings]
+    # Re-entrant corners: the rim of the narrower disk at each of the two PZT interfaces.
+    corners = sorted({min(r_b, r_p), min(r_t, r_p)})
+    pts2, quads2, qrad = cross_section(radii, divisions(density.n_core, level), n_rings, density.grading, corners)
     zs = geometry.z_interfaces_m
     zlist = [np.array([zs[0]])]
     groups_z = []
     for m in range(3):
-        nl = level * density.n_layers[m]
+        nl = divisions(density.n_layers[m], level)
         # Refine towards the PZT faces (the corners sit there).
         ends = {0: "hi", 1: "both", 2: "lo"}[m]
         t = graded(nl, density.grading, ends)
