@@ -33,6 +33,8 @@ rule sensor_voltage:
         f"{RESULTS}/logs/sensor_voltage_{{case}}.log",
     wildcard_constraints:
         case="healthy|faulty",
+    conda:
+        "../envs/piezobearing.yaml"
     params:
         sensor=config["sensor"],
         signals=config["signals"],
@@ -50,6 +52,8 @@ rule noisy:
         f"{RESULTS}/logs/noisy_{{case}}.log",
     wildcard_constraints:
         case="healthy|faulty",
+    conda:
+        "../envs/piezobearing.yaml"
     params:
         seed=config["seed"],
         snr_dB=config["signals"]["snr_dB"],
@@ -69,6 +73,8 @@ rule envelope:
         f"{RESULTS}/logs/envelope_{{case}}.log",
     wildcard_constraints:
         case="healthy|faulty",
+    conda:
+        "../envs/piezobearing.yaml"
     params:
         signals=config["signals"],
     script:
@@ -88,6 +94,8 @@ rule fault_indicator:
         json=f"{RESULTS}/signals/fault_indicator.json",
     log:
         f"{RESULTS}/logs/fault_indicator.log",
+    conda:
+        "../envs/piezobearing.yaml"
     params:
         signals=config["signals"],
     script:
@@ -105,6 +113,8 @@ rule snr_study:
         json=f"{RESULTS}/signals/snr_study.json",
     log:
         f"{RESULTS}/logs/snr_study.log",
+    conda:
+        "../envs/piezobearing.yaml"
     params:
         seed=config["seed"],
         signals=config["signals"],
@@ -117,9 +127,15 @@ rule snr_study_figure:
         summary=f"{RESULTS}/signals/snr_study_summary.csv",
         json=f"{RESULTS}/signals/snr_study.json",
     output:
-        figure=f"{RESULTS}/figures/snr_study.png",
+        figure=report(
+            f"{RESULTS}/figures/snr_study.png",
+            caption="../report/snr_study.rst",
+            category="Fault detection",
+        ),
     log:
         f"{RESULTS}/logs/snr_study_figure.log",
+    conda:
+        "../envs/piezobearing.yaml"
     script:
         "../scripts/snr_study_figure.py"
 
@@ -133,6 +149,8 @@ rule defect_events:
         csv=f"{RESULTS}/signals/defect_events.csv",
     log:
         f"{RESULTS}/logs/defect_events.log",
+    conda:
+        "../envs/piezobearing.yaml"
     script:
         "../scripts/defect_events.py"
 
@@ -145,10 +163,16 @@ rule fig09:
         events=f"{RESULTS}/signals/defect_events.csv",
         kinematics=f"{RESULTS}/bearing/kinematics.json",
     output:
-        figure=f"{RESULTS}/figures/fig09.png",
+        figure=report(
+            f"{RESULTS}/figures/fig09.png",
+            caption="../report/fig09.rst",
+            category="Fault detection",
+        ),
         notebook=f"{RESULTS}/notebooks/fig09_voltage.ipynb",
     log:
         f"{RESULTS}/logs/fig09.log",
+    conda:
+        "../envs/piezobearing.yaml"
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p healthy {input.healthy}"
         " -p faulty {input.faulty} -p events {input.events} -p kinematics {input.kinematics}"
@@ -163,10 +187,16 @@ rule fig10:
         indicator=f"{RESULTS}/signals/fault_indicator.json",
         kinematics=f"{RESULTS}/bearing/kinematics.json",
     output:
-        figure=f"{RESULTS}/figures/fig10.png",
+        figure=report(
+            f"{RESULTS}/figures/fig10.png",
+            caption="../report/fig10.rst",
+            category="Fault detection",
+        ),
         notebook=f"{RESULTS}/notebooks/fig10_envelope.ipynb",
     log:
         f"{RESULTS}/logs/fig10.log",
+    conda:
+        "../envs/piezobearing.yaml"
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p healthy {input.healthy}"
         " -p faulty {input.faulty} -p indicator {input.indicator} -p kinematics {input.kinematics}"
@@ -182,5 +212,7 @@ rule scorecard_signals:
         csv=f"{RESULTS}/scorecard/signals.csv",
     log:
         f"{RESULTS}/logs/scorecard_signals.log",
+    conda:
+        "../envs/piezobearing.yaml"
     script:
         "../scripts/scorecard_signals.py"

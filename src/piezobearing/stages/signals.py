@@ -10,6 +10,7 @@ markers) and the scorecard rows.
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -280,7 +281,7 @@ def snr_study(voltages: dict, kinematics_json: str, out_csv: str, out_summary: s
     rows = []
     for case, path in voltages.items():
         _, v, dt = read_series(path, "voltage_V")
-        print(f"snr_study: {case}, {len(grid)} SNRs x {s['study_n_seeds']} seeds", flush=True)
+        print(f"snr_study: {case}, {len(grid)} SNRs x {s['study_n_seeds']} seeds", file=sys.stderr, flush=True)
         rows += sig.snr_sweep(v, dt, f0, case, grid, s["study_n_seeds"], config["seed"], es, ins)
     df = pd.DataFrame(rows)
     write_csv(df, out_csv)
