@@ -188,7 +188,9 @@ def assemble(mesh: StackMesh, mat: StackMaterials, order: int = 2, load_face: st
     t_stiff, t_mass = [], []
     for g, reg in regions.items():
         mm = m_pzt if g == GROUP_PZT else m_alu
-        t_stiff.append(Term.new(f"dw_lin_elastic({mm.name}.D, v, u)", integral, reg, **{mm.name: mm}, v=v, u=u))
+        t_stiff.append(
+            Term.new(f"dw_lin_elastic({mm.name}.D, v, u)", integral, reg, **{mm.name: mm}, v=v, u=u)
+        )
         t_mass.append(Term.new(f"dw_dot({mm.name}.rho, v, u)", integral, reg, **{mm.name: mm}, v=v, u=u))
     reg_p = regions[GROUP_PZT]
     t_g = Term.new("dw_piezo_coupling(pzt.e, v, p)", integral, reg_p, pzt=m_pzt, v=v, p=p)
@@ -232,7 +234,14 @@ def assemble(mesh: StackMesh, mat: StackMaterials, order: int = 2, load_face: st
     face_area = abs(fvec[2::3].sum())  # quarter face area [m^2] (unit traction)
     load = fvec * (SECTOR_FRACTION / face_area)
     return Assembled(
-        K=K, M=M, G=G, Kpp=Kpp, u_coors=fu.get_coor().copy(), p_coors=fp.get_coor().copy(), load=load, mesh=mesh
+        K=K,
+        M=M,
+        G=G,
+        Kpp=Kpp,
+        u_coors=fu.get_coor().copy(),
+        p_coors=fp.get_coor().copy(),
+        load=load,
+        mesh=mesh,
     )
 
 
@@ -301,7 +310,9 @@ class ReducedSystem:
         s = self.scale
         a = sp.bmat([[self.K, s * self.G_I], [s * self.G_I.T, -(s * s) * self.Kpp_II]], format="csc")
         log.info("factorizing saddle matrix n=%d nnz=%d", a.shape[0], a.nnz)
-        return spla.splu(a, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+        return spla.splu(
+            a, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True}
+        )
 
     @cached_property
     def _kpp_lu(self):
@@ -418,8 +429,19 @@ def reduce(asm: Assembled, bc: BoundaryConditions) -> ReducedSystem:
     pmax = abs(Kpp_II.diagonal()).max() if Kpp_II.shape[0] else 1.0
     scale = float(np.sqrt(kmax / pmax))
     return ReducedSystem(
-        asm=asm, bc=bc, free_u=free_u, K=K, M=M, G_I=G_I, Kpp_II=Kpp_II, g=g, k_I=k_I, k_EE=k_EE,
-        f=asm.load[free_u], scale=scale, electrode_active=electrode_active,
+        asm=asm,
+        bc=bc,
+        free_u=free_u,
+        K=K,
+        M=M,
+        G_I=G_I,
+        Kpp_II=Kpp_II,
+        g=g,
+        k_I=k_I,
+        k_EE=k_EE,
+        f=asm.load[free_u],
+        scale=scale,
+        electrode_active=electrode_active,
     )
 
 
@@ -627,8 +649,11 @@ def direct_voltage_per_force(rs: ReducedSystem, f_Hz: float, circuit: MeasuringC
         [
             [rs.K - w2 * rs.M, s * rs.G_I, s * sp.csr_matrix(rs.g[:, None])],
             [s * rs.G_I.T, -(s * s) * rs.Kpp_II, -(s * s) * sp.csr_matrix(rs.k_I[:, None])],
-            [s * sp.csr_matrix(rs.g[None, :]), -(s * s) * sp.csr_matrix(rs.k_I[None, :]),
-             sp.csr_matrix(np.array([[-(s * s) * (rs.k_EE + load)]]))],
+            [
+                s * sp.csr_matrix(rs.g[None, :]),
+                -(s * s) * sp.csr_matrix(rs.k_I[None, :]),
+                sp.csr_matrix(np.array([[-(s * s) * (rs.k_EE + load)]])),
+            ],
         ],
         format="csc",
     ).astype(complex)
@@ -701,7 +726,9 @@ def modal_survey(asm: Assembled, z_interfaces_m, f_max_Hz: float) -> ModalSurvey
             label, info = label_mode(rs, short.shapes[:, k])
             keff = float(np.sqrt(max(0.0, 1 - (f_s / f_open[k]) ** 2)))
             records.append(
-                ModeRecord(fam, 2 if fam == "SA" else 1, label, float(f_s), float(f_open[k]), info["kinetic"], keff)
+                ModeRecord(
+                    fam, 2 if fam == "SA" else 1, label, float(f_s), float(f_open[k]), info["kinetic"], keff
+                )
             )
     records.sort(key=lambda r: r.frequency_short_Hz)
     return ModalSurvey(records, ss_sys, ss_short)
@@ -718,7 +745,9 @@ def first_axial_shape(survey: ModalSurvey) -> np.ndarray:
     return sign * u / np.abs(rs.full_u(u)).max()
 
 
-def loaded_resonance_Hz(model: ReducedModel, circuit: MeasuringCircuit, f_lo_Hz: float, f_hi_Hz: float) -> float:
+def loaded_resonance_Hz(
+    model: ReducedModel, circuit: MeasuringCircuit, f_lo_Hz: float, f_hi_Hz: float
+) -> float:
     """Frequency of the largest |V/F| in [f_lo, f_hi]: the first axial resonance with the circuit attached."""
     from scipy.optimize import minimize_scalar
 
@@ -727,14 +756,20 @@ def loaded_resonance_Hz(model: ReducedModel, circuit: MeasuringCircuit, f_lo_Hz:
     k = int(np.argmax(h))
     lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
     res = minimize_scalar(
-        lambda f: -abs(model.voltage_per_force(f, circuit)[0]), bounds=(lo, hi), method="bounded",
+        lambda f: -abs(model.voltage_per_force(f, circuit)[0]),
+        bounds=(lo, hi),
+        method="bounded",
         options={"xatol": 1e-6 * hi},
     )
     return float(res.x)
 
 
 def band_edge_Hz(
-    model: ReducedModel, circuit: MeasuringCircuit, ratio: float, reference_V_per_N: float, f_lo_Hz: float,
+    model: ReducedModel,
+    circuit: MeasuringCircuit,
+    ratio: float,
+    reference_V_per_N: float,
+    f_lo_Hz: float,
     f_peak_Hz: float,
 ) -> float:
     """Frequency in (f_lo, f_peak) where |V/F| first reaches ``ratio`` times the reference (root-found)."""
@@ -744,7 +779,9 @@ def band_edge_Hz(
         return abs(model.voltage_per_force(f, circuit)[0]) / reference_V_per_N - ratio
 
     if g(f_lo_Hz) >= 0 or g(f_peak_Hz) <= 0:
-        raise ValueError(f"the response does not cross {ratio:.4g} x reference between {f_lo_Hz} and {f_peak_Hz} Hz")
+        raise ValueError(
+            f"the response does not cross {ratio:.4g} x reference between {f_lo_Hz} and {f_peak_Hz} Hz"
+        )
     # Bracket on a log grid first: the response is monotonic there, but this guards the root.
     grid = np.geomspace(f_lo_Hz, f_peak_Hz, 400)
     vals = np.array([g(f) for f in grid])

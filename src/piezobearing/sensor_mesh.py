@@ -135,8 +135,10 @@ def cross_section(radii: list[float], n_core: int, n_rings: list[int], grading: 
     theta = np.linspace(0.0, np.pi / 2, n_ang + 1)
     # Square boundary from (a, 0) to (a, a) to (0, a), n_ang segments.
     sq = np.concatenate(
-        [np.column_stack([np.full(n + 1, a), np.linspace(0, a, n + 1)]),
-         np.column_stack([np.linspace(a, 0, n + 1)[1:], np.full(n, a)])]
+        [
+            np.column_stack([np.full(n + 1, a), np.linspace(0, a, n + 1)]),
+            np.column_stack([np.linspace(a, 0, n + 1)[1:], np.full(n, a)]),
+        ]
     )
     idx = {}
     pts = []
@@ -158,17 +160,21 @@ def cross_section(radii: list[float], n_core: int, n_rings: list[int], grading: 
     qrad = []
     for i in range(n):
         for j in range(n):
-            quads.append([idx[("c", i, j)], idx[("c", i + 1, j)], idx[("c", i + 1, j + 1)], idx[("c", i, j + 1)]])
+            quads.append(
+                [idx[("c", i, j)], idx[("c", i + 1, j)], idx[("c", i + 1, j + 1)], idx[("c", i, j + 1)]]
+            )
             qrad.append(0.0)
     # Rings: radial stations along each ray k.
     circle = np.column_stack([np.cos(theta), np.sin(theta)])
     stations = []  # list of (kind, param) per radial station after the square
     prev = None
-    for m, (r, nr) in enumerate(zip(radii, n_rings)):
+    for m, (r, nr) in enumerate(zip(radii, n_rings, strict=True)):
         rv = _area_radius(r, delta)
         lo_corner = m > 0 and any(np.isclose(radii[m - 1], c) for c in corner_radii)
         hi_corner = any(np.isclose(r, c) for c in corner_radii)
-        ends = "both" if (lo_corner and hi_corner) else ("hi" if hi_corner else ("lo" if lo_corner else "none"))
+        ends = (
+            "both" if (lo_corner and hi_corner) else ("hi" if hi_corner else ("lo" if lo_corner else "none"))
+        )
         t = graded(nr, grading, ends)
         for tt in t[1:]:
             if m == 0:
@@ -177,7 +183,6 @@ def cross_section(radii: list[float], n_core: int, n_rings: list[int], grading: 
                 stations.append(("ring", prev + tt * (rv - prev), tt))
         prev = rv
     ring_keys = [core_key]
-    ring_rad_exact = [0.0]
     for s, (kind, val, tt) in enumerate(stations):
         keys = []
         for k in range(n_ang + 1):
@@ -206,7 +211,9 @@ def divisions(base: int, multiplier: float) -> int:
     return max(1, int(np.floor(base * multiplier + 0.5)))
 
 
-def stack_mesh(geometry: StackGeometry, density: MeshDensity = MeshDensity(), level: float = 1.0) -> StackMesh:
+def stack_mesh(
+    geometry: StackGeometry, density: MeshDensity = MeshDensity(), level: float = 1.0
+) -> StackMesh:
     """Quarter hexahedral mesh of the stack at refinement multiplier ``level``.
 
     Every division count of ``density`` is multiplied by ``level`` and rounded.
@@ -220,7 +227,9 @@ def stack_mesh(geometry: StackGeometry, density: MeshDensity = MeshDensity(), le
     n_rings = [divisions(k, level) for k in density.n_rings]
     # Re-entrant corners: the rim of the narrower disk at each of the two PZT interfaces.
     corners = sorted({min(r_b, r_p), min(r_t, r_p)})
-    pts2, quads2, qrad = cross_section(radii, divisions(density.n_core, level), n_rings, density.grading, corners)
+    pts2, quads2, qrad = cross_section(
+        radii, divisions(density.n_core, level), n_rings, density.grading, corners
+    )
     zs = geometry.z_interfaces_m
     zlist = [np.array([zs[0]])]
     groups_z = []
@@ -263,8 +272,10 @@ def cylinder_mesh(radius_m: float, height_m: float, n_core: int, n_ring: int, n_
 def hex_volumes(mesh: StackMesh) -> np.ndarray:
     """Volume of each hexahedron [m^3] (2x2x2 Gauss rule on the trilinear map)."""
     g = np.array([-1, 1]) / np.sqrt(3)
-    ref = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
-                    [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], dtype=float)
+    ref = np.array(
+        [[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1], [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]],
+        dtype=float,
+    )
     x = mesh.coors[mesh.cells]  # (nc, 8, 3)
     vol = np.zeros(len(x))
     for a in g:

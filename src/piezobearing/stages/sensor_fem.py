@@ -100,17 +100,29 @@ class SensorFemParams:
         )
         mats = fem.StackMaterials(stress_charge_form(pzt), s["pzt_density_kg_per_m3"], alu)
         dens = MeshDensity(
-            n_core=f["mesh_n_core"], n_rings=tuple(f["mesh_n_rings"]), n_layers=tuple(f["mesh_n_layers"]),
+            n_core=f["mesh_n_core"],
+            n_rings=tuple(f["mesh_n_rings"]),
+            n_layers=tuple(f["mesh_n_layers"]),
             grading=f["mesh_grading_ratio"],
         )
         q = f["mechanical_quality_factor"]
         return cls(
-            geometry=geo, density=dens, multipliers=mult, mesh_level=int(f["mesh_level"]), order=int(f["element_order"]),
-            materials=mats, c66_rule=s["c66_rule"], modal_max_frequency_Hz=f["modal_max_frequency_Hz"],
-            damping_ratio=0.0 if q is None else 1.0 / (2.0 * q), n_ritz_modes=int(f["n_ritz_modes"]),
-            sweep_min_Hz=f["sweep_min_frequency_Hz"], sweep_max_Hz=f["sweep_max_frequency_Hz"],
-            sweep_points=int(f["sweep_points"]), reference_frequency_Hz=f["reference_frequency_Hz"],
-            band_ratio_dB=f["band_ratio_dB"], band_ratio_percent=f["band_ratio_percent"],
+            geometry=geo,
+            density=dens,
+            multipliers=mult,
+            mesh_level=int(f["mesh_level"]),
+            order=int(f["element_order"]),
+            materials=mats,
+            c66_rule=s["c66_rule"],
+            modal_max_frequency_Hz=f["modal_max_frequency_Hz"],
+            damping_ratio=0.0 if q is None else 1.0 / (2.0 * q),
+            n_ritz_modes=int(f["n_ritz_modes"]),
+            sweep_min_Hz=f["sweep_min_frequency_Hz"],
+            sweep_max_Hz=f["sweep_max_frequency_Hz"],
+            sweep_points=int(f["sweep_points"]),
+            reference_frequency_Hz=f["reference_frequency_Hz"],
+            band_ratio_dB=f["band_ratio_dB"],
+            band_ratio_percent=f["band_ratio_percent"],
             cable_capacitance_F=s["cable_length_m"] * s["cable_capacitance_F_per_m"],
         )
 
@@ -153,7 +165,9 @@ def write_mesh(mesh: StackMesh, path: str | Path) -> None:
     import meshio
 
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    m = meshio.Mesh(mesh.coors, [("hexahedron", mesh.cells)], cell_data={"group": [mesh.groups.astype(np.int32)]})
+    m = meshio.Mesh(
+        mesh.coors, [("hexahedron", mesh.cells)], cell_data={"group": [mesh.groups.astype(np.int32)]}
+    )
     meshio.write(str(path), m, file_format="vtk", binary=True)
 
 
@@ -171,7 +185,9 @@ def read_mesh(path: str | Path, params: SensorFemParams, level: float) -> StackM
     groups = np.asarray(m.cell_data_dict["group"]["hexahedron"], dtype=int)
     z = params.geometry.z_interfaces_m
     if not np.isclose(m.points[:, 2].max(), z[-1], rtol=1e-9) or not set(groups) <= {1, 2, 3}:
-        raise SensorFemError(f"{p}: mesh does not match the configured stack geometry; rerun rule sensor_mesh")
+        raise SensorFemError(
+            f"{p}: mesh does not match the configured stack geometry; rerun rule sensor_mesh"
+        )
     return StackMesh(np.asarray(m.points, float), np.asarray(cells, int), groups, params.geometry, level)
 
 
@@ -181,11 +197,18 @@ def sensor_mesh(out_meshes: list[str], out_json: str, config: dict) -> None:
     if len(out_meshes) != len(p.multipliers):
         raise SensorFemError("one mesh output per sensor_fem.refinement_multipliers entry is expected")
     levels = []
-    for k, (mult, path) in enumerate(zip(p.multipliers, out_meshes), start=1):
+    for k, (mult, path) in enumerate(zip(p.multipliers, out_meshes, strict=True), start=1):
         mesh = stack_mesh(p.geometry, p.density, mult)
         write_mesh(mesh, path)
-        levels.append({"level": k, "multiplier": mult, "n_cells": mesh.n_cells, "n_vertices": len(mesh.coors),
-                       "path": str(path)})
+        levels.append(
+            {
+                "level": k,
+                "multiplier": mult,
+                "n_cells": mesh.n_cells,
+                "n_vertices": len(mesh.coors),
+                "path": str(path),
+            }
+        )
     write_json(
         {
             "geometry": asdict(p.geometry),
@@ -237,7 +260,7 @@ def convergence_table(meshes: list[StackMesh], p: SensorFemParams) -> pd.DataFra
 def sensor_convergence(mesh_paths: list[str], out_csv: str, config: dict) -> None:
     """Mesh convergence of the first axial frequency over all refinement levels (SS quarter)."""
     p = SensorFemParams.from_config(config)
-    meshes = [read_mesh(path, p, m) for path, m in zip(mesh_paths, p.multipliers)]
+    meshes = [read_mesh(path, p, m) for path, m in zip(mesh_paths, p.multipliers, strict=True)]
     df = convergence_table(meshes, p)
     Path(out_csv).parent.mkdir(parents=True, exist_ok=True)
     df.to_csv(out_csv, index=False)
@@ -255,26 +278,35 @@ def _mode_npz(survey: fem.ModalSurvey, mesh: StackMesh, path: str | Path) -> Non
     interior = np.setdiff1d(
         np.arange(asm.p_coors.shape[0]),
         np.flatnonzero(
-            (np.abs(asm.p_coors[:, 2] - rs.bc.hot_z_m) < 1e-12) | (np.abs(asm.p_coors[:, 2] - rs.bc.ground_z_m) < 1e-12)
+            (np.abs(asm.p_coors[:, 2] - rs.bc.hot_z_m) < 1e-12)
+            | (np.abs(asm.p_coors[:, 2] - rs.bc.ground_z_m) < 1e-12)
         ),
     )
     phi = np.zeros(asm.p_coors.shape[0])
     if len(interior) == len(pot_free):
         phi[interior] = pot_free
     key = {tuple(np.round(c, 12)): i for i, c in enumerate(asm.p_coors)}
-    phi_v = np.array([phi[key[tuple(np.round(c, 12))]] if tuple(np.round(c, 12)) in key else np.nan
-                      for c in mesh.coors])
+    phi_v = np.array(
+        [phi[key[tuple(np.round(c, 12))]] if tuple(np.round(c, 12)) in key else np.nan for c in mesh.coors]
+    )
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(
-        path, coors_m=mesh.coors, cells=mesh.cells, groups=mesh.groups, displacement=disp,
-        potential=phi_v, frequency_Hz=survey.first_axial.frequency_short_Hz,
+        path,
+        coors_m=mesh.coors,
+        cells=mesh.cells,
+        groups=mesh.groups,
+        displacement=disp,
+        potential=phi_v,
+        frequency_Hz=survey.first_axial.frequency_short_Hz,
     )
 
 
 def _placement_check(p: SensorFemParams) -> dict:
     """First axial frequency with the two alumina disks swapped, on the coarsest mesh."""
     g = p.geometry
-    swapped = replace(g, bottom_disk_diameter_m=g.top_disk_diameter_m, top_disk_diameter_m=g.bottom_disk_diameter_m)
+    swapped = replace(
+        g, bottom_disk_diameter_m=g.top_disk_diameter_m, top_disk_diameter_m=g.bottom_disk_diameter_m
+    )
     mesh = stack_mesh(swapped, p.density, p.multipliers[0])
     asm = _assemble(mesh, p)
     rs = fem.reduce(asm, fem.stack_conditions(swapped.z_interfaces_m, "SS"))
@@ -416,7 +448,7 @@ def harmonic_results(mesh: StackMesh, p: SensorFemParams, rc_paper: SensorCircui
         "band_ratio_dB": p.band_ratio_dB,
         "band_ratio_percent": p.band_ratio_percent,
         "reference": "mid-band: |V/F| at reference_frequency_Hz (the flat plateau between the RC corner and the "
-                     "resonance)",
+        "resonance)",
         "reference_frequency_Hz": p.reference_frequency_Hz,
         "reference_sensitivity_V_per_N": ref,
         "mid_band_sensitivity_V_per_N": ref,
@@ -435,8 +467,11 @@ def harmonic_results(mesh: StackMesh, p: SensorFemParams, rc_paper: SensorCircui
         "rc_model_mid_band_V_per_N": rc_paper.open_circuit_gain_V_per_N,
         "damping_ratio": p.damping_ratio,
         "n_ritz_modes": p.n_ritz_modes,
-        "paper": {"band_low_Hz": PAPER_BAND_LOW_HZ, "band_high_Hz": PAPER_BAND_HIGH_HZ,
-                  "reference_sensitivity_V_per_N": PAPER_REFERENCE_SENSITIVITY_V_PER_N},
+        "paper": {
+            "band_low_Hz": PAPER_BAND_LOW_HZ,
+            "band_high_Hz": PAPER_BAND_HIGH_HZ,
+            "reference_sensitivity_V_per_N": PAPER_REFERENCE_SENSITIVITY_V_PER_N,
+        },
         "mesh": {"level": p.mesh_level, "multiplier": p.multiplier, "n_dof_displacement": int(asm.n_u)},
         "seconds": time.perf_counter() - t0,
     }
@@ -444,7 +479,12 @@ def harmonic_results(mesh: StackMesh, p: SensorFemParams, rc_paper: SensorCircui
 
 
 def sensor_harmonic(
-    mesh_vtk: str, modal_json: str, resistance_json: str, lowfreq_json: str, out_csv: str, out_json: str,
+    mesh_vtk: str,
+    modal_json: str,
+    resistance_json: str,
+    lowfreq_json: str,
+    out_csv: str,
+    out_json: str,
     config: dict,
 ) -> None:
     """1 N harmonic force on the bottom, top clamped, the fitted R and the cable across the electrodes."""
@@ -454,14 +494,128 @@ def sensor_harmonic(
     low = read_json(lowfreq_json, ["linear_from_Hz"])
     r = float(res["resistance_ohm"])
     if not np.isfinite(r) or r <= 0:
-        raise SensorFemError(f"{resistance_json}: resistance_ohm = {r} is not a positive number; rerun fit_resistance")
+        raise SensorFemError(
+            f"{resistance_json}: resistance_ohm = {r} is not a positive number; rerun fit_resistance"
+        )
     mesh = read_mesh(mesh_vtk, p, p.multiplier)
     rc = SensorCircuit.from_config(config["sensor"], r)
     df, band = harmonic_results(mesh, p, rc, float(low["linear_from_Hz"]))
     if not np.isclose(band["first_axial_short_Hz"], modal["first_resonance_short_Hz"], rtol=1e-6):
-        raise SensorFemError(f"{modal_json}: first resonance differs from this mesh's; rerun rule sensor_modal")
+        raise SensorFemError(
+            f"{modal_json}: first resonance differs from this mesh's; rerun rule sensor_modal"
+        )
     band["band_low_source"] = f"{lowfreq_json}: linear_from_Hz"
     band["config"] = _config_record(config)
     Path(out_csv).parent.mkdir(parents=True, exist_ok=True)
     df.to_csv(out_csv, index=False)
     write_json(band, out_json)
+
+
+# --------------------------------------------------------------------------- scorecard
+
+
+def scorecard_rows(modal: dict, band: dict, convergence: pd.DataFrame) -> list[Row]:
+    """The paper's numbers of Sec. III-C beside ours, with the reasons where they differ."""
+    sec = "III-C sensor FEM"
+    pc = modal["placement_check"]
+    lower = [m for m in modal["modes"] if m["frequency_short_Hz"] < modal["first_resonance_short_Hz"]]
+    lower_txt = ", ".join(f"{m['label']} {m['frequency_short_Hz'] / 1e3:.1f} kHz" for m in lower)
+    fr = PAPER_FIRST_RESONANCE_HZ
+    x3 = 10 ** (band["band_ratio_dB"] / 20)
+    sdof_3db = fr * np.sqrt(1 - 1 / x3)
+    sdof_27 = fr * np.sqrt(1 - 1 / (1 + band["band_ratio_percent"] / 100))
+    rise_45 = 1 / (1 - (PAPER_BAND_HIGH_HZ / fr) ** 2)
+    last = convergence.iloc[-1]
+    x_low = band["band_low_Hz"] / band["rc_model_corner_Hz"]
+    hp_low = x_low / np.sqrt(1 + x_low**2)
+    return [
+        Row(
+            sec,
+            "first resonance (first axial mode, electrodes shorted)",
+            fr,
+            modal["first_resonance_short_Hz"],
+            "Hz",
+            f"the mode a centred axial force excites; open circuit {modal['first_resonance_open_Hz'] / 1e3:.1f} kHz, "
+            f"with R and the cable {band['loaded_resonance_Hz'] / 1e3:.1f} kHz; below it only modes an axial force "
+            f"cannot excite ({lower_txt}). Depends on which disk is clamped: with the 5 mm disk on the housing "
+            f"{pc['first_axial_short_Hz'] / 1e3:.0f} kHz",
+        ),
+        Row(
+            sec,
+            "first resonance, open circuit (floating electrode)",
+            None,
+            modal["first_resonance_open_Hz"],
+            "Hz",
+            f"coupling factor k_eff = {modal['first_resonance_coupling_factor']:.3f}",
+        ),
+        Row(
+            sec,
+            "band low edge",
+            PAPER_BAND_LOW_HZ,
+            band["band_low_Hz"],
+            "Hz",
+            "from the low-frequency analysis (lowfreq.json, linear_from_Hz)",
+        ),
+        Row(
+            sec,
+            f"band high edge (+{band['band_ratio_dB']:g} dB over mid-band)",
+            PAPER_BAND_HIGH_HZ,
+            band["band_high_Hz"],
+            "Hz",
+            f"reference |V/F| at {band['reference_frequency_Hz']:g} Hz. A single-mode response "
+            f"1/(1-(f/fr)^2) with the paper's own fr = 121 kHz is +{band['band_ratio_dB']:g} dB (x{x3:.3f}) at "
+            f"fr sqrt(1-1/{x3:.3f}) = {sdof_3db / 1e3:.1f} kHz and only x{rise_45:.3f} "
+            f"({20 * np.log10(rise_45):.1f} dB) at 45 kHz, so 45 kHz cannot be a +3 dB edge of a 121 kHz resonance; "
+            f"relative to the 30 Hz sensitivity (the paper's reference) ours is "
+            f"{band['band_high_rel_band_low_Hz'] / 1e3:.1f} kHz",
+        ),
+        Row(
+            sec,
+            f"band high edge (+{band['band_ratio_percent']:g}%)",
+            PAPER_BAND_HIGH_HZ,
+            band["band_high_27_percent_Hz"],
+            "Hz",
+            f"the paper equates +3 dB with 'about 27%' (+3 dB is +41% in amplitude, +27% is "
+            f"{20 * np.log10(1.27):.2f} dB); single-mode estimate with fr = 121 kHz: {sdof_27 / 1e3:.1f} kHz; "
+            f"relative to the 30 Hz sensitivity ours is {band['band_high_27_percent_rel_band_low_Hz'] / 1e3:.1f} kHz",
+        ),
+        Row(
+            sec,
+            "mid-band sensitivity",
+            None,
+            band["reference_sensitivity_V_per_N"],
+            "V/N",
+            f"at {band['reference_frequency_Hz']:g} Hz: effective d33 {band['effective_d33_C_per_N'] * 1e12:.0f} pC/N "
+            f"over (C_FEM {band['fem_capacitance_F'] * 1e12:.1f} pF + cable "
+            f"{band['cable_capacitance_F'] * 1e12:.0f} pF); the RC model with the paper's d33 and Cp gives "
+            f"{band['rc_model_mid_band_V_per_N']:.3f} V/N",
+        ),
+        Row(
+            sec,
+            "sensitivity at the band low edge (reference of the paper)",
+            PAPER_REFERENCE_SENSITIVITY_V_PER_N,
+            band["sensitivity_at_band_low_V_per_N"],
+            "V/N",
+            f"the paper's 0.36 V/N cannot hold with its own constants: d33/(Cp + Ccable) = "
+            f"{band['rc_model_mid_band_V_per_N']:.3f} V/N times the RC high-pass at {band['band_low_Hz']:g} Hz "
+            f"({hp_low:.3f}) = {band['rc_model_mid_band_V_per_N'] * hp_low:.3f} V/N (see the calibration rows); "
+            "the FEM differs from that RC model only by its effective d33 and capacitance",
+        ),
+        Row(
+            sec,
+            "mesh convergence: change of the first axial frequency between the two finest meshes",
+            None,
+            float(last["change_short_percent"]),
+            "%",
+            f"levels {', '.join(f'{m:g}' for m in convergence['multiplier'])}; "
+            f"{int(last['n_dof'])} DOF on the finest",
+        ),
+    ]
+
+
+def scorecard_sensor_fem(modal_json: str, band_json: str, convergence_csv: str, out_csv: str) -> None:
+    """Write results/scorecard/sensor_fem.csv."""
+    modal = read_json(modal_json, ["first_resonance_short_Hz", "modes", "placement_check"])
+    band = read_json(band_json, ["band_high_Hz", "band_low_Hz"])
+    conv = pd.read_csv(convergence_csv)
+    write_part(scorecard_rows(modal, band, conv), out_csv)

@@ -1,0 +1,148 @@
+# The sensor stack in finite elements (paper Sec. III-C, Fig. 7 and 8b): quarter
+# mesh at every refinement level, mesh convergence, modes (short and open
+# circuit), harmonic response with the fitted R and the cable, band edges.
+
+SENSOR_FEM_LEVELS = range(1, len(config["sensor_fem"]["refinement_multipliers"]) + 1)
+SENSOR_FEM_MESH = (
+    f"{RESULTS}/sensor/mesh/stack_L{config['sensor_fem']['mesh_level']}.vtk"
+)
+
+FIGURES.extend([f"{RESULTS}/figures/fig07.png", f"{RESULTS}/figures/fig08b.png"])
+SCORECARD_PARTS.append(f"{RESULTS}/scorecard/sensor_fem.csv")
+TARGETS.extend(
+    [
+        f"{RESULTS}/sensor/modal.json",
+        f"{RESULTS}/sensor/harmonic.csv",
+        f"{RESULTS}/sensor/band.json",
+        f"{RESULTS}/sensor/convergence.csv",
+    ]
+)
+
+
+rule sensor_mesh:
+    output:
+        meshes=expand(
+            f"{RESULTS}/sensor/mesh/stack_L{{level}}.vtk", level=SENSOR_FEM_LEVELS
+        ),
+        json=f"{RESULTS}/sensor/mesh/mesh.json",
+    log:
+        f"{RESULTS}/logs/sensor_mesh.log",
+    conda:
+        "../envs/piezobearing.yaml"
+    params:
+        sensor=config["sensor"],
+        sensor_fem=config["sensor_fem"],
+    script:
+        "../scripts/sensor_mesh.py"
+
+
+rule sensor_convergence:
+    input:
+        meshes=expand(
+            f"{RESULTS}/sensor/mesh/stack_L{{level}}.vtk", level=SENSOR_FEM_LEVELS
+        ),
+    output:
+        csv=f"{RESULTS}/sensor/convergence.csv",
+    log:
+        f"{RESULTS}/logs/sensor_convergence.log",
+    conda:
+        "../envs/piezobearing.yaml"
+    params:
+        sensor=config["sensor"],
+        sensor_fem=config["sensor_fem"],
+    script:
+        "../scripts/sensor_convergence.py"
+
+
+rule sensor_modal:
+    input:
+        mesh=SENSOR_FEM_MESH,
+    output:
+        json=f"{RESULTS}/sensor/modal.json",
+        mode=f"{RESULTS}/sensor/first_axial_mode.npz",
+    log:
+        f"{RESULTS}/logs/sensor_modal.log",
+    conda:
+        "../envs/piezobearing.yaml"
+    params:
+        sensor=config["sensor"],
+        sensor_fem=config["sensor_fem"],
+    script:
+        "../scripts/sensor_modal.py"
+
+
+rule sensor_harmonic:
+    input:
+        mesh=SENSOR_FEM_MESH,
+        modal=f"{RESULTS}/sensor/modal.json",
+        resistance=f"{RESULTS}/calibration/resistance.json",
+        lowfreq=f"{RESULTS}/sensor/lowfreq.json",
+    output:
+        csv=f"{RESULTS}/sensor/harmonic.csv",
+        band=f"{RESULTS}/sensor/band.json",
+    log:
+        f"{RESULTS}/logs/sensor_harmonic.log",
+    conda:
+        "../envs/piezobearing.yaml"
+    params:
+        sensor=config["sensor"],
+        sensor_fem=config["sensor_fem"],
+    script:
+        "../scripts/sensor_harmonic.py"
+
+
+rule scorecard_sensor_fem:
+    input:
+        modal=f"{RESULTS}/sensor/modal.json",
+        band=f"{RESULTS}/sensor/band.json",
+        convergence=f"{RESULTS}/sensor/convergence.csv",
+    output:
+        csv=f"{RESULTS}/scorecard/sensor_fem.csv",
+    log:
+        f"{RESULTS}/logs/scorecard_sensor_fem.log",
+    conda:
+        "../envs/piezobearing.yaml"
+    script:
+        "../scripts/scorecard_sensor_fem.py"
+
+
+rule fig07:
+    input:
+        notebook="notebooks/fig07_sensor_mode.ipynb",
+        modal=f"{RESULTS}/sensor/modal.json",
+        mode=f"{RESULTS}/sensor/first_axial_mode.npz",
+    output:
+        figure=report(
+            f"{RESULTS}/figures/fig07.png",
+            caption="../report/fig07.rst",
+            category="Sensor FEM",
+        ),
+        notebook=f"{RESULTS}/notebooks/fig07_sensor_mode.ipynb",
+    log:
+        f"{RESULTS}/logs/fig07.log",
+    conda:
+        "../envs/piezobearing.yaml"
+    shell:
+        "papermill {input.notebook} {output.notebook} -k python3 -p modal {input.modal}"
+        " -p mode {input.mode} -p figure {output.figure} > {log} 2>&1"
+
+
+rule fig08b:
+    input:
+        notebook="notebooks/fig08b_sensor_harmonic.ipynb",
+        harmonic=f"{RESULTS}/sensor/harmonic.csv",
+        band=f"{RESULTS}/sensor/band.json",
+    output:
+        figure=report(
+            f"{RESULTS}/figures/fig08b.png",
+            caption="../report/fig08b.rst",
+            category="Sensor FEM",
+        ),
+        notebook=f"{RESULTS}/notebooks/fig08b_sensor_harmonic.ipynb",
+    log:
+        f"{RESULTS}/logs/fig08b.log",
+    conda:
+        "../envs/piezobearing.yaml"
+    shell:
+        "papermill {input.notebook} {output.notebook} -k python3 -p harmonic {input.harmonic}"
+        " -p band {input.band} -p figure {output.figure} > {log} 2>&1"
