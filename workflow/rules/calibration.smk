@@ -17,6 +17,8 @@ rule synthesize_calibration:
         csv=f"{RESULTS}/calibration/measurement.csv",
     log:
         f"{RESULTS}/logs/synthesize_calibration.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/synthesize_calibration.tsv"
     conda:
         "../envs/piezobearing.yaml"
     params:
@@ -34,6 +36,8 @@ rule extract_sensitivity:
         json=f"{RESULTS}/calibration/sensitivity.json",
     log:
         f"{RESULTS}/logs/extract_sensitivity.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/extract_sensitivity.tsv"
     conda:
         "../envs/piezobearing.yaml"
     params:
@@ -50,6 +54,8 @@ rule fit_resistance:
         csv=f"{RESULTS}/calibration/fit.csv",
     log:
         f"{RESULTS}/logs/fit_resistance.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/fit_resistance.tsv"
     conda:
         "../envs/piezobearing.yaml"
     params:
@@ -67,6 +73,8 @@ rule lowfreq_sensitivity:
         csv=f"{RESULTS}/sensor/lowfreq.csv",
     log:
         f"{RESULTS}/logs/lowfreq_sensitivity.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/lowfreq_sensitivity.tsv"
     conda:
         "../envs/piezobearing.yaml"
     params:
@@ -85,6 +93,8 @@ rule scorecard_calibration:
         csv=f"{RESULTS}/scorecard/calibration.csv",
     log:
         f"{RESULTS}/logs/scorecard_calibration.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/scorecard_calibration.tsv"
     conda:
         "../envs/piezobearing.yaml"
     script:

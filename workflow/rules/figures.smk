@@ -18,6 +18,8 @@ rule fig05:
         notebook=f"{RESULTS}/notebooks/fig05_calibration_impulses.ipynb",
     log:
         f"{RESULTS}/logs/fig05.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/fig05.tsv"
     conda:
         "../envs/piezobearing.yaml"
     shell:
@@ -39,6 +41,8 @@ rule fig06:
         notebook=f"{RESULTS}/notebooks/fig06_resistance_fit.ipynb",
     log:
         f"{RESULTS}/logs/fig06.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/fig06.tsv"
     conda:
         "../envs/piezobearing.yaml"
     shell:
@@ -60,6 +64,8 @@ rule fig08a:
         notebook=f"{RESULTS}/notebooks/fig08a_lowfreq_sensitivity.ipynb",
     log:
         f"{RESULTS}/logs/fig08a.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/fig08a.tsv"
     conda:
         "../envs/piezobearing.yaml"
     shell:

@@ -13,6 +13,8 @@ rule scorecard:
         ),
     log:
         f"{RESULTS}/logs/scorecard.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/scorecard.tsv"
     conda:
         "../envs/piezobearing.yaml"
     script:

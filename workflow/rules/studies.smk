@@ -19,6 +19,8 @@ rule study_case:
         json=f"{RESULTS}/studies/{{study}}/{{case}}/summary.json",
     log:
         f"{RESULTS}/logs/studies/{{study}}/{{case}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/study_case_{{study}}_{{case}}.tsv"
     conda:
         "../envs/piezobearing.yaml"
     params:
@@ -43,6 +45,8 @@ rule study_summary:
         ),
     log:
         f"{RESULTS}/logs/studies/{{study}}_summary.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/study_summary_{{study}}.tsv"
     conda:
         "../envs/piezobearing.yaml"
     script:
