@@ -61,7 +61,7 @@ def test_chain_detects_the_stand_in_fault(tmp_path, inputs, paper_config):
     nz = json.loads((out / "noisy_faulty.json").read_text())
     assert nz["realised_snr_dB"] == pytest.approx(10.0, abs=0.5)
     env = json.loads((out / "envelope_faulty.json").read_text())
-    assert env["n_samples"] == 2592 and abs(env["bpfo_bin_offset"]) < 1e-6  # 72 periods of 36 samples
+    assert env["n_samples"] == 2340 and abs(env["bpfo_bin_offset"]) < 1e-6  # (2600 - 255 skipped) -> 65 periods of 36
     ind = json.loads((out / "fault_indicator.json").read_text())
     assert ind["faulty"]["detected"] and not ind["healthy"]["detected"]
     assert [h["k"] for h in ind["faulty"]["harmonics"]] == [1, 2, 3]
@@ -89,7 +89,7 @@ def test_study_events_and_scorecard(tmp_path, inputs, paper_config):
     ind = json.loads((out / "fault_indicator.json").read_text())
     assert float(r0["indicator"].iloc[0]) == pytest.approx(ind["faulty"]["indicator"], rel=1e-6)
     st.defect_events(volt["healthy"], volt["faulty"], inputs["kinematics"], out / "events.csv")
-    assert len(pd.read_csv(out / "events.csv")) == 72
+    assert len(pd.read_csv(out / "events.csv")) == 65
     st.scorecard(out / "fault_indicator.json", out / "study.json", inputs["kinematics"], out / "scorecard.csv")
     sc = pd.read_csv(out / "scorecard.csv")
     assert sc.loc[sc["quantity"].str.startswith("BPFO"), "ours"].item() == pytest.approx(BPFO)

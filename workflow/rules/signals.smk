@@ -31,6 +31,8 @@ rule sensor_voltage:
         json=f"{RESULTS}/signals/voltage_{{case}}.json",
     log:
         f"{RESULTS}/logs/sensor_voltage_{{case}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/sensor_voltage_{{case}}.tsv"
     wildcard_constraints:
         case="healthy|faulty",
     conda:
@@ -50,6 +52,8 @@ rule noisy:
         json=f"{RESULTS}/signals/noisy_{{case}}.json",
     log:
         f"{RESULTS}/logs/noisy_{{case}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/noisy_{{case}}.tsv"
     wildcard_constraints:
         case="healthy|faulty",
     conda:
@@ -71,6 +75,8 @@ rule envelope:
         json=f"{RESULTS}/signals/envelope_{{case}}.json",
     log:
         f"{RESULTS}/logs/envelope_{{case}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/envelope_{{case}}.tsv"
     wildcard_constraints:
         case="healthy|faulty",
     conda:
@@ -94,6 +100,8 @@ rule fault_indicator:
         json=f"{RESULTS}/signals/fault_indicator.json",
     log:
         f"{RESULTS}/logs/fault_indicator.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/fault_indicator.tsv"
     conda:
         "../envs/piezobearing.yaml"
     params:
@@ -113,6 +121,8 @@ rule snr_study:
         json=f"{RESULTS}/signals/snr_study.json",
     log:
         f"{RESULTS}/logs/snr_study.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/snr_study.tsv"
     conda:
         "../envs/piezobearing.yaml"
     params:
@@ -134,6 +144,8 @@ rule snr_study_figure:
         ),
     log:
         f"{RESULTS}/logs/snr_study_figure.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/snr_study_figure.tsv"
     conda:
         "../envs/piezobearing.yaml"
     script:
@@ -149,6 +161,8 @@ rule defect_events:
         csv=f"{RESULTS}/signals/defect_events.csv",
     log:
         f"{RESULTS}/logs/defect_events.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/defect_events.tsv"
     conda:
         "../envs/piezobearing.yaml"
     script:
@@ -171,6 +185,8 @@ rule fig09:
         notebook=f"{RESULTS}/notebooks/fig09_voltage.ipynb",
     log:
         f"{RESULTS}/logs/fig09.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/fig09.tsv"
     conda:
         "../envs/piezobearing.yaml"
     shell:
@@ -195,6 +211,8 @@ rule fig10:
         notebook=f"{RESULTS}/notebooks/fig10_envelope.ipynb",
     log:
         f"{RESULTS}/logs/fig10.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/fig10.tsv"
     conda:
         "../envs/piezobearing.yaml"
     shell:
@@ -212,6 +230,8 @@ rule scorecard_signals:
         csv=f"{RESULTS}/scorecard/signals.csv",
     log:
         f"{RESULTS}/logs/scorecard_signals.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/scorecard_signals.tsv"
     conda:
         "../envs/piezobearing.yaml"
     script:

@@ -12,14 +12,16 @@ REFERENCE_LINES = (("bpfi_Hz", "BPFI", "C2", (0, (4, 2))), ("ftf_Hz", "FTF", "C3
 
 
 def fig09_voltage(healthy: pd.DataFrame, faulty: pd.DataFrame, events: pd.DataFrame, kinematics: dict,
-                  window_s: tuple[float, float] | None = None):
+                  n_periods: float | None = 12):
     """Sensor voltage against time, healthy above faulty, the defect impulses marked (paper Fig. 9).
 
-    ``window_s`` limits the time axis (default: the whole record). Thin grey
-    lines mark the roller passages at the sensor's period 1/BPFO.
+    Shows the first ``n_periods`` BPFO periods of the record (None: all of it),
+    so the single roller passages stay visible.
     """
     fig, axes = plt.subplots(2, 1, sharex=True, sharey=True, figsize=(7.0, 4.8))
-    t0, t1 = window_s if window_s is not None else (healthy["time_s"].iloc[0], healthy["time_s"].iloc[-1])
+    f0 = kinematics["bpfo_Hz"]
+    t0, t_end = float(healthy["time_s"].iloc[0]), float(healthy["time_s"].iloc[-1])
+    t1 = t_end if n_periods is None else min(t_end, t0 + n_periods / f0)
     for ax, df, name, col in ((axes[0], healthy, "healthy", "C0"), (axes[1], faulty, "faulty", "C1")):
         m = (df["time_s"] >= t0) & (df["time_s"] <= t1)
         ax.plot(df["time_s"][m], 1e3 * df["voltage_V"][m], color=col, lw=0.9, marker=".", ms=2.0)
@@ -31,7 +33,6 @@ def fig09_voltage(healthy: pd.DataFrame, faulty: pd.DataFrame, events: pd.DataFr
     axes[1].legend(loc="lower right")
     axes[1].set_xlabel("time [s]")
     axes[1].set_xlim(t0, t1)
-    f0 = kinematics["bpfo_Hz"]
     axes[0].text(0.99, 0.97, f"rollers pass the sensor at BPFO = {f0:.2f} Hz (period {1e3 / f0:.2f} ms)",
                  transform=axes[0].transAxes, ha="right", va="top", fontsize=8)
     return fig

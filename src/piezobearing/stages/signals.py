@@ -30,9 +30,20 @@ class SignalFileError(ValueError):
     """A time series or result file that cannot be used as it is."""
 
 
+def _strict(obj):
+    """NaN and inf as null, so the JSON is strict."""
+    if isinstance(obj, dict):
+        return {k: _strict(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_strict(v) for v in obj]
+    if isinstance(obj, float) and not np.isfinite(obj):
+        return None
+    return obj
+
+
 def write_json(obj: dict, path: str | Path) -> None:
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    Path(path).write_text(json.dumps(obj, indent=2, allow_nan=True) + "\n")
+    Path(path).write_text(json.dumps(_strict(obj), indent=2, allow_nan=False) + "\n")
 
 
 def read_json(path: str | Path) -> dict:
@@ -111,7 +122,10 @@ def sensor_voltage(
     """Sensor force through the calibrated sensor model → voltage_{case}.{csv,json}.
 
     The RC model of Eq. 6 with the fitted R and the cable (exact for a
-    piecewise-linear force). With ``signals.sensor_fem_correction`` the voltage
+    piecewise-linear force). The circuit starts at rest with the force at its
+    first value, so the first ``signals.skip_s`` of the voltage (its settling,
+    time constant tau = RC) are dropped; a warning goes to the log when
+    skip_s < 5 tau. With ``signals.sensor_fem_correction`` the voltage
     is scaled by the median |H_FEM| / |H_RC| below the Nyquist frequency
     (the FEM is flat there: its first resonance is near 100 kHz).
     """
@@ -120,9 +134,13 @@ def sensor_voltage(
     skip = int(round(s["skip_s"] / dt))
     if skip >= t.size - 8:
         raise SignalFileError(f"{force_csv}: signals.skip_s = {s['skip_s']} s leaves no record; lower it")
-    t, force = t[skip:], force[skip:]
+    print(f"sensor_voltage: {t.size} samples, dt = {dt:.6g} s, {skip} dropped", file=sys.stderr)
     circuit, res = sensor_circuit(config, resistance_json)
-    v = circuit_voltage(force, dt, circuit)
+    v = circuit_voltage(force, dt, circuit)  # starts at rest: drop its settling (about 5 tau) by skip_s
+    t, force, v = t[skip:], force[skip:], v[skip:]
+    if s["skip_s"] < 5 * circuit.tau_s:
+        print(f"sensor_voltage: warning: skip_s = {s['skip_s']} s < 5 tau = {5 * circuit.tau_s:.3g} s; "
+              "the circuit's settling stays in the record", file=sys.stderr)
     corr = None
     if harmonic_csv:
         f_fem, h_fem = read_harmonic(harmonic_csv)
@@ -135,6 +153,7 @@ def sensor_voltage(
             "sample_rate_Hz": 1.0 / dt,
             "n_samples": int(t.size),
             "duration_s": float(t.size * dt),
+            "skipped_s": skip * dt,
             "resistance_ohm": circuit.resistance_ohm,
             "capacitance_F": circuit.capacitance_F,
             "tau_s": circuit.tau_s,
