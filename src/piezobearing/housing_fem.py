@@ -1,0 +1,627 @@
+r"""Transient FEM of outer ring, housing and sensor under the moving roller loads.
+
+Linear elastodynamics on the half model of :mod:`piezobearing.housing_mesh`
+(x = 0 a mirror plane, U_x = 0; the foot's underside held):
+
+.. math::
+    \int_\Omega \rho\, v \cdot \ddot u \, d\Omega
+    + \int_\Omega \varepsilon(v) : D : \varepsilon(u) \, d\Omega
+    + k_s (w \cdot v_z)(w \cdot u_z)
+    = \sum_j Q_j(t)\, v \cdot p(\psi_j(t)) \quad \forall v
+
+K and M are assembled by sfepy (``dw_lin_elastic``, ``dw_dot``, linear
+hexahedra; cast iron for the housing, steel for the ring, Table I); C is
+Rayleigh damping. The sensor (alumina tip on the PZT disk, its far end held,
+paper Sec. III-A) is a spring of the stack's axial stiffness k_s between the
+mean radial displacement of its contact patch on the ring and the ground;
+its force, F_s = -k_s w . u_z (compression positive), is the output. The
+roller j's load Q_j acts on a small patch of the raceway centred at its angle
+psi_j, along the outward normal: a uniform traction over the patch's arc and
+the roller's contact length, whose consistent nodal forces are built here
+(not by sfepy's surface terms).
+
+Two solution methods:
+
+* ``direct``: sfepy's generalized-alpha time stepper
+  (:class:`sfepy.solvers.ts_solvers.GeneralizedAlphaTS`) on the full
+  system, one factorisation of the effective matrix, one back-substitution a
+  step: the reference.
+* ``reduced`` (default): the n lowest modes, integrated exactly for loads
+  linear between the samples, plus the static correction of the truncated
+  modes (mode acceleration):
+  F_s(t) = sum_i c_i q_i(t) + [g(t) - sum_i c_i f_i(t) / omega_i^2], where
+  g(t) = c . K^-1 f(t) is the quasi-static sensor force. By reciprocity
+  (K symmetric), g(t) = sum_j Q_j(t) (K^-1 c) . p(psi_j): a single solve
+  gives the influence line of the sensor for every roller position.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .housing_mesh import GROUP_HOUSING, GROUP_RING, HousingMesh, nested_dissection_order
+from .materials import IsotropicMaterial, PiezoMaterial
+
+# ---------------------------------------------------------------------------
+# The sensor as a spring
+# ---------------------------------------------------------------------------
+
+
+def pzt_axial_modulus(pzt: PiezoMaterial, electrical: str = "open") -> float:
+    """Young's modulus of a poled PZT bar under uniaxial stress along 3 [Pa].
+
+    ``short``: 1 / s33^E (electrodes shorted); ``open``: 1 / s33^D with
+    s33^D = s33^E - d33^2 / eps33^T (no charge flows). The sensor works into
+    R = 50 MOhm: above ~30 Hz it is close to open circuit (paper Sec. III-C).
+    """
+    s = np.linalg.inv(pzt.c_E_Pa)
+    s33 = s[2, 2]
+    if electrical == "short":
+        return float(1 / s33)
+    if electrical == "open":
+        return float(1 / (s33 - pzt.d33_C_per_N**2 / pzt.eps33_T_F_per_m))
+    raise ValueError(f"config housing.sensor_electrical must be 'open' or 'short', got {electrical!r}")
+
+
+def sensor_stiffness(
+    pzt: PiezoMaterial,
+    pzt_diameter_m: float,
+    pzt_height_m: float,
+    tip: IsotropicMaterial,
+    tip_diameter_m: float,
+    tip_height_m: float,
+    electrical: str = "open",
+) -> float:
+    """Axial stiffness of the sensor stack: the alumina tip and the PZT disk in series [N/m].
+
+    k_s = 1 / (t / (E_tip A_tip) + h / (E_3 A_pzt)). The far alumina disk is
+    left out, as the paper holds the PZT's far face (U_z = 0). The stack's
+    first resonance (1.2e5 Hz) lies far above the FEM's band, so its mass is
+    negligible and a spring represents it.
+    """
+    a_tip = np.pi * tip_diameter_m**2 / 4
+    a_pzt = np.pi * pzt_diameter_m**2 / 4
+    e3 = pzt_axial_modulus(pzt, electrical)
+    return float(1 / (tip_height_m / (tip.young_Pa * a_tip) + pzt_height_m / (e3 * a_pzt)))
+
+
+# ---------------------------------------------------------------------------
+# Consistent nodal weights of a uniform load over an interval
+# ---------------------------------------------------------------------------
+
+
+def _hat_antiderivative(sig: np.ndarray, left: np.ndarray, node: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """int_{-inf}^{sig} of the hat function (left, node, right), elementwise."""
+    hl = node - left
+    hr = right - node
+    out = np.zeros(np.broadcast_shapes(sig.shape, node.shape))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.where(hl > 0, (np.clip(sig, left, node) - left) ** 2 / (2 * hl), 0.0)
+        b = np.where(hr > 0, hr / 2 - (right - np.clip(sig, node, right)) ** 2 / (2 * hr), 0.0)
+    out = a + np.where(sig > node, b, 0.0)
+    return out
+
+
+def box_weights(nodes: np.ndarray, lo: np.ndarray, hi: np.ndarray, period: float | None = None) -> np.ndarray:
+    """Consistent nodal weights of a unit load spread uniformly over [lo, hi] on 1D linear elements.
+
+    w_k = (1 / (hi - lo)) int_lo^hi N_k(s) ds, with N_k the hat functions of
+    the sorted ``nodes`` (the first and last hats are halves unless
+    ``period`` closes the line into a circle). The weights sum to 1 for an
+    interval inside the mesh. For hi == lo the weights are N_k(lo), a point load.
+
+    Parameters
+    ----------
+    nodes : ndarray (nk,)
+        Sorted node positions [m].
+    lo, hi : ndarray (n,)
+        Intervals [m].
+    period : float, optional
+        Length of the closed line [m].
+
+    Returns
+    -------
+    ndarray (n, nk)
+    """
+    s = np.asarray(nodes, dtype=float)
+    lo = np.atleast_1d(np.asarray(lo, dtype=float))
+    hi = np.atleast_1d(np.asarray(hi, dtype=float))
+    if period is None:
+        left = np.r_[s[0], s[:-1]]
+        right = np.r_[s[1:], s[-1]]
+        node, lft, rgt = s[None, :], left[None, :], right[None, :]
+        a, b = lo[:, None], hi[:, None]
+    else:
+        left = np.r_[s[-1] - period, s[:-1]]
+        right = np.r_[s[1:], s[0] + period]
+        c = 0.5 * (lo + hi)
+        # node positions relative to each interval's centre, wrapped into [-P/2, P/2)
+        shift = np.mod(s[None, :] - c[:, None] + period / 2, period) - period / 2 - (s[None, :] - c[:, None])
+        node, lft, rgt = s[None, :] + shift, left[None, :] + shift, right[None, :] + shift
+        a, b = lo[:, None], hi[:, None]
+    width = b - a
+    point = width <= 1e-15
+    with np.errstate(divide="ignore", invalid="ignore"):
+        box = (_hat_antiderivative(b, lft, node, rgt) - _hat_antiderivative(a, lft, node, rgt)) / np.where(
+            point, 1.0, width
+        )
+        hl, hr = node - lft, rgt - node
+        hat = np.where(
+            a <= node,
+            np.where(hl > 0, np.clip((a - lft) / hl, 0, 1), 1.0 * (a == node)),
+            np.where(hr > 0, np.clip((rgt - a) / hr, 0, 1), 0.0),
+        )
+    return np.where(point, hat, box)
+
+
+# ---------------------------------------------------------------------------
+# Assembly with sfepy
+# ---------------------------------------------------------------------------
+
+
+def assemble_matrices(mesh: HousingMesh, ring: IsotropicMaterial, housing: IsotropicMaterial):
+    """Stiffness and mass matrices of the mesh, assembled by sfepy, without boundary conditions.
+
+    Returns
+    -------
+    K, M : scipy.sparse.csr_matrix (3n, 3n)
+        [N/m] and [kg]; DOF 3 i + c is component c (x, y, z) of node i.
+    """
+    from sfepy.base.base import output
+    from sfepy.discrete import Equation, Equations, FieldVariable, Integral, Material, Problem
+    from sfepy.discrete.fem import FEDomain, Field, Mesh
+    from sfepy.mechanics.matcoefs import stiffness_from_youngpoisson
+    from sfepy.terms import Term
+
+    output.set_output(quiet=True)
+    sf_mesh = Mesh.from_data(
+        "housing", mesh.coors, np.zeros(mesh.n_nodes, dtype=np.int32), [mesh.conn.astype(np.int32)],
+        [mesh.group.astype(np.int32)], ["3_8"],
+    )
+    domain = FEDomain("domain", sf_mesh)
+    omega = domain.create_region("Omega", "all")
+    regions = {
+        GROUP_RING: domain.create_region("Ring", f"cells of group {GROUP_RING}"),
+        GROUP_HOUSING: domain.create_region("Housing", f"cells of group {GROUP_HOUSING}"),
+    }
+    fld = Field.from_args("fu", np.float64, "vector", omega, approx_order=1)
+    if not np.allclose(fld.get_coor(), mesh.coors):
+        raise RuntimeError("sfepy reordered the nodes; DOF numbering would not match the mesh")
+    u = FieldVariable("u", "unknown", fld)
+    v = FieldVariable("v", "test", fld, primary_var_name="u")
+    integral = Integral("i", order=2)
+    tk, tm = [], []
+    for gid, mat in ((GROUP_RING, ring), (GROUP_HOUSING, housing)):
+        m = Material(f"m{gid}", D=stiffness_from_youngpoisson(3, mat.young_Pa, mat.poisson), rho=mat.density_kg_per_m3)
+        tk.append(Term.new(f"dw_lin_elastic(m{gid}.D, v, u)", integral, regions[gid], **{f"m{gid}": m, "v": v, "u": u}))
+        tm.append(Term.new(f"dw_dot(m{gid}.rho, v, u)", integral, regions[gid], **{f"m{gid}": m, "v": v, "u": u}))
+    eq_k = Equation("stiffness", tk[0] + tk[1])
+    eq_m = Equation("mass", tm[0] + tm[1])
+    pb = Problem("housing", equations=Equations([eq_k, eq_m]))
+    pb.time_update()
+    pb.update_materials()
+    k = eq_k.evaluate(mode="weak", dw_mode="matrix", asm_obj=pb.mtx_a)
+    mm = k.copy()
+    mm.data[:] = 0.0
+    mm = eq_m.evaluate(mode="weak", dw_mode="matrix", asm_obj=mm)
+    return k.tocsr(), mm.tocsr()
+
+
+# ---------------------------------------------------------------------------
+# The model: boundary conditions, sensor, loads
+# ---------------------------------------------------------------------------
+
+
+@dataclass
+class HousingModel:
+    """The reduced system K u = f on the free DOFs, with the sensor and the load operators.
+
+    Attributes
+    ----------
+    mesh : HousingMesh
+    K, M : csc_matrix (nf, nf)
+        Stiffness (with the sensor spring) [N/m] and mass [kg] on the free DOFs.
+    free : ndarray (nf,)
+        Global DOF index of each free DOF.
+    sensor : ndarray (nf,)
+        c with F_s = c . u [N/m] (full-width sensor force, compression positive).
+    load_y, load_z : csr_matrix (nc, nf)
+        Nodal forces of a unit y (z) load on raceway column c spread over
+        the roller's half-length (half the load: the half model carries half).
+    sensor_stiffness_N_per_m : float
+    patch_width_m : float
+    """
+
+    mesh: HousingMesh
+    K: sp.csc_matrix = field(repr=False)
+    M: sp.csc_matrix = field(repr=False)
+    free: np.ndarray = field(repr=False)
+    sensor: np.ndarray = field(repr=False)
+    load_y: sp.csr_matrix = field(repr=False)
+    load_z: sp.csr_matrix = field(repr=False)
+    sensor_stiffness_N_per_m: float
+    patch_width_m: float
+    mass_kg: float
+    _lu: object = field(default=None, repr=False)
+
+    @property
+    def n_dofs(self) -> int:
+        return len(self.free)
+
+    def factor(self):
+        """SuperLU factors of K (cached)."""
+        if self._lu is None:
+            self._lu = splu_symmetric(self.K)
+        return self._lu
+
+    def patch_weights(self, psi_rad: np.ndarray) -> np.ndarray:
+        """Weights (n, nc) of the raceway columns for load patches centred at psi."""
+        g = self.mesh.geometry
+        r = g.raceway_radius_m
+        s = np.atleast_1d(psi_rad).ravel() * r
+        half = 0.5 * self.patch_width_m
+        return box_weights(self.mesh.raceway_psi * r, s - half, s + half, period=2 * np.pi * r)
+
+    def column_loads(self, load_N: np.ndarray, psi_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Column load amplitudes (y and z) of rollers with loads Q (n_t, Z) at angles psi (n_t, Z).
+
+        The force of roller j is Q_j n(psi_j), n = (sin psi, -cos psi) in (y, z).
+
+        Returns
+        -------
+        wy, wz : ndarray (n_t, nc) [N]
+        """
+        q = np.asarray(load_N, dtype=float)
+        psi = np.asarray(psi_rad, dtype=float)
+        nt, z = q.shape
+        w = self.patch_weights(psi.ravel()).reshape(nt, z, -1)
+        wy = np.einsum("tj,tjc->tc", q * np.sin(psi), w)
+        wz = np.einsum("tj,tjc->tc", -q * np.cos(psi), w)
+        return wy, wz
+
+    def load_vectors(self, wy: np.ndarray, wz: np.ndarray) -> np.ndarray:
+        """Nodal load vectors f (n_t, nf) [N] from column loads."""
+        return np.asarray(self.load_y.T @ wy.T + self.load_z.T @ wz.T).T
+
+    def influence_line(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Quasi-static sensor force per unit roller load at each raceway column.
+
+        By reciprocity one solve, z = K^-1 c, gives the sensor force of a
+        unit load at any column: g_y = P_y z, g_z = P_z z.
+
+        Returns
+        -------
+        gy, gz : ndarray (nc,)
+            Sensor force [N] per newton of y and z load on the column.
+        radial : ndarray (nc,)
+            Sensor force per newton of outward radial load at the column's angle [N/N].
+        """
+        zvec = self.factor().solve(self.sensor)
+        gy = self.load_y @ zvec
+        gz = self.load_z @ zvec
+        psi = self.mesh.raceway_psi
+        return gy, gz, gy * np.sin(psi) - gz * np.cos(psi)
+
+
+def splu_symmetric(a: sp.spmatrix, ordering: str = "NATURAL"):
+    """SuperLU of a symmetric positive definite matrix, without pivoting.
+
+    The model's DOFs are numbered in nested-dissection order already
+    (:func:`piezobearing.housing_mesh.nested_dissection_order`), so the
+    natural column order is the fill-reducing one.
+    """
+    return spla.splu(sp.csc_matrix(a), permc_spec=ordering, diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+
+
+def build_model(
+    mesh: HousingMesh,
+    ring: IsotropicMaterial,
+    housing: IsotropicMaterial,
+    sensor_stiffness_N_per_m: float,
+    patch_width_m: float,
+) -> HousingModel:
+    """Assemble the half model, apply the conditions, add the sensor and build the load operators.
+
+    Conditions: U_x = 0 on the mirror plane x = 0; U = 0 on the foot's
+    underside (bolted to a rigid base). The sensor: a spring k_s between the
+    weighted mean radial displacement of its patch (the tip's area on the
+    ring's outer surface at psi = 0) and the ground; in the half model it has
+    half the stiffness, and F_s is reported for the full sensor.
+    """
+    g = mesh.geometry
+    k, m = assemble_matrices(mesh, ring, housing)
+    n = mesh.n_nodes
+    fixed = np.zeros(3 * n, bool)
+    on_plane = np.abs(mesh.coors[:, 0]) < 1e-12
+    fixed[3 * np.where(on_plane)[0]] = True
+    for c in range(3):
+        fixed[3 * mesh.base_nodes + c] = True
+    # free DOFs numbered in nested-dissection order of their nodes
+    dofs = (3 * nested_dissection_order(mesh)[:, None] + np.arange(3)).ravel()
+    free = dofs[~fixed[dofs]]
+    gmap = -np.ones(3 * n, int)
+    gmap[free] = np.arange(len(free))
+
+    # sensor patch: square of the tip's area at psi = 0 on the ring's outer surface
+    ro = g.ring_outer_radius_m
+    at = g.tip_half_side_m
+    ws = box_weights(mesh.ring_outer_psi * ro, np.array([-at]), np.array([at]), period=2 * np.pi * ro)[0]
+    wx = box_weights(mesh.raceway_x, np.array([0.0]), np.array([at]))[0]
+    wpatch = ws[:, None] * wx[None, :]
+    nodes = mesh.ring_outer_nodes
+    sel = wpatch > 0
+    # radial displacement at psi ~ 0 is -u_z; weight the z DOFs
+    c_full = np.zeros(3 * n)
+    np.add.at(c_full, 3 * nodes[sel] + 2, wpatch[sel])
+    # F_s = -k_s w . u_z = k_s w . (radial); c such that F_s = c . u
+    c = -sensor_stiffness_N_per_m * c_full[free]
+    # the half model carries half the sensor: K += (k_s/2) w w^T (w on the z DOFs)
+    idx = np.where(c_full[free] != 0)[0]
+    wv = c_full[free][idx]
+    ks = sp.coo_matrix((0.5 * sensor_stiffness_N_per_m * np.outer(wv, wv).ravel(),
+                        (np.repeat(idx, len(idx)), np.tile(idx, len(idx)))), shape=(len(free), len(free)))
+    kf = (k[free][:, free] + ks).tocsc()
+    mf = m[free][:, free].tocsc()
+
+    # load operators: unit load on raceway column c, spread uniformly over x in [0, l/2], half of it
+    wxl = box_weights(mesh.raceway_x, np.array([0.0]), np.array([g.roller_half_length_m]))[0]
+    rows, cols_y, cols_z, vals = [], [], [], []
+    for ci in range(len(mesh.raceway_psi)):
+        for li, w in enumerate(wxl):
+            if w == 0:
+                continue
+            node = mesh.raceway_nodes[ci, li]
+            rows.append(ci)
+            cols_y.append(gmap[3 * node + 1])
+            cols_z.append(gmap[3 * node + 2])
+            vals.append(0.5 * w)
+    rows, cols_y, cols_z, vals = map(np.asarray, (rows, cols_y, cols_z, vals))
+    ok_y, ok_z = cols_y >= 0, cols_z >= 0
+    shape = (len(mesh.raceway_psi), len(free))
+    py = sp.csr_matrix((vals[ok_y], (rows[ok_y], cols_y[ok_y])), shape=shape)
+    pz = sp.csr_matrix((vals[ok_z], (rows[ok_z], cols_z[ok_z])), shape=shape)
+    mass = float(m[0::3][:, 0::3].sum())
+    return HousingModel(mesh, kf, mf, free, c, py, pz, sensor_stiffness_N_per_m, patch_width_m, 2 * mass)
+
+
+# ---------------------------------------------------------------------------
+# Modes
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Modes:
+    """Mass-normalised modes of the half model.
+
+    Attributes
+    ----------
+    omega_rad_s : ndarray (n,)
+    shapes : ndarray (nf, n)
+    """
+
+    omega_rad_s: np.ndarray
+    shapes: np.ndarray = field(repr=False)
+
+    @property
+    def frequencies_Hz(self) -> np.ndarray:
+        return self.omega_rad_s / (2 * np.pi)
+
+
+def compute_modes(model: HousingModel, n_modes: int, seed: int = 0) -> Modes:
+    """The n lowest modes by shift-invert Lanczos about 0, reusing K's factors."""
+    lu = model.factor()
+    op = spla.LinearOperator(model.K.shape, matvec=lu.solve, dtype=float)
+    v0 = np.random.default_rng(seed).standard_normal(model.n_dofs)
+    lam, vec = spla.eigsh(model.K, k=n_modes, M=model.M, sigma=0.0, OPinv=op, which="LM", v0=v0)
+    order = np.argsort(lam)
+    lam, vec = lam[order], vec[:, order]
+    # mass-normalise
+    vec = vec / np.sqrt(np.einsum("ij,ij->j", vec, model.M @ vec))
+    return Modes(np.sqrt(np.maximum(lam, 0.0)), vec)
+
+
+def rayleigh_coefficients(damping_ratio: float, band_Hz: tuple[float, float]) -> tuple[float, float]:
+    """alpha, beta of C = alpha M + beta K with the damping ratio zeta at both band edges."""
+    wa, wb = 2 * np.pi * np.asarray(band_Hz, dtype=float)
+    return 2 * damping_ratio * wa * wb / (wa + wb), 2 * damping_ratio / (wa + wb)
+
+
+# ---------------------------------------------------------------------------
+# Reduced method: modes + static correction, exact for piecewise-linear loads
+# ---------------------------------------------------------------------------
+
+
+def _ramp_recurrence(omega: np.ndarray, zeta: np.ndarray, h: float):
+    """Matrices of the exact step of q'' + 2 zeta w q' + w^2 q = f, f linear over the step.
+
+    Returns (A (n,2,2), B (n,2,2)) with x_{k+1} = A x_k + B (f_k, f_{k+1}), x = (q, q').
+    """
+    from scipy.linalg import expm
+
+    a_mat = np.zeros((len(omega), 2, 2))
+    b_mat = np.zeros((len(omega), 2, 2))
+    for i, (w, z) in enumerate(zip(omega, zeta, strict=True)):
+        aug = np.zeros((4, 4))
+        aug[0, 1] = 1.0
+        aug[1, 0] = -w * w
+        aug[1, 1] = -2 * z * w
+        aug[1, 2] = 1.0
+        aug[2, 3] = 1.0
+        e = expm(aug * h)
+        a_mat[i] = e[:2, :2]
+        # x_{k+1} = E11 x + E12 f_k + E13 fdot h... with state (f, df/dt): f' = fdot, fdot' = 0
+        # E[:2, 2] multiplies f_k, E[:2, 3] multiplies fdot_k = (f_{k+1} - f_k)/h
+        e_f, e_fd = e[:2, 2], e[:2, 3] / h
+        b_mat[i, :, 0] = e_f - e_fd
+        b_mat[i, :, 1] = e_fd
+    return a_mat, b_mat
+
+
+def modal_response(forces: np.ndarray, omega: np.ndarray, zeta: np.ndarray, h: float) -> np.ndarray:
+    """Modal coordinates q (n_t, n) under modal forces (n_t, n) linear between samples, exactly.
+
+    Starts from the static response to the first sample (q = f_0 / w^2, q' = 0).
+    """
+    a_mat, b_mat = _ramp_recurrence(omega, zeta, h)
+    nt, n = forces.shape
+    q = np.empty((nt, n))
+    x = np.stack([forces[0] / omega**2, np.zeros(n)], axis=1)  # (n, 2)
+    q[0] = x[:, 0]
+    for k in range(nt - 1):
+        x = np.einsum("nij,nj->ni", a_mat, x) + np.einsum("nij,nj->ni", b_mat, np.stack([forces[k], forces[k + 1]], 1))
+        q[k + 1] = x[:, 0]
+    return q
+
+
+@dataclass(frozen=True)
+class ReducedOperators:
+    """Everything the reduced method needs, on the raceway columns.
+
+    ``modal_y``/``modal_z`` (nc, n): modal force per unit column load;
+    ``static_y``/``static_z`` (nc,): quasi-static sensor force per unit column load;
+    ``sensor_modal`` (n,): c . phi_i; ``omega``, ``zeta`` (n,).
+    """
+
+    modal_y: np.ndarray
+    modal_z: np.ndarray
+    static_y: np.ndarray
+    static_z: np.ndarray
+    sensor_modal: np.ndarray
+    omega: np.ndarray
+    zeta: np.ndarray
+
+
+def reduced_operators(model: HousingModel, modes: Modes, alpha: float, beta: float) -> ReducedOperators:
+    gy, gz, _ = model.influence_line()
+    phi = modes.shapes
+    w = modes.omega_rad_s
+    return ReducedOperators(
+        modal_y=np.asarray(model.load_y @ phi),
+        modal_z=np.asarray(model.load_z @ phi),
+        static_y=gy,
+        static_z=gz,
+        sensor_modal=model.sensor @ phi,
+        omega=w,
+        zeta=(alpha / w + beta * w) / 2,
+    )
+
+
+def sensor_force_reduced(ops: ReducedOperators, wy: np.ndarray, wz: np.ndarray, h: float) -> dict:
+    """Sensor force by modal superposition with static correction.
+
+    Parameters
+    ----------
+    ops : ReducedOperators
+    wy, wz : ndarray (n_t, nc)
+        Column loads at the time samples [N] (linear in between).
+    h : float
+        Time step [s].
+
+    Returns
+    -------
+    dict with ``force_N`` (total), ``quasi_static_N`` (g(t)) and ``dynamic_N`` (the difference).
+    """
+    g = wy @ ops.static_y + wz @ ops.static_z
+    f = wy @ ops.modal_y + wz @ ops.modal_z
+    q = modal_response(f, ops.omega, ops.zeta, h)
+    dyn = (q - f / ops.omega**2) @ ops.sensor_modal
+    return {"force_N": g + dyn, "quasi_static_N": g, "dynamic_N": dyn}
+
+
+# ---------------------------------------------------------------------------
+# Direct method: sfepy's generalized-alpha stepper on the full system
+# ---------------------------------------------------------------------------
+
+
+def sensor_force_direct(
+    model: HousingModel,
+    wy: np.ndarray,
+    wz: np.ndarray,
+    h: float,
+    alpha: float,
+    beta: float,
+    rho_inf: float = 0.9,
+    progress=None,
+) -> dict:
+    """Sensor force by direct time integration with sfepy's ``ts.generalized_alpha``.
+
+    The solver class is driven on the assembled matrices: its nonlinear
+    solver (sfepy's Newton, linear mode, one iteration a step) evaluates
+    the residual K u + C v + M a - f(t) with f linear between the samples, at
+    the solver's intermediate time t_{n+1-alpha_f}; the effective matrix is
+    factorised once. The run starts from static equilibrium (a_0 = 0).
+
+    Returns
+    -------
+    dict with ``force_N`` and ``seconds``.
+    """
+    from sfepy.base.base import Struct, output
+    from sfepy.solvers.ls import ScipyDirect
+    from sfepy.solvers.nls import Newton
+    from sfepy.solvers.ts_solvers import GeneralizedAlphaTS
+
+    output.set_output(quiet=True)
+    nt = wy.shape[0]
+    nf = model.n_dofs
+    kmat, mmat = model.K.tocsr(), model.M.tocsr()
+    cmat = (alpha * mmat + beta * kmat).tocsr()
+    blocks = sp.block_diag([kmat, cmat, mmat], format="csr")
+    times = h * np.arange(nt)
+
+    def load(t):
+        k = int(np.clip(np.floor(t / h + 1e-9), 0, nt - 2))
+        lam = np.clip(t / h - k, 0.0, 1.0)
+        wyt = (1 - lam) * wy[k] + lam * wy[k + 1]
+        wzt = (1 - lam) * wz[k] + lam * wz[k + 1]
+        return model.load_y.T @ wyt + model.load_z.T @ wzt
+
+    class _State:
+        ts = None
+
+    def fun(vec):
+        u, v, a = vec[:nf], vec[nf : 2 * nf], vec[2 * nf :]
+        return np.concatenate([kmat @ u - load(_State.ts.time), cmat @ v, mmat @ a])
+
+    def fun_grad(vec):
+        return blocks
+
+    class _LS(ScipyDirect):
+        """sfepy's direct solver, factorising with a symmetric ordering (much less fill-in)."""
+
+        def presolve(self, mtx, use_mtx_digest=True):
+            if self.solve is None:
+                self.solve = splu_symmetric(mtx).solve
+
+    ls = _LS({"use_presolve": True, "use_mtx_digest": False})
+    nls = Newton({"i_max": 1, "eps_a": 0.0, "eps_r": 0.0, "is_linear": True}, fun=fun, fun_grad=fun_grad, lin_solver=ls)
+
+    class _GA(GeneralizedAlphaTS):
+        def get_a0(self, nls, u0, e0, v0, unpack):
+            # caches the constant M, C, K as sfepy's own get_a0() does; the static start has a0 = 0
+            self.get_matrices(nls, np.concatenate([u0, e0, v0, np.zeros_like(v0)]), unpack)
+            return np.zeros_like(u0)
+
+    conf = Struct(name="ga", kind="ts.generalized_alpha", t0=0.0, t1=times[-1], n_step=nt, rho_inf=rho_inf,
+                  is_linear=True, var_names={"u": "u", "du": "du", "ddu": "ddu"}, verbose=False, quasistatic=False)
+    solver = _GA(conf, nls=nls)
+    solver.set_dof_info(Struct(indx={"u": slice(0, nf), "du": slice(nf, 2 * nf), "ddu": slice(2 * nf, 3 * nf)},
+                               n_dof={"u": nf, "du": nf, "ddu": nf}, n_dof_total=3 * nf))
+    _State.ts = solver.ts
+    u0 = model.factor().solve(load(0.0))
+    vec0 = np.concatenate([u0, np.zeros(nf), np.zeros(nf)])
+    out = np.zeros(nt)
+
+    def poststep(ts, vec):
+        out[ts.step] = model.sensor @ vec[:nf]
+        if progress is not None and ts.step % 200 == 0:
+            progress(ts.step, nt)
+        return vec
+
+    t0 = time.perf_counter()
+    solver(vec0=vec0, init_fun=lambda ts, v: v, prestep_fun=lambda ts, v: v, poststep_fun=poststep)
+    return {"force_N": out, "seconds": time.perf_counter() - t0}

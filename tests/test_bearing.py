@@ -1,0 +1,213 @@
+"""The bearing: kinematics, contact law, defect geometry and the 4-DOF lumped-parameter model."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from piezobearing import bearing as brg
+
+
+@pytest.fixture(scope="module")
+def bcfg(paper_config):
+    return paper_config["bearing"]
+
+
+@pytest.fixture(scope="module")
+def geo(bcfg):
+    return brg.BearingGeometry.from_config(bcfg)
+
+
+def _params(bcfg, faulty=False, **over):
+    p = brg.LPMParameters.from_config(bcfg, faulty)
+    from dataclasses import replace
+
+    if "clearance" in over:
+        p = replace(p, geometry=replace(p.geometry, radial_clearance_m=over.pop("clearance")))
+    return replace(p, **over)
+
+
+# --- kinematics ---------------------------------------------------------------
+
+
+def test_bpfo_matches_paper(geo):
+    kin = brg.kinematic_frequencies(geo, 1000 / 60)
+    assert kin.bpfo_Hz == pytest.approx(70.8, rel=1e-3)
+    # the paper's time step is 1/(36 BPFO) to its 6 digits
+    assert 1 / (36 * kin.bpfo_Hz) == pytest.approx(0.392156e-3, abs=1e-9)
+
+
+def test_kinematic_identities(geo):
+    fr = 23.0
+    kin = brg.kinematic_frequencies(geo, fr)
+    z, g = geo.n_rollers, geo.roller_diameter_m / geo.pitch_diameter_m
+    assert kin.bpfo_Hz + kin.bpfi_Hz == pytest.approx(z * fr)
+    assert kin.ftf_Hz == pytest.approx(fr / 2 * (1 - g))
+    assert kin.bsf_Hz == pytest.approx(geo.pitch_diameter_m / (2 * geo.roller_diameter_m) * fr * (1 - g * g))
+    assert set(kin.to_dict()) == {"shaft_Hz", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz"}
+
+
+def test_bad_geometry_names_the_key(bcfg):
+    bad = {**bcfg, "pitch_diameter_m": 60e-3}
+    with pytest.raises(ValueError, match="pitch_diameter_m"):
+        brg.BearingGeometry.from_config(bad)
+
+
+# --- contact law and defect ---------------------------------------------------
+
+
+def test_contact_stiffness_is_palmgren_twice():
+    l_mm, q = 9.76, 500.0
+    delta_mm = 2 * 3.84e-5 * q**0.9 / l_mm**0.8  # two contacts in series, Harris Eq. 6.41
+    k = brg.line_contact_stiffness(l_mm * 1e-3)
+    assert k * (delta_mm * 1e-3) ** (10 / 9) == pytest.approx(q, rel=1e-12)
+
+
+def test_contact_law_slope():
+    k = 6e8
+    d = np.array([-1e-6, 0.0, 1e-6, 3e-6])
+    q, dq = brg.contact_law(d, k)
+    assert q[0] == q[1] == 0.0
+    eps = 1e-12
+    num = (brg.contact_law(d + eps, k)[0] - brg.contact_law(d - eps, k)[0]) / (2 * eps)
+    np.testing.assert_allclose(dq[2:], num[2:], rtol=1e-5)
+
+
+def test_defect_drop_limited_by_roller_radius():
+    r, w = 5e-3, 0.9e-3
+    d = brg.Defect(0.0, w, 1e-3)
+    expect = r - np.sqrt(r**2 - (w / 2) ** 2)
+    assert d.max_drop_m(r) == pytest.approx(expect)
+    assert expect == pytest.approx(20.29e-6, rel=1e-3)  # tens of micrometres, not the 1 mm depth
+    race = 27e-3
+    psi = np.linspace(-2 * w / race, 2 * w / race, 4001)
+    drop = d.drop_m(psi, r, race)
+    assert drop.max() == pytest.approx(expect, rel=1e-3)
+    np.testing.assert_allclose(drop, drop[::-1], atol=1e-12)  # entry and exit flanks mirror each other
+    assert np.all(drop[np.abs(psi) * race >= w / 2] == 0)
+    shallow = brg.Defect(0.0, w, 5e-6)
+    assert shallow.drop_m(np.array([0.0]), r, race)[0] == pytest.approx(5e-6)
+
+
+# --- quasi-static load distribution against Harris -------------------------------
+
+
+@pytest.mark.parametrize("clearance", [0.0, 20e-6])
+@pytest.mark.parametrize("psi0_fraction", [0.0, 0.5])
+def test_static_loads_match_harris(bcfg, clearance, psi0_fraction):
+    p = _params(bcfg, clearance=clearance)
+    g = p.geometry
+    psi = g.roller_pitch_rad * (psi0_fraction + np.arange(g.n_rollers))
+    zero = np.zeros_like(psi)
+    e = brg.static_offset(np.array([0.0, -500.0]), psi, p.gap_m, zero, p.k_contact)
+    _, _, q = brg.bearing_force(e, psi, p.gap_m, zero, p.k_contact)
+    qh, dr = brg.harris_discrete_loads(500.0, psi, p.gap_m, p.k_contact)
+    np.testing.assert_allclose(q, qh, atol=1e-6 * qh.max())
+    assert e[0] == pytest.approx(0.0, abs=1e-12)
+    assert -e[1] == pytest.approx(dr, rel=1e-9)
+
+
+@pytest.mark.parametrize("clearance", [0.0, 20e-6])
+def test_dynamic_lpm_quasi_static_matches_harris(bcfg, clearance):
+    """At a slow speed the integrated loads equal Harris's discrete distribution within 1%."""
+    p = _params(bcfg, clearance=clearance, shaft_speed_Hz=0.5)
+    g = p.geometry
+    # half a roller pitch of cage rotation: passes both symmetric positions
+    t_end = 0.5 * g.roller_pitch_rad / p.cage_speed_rad_per_s
+    n = 4000
+    res = brg.simulate_lpm(p, 0.0, n, t_end / n)
+    for k in (0, n):
+        qh, _ = brg.harris_discrete_loads(500.0, res.psi_rad[k], p.gap_m, p.k_contact)
+        assert np.abs(res.load_N[k] - qh).max() < 0.01 * qh.max()
+    # in between, against the static 2D equilibrium at the same angles
+    for k in (n // 3, 2 * n // 3):
+        zero = np.zeros(g.n_rollers)
+        e = brg.static_offset(np.array([0.0, -500.0]), res.psi_rad[k], p.gap_m, zero, p.k_contact)
+        q = brg.bearing_force(e, res.psi_rad[k], p.gap_m, zero, p.k_contact)[2]
+        assert np.abs(res.load_N[k] - q).max() < 0.01 * q.max()
+
+
+def test_clearance_shrinks_the_load_zone(bcfg):
+    p0, p1 = _params(bcfg, clearance=0.0), _params(bcfg, clearance=20e-6)
+    psi = p0.geometry.roller_pitch_rad * np.arange(11)
+    q0, _ = brg.harris_discrete_loads(500.0, psi, p0.gap_m, p0.k_contact)
+    q1, _ = brg.harris_discrete_loads(500.0, psi, p1.gap_m, p1.k_contact)
+    assert (q1 > 0).sum() < (q0 > 0).sum()
+    assert q1.max() > q0.max()
+
+
+# --- dynamics -----------------------------------------------------------------
+
+
+def test_load_equilibrium_over_a_record(bcfg):
+    """Averaged over roller passages the rollers carry the radial load (inertia averages out)."""
+    p = _params(bcfg)
+    kin = brg.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
+    h = bcfg["time_step_s"] / bcfg["substeps"]
+    n = int(round(5 / kin.bpfo_Hz / h))
+    res = brg.simulate_lpm(p, 0.0, n, h)
+    fz = np.sum(res.load_N * -np.cos(res.psi_rad), axis=1)
+    fy = np.sum(res.load_N * np.sin(res.psi_rad), axis=1)
+    assert -fz.mean() == pytest.approx(500.0, rel=2e-3)
+    assert abs(fy.mean()) < 1e-3 * 500
+    # the pedestal spring carries the load too
+    assert -res.pedestal_m[:, 1].mean() * p.pedestal_stiffness_N_per_m == pytest.approx(500.0, rel=2e-3)
+
+
+def test_defect_impacts_repeat_at_bpfo(bcfg):
+    from piezobearing.stages.bearing import _impact_intervals
+
+    p = _params(bcfg, faulty=True)
+    kin = brg.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
+    h = bcfg["time_step_s"] / bcfg["substeps"]
+    n = int(round(8 / kin.bpfo_Hz / h))
+    res = brg.simulate_lpm(p, 0.0, n, h)
+    iv = _impact_intervals(res.time_s, res.load_N.max(axis=1), kin.bpfo_Hz)
+    assert len(iv) >= 6
+    np.testing.assert_allclose(iv, 1 / kin.bpfo_Hz, rtol=0.01)
+    # the healthy bearing has no such impacts: its largest load varies smoothly and far less
+    ph = _params(bcfg)
+    rh = brg.simulate_lpm(ph, 0.0, n, h)
+    assert np.ptp(rh.load_N.max(axis=1)) < 0.5 * np.ptp(res.load_N.max(axis=1))
+
+
+@pytest.mark.slow
+def test_trapezoidal_rule_agrees_with_radau(bcfg):
+    """The fixed-step implicit integrator against scipy's adaptive Radau over a defect passage.
+
+    At the default step (T/36 = 10.9 us) the largest load error, at the
+    defect's exit, is below 2% of the peak load, and it falls as h^2.
+    """
+    p = _params(bcfg, faulty=True, start_angle_rad=-0.012)
+    h = bcfg["time_step_s"] / bcfg["substeps"]
+    n = 240  # 2.6 ms: the roller at -0.012 rad crosses the defect at 0
+    fun, jac = brg.lpm_rhs(p)
+    errors = []
+    for div in (1, 2):
+        res = brg.simulate_lpm(p, 0.0, n * div, h / div)
+        if div == 1:
+            y0 = np.r_[res.shaft_m[0], res.pedestal_m[0], np.zeros(4)]
+            sol = solve_ivp(fun, (0, n * h), y0, method="Radau", jac=jac, rtol=1e-9, atol=1e-15, t_eval=res.time_s,
+                            max_step=h)
+            assert sol.success
+            e = sol.y[:2] - sol.y[2:4]
+            delta = brg.roller_deflections(e.T, res.psi_rad, p.gap_m, p.drops(res.psi_rad))
+            q_ref = brg.contact_law(delta, p.k_contact)[0]
+            assert res.load_N[:, 0].min() == 0.0  # the roller unloads in the defect
+        errors.append(np.abs(res.load_N[::div] - q_ref).max())
+    assert errors[0] < 0.02 * q_ref.max()
+    assert 3.0 < errors[0] / errors[1] < 5.0  # second order
+
+
+def test_average_resampling_keeps_the_impulse():
+    t = np.linspace(0, 0.01, 10001)
+    q = np.where(np.abs(t - 0.005) < 0.2e-3, 100.0, 0.0)[:, None]
+    dt = 0.39e-3
+    t_out = np.arange(0.001, 0.009, dt)
+    avg = brg.resample_loads(t, q, t_out, dt, "average")
+    smp = brg.resample_loads(t, q, t_out, dt, "sample")
+    assert avg.sum() * dt == pytest.approx(100.0 * 0.4e-3, rel=0.01)
+    np.testing.assert_allclose(smp[:, 0], np.interp(t_out, t, q[:, 0]))
+    with pytest.raises(ValueError, match="resample"):
+        brg.resample_loads(t, q, t_out, dt, "nearest")
