@@ -127,6 +127,60 @@ def _sfepy_quiet():
     output.set_output(quiet=True)
 
 
+def _lagrange_1d(order: int, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes on [-1, 1] and the 1D Lagrange shape functions (len(nodes), len(a)) of the given order."""
+    nodes = np.linspace(-1.0, 1.0, order + 1)
+    n = np.ones((order + 1, len(a)))
+    for i, xi in enumerate(nodes):
+        for j, xj in enumerate(nodes):
+            if i != j:
+                n[i] *= (a - xj) / (xi - xj)
+    return nodes, n
+
+
+def face_load(mesh: StackMesh, u_coors: np.ndarray, order: int, face: str) -> np.ndarray:
+    """Consistent nodal z-forces [N] of a unit uniform traction on the bottom or top face.
+
+    Integrates the tensor-product Lagrange shape functions of every face
+    quadrilateral over its bilinear map (Gauss rule exact for the
+    integrand); face nodes are found by their coordinates among ``u_coors``.
+    Returns a vector over all displacement DOFs (node-major, z components set).
+    """
+    from scipy.spatial import cKDTree
+
+    z = mesh.coors[:, 2]
+    zf = z.min() if face == "bottom" else z.max()
+    local = [0, 1, 2, 3] if face == "bottom" else [4, 5, 6, 7]
+    quads = mesh.cells[:, local]
+    quads = quads[np.all(np.abs(z[quads] - zf) < 1e-9 * np.ptp(z), axis=1)]
+    nodes, _ = _lagrange_1d(order, np.zeros(1))
+    g, w = np.polynomial.legendre.leggauss(order + 2)
+    _, ng = _lagrange_1d(order, g)  # (order+1, ng)
+    tree = cKDTree(u_coors)
+    out = np.zeros(u_coors.shape[0] * 3)
+    ga, gb = np.meshgrid(g, g, indexing="ij")
+    wab = np.outer(w, w)
+    for q in quads:
+        xy = mesh.coors[q, :2]
+        # Jacobian of the bilinear map at the Gauss points.
+        da = 0.25 * np.array([-(1 - gb), (1 - gb), (1 + gb), -(1 + gb)])
+        db = 0.25 * np.array([-(1 - ga), -(1 + ga), (1 + ga), (1 - ga)])
+        xa, ya = np.tensordot(xy[:, 0], da, 1), np.tensordot(xy[:, 1], da, 1)
+        xb, yb = np.tensordot(xy[:, 0], db, 1), np.tensordot(xy[:, 1], db, 1)
+        jac = np.abs(xa * yb - xb * ya) * wab
+        for i, a in enumerate(nodes):
+            for j, b in enumerate(nodes):
+                m4 = 0.25 * np.array(
+                    [(1 - a) * (1 - b), (1 + a) * (1 - b), (1 + a) * (1 + b), (1 - a) * (1 + b)]
+                )
+                p = np.array([*(m4 @ xy), zf])
+                dist, k = tree.query(p)
+                if dist > 1e-9 * np.ptp(mesh.coors):
+                    raise RuntimeError(f"face node {p} not found among the displacement nodes")
+                out[3 * k + 2] += np.sum(np.outer(ng[i], ng[j]) * jac)
+    return out
+
+
 def assemble(mesh: StackMesh, mat: StackMaterials, order: int = 2, load_face: str = "bottom") -> Assembled:
     """Assemble K, M, G, Kpp and the load vector with sfepy.
 
@@ -157,16 +211,9 @@ def assemble(mesh: StackMesh, mat: StackMaterials, order: int = 2, load_face: st
         for g in (GROUP_BOTTOM_DISK, GROUP_PZT, GROUP_TOP_DISK)
         if g in present
     }
-    zmin, zmax = mesh.coors[:, 2].min(), mesh.coors[:, 2].max()
-    tol = 1e-9 * (zmax - zmin)
-    if load_face == "bottom":
-        face = domain.create_region("LoadFace", f"vertices in (z < {zmin + tol:.15e})", "facet")
-        direction = 1.0
-    elif load_face == "top":
-        face = domain.create_region("LoadFace", f"vertices in (z > {zmax - tol:.15e})", "facet")
-        direction = -1.0
-    else:
+    if load_face not in ("bottom", "top"):
         raise ValueError(f"load_face must be 'bottom' or 'top', got {load_face!r}")
+    direction = 1.0 if load_face == "bottom" else -1.0
 
     fu = Field.from_args("fu", np.float64, "vector", omega, approx_order=order)
     fp = Field.from_args("fp", np.float64, "scalar", regions[GROUP_PZT], approx_order=order)
@@ -221,18 +268,11 @@ def assemble(mesh: StackMesh, mat: StackMaterials, order: int = 2, load_face: st
         raise RuntimeError("dw_piezo_coupling blocks are not transposes of each other")
     Kpp = full_d[spp, spp]
 
-    # Consistent load: unit traction integrated by sfepy, rescaled to a total of SECTOR_FRACTION N.
-    m_load = Material("load", val=np.array([[0.0], [0.0], [direction]]))
-    t_l = Term.new("dw_surface_ltr(load.val, v)", integral, face, load=m_load, v=v)
-    load_eq = Equation("L", t_l)
-    pb_l = Problem("load", equations=Equations([load_eq]), domain=domain)
-    pb_l.time_update()
-    pb_l.update_materials()
-    vec = np.zeros(pb_l.equations.variables.adi.n_dof_total)
-    vec = load_eq.evaluate(mode="weak", dw_mode="vector", asm_obj=vec)
-    fvec = np.asarray(vec)[pb_l.equations.variables.adi.indx["u"]]
-    face_area = abs(fvec[2::3].sum())  # quarter face area [m^2] (unit traction)
-    load = fvec * (SECTOR_FRACTION / face_area)
+    # Consistent load of a uniform traction, integrated here: sfepy's dw_surface_ltr distributed
+    # the load of non-parallelogram hexahedron faces to the wrong nodes (tests/test_sensor_fem.py).
+    u_coors = fu.get_coor().copy()
+    load = face_load(mesh, u_coors, order, load_face) * direction
+    load *= SECTOR_FRACTION / abs(load[2::3].sum())
     return Assembled(
         K=K,
         M=M,
