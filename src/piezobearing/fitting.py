@@ -32,6 +32,10 @@ class Param:
         Fit log10(value) instead of the value (requires lower > 0).
     vary : bool
         Whether the fit may change it.
+    scale : float
+        Typical magnitude in physical units (linear parameters only): the fit
+        works on value / scale, so that finite-difference steps suit
+        quantities such as 100 pF or 10 ms.
     """
 
     name: str
@@ -40,12 +44,13 @@ class Param:
     upper: float = np.inf
     log: bool = False
     vary: bool = True
+    scale: float = 1.0
 
     def to_internal(self, x: float) -> float:
-        return float(np.log10(x)) if self.log else float(x)
+        return float(np.log10(x)) if self.log else float(x) / self.scale
 
     def to_physical(self, u: float) -> float:
-        return float(10.0**u) if self.log else float(u)
+        return float(10.0 ** np.clip(u, -300.0, 300.0)) if self.log else float(u) * self.scale
 
 
 @dataclass
@@ -63,6 +68,20 @@ class FitResult:
     success: bool = True
     message: str = ""
 
+    @property
+    def aic(self) -> float:
+        """Akaike information criterion chi2 + 2 k.
+
+        Equal to -2 log L up to a constant when the residual is normalised
+        by a known noise level (chi2 is then -2 log L + const).
+        """
+        return self.chi2 + 2.0 * self.n_free
+
+    @property
+    def bic(self) -> float:
+        """Bayesian information criterion chi2 + k ln n (same normalisation as :attr:`aic`)."""
+        return self.chi2 + self.n_free * float(np.log(max(self.n_data, 1)))
+
     def report(self) -> dict:
         """JSON-ready summary (no arrays)."""
         return {
@@ -73,6 +92,8 @@ class FitResult:
             "n_data": self.n_data,
             "n_free": self.n_free,
             "chi2": self.chi2,
+            "aic": self.aic,
+            "bic": self.bic,
             "success": self.success,
             "message": self.message,
         }
@@ -82,6 +103,7 @@ def fit(
     residual_fn: Callable[[dict[str, float]], np.ndarray],
     params: Sequence[Param],
     max_nfev: int | None = None,
+    ftol: float = 1e-8,
 ) -> FitResult:
     """Minimise sum(residual_fn(values)**2) over the free parameters.
 
@@ -89,7 +111,8 @@ def fit(
     returns the residual vector. The 95% intervals are Student-t intervals
     from the Gauss-Newton covariance s^2 (J^T J)^-1 in internal coordinates,
     mapped to physical units (asymmetric for ``log`` parameters); they assume
-    white residuals, which the diagnostics check.
+    white residuals, which the diagnostics check. ``ftol`` is the relative
+    change of the sum of squares at which the fit stops (scipy's ``ftol``).
     """
     free = [p for p in params if p.vary]
     fixed = {p.name: float(p.value) for p in params if not p.vary}
@@ -108,7 +131,7 @@ def fit(
     hi = np.array([p.to_internal(p.upper) if np.isfinite(p.upper) else np.inf for p in free])
     u0 = np.clip(u0, np.where(np.isfinite(lo), lo, u0), np.where(np.isfinite(hi), hi, u0))
     sol = least_squares(
-        lambda u: residual_fn(unpack(u)), u0, bounds=(lo, hi), x_scale="jac", max_nfev=max_nfev
+        lambda u: residual_fn(unpack(u)), u0, bounds=(lo, hi), x_scale="jac", max_nfev=max_nfev, ftol=ftol
     )
     r = sol.fun
     n, k = r.size, len(free)
@@ -124,7 +147,7 @@ def fit(
         lo_i, hi_i = p.to_physical(sol.x[i] - tq * sd[i]), p.to_physical(sol.x[i] + tq * sd[i])
         ci95[p.name] = [lo_i, hi_i]
         # first-order physical standard error
-        stderr[p.name] = float(sd[i] * (np.log(10) * values[p.name] if p.log else 1.0))
+        stderr[p.name] = float(sd[i] * (np.log(10) * values[p.name] if p.log else p.scale))
         corr[p.name] = {
             q.name: float(cov[i, j] / (sd[i] * sd[j])) if sd[i] > 0 and sd[j] > 0 else float("nan")
             for j, q in enumerate(free)
