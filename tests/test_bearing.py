@@ -172,7 +172,6 @@ def test_defect_impacts_repeat_at_bpfo(bcfg):
     assert np.ptp(rh.load_N.max(axis=1)) < 0.5 * np.ptp(res.load_N.max(axis=1))
 
 
-@pytest.mark.slow
 def test_trapezoidal_rule_agrees_with_radau(bcfg):
     """The fixed-step implicit integrator against scipy's adaptive Radau over a defect passage.
 
@@ -188,8 +187,17 @@ def test_trapezoidal_rule_agrees_with_radau(bcfg):
         res = brg.simulate_lpm(p, 0.0, n * div, h / div)
         if div == 1:
             y0 = np.r_[res.shaft_m[0], res.pedestal_m[0], np.zeros(4)]
-            sol = solve_ivp(fun, (0, n * h), y0, method="Radau", jac=jac, rtol=1e-9, atol=1e-15, t_eval=res.time_s,
-                            max_step=h)
+            sol = solve_ivp(
+                fun,
+                (0, n * h),
+                y0,
+                method="Radau",
+                jac=jac,
+                rtol=1e-9,
+                atol=1e-15,
+                t_eval=res.time_s,
+                max_step=h,
+            )
             assert sol.success
             e = sol.y[:2] - sol.y[2:4]
             delta = brg.roller_deflections(e.T, res.psi_rad, p.gap_m, p.drops(res.psi_rad))

@@ -12,7 +12,6 @@ from piezobearing import housing_fem as fem
 from piezobearing.housing_mesh import (
     GROUP_HOUSING,
     GROUP_RING,
-    HousingGeometry,
     build_housing_mesh,
     mesh_quality,
     nested_dissection_order,
@@ -25,7 +24,7 @@ LEVEL = 0.35  # a coarse mesh: a few thousand DOFs
 
 @pytest.fixture(scope="module")
 def geo(paper_config):
-    return HousingGeometry.from_config(paper_config["bearing"], paper_config["housing"])
+    return st.housing_geometry(paper_config)
 
 
 @pytest.fixture(scope="module")
@@ -41,7 +40,9 @@ def model(meshes, paper_config):
 def _hex_volumes(m):
     """Volumes of the hexahedra by 2x2x2 Gauss quadrature of the trilinear map."""
     p = m.coors[m.conn]
-    ref = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1], [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]])
+    ref = np.array(
+        [[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1], [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]]
+    )
     g = 1 / np.sqrt(3)
     vol = np.zeros(len(p))
     for a in (-g, g):
@@ -167,7 +168,9 @@ def test_static_balance_and_influence_line(model):
     sensor = model.sensor @ u
     gy, gz, radial = model.influence_line()
     w0 = model.patch_weights(np.array([0.0]))[0]
-    assert sensor == pytest.approx(-500 * (w0 @ gz), rel=1e-9)  # reciprocity: one solve gives every load position
+    assert sensor == pytest.approx(
+        -500 * (w0 @ gz), rel=1e-9
+    )  # reciprocity: one solve gives every load position
     g0 = float(w0 @ radial)
     assert 0.05 < g0 < 0.9
     far = np.abs(model.mesh.raceway_psi) > np.pi / 2
@@ -203,7 +206,6 @@ def test_exact_modal_step_against_closed_form():
     np.testing.assert_allclose(q, exact, atol=1e-9 * np.abs(exact).max())
 
 
-@pytest.mark.slow
 def test_reduced_agrees_with_sfepy_direct(paper_config, meshes):
     """Modes + static correction against sfepy's generalized-alpha on the same loads (healthy and faulty)."""
     b = paper_config["bearing"]
@@ -217,7 +219,9 @@ def test_reduced_agrees_with_sfepy_direct(paper_config, meshes):
         m = st.make_model(meshes[case], paper_config)
         wy, wz = m.column_loads(q, p.roller_angles(t_out))
         alpha, beta = fem.rayleigh_coefficients(h["damping_ratio"], h["damping_band_Hz"])
-        red = fem.sensor_force_reduced(fem.reduced_operators(m, fem.compute_modes(m, 8), alpha, beta), wy, wz, dt)
+        red = fem.sensor_force_reduced(
+            fem.reduced_operators(m, fem.compute_modes(m, 8), alpha, beta), wy, wz, dt
+        )
         d = fem.sensor_force_direct(m, wy, wz, dt, alpha, beta, h["rho_inf"])
         rms = np.sqrt(np.mean((d["force_N"] - red["force_N"]) ** 2)) / np.sqrt(np.mean(red["force_N"] ** 2))
         assert rms < 0.01, case

@@ -77,7 +77,9 @@ class BearingGeometry:
     @property
     def diameter_ratio(self) -> float:
         """D_r cos(alpha) / D_p [-]."""
-        return float(self.roller_diameter_m * np.cos(np.radians(self.contact_angle_deg)) / self.pitch_diameter_m)
+        return float(
+            self.roller_diameter_m * np.cos(np.radians(self.contact_angle_deg)) / self.pitch_diameter_m
+        )
 
     @property
     def outer_raceway_radius_m(self) -> float:
@@ -410,7 +412,9 @@ def static_offset(
                 break
             lam *= 0.5
         e = e + lam * step
-    raise RuntimeError(f"static_offset: no equilibrium for the load {load} N (residual {np.linalg.norm(r):.3g} N)")
+    raise RuntimeError(
+        f"static_offset: no equilibrium for the load {load} N (residual {np.linalg.norm(r):.3g} N)"
+    )
 
 
 def harris_discrete_loads(
@@ -510,7 +514,9 @@ def lpm_rhs(p: LPMParameters):
     return fun, jac
 
 
-def simulate_lpm(p: LPMParameters, t_start_s: float, n_steps: int, step_s: float, tol_m: float = 1e-16) -> LPMResult:
+def simulate_lpm(
+    p: LPMParameters, t_start_s: float, n_steps: int, step_s: float, tol_m: float = 1e-16
+) -> LPMResult:
     """Integrate the 4-DOF model with the implicit trapezoidal rule (Newmark, beta = 1/4, gamma = 1/2).
 
     .. math::
@@ -626,6 +632,8 @@ def resample_loads(
     if t_out_s[0] - step_s / 2 < time_s[0] - 1e-12 or t_out_s[-1] + step_s / 2 > time_s[-1] + 1e-12:
         raise ValueError("resample_loads: the fine grid does not cover the averaging windows")
     h = np.diff(time_s)[:, None]
-    cum = np.concatenate([np.zeros((1, load_N.shape[1])), np.cumsum(0.5 * h * (load_N[1:] + load_N[:-1]), axis=0)])
+    cum = np.concatenate(
+        [np.zeros((1, load_N.shape[1])), np.cumsum(0.5 * h * (load_N[1:] + load_N[:-1]), axis=0)]
+    )
     lo, hi = t_out_s - step_s / 2, t_out_s + step_s / 2
     return np.stack([(np.interp(hi, time_s, c) - np.interp(lo, time_s, c)) / step_s for c in cum.T], axis=1)

@@ -180,8 +180,12 @@ def assemble_matrices(mesh: HousingMesh, ring: IsotropicMaterial, housing: Isotr
 
     output.set_output(quiet=True)
     sf_mesh = Mesh.from_data(
-        "housing", mesh.coors, np.zeros(mesh.n_nodes, dtype=np.int32), [mesh.conn.astype(np.int32)],
-        [mesh.group.astype(np.int32)], ["3_8"],
+        "housing",
+        mesh.coors,
+        np.zeros(mesh.n_nodes, dtype=np.int32),
+        [mesh.conn.astype(np.int32)],
+        [mesh.group.astype(np.int32)],
+        ["3_8"],
     )
     domain = FEDomain("domain", sf_mesh)
     omega = domain.create_region("Omega", "all")
@@ -197,9 +201,17 @@ def assemble_matrices(mesh: HousingMesh, ring: IsotropicMaterial, housing: Isotr
     integral = Integral("i", order=2)
     tk, tm = [], []
     for gid, mat in ((GROUP_RING, ring), (GROUP_HOUSING, housing)):
-        m = Material(f"m{gid}", D=stiffness_from_youngpoisson(3, mat.young_Pa, mat.poisson), rho=mat.density_kg_per_m3)
-        tk.append(Term.new(f"dw_lin_elastic(m{gid}.D, v, u)", integral, regions[gid], **{f"m{gid}": m, "v": v, "u": u}))
-        tm.append(Term.new(f"dw_dot(m{gid}.rho, v, u)", integral, regions[gid], **{f"m{gid}": m, "v": v, "u": u}))
+        m = Material(
+            f"m{gid}", D=stiffness_from_youngpoisson(3, mat.young_Pa, mat.poisson), rho=mat.density_kg_per_m3
+        )
+        tk.append(
+            Term.new(
+                f"dw_lin_elastic(m{gid}.D, v, u)", integral, regions[gid], **{f"m{gid}": m, "v": v, "u": u}
+            )
+        )
+        tm.append(
+            Term.new(f"dw_dot(m{gid}.rho, v, u)", integral, regions[gid], **{f"m{gid}": m, "v": v, "u": u})
+        )
     eq_k = Equation("stiffness", tk[0] + tk[1])
     eq_m = Equation("mass", tm[0] + tm[1])
     pb = Problem("housing", equations=Equations([eq_k, eq_m]))
@@ -315,7 +327,9 @@ def splu_symmetric(a: sp.spmatrix, ordering: str = "NATURAL"):
     (:func:`piezobearing.housing_mesh.nested_dissection_order`), so the
     natural column order is the fill-reducing one.
     """
-    return spla.splu(sp.csc_matrix(a), permc_spec=ordering, diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+    return spla.splu(
+        sp.csc_matrix(a), permc_spec=ordering, diag_pivot_thresh=0.0, options={"SymmetricMode": True}
+    )
 
 
 def build_model(
@@ -363,8 +377,13 @@ def build_model(
     # the half model carries half the sensor: K += (k_s/2) w w^T (w on the z DOFs)
     idx = np.where(c_full[free] != 0)[0]
     wv = c_full[free][idx]
-    ks = sp.coo_matrix((0.5 * sensor_stiffness_N_per_m * np.outer(wv, wv).ravel(),
-                        (np.repeat(idx, len(idx)), np.tile(idx, len(idx)))), shape=(len(free), len(free)))
+    ks = sp.coo_matrix(
+        (
+            0.5 * sensor_stiffness_N_per_m * np.outer(wv, wv).ravel(),
+            (np.repeat(idx, len(idx)), np.tile(idx, len(idx))),
+        ),
+        shape=(len(free), len(free)),
+    )
     kf = (k[free][:, free] + ks).tocsc()
     mf = m[free][:, free].tocsc()
 
@@ -473,7 +492,9 @@ def modal_response(forces: np.ndarray, omega: np.ndarray, zeta: np.ndarray, h: f
     x = np.stack([forces[0] / omega**2, np.zeros(n)], axis=1)  # (n, 2)
     q[0] = x[:, 0]
     for k in range(nt - 1):
-        x = np.einsum("nij,nj->ni", a_mat, x) + np.einsum("nij,nj->ni", b_mat, np.stack([forces[k], forces[k + 1]], 1))
+        x = np.einsum("nij,nj->ni", a_mat, x) + np.einsum(
+            "nij,nj->ni", b_mat, np.stack([forces[k], forces[k + 1]], 1)
+        )
         q[k + 1] = x[:, 0]
     return q
 
@@ -598,7 +619,9 @@ def sensor_force_direct(
                 self.solve = splu_symmetric(mtx).solve
 
     ls = _LS({"use_presolve": True, "use_mtx_digest": False})
-    nls = Newton({"i_max": 1, "eps_a": 0.0, "eps_r": 0.0, "is_linear": True}, fun=fun, fun_grad=fun_grad, lin_solver=ls)
+    nls = Newton(
+        {"i_max": 1, "eps_a": 0.0, "eps_r": 0.0, "is_linear": True}, fun=fun, fun_grad=fun_grad, lin_solver=ls
+    )
 
     class _GA(GeneralizedAlphaTS):
         def get_a0(self, nls, u0, e0, v0, unpack):
@@ -606,11 +629,26 @@ def sensor_force_direct(
             self.get_matrices(nls, np.concatenate([u0, e0, v0, np.zeros_like(v0)]), unpack)
             return np.zeros_like(u0)
 
-    conf = Struct(name="ga", kind="ts.generalized_alpha", t0=0.0, t1=times[-1], n_step=nt, rho_inf=rho_inf,
-                  is_linear=True, var_names={"u": "u", "du": "du", "ddu": "ddu"}, verbose=False, quasistatic=False)
+    conf = Struct(
+        name="ga",
+        kind="ts.generalized_alpha",
+        t0=0.0,
+        t1=times[-1],
+        n_step=nt,
+        rho_inf=rho_inf,
+        is_linear=True,
+        var_names={"u": "u", "du": "du", "ddu": "ddu"},
+        verbose=False,
+        quasistatic=False,
+    )
     solver = _GA(conf, nls=nls)
-    solver.set_dof_info(Struct(indx={"u": slice(0, nf), "du": slice(nf, 2 * nf), "ddu": slice(2 * nf, 3 * nf)},
-                               n_dof={"u": nf, "du": nf, "ddu": nf}, n_dof_total=3 * nf))
+    solver.set_dof_info(
+        Struct(
+            indx={"u": slice(0, nf), "du": slice(nf, 2 * nf), "ddu": slice(2 * nf, 3 * nf)},
+            n_dof={"u": nf, "du": nf, "ddu": nf},
+            n_dof_total=3 * nf,
+        )
+    )
     _State.ts = solver.ts
     u0 = model.factor().solve(load(0.0))
     vec0 = np.concatenate([u0, np.zeros(nf), np.zeros(nf)])

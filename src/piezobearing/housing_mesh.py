@@ -92,7 +92,8 @@ class HousingGeometry:
     defect_depth_m: float
 
     @classmethod
-    def from_config(cls, bearing: dict, housing: dict) -> HousingGeometry:
+    def from_config(cls, bearing: dict, housing: dict, tip_diameter_m: float) -> HousingGeometry:
+        """From the config sections ``bearing`` and ``housing`` and the diameter of the sensor's contact disk."""
         h = housing
         geo = cls(
             raceway_radius_m=0.5 * (bearing["pitch_diameter_m"] + bearing["roller_diameter_m"]),
@@ -105,7 +106,7 @@ class HousingGeometry:
             foot_length_m=h["foot_length_m"],
             half_axial_width_m=0.5 * h["axial_width_m"],
             hole_diameter_m=h["hole_diameter_m"],
-            tip_diameter_m=h["sensor_tip_diameter_m"],
+            tip_diameter_m=tip_diameter_m,
             roller_half_length_m=0.5 * bearing["roller_length_m"],
             defect_angle_rad=np.radians(bearing["defect_angle_deg"]),
             defect_width_m=bearing["defect_width_m"],
@@ -118,17 +119,44 @@ class HousingGeometry:
         """Raise ValueError naming the config key when the parts do not fit together."""
         ro = self.ring_outer_radius_m
         rules = [
-            (self.body_half_width_m > ro + 2e-3, "housing.body_half_width_m must exceed the ring's outer radius + 2 mm"),
+            (
+                self.body_half_width_m > ro + 2e-3,
+                "housing.body_half_width_m must exceed the ring's outer radius + 2 mm",
+            ),
             (self.body_top_m > ro + 2e-3, "housing.body_top_m must exceed the ring's outer radius + 2 mm"),
-            (self.body_bottom_m > ro + 2e-3, "housing.body_bottom_m must exceed the ring's outer radius + 2 mm"),
-            (self.centre_height_m > self.body_bottom_m + 2e-3, "housing.centre_height_m must exceed body_bottom_m + 2 mm"),
-            (self.foot_length_m / 2 > self.body_half_width_m + 2e-3, "housing.foot_length_m/2 must exceed body_half_width_m"),
-            (self.half_axial_width_m >= self.ring_half_width_m, "housing.axial_width_m must be at least bearing.width_m"),
+            (
+                self.body_bottom_m > ro + 2e-3,
+                "housing.body_bottom_m must exceed the ring's outer radius + 2 mm",
+            ),
+            (
+                self.centre_height_m > self.body_bottom_m + 2e-3,
+                "housing.centre_height_m must exceed body_bottom_m + 2 mm",
+            ),
+            (
+                self.foot_length_m / 2 > self.body_half_width_m + 2e-3,
+                "housing.foot_length_m/2 must exceed body_half_width_m",
+            ),
+            (
+                self.half_axial_width_m >= self.ring_half_width_m,
+                "housing.axial_width_m must be at least bearing.width_m",
+            ),
             (self.hole_half_side_m < 0.5 * ro, "housing.hole_diameter_m is too large for the ring"),
-            (self.tip_half_side_m < self.hole_half_side_m, "housing.sensor_tip_diameter_m must be below hole_diameter_m"),
-            (self.hole_half_side_m < self.ring_half_width_m, "housing.hole_diameter_m must be below bearing.width_m"),
-            (self.defect_depth_m < ro - self.raceway_radius_m, "bearing.defect_depth_m must be below the ring thickness"),
-            (self.roller_half_length_m <= self.ring_half_width_m, "bearing.roller_length_m must not exceed width_m"),
+            (
+                self.tip_half_side_m < self.hole_half_side_m,
+                "sensor_fem.bottom_disk_diameter_m must be below housing.hole_diameter_m",
+            ),
+            (
+                self.hole_half_side_m < self.ring_half_width_m,
+                "housing.hole_diameter_m must be below bearing.width_m",
+            ),
+            (
+                self.defect_depth_m < ro - self.raceway_radius_m,
+                "bearing.defect_depth_m must be below the ring thickness",
+            ),
+            (
+                self.roller_half_length_m <= self.ring_half_width_m,
+                "bearing.roller_length_m must not exceed width_m",
+            ),
         ]
         for ok, msg in rules:
             if not ok:
@@ -339,9 +367,13 @@ def _cross_section(g: HousingGeometry, sz: MeshSizes):
     # housing O-grid: parameter rho in [0, 1] from the ring's surface to the outline, graded
     # from the ring's radial size to the housing size over the wall thickness (~S_b - R_o)
     wall = sb - ro
-    rho = graded_nodes(
-        np.array([0.0, wall]), lambda s: _size_near(s, [(0, 0)], sz.ring_radial_m, sz.housing_m, sz.growth)
-    ) / wall
+    rho = (
+        graded_nodes(
+            np.array([0.0, wall]),
+            lambda s: _size_near(s, [(0, 0)], sz.ring_radial_m, sz.housing_m, sz.growth),
+        )
+        / wall
+    )
 
     cpt = ro * np.stack([np.sin(psi), -np.cos(psi)], axis=-1)
     opt = _outline_point(psi, g, psi_core, psi_corner)
@@ -388,7 +420,9 @@ def _cross_section(g: HousingGeometry, sz: MeshSizes):
     groups = np.concatenate(groups)
     # orient every quad counter-clockwise in (y, z)
     p = nodes[quads]
-    area = 0.5 * np.sum(p[:, :, 0] * np.roll(p[:, :, 1], -1, 1) - np.roll(p[:, :, 0], -1, 1) * p[:, :, 1], axis=1)
+    area = 0.5 * np.sum(
+        p[:, :, 0] * np.roll(p[:, :, 1], -1, 1) - np.roll(p[:, :, 0], -1, 1) * p[:, :, 1], axis=1
+    )
     quads[area < 0] = quads[area < 0][:, ::-1]
     grids = dict(psi=psi, pid=pid, nr_ring=nr_ring, fid=fid, z_rows=z_rows)
     return nodes, quads, groups, grids
@@ -397,8 +431,14 @@ def _cross_section(g: HousingGeometry, sz: MeshSizes):
 def _x_layers(g: HousingGeometry, sz: MeshSizes) -> np.ndarray:
     must = np.unique(
         np.round(
-            [0.0, g.tip_half_side_m, g.hole_half_side_m, g.roller_half_length_m, g.ring_half_width_m,
-             g.half_axial_width_m],
+            [
+                0.0,
+                g.tip_half_side_m,
+                g.hole_half_side_m,
+                g.roller_half_length_m,
+                g.ring_half_width_m,
+                g.half_axial_width_m,
+            ],
             12,
         )
     )
@@ -477,7 +517,9 @@ def build_housing_mesh(g: HousingGeometry, faulty: bool, level: float = 1.0, siz
     pid = grids["pid"]
     ring_layers = np.where(xs <= g.ring_half_width_m + 1e-12)[0]
     race = np.array([[new[pid[0, j] + k * n2n] for k in ring_layers] for j in range(len(psi))])
-    outer = np.array([[new[pid[grids["nr_ring"] - 1, j] + k * n2n] for k in ring_layers] for j in range(len(psi))])
+    outer = np.array(
+        [[new[pid[grids["nr_ring"] - 1, j] + k * n2n] for k in ring_layers] for j in range(len(psi))]
+    )
     # a raceway column inside the groove has lost its nodes (those at the groove's edges remain)
     keep_cols = np.all(race >= 0, axis=1)
     fid = grids["fid"]
@@ -513,15 +555,28 @@ def _hex_volume_sign(coors: np.ndarray, conn: np.ndarray) -> np.ndarray:
 def mesh_quality(m: HousingMesh) -> dict:
     """Smallest scaled Jacobian over the corners of every hexahedron, and counts."""
     p = m.coors[m.conn]
-    corners = {0: (1, 3, 4), 1: (2, 0, 5), 2: (3, 1, 6), 3: (0, 2, 7), 4: (7, 5, 0), 5: (4, 6, 1), 6: (5, 7, 2),
-               7: (6, 4, 3)}
+    corners = {
+        0: (1, 3, 4),
+        1: (2, 0, 5),
+        2: (3, 1, 6),
+        3: (0, 2, 7),
+        4: (7, 5, 0),
+        5: (4, 6, 1),
+        6: (5, 7, 2),
+        7: (6, 4, 3),
+    }
     sj = np.inf * np.ones(len(p))
     for c, (a, b, d) in corners.items():
         e1, e2, e3 = p[:, a] - p[:, c], p[:, b] - p[:, c], p[:, d] - p[:, c]
         det = np.einsum("ij,ij->i", np.cross(e1, e2), e3)
         nrm = np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1) * np.linalg.norm(e3, axis=1)
         sj = np.minimum(sj, det / nrm)
-    return {"n_nodes": m.n_nodes, "n_cells": m.n_cells, "n_dofs": 3 * m.n_nodes, "min_scaled_jacobian": float(sj.min())}
+    return {
+        "n_nodes": m.n_nodes,
+        "n_cells": m.n_cells,
+        "n_dofs": 3 * m.n_nodes,
+        "min_scaled_jacobian": float(sj.min()),
+    }
 
 
 # ---------------------------------------------------------------------------
