@@ -68,6 +68,9 @@ def test_chain_detects_the_stand_in_fault(tmp_path, inputs, paper_config):
     for key in ("indicator", "threshold", "detected", "harmonics"):
         assert key in ind["healthy"] and key in ind["faulty"]
     assert ind["config"]["signals"]["snr_dB"] == 10.0
+    # the naive test on the raw spectrum fires for the healthy bearing (roller passages at BPFO)
+    assert ind["healthy"]["raw_spectrum_test"]["detected"]
+    assert ind["healthy"]["in_band_snr_dB"] < -20 < ind["faulty"]["in_band_snr_dB"]
     df = pd.read_csv(out / "envelope_faulty.csv")
     assert list(df.columns) == ["frequency_Hz", "amplitude_V", "noiseless_amplitude_V"]
 
@@ -82,10 +85,12 @@ def test_study_events_and_scorecard(tmp_path, inputs, paper_config):
     assert study["faulty"]["detected_all_seeds_at_snr"] and study["healthy"]["detected_no_seed_at_snr"]
     assert -10.0 < study["faulty"]["detection_limit_dB"] <= 10.0
     summ = pd.read_csv(out / "summary.csv")
-    assert set(summ["n_seeds"]) == {20}
+    assert set(summ["n_seeds"]) == {20} and set(summ["band_rule"]) == {"fixed", "kurtogram"}
+    assert study["band_rule"] == config["signals"]["band_rule"] and "faulty" in study["other_band_rule"]
     # replicate 0 at the configured SNR is the record of the noisy stage
     rows = pd.read_csv(out / "study.csv")
-    r0 = rows[(rows["case"] == "faulty") & (rows["snr_dB"] == 10.0) & (rows["seed"] == 0)]
+    r0 = rows[(rows["case"] == "faulty") & (rows["snr_dB"] == 10.0) & (rows["seed"] == 0)
+              & (rows["band_rule"] == config["signals"]["band_rule"])]
     ind = json.loads((out / "fault_indicator.json").read_text())
     assert float(r0["indicator"].iloc[0]) == pytest.approx(ind["faulty"]["indicator"], rel=1e-6)
     st.defect_events(volt["healthy"], volt["faulty"], inputs["kinematics"], out / "events.csv")

@@ -322,6 +322,23 @@ def envelope_spectrum(x: np.ndarray, dt_s: float, band_Hz: tuple[float, float], 
     return EnvelopeSpectrum(np.fft.rfftfreq(n, dt_s), amp, (float(band_Hz[0]), float(band_Hz[1])), n)
 
 
+def band_power_V2(x: np.ndarray, dt_s: float, band_Hz: tuple[float, float], order: int = 4) -> float:
+    """Mean square of x band-passed as before the envelope, mean(|z|^2)/2 [V^2]."""
+    return float(np.mean(np.abs(analytic_band_signal(x, dt_s, band_Hz, order)) ** 2) / 2.0)
+
+
+def amplitude_spectrum(x: np.ndarray, dt_s: float) -> EnvelopeSpectrum:
+    """Amplitude spectrum 2|DFT(x - mean x)|/N of the record itself, no band-pass, no envelope [V].
+
+    The naive check: the same harmonic test on it fires for the healthy
+    bearing too, whose roller passages put a strong line at BPFO.
+    """
+    x = np.asarray(x, dtype=float)
+    n = x.size
+    amp = 2.0 * np.abs(np.fft.rfft(x - x.mean())) / n
+    return EnvelopeSpectrum(np.fft.rfftfreq(n, dt_s), amp, (0.0, 0.5 / dt_s), n)
+
+
 # --------------------------------------------------------------------------- indicator
 
 

@@ -86,11 +86,20 @@ def fig10_envelope(healthy: pd.DataFrame, faulty: pd.DataFrame, indicator: dict,
 
 
 def snr_study(summary: pd.DataFrame, study: dict):
-    """Detection rate against SNR, healthy and faulty, over the noise seeds."""
-    fig, (ax, ax_i) = plt.subplots(2, 1, sharex=True, figsize=(7.0, 5.0), gridspec_kw={"height_ratios": [1, 1]})
+    """Detection rate against SNR, healthy and faulty, over the noise seeds.
+
+    Solid: the configured band rule; dashed: the other rule on the same noise
+    records. Below: the indicator (median and range) of the configured rule.
+    """
+    fig, (ax, ax_i) = plt.subplots(2, 1, sharex=True, figsize=(7.0, 5.4))
+    rule = study["band_rule"]
+    other = study.get("other_band_rule", {}).get("band_rule")
     for case, col in (("healthy", "C0"), ("faulty", "C1")):
-        c = summary[summary["case"] == case].sort_values("snr_dB")
-        ax.plot(c["snr_dB"], c["detection_rate"], "o-", color=col, ms=3, label=case)
+        c = summary[(summary["case"] == case) & (summary["band_rule"] == rule)].sort_values("snr_dB")
+        ax.plot(c["snr_dB"], c["detection_rate"], "o-", color=col, ms=3, label=f"{case} ({rule})")
+        if other:
+            o = summary[(summary["case"] == case) & (summary["band_rule"] == other)].sort_values("snr_dB")
+            ax.plot(o["snr_dB"], o["detection_rate"], "--", color=col, lw=0.9, alpha=0.8, label=f"{case} ({other})")
         ax_i.plot(c["snr_dB"], c["indicator_median"], "-", color=col, label=f"{case}: median")
         ax_i.fill_between(c["snr_dB"], c["indicator_min"], c["indicator_max"], color=col, alpha=0.2, lw=0,
                           label=f"{case}: min-max")
@@ -98,16 +107,18 @@ def snr_study(summary: pd.DataFrame, study: dict):
     ax_i.axhline(thr, color="k", lw=0.9, ls="--", label=f"threshold {thr:.1f}")
     ax_i.set_yscale("log")
     lim = study["faulty"]["detection_limit_dB"]
+    fa = study["healthy"]["first_snr_rate_above_dB"]
     for a in (ax, ax_i):
         a.axvline(study["snr_dB"], color="0.5", lw=0.8, ls=":")
-        if np.isfinite(lim):
+        if lim is not None and np.isfinite(lim):
             a.axvline(lim, color="C1", lw=0.8, ls="-.")
     ax.set_ylabel("detection rate")
     ax.set_ylim(-0.03, 1.03)
-    ax.set_title(f"{study['n_seeds']} noise seeds per SNR; faulty detected at rate >= "
-                 f"{study['required_detection_rate']:g} from {lim:g} dB up", loc="left")
-    ax.legend(loc="center right")
-    ax_i.set_ylabel("indicator")
+    fa_txt = "" if fa is None or not np.isfinite(fa) else f"; healthy false alarms > {1 - study['required_detection_rate']:g} from {fa:g} dB"
+    ax.set_title(f"{study['n_seeds']} noise seeds per SNR; faulty detected (rate >= "
+                 f"{study['required_detection_rate']:g}) from {lim} dB up{fa_txt}", loc="left", fontsize=8)
+    ax.legend(loc="center right", fontsize=7)
+    ax_i.set_ylabel(f"indicator ({rule})")
     ax_i.set_xlabel("SNR [dB]")
     ax_i.legend(loc="upper left", fontsize=7, ncol=2)
     return fig
