@@ -11,6 +11,11 @@ REFERENCE_LINES = (("bpfi_Hz", "BPFI", "C2", (0, (4, 2))), ("ftf_Hz", "FTF", "C3
                    ("bsf_Hz", "BSF", "C4", (0, (6, 2, 1, 2))))
 
 
+def _unit(values) -> tuple[float, str]:
+    """Scale and unit for a voltage axis: V above 2 V, else mV."""
+    return (1.0, "V") if float(np.nanmax(np.abs(values))) > 2.0 else (1e3, "mV")
+
+
 def fig09_voltage(healthy: pd.DataFrame, faulty: pd.DataFrame, events: pd.DataFrame, kinematics: dict,
                   n_periods: float | None = 12):
     """Sensor voltage against time, healthy above faulty, the defect impulses marked (paper Fig. 9).
@@ -22,19 +27,20 @@ def fig09_voltage(healthy: pd.DataFrame, faulty: pd.DataFrame, events: pd.DataFr
     f0 = kinematics["bpfo_Hz"]
     t0, t_end = float(healthy["time_s"].iloc[0]), float(healthy["time_s"].iloc[-1])
     t1 = t_end if n_periods is None else min(t_end, t0 + n_periods / f0)
-    for ax, df, name, col in ((axes[0], healthy, "healthy", "C0"), (axes[1], faulty, "faulty", "C1")):
+    k, unit = _unit(np.concatenate([healthy["voltage_V"], faulty["voltage_V"]]))
+    for ax, df, col in ((axes[0], healthy, "C0"), (axes[1], faulty, "C1")):
         m = (df["time_s"] >= t0) & (df["time_s"] <= t1)
-        ax.plot(df["time_s"][m], 1e3 * df["voltage_V"][m], color=col, lw=0.9, marker=".", ms=2.0)
-        ax.set_ylabel("voltage [mV]")
-        ax.set_title(f"{name} bearing", loc="left")
+        ax.plot(df["time_s"][m], k * df["voltage_V"][m], color=col, lw=0.9, marker=".", ms=2.0)
+        ax.set_ylabel(f"voltage [{unit}]")
     e = events[(events["time_s"] >= t0) & (events["time_s"] <= t1)]
-    axes[1].plot(e["time_s"], 1e3 * e["voltage_V"], "v", color="k", ms=5, mfc="none",
-                 label="defect impulses (largest |faulty - healthy| per 1/BPFO)")
-    axes[1].legend(loc="lower right")
+    axes[1].plot(e["time_s"], k * e["voltage_V"], "v", color="k", ms=5, mfc="none")
+    axes[0].set_title("healthy bearing: one load bump per roller passing the sensor", loc="left")
+    axes[1].set_title("faulty bearing; triangles: defect impulses (largest |faulty - healthy| per 1/BPFO)",
+                      loc="left")
     axes[1].set_xlabel("time [s]")
     axes[1].set_xlim(t0, t1)
-    axes[0].text(0.99, 0.97, f"rollers pass the sensor at BPFO = {f0:.2f} Hz (period {1e3 / f0:.2f} ms)",
-                 transform=axes[0].transAxes, ha="right", va="top", fontsize=8)
+    fig.suptitle(f"sensor voltage; rollers pass the sensor at BPFO = {f0:.2f} Hz (period {1e3 / f0:.2f} ms)",
+                 fontsize=9)
     return fig
 
 
@@ -57,28 +63,26 @@ def fig10_envelope(healthy: pd.DataFrame, faulty: pd.DataFrame, indicator: dict,
     envelope spectrum (same band) is drawn thin and grey for reference.
     """
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(7.0, 5.2))
-    top = 0.0
+    k, unit = _unit(np.concatenate([healthy["amplitude_V"], faulty["amplitude_V"]]))
     for ax, df, case, col in ((axes[0], healthy, "healthy", "C0"), (axes[1], faulty, "faulty", "C1")):
         r = indicator[case]
         m = df["frequency_Hz"] <= fmax_Hz
-        ax.plot(df["frequency_Hz"][m], 1e3 * df["noiseless_amplitude_V"][m], color="0.6", lw=0.7,
+        ax.plot(df["frequency_Hz"][m], k * df["noiseless_amplitude_V"][m], color="0.6", lw=0.7,
                 label="noiseless")
-        ax.plot(df["frequency_Hz"][m], 1e3 * df["amplitude_V"][m], color=col, lw=0.9,
+        ax.plot(df["frequency_Hz"][m], k * df["amplitude_V"][m], color=col, lw=0.9,
                 label=f"SNR {r['snr_dB']:g} dB")
         for h in r["harmonics"]:
-            ax.plot(h["frequency_Hz"], 1e3 * h["amplitude_V"], "o", mfc="none", color="k", ms=7)
-            ax.plot([h["frequency_Hz"] - 0.5 * kinematics["bpfo_Hz"], h["frequency_Hz"] + 0.5 * kinematics["bpfo_Hz"]],
-                    [1e3 * h["floor_V"]] * 2, color="k", lw=0.8, alpha=0.7,
-                    label="local floor (rms)" if h["k"] == 1 else None)
+            ax.plot(h["frequency_Hz"], k * h["amplitude_V"], "o", mfc="none", color="k", ms=7)
+            half = 0.5 * kinematics["bpfo_Hz"]
+            ax.plot([h["frequency_Hz"] - half, h["frequency_Hz"] + half], [k * h["floor_V"]] * 2, color="k",
+                    lw=0.8, alpha=0.7, label="local floor (rms)" if h["k"] == 1 else None)
         _markers(ax, kinematics, fmax_Hz, n_bpfo)
         verdict = "fault detected" if r["detected"] else "no fault detected"
         ax.set_title(
             f"{case}: band {r['band_Hz'][0]:.0f}-{r['band_Hz'][1]:.0f} Hz; indicator {r['indicator']:.1f} "
             f"vs threshold {r['threshold']:.1f} -> {verdict}", loc="left")
-        ax.set_ylabel("envelope amplitude [mV]")
-        top = max(top, float(1e3 * df["amplitude_V"][m].max()))
-    for ax in axes:
-        ax.set_ylim(0, 1.1 * top)
+        ax.set_ylabel(f"envelope amplitude [{unit}]")
+        ax.set_ylim(0, 1.15 * float(k * df["amplitude_V"][m].max()))
     axes[0].legend(loc="upper right", fontsize=7, ncol=2)
     axes[1].set_xlabel("frequency [Hz]")
     axes[1].set_xlim(0, fmax_Hz)
