@@ -12,20 +12,16 @@ TARGETS.extend(
 )
 
 
-def sensor_voltage_inputs(wildcards):
-    """The force, the fitted R and, with signals.sensor_fem_correction, the sensor FEM's response."""
-    inputs = {
-        "force": f"{RESULTS}/bearing/sensor_force_{wildcards.case}.csv",
-        "resistance": f"{RESULTS}/calibration/resistance.json",
-    }
-    if config["signals"]["sensor_fem_correction"]:
-        inputs["harmonic"] = f"{RESULTS}/sensor/harmonic.csv"
-    return inputs
-
-
 rule sensor_voltage:
     input:
-        unpack(sensor_voltage_inputs),
+        force=f"{RESULTS}/bearing/sensor_force_{{case}}.csv",
+        resistance=f"{RESULTS}/calibration/resistance.json",
+        # the sensor FEM's response, if signals.sensor_fem_correction (else no input)
+        harmonic=(
+            [f"{RESULTS}/sensor/harmonic.csv"]
+            if config["signals"]["sensor_fem_correction"]
+            else []
+        ),
     output:
         csv=f"{RESULTS}/signals/voltage_{{case}}.csv",
         json=f"{RESULTS}/signals/voltage_{{case}}.json",
