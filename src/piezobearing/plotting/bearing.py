@@ -55,7 +55,7 @@ def _sensor_sketch(
             edgecolor="C3",
             hatch="..",
             lw=1.2,
-            label="alumina tip",
+            label="alumina disk",
         )
     )
     z1 = z0 - tip_height_m - pzt_height_m

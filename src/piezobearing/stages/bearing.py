@@ -296,6 +296,20 @@ def bearing_seat_stiffness(model: fem.HousingModel, load_N: np.ndarray, angle_ra
     return resultant / float(w @ ur / w.sum())
 
 
+def mode_direction_shares(model: fem.HousingModel, modes: fem.Modes) -> np.ndarray:
+    """Share of each mode's kinetic energy in x (axial), y (horizontal) and z (vertical) motion, (n, 3).
+
+    A label of the mode's shape: e.g. (0, 0.9, 0.1) is a sideways rocking of the housing.
+    """
+    comp = model.free % 3
+    out = np.zeros((modes.shapes.shape[1], 3))
+    mphi = model.M @ modes.shapes
+    for c in range(3):
+        sel = comp == c
+        out[:, c] = np.einsum("ij,ij->j", modes.shapes[sel], mphi[sel])
+    return out / out.sum(axis=1, keepdims=True)
+
+
 def housing_transient(
     case: str,
     mesh_npz: str,
@@ -382,6 +396,7 @@ def housing_transient(
         {
             "case": case,
             "natural_frequencies_Hz": freqs.tolist(),
+            "direction_share_xyz": mode_direction_shares(model, modes).tolist(),
             "nyquist_Hz": 0.5 / dt,
             "modal_damping_ratio": ops.zeta.tolist(),
             "n_dofs": model.n_dofs,
