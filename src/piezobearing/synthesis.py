@@ -94,12 +94,26 @@ def synthesize(
     seed: int,
     hidden_effects: list[dict] | None = None,
 ) -> Measurement:
-    """A synthetic calibration record: true force through the circuit, then noise on both channels."""
-    if hidden_effects:
-        raise ValueError("hidden effects need the effect catalogue (piezobearing.effects)")
+    """A synthetic calibration record: true force through the circuit, then noise on both channels.
+
+    ``hidden_effects`` ([{name, params}], as ``synthesis.hidden_effects``)
+    puts catalogue effects into the voltage: it is then the forward model
+    of the diagnosis (:class:`piezobearing.model.ForwardModel`, baseline plus
+    those effects) driven by the noise-free force. Parameters not given take
+    the effect's neutral default.
+    """
     rng = np.random.default_rng(seed)
     t, force = press_force(protocol, rng)
-    voltage = circuit_voltage(force, 1.0 / protocol.sample_rate_Hz, circuit)
     force_meas = force + rng.normal(0.0, protocol.force_noise_N, t.size)
+    if hidden_effects:
+        from .effects import Record
+        from .model import model_from_specs
+
+        # the effects see the record the diagnosis will see (e.g. the force band), driven by the true force
+        record = Record(t, force_meas)
+        model, values = model_from_specs(circuit, list(hidden_effects), record)
+        voltage = model.simulate(values, record, force_N=force)
+    else:
+        voltage = circuit_voltage(force, 1.0 / protocol.sample_rate_Hz, circuit)
     voltage_meas = voltage + rng.normal(0.0, protocol.voltage_noise_V, t.size)
     return Measurement(t, force_meas, voltage_meas, "synthetic")

@@ -1,0 +1,87 @@
+"""The effect catalogue: physical effects the RC baseline leaves out.
+
+Each effect is one module defining ``EFFECT``, an instance of a subclass of
+:class:`~piezobearing.effects.base.Effect`, registered below under a stable
+identifier. Adding an effect is adding one module and one entry in
+``_MODULES`` (or calling :func:`register` at run time).
+
+=====================  ==========================================================
+identifier             what it models
+=====================  ==========================================================
+``channel_delay``      time offset between the force and voltage acquisitions
+``ac_coupling``        first-order high-pass of an AC-coupled DAQ input
+``reference_lag``      first-order lag of the reference force sensor
+``d33_nonlinearity``   stress-dependent charge constant q = d33 (F + beta F^2)
+``mains_pickup``       50/60 Hz interference and its odd harmonics
+``baseline_drift``     slow additive drift (pyroelectric, thermal, offset)
+``extra_capacitance``  capacitance across the electrodes beyond Cp + cable
+=====================  ==========================================================
+"""
+
+from __future__ import annotations
+
+from .base import Effect, EffectError, EffectParam, Record, StartContext
+
+CATALOGUE: dict[str, Effect] = {}
+
+
+def register(effect: Effect) -> Effect:
+    """Add an effect to the catalogue under ``effect.name`` (names and parameter names must be new)."""
+    if not effect.name or effect.name in CATALOGUE:
+        raise EffectError(f"effect identifier '{effect.name}' is empty or already registered")
+    CATALOGUE[effect.name] = effect
+    return effect
+
+
+def unregister(name: str) -> None:
+    """Remove an effect (for tests that register a temporary one)."""
+    CATALOGUE.pop(name, None)
+
+
+def resolve(names, key: str = "model.effects") -> list[Effect]:
+    """Effects for identifiers; an unknown or repeated name raises a one-line EffectError naming ``key``."""
+    out = []
+    for i, name in enumerate(names):
+        if name not in CATALOGUE:
+            raise EffectError(
+                f"{key}[{i}]: unknown effect '{name}'; the catalogue has: {', '.join(CATALOGUE)}"
+            )
+        if CATALOGUE[name] in out:
+            raise EffectError(f"{key}[{i}]: effect '{name}' is listed twice; list each effect once")
+        out.append(CATALOGUE[name])
+    return out
+
+
+from . import (  # noqa: E402  (the modules import .base, registered in this order)
+    ac_coupling,
+    baseline_drift,
+    channel_delay,
+    d33_nonlinearity,
+    extra_capacitance,
+    mains_pickup,
+    reference_lag,
+)
+
+_MODULES = (
+    channel_delay,
+    ac_coupling,
+    reference_lag,
+    d33_nonlinearity,
+    mains_pickup,
+    baseline_drift,
+    extra_capacitance,
+)
+for _m in _MODULES:
+    register(_m.EFFECT)
+
+__all__ = [
+    "CATALOGUE",
+    "Effect",
+    "EffectError",
+    "EffectParam",
+    "Record",
+    "StartContext",
+    "register",
+    "resolve",
+    "unregister",
+]

@@ -1,0 +1,252 @@
+"""What an effect is: a small, documented change to the forward model.
+
+The forward model (:mod:`piezobearing.model`) maps the recorded reference
+force to the DAQ voltage along one signal chain::
+
+    recorded force --force()--> force on the disk --circuit()--> RC voltage
+                   --voltage()--> DAQ voltage --+ additive()--> recorded voltage
+
+An effect overrides the hooks of the links it changes and leaves the others
+as the identity. Besides the simulation it states its parameters (with units
+in their names, bounds and a typical scale), its frequency response on the
+force-noise path (:meth:`Effect.response`, used for the noise floor and the
+weighting of the fit) and, optionally, data-driven start values.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+from scipy import fft as sfft
+from scipy.signal import welch
+
+from ..fitting import Param
+
+
+class EffectError(ValueError):
+    """An unknown effect name or parameter in the configuration."""
+
+
+@dataclass(frozen=True)
+class EffectParam:
+    """A parameter of an effect.
+
+    Parameters
+    ----------
+    name : str
+        Identifier with a unit suffix (``delay_s``), unique across the catalogue.
+    default : float
+        Value that switches the effect off (or its neutral start) [unit of name].
+    lower, upper : float
+        Physical bounds [unit of name].
+    log : bool
+        Fit on a log10 scale (for quantities spanning decades; requires lower > 0).
+    scale : float
+        Typical magnitude [unit of name] (linear parameters).
+    description : str
+        One line: what it is, with its unit.
+    """
+
+    name: str
+    default: float
+    lower: float
+    upper: float
+    log: bool = False
+    scale: float = 1.0
+    description: str = ""
+
+    def to_param(self, value: float | None = None) -> Param:
+        v = self.default if value is None else float(value)
+        v = float(np.clip(v, self.lower, self.upper))
+        return Param(self.name, v, self.lower, self.upper, log=self.log, scale=self.scale)
+
+
+@dataclass(frozen=True, eq=False)
+class Record:
+    """The measured record the model runs on (time axis and recorded force).
+
+    Attributes
+    ----------
+    time_s : ndarray
+        Uniform sample times [s].
+    force_N : ndarray
+        Recorded reference force [N].
+    """
+
+    time_s: np.ndarray
+    force_N: np.ndarray
+    _cache: dict = field(default_factory=dict, compare=False, repr=False)
+
+    @property
+    def n(self) -> int:
+        return int(self.time_s.size)
+
+    @property
+    def dt_s(self) -> float:
+        return float((self.time_s[-1] - self.time_s[0]) / (self.n - 1))
+
+    @property
+    def sample_rate_Hz(self) -> float:
+        return 1.0 / self.dt_s
+
+    @property
+    def freq_Hz(self) -> np.ndarray:
+        """Frequencies of the real DFT of a record of this length [Hz]."""
+        if "freq" not in self._cache:
+            self._cache["freq"] = np.fft.rfftfreq(self.n, self.dt_s)
+        return self._cache["freq"]
+
+
+def fd_filter(x: np.ndarray, response: Callable[[np.ndarray], np.ndarray], margin: int = 0) -> np.ndarray:
+    """x filtered in the frequency domain by ``response(f)`` (f in cycles per sample, 0 to 0.5).
+
+    Non-causal filters (a fractional delay, a zero-phase lead) need the
+    signal beyond both ends: the record is padded with its last value held,
+    a raised-cosine bridge to its first value, and its first value held, so
+    that the circular filter reads the held first value before the record
+    starts and the held last value after it ends. ``margin`` is the reach
+    of the filter in samples.
+    """
+    x = np.asarray(x, dtype=float)
+    n = x.size
+    pad = int(margin) + 64
+    total = sfft.next_fast_len(n + 3 * pad, real=True)
+    hold = (total - n - pad) // 2
+    bridge = x[-1] + (x[0] - x[-1]) * 0.5 * (1 - np.cos(np.pi * np.arange(1, pad + 1) / (pad + 1)))
+    y = np.concatenate([x, np.full(hold, x[-1]), bridge, np.full(total - n - pad - hold, x[0])])
+    spec = sfft.rfft(y) * response(np.fft.rfftfreq(total))
+    return sfft.irfft(spec, total)[:n]
+
+
+def force_band_Hz(record: "Record", factor: float = 10.0) -> float:
+    """Highest frequency at which the recorded force's spectrum exceeds ``factor`` times its noise level [Hz].
+
+    Welch spectrum with segments of about one second; the noise level is
+    the median above a quarter of the sampling rate. Clipped to
+    [1 Hz, 0.2 fs]. Above this band the recorded force is noise, so a model
+    that must invert a filter of the force channel (``reference_lag``) does so
+    only within it.
+    """
+    if "band" not in record._cache:
+        fs = record.sample_rate_Hz
+        seg = int(min(record.n, 2 ** np.ceil(np.log2(fs))))
+        f, p = welch(record.force_N - np.mean(record.force_N), fs, nperseg=seg)
+        noise = np.median(p[f > 0.25 * fs])
+        above = f[p > factor * noise]
+        band = float(above.max()) if above.size else 0.05 * fs
+        record._cache["band"] = float(np.clip(band, 1.0, 0.2 * fs))
+    return record._cache["band"]
+
+
+def prefilter_response(f_Hz: np.ndarray, record: "Record") -> np.ndarray:
+    """W(f) = 1 / (1 + (f / f_c)^8), f_c = twice the force band: zero-phase, flat in the band [-]."""
+    cut = 2 * force_band_Hz(record)
+    return 1.0 / (1.0 + (np.asarray(f_Hz, dtype=float) / cut) ** 8)
+
+
+def denoised_force(record: "Record") -> np.ndarray:
+    """The recorded force filtered by :func:`prefilter_response` [N].
+
+    Keeps the force's content (its band, see :func:`force_band_Hz`) and
+    removes its white noise above twice the band. The diagnosis fits the
+    model on this input so that the carried force noise, which a delay or a
+    lead would otherwise rotate and amplify at every frequency, cannot be
+    fitted; the reported residual uses the recorded force as it is.
+    """
+    if "denoised" not in record._cache:
+        fs = record.sample_rate_Hz
+        record._cache["denoised"] = fd_filter(
+            record.force_N, lambda k: prefilter_response(k * fs, record), int(2 * fs / force_band_Hz(record))
+        )
+    return record._cache["denoised"]
+
+
+@dataclass(frozen=True, eq=False)
+class StartContext:
+    """What an effect may look at to propose start values.
+
+    Attributes
+    ----------
+    record : Record
+    voltage_V : ndarray
+        Measured voltage [V].
+    model_V : ndarray
+        Voltage of the current model (without this effect) [V].
+    values : dict
+        Fitted values of the current model.
+    """
+
+    record: Record
+    voltage_V: np.ndarray
+    model_V: np.ndarray
+    values: dict
+
+    @property
+    def residual_V(self) -> np.ndarray:
+        return self.voltage_V - self.model_V
+
+
+class Effect:
+    """Base class of a catalogue effect (see the module docstring).
+
+    Class attributes
+    ----------------
+    name : str
+        Stable identifier (used in ``model.effects`` and ``synthesis.hidden_effects``).
+    title : str
+        A few words for tables.
+    order : int
+        Position in the chain among effects using the same hook (lower first).
+    physics : str
+        A paragraph for the report: the mechanism, the model, plausible sizes.
+    """
+
+    name: str = ""
+    title: str = ""
+    order: int = 0
+    physics: str = ""
+
+    # ----------------------------------------------------------------- parameters
+    def params(self, record: Record) -> list[EffectParam]:
+        """The parameters for a record (a few effects depend on its sampling rate)."""
+        return []
+
+    def defaults(self, record: Record) -> dict[str, float]:
+        return {p.name: p.default for p in self.params(record)}
+
+    # ----------------------------------------------------------------- signal chain
+    def force(self, force_N: np.ndarray, values: dict, record: Record) -> np.ndarray:
+        """Recorded force -> force acting on the disk (in the voltage channel's time) [N]."""
+        return force_N
+
+    def circuit(self, circuit: Any, values: dict) -> Any:
+        """Change the :class:`~piezobearing.calibration.SensorCircuit`."""
+        return circuit
+
+    def voltage(self, voltage_V: np.ndarray, values: dict, record: Record) -> np.ndarray:
+        """Voltage across the electrodes -> voltage the DAQ digitises [V]."""
+        return voltage_V
+
+    def additive(self, values: dict, record: Record) -> np.ndarray | None:
+        """A voltage added to the recorded voltage, independent of the force [V]."""
+        return None
+
+    def response(self, values: dict, record: Record) -> np.ndarray | float:
+        """Factor this effect puts on the force-to-voltage response at ``record.freq_Hz`` [-].
+
+        The forward model multiplies the circuit's response by it to carry the
+        force channel's white noise to the voltage (the noise floor). Additive
+        effects leave it at 1.
+        """
+        return 1.0
+
+    # ----------------------------------------------------------------- fitting help
+    def starts(self, ctx: StartContext) -> list[dict[str, float]]:
+        """Start values for this effect's parameters (each dict one start; {} = defaults)."""
+        return [{}]
+
+    def summary(self, values: dict) -> str:
+        """One line with the fitted parameters in readable units."""
+        return ", ".join(f"{p} = {values[p]:.4g}" for p in values)

@@ -1,0 +1,175 @@
+"""The forward model the diagnosis fits: the RC baseline of Eq. 6 plus effects.
+
+The baseline maps the recorded reference force F to the voltage V by
+
+.. math::  C \\dot V + V / R = d_{33} \\dot F,\\qquad C = C_p + C_{cable},
+
+integrated exactly for a force piecewise linear between samples
+(:func:`piezobearing.calibration.circuit_voltage`). Its free parameter is R.
+Each effect of the catalogue (:mod:`piezobearing.effects`) changes one link
+of the chain (recorded force -> force on the disk -> circuit -> DAQ input ->
+additive interference) and brings its own parameters.
+
+The model also gives its response G(f) from the recorded force to the
+voltage (the discrete response of the circuit times each effect's factor):
+white noise of the force channel reaches the residual through G, so the
+noise floor of a model is S(f) = s_v^2 + s_f^2 |G(f)|^2.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .calibration import SensorCircuit, circuit_voltage, resistance_param
+from .effects import Effect, EffectError, EffectParam, Record, resolve
+from .fitting import Param
+
+#: Samples at the initial force level put before the record (see :meth:`ForwardModel.simulate`).
+PAD = 16
+
+
+def rc_response(freq_Hz: np.ndarray, dt_s: float, gain: float, tau_s: float) -> np.ndarray:
+    """Frequency response of :func:`piezobearing.calibration.rc_voltage` as a discrete filter.
+
+    The exact discretisation is V_k = a V_{k-1} + b (F_k - F_{k-1}) with
+    a = exp(-dt/tau), b = gain (tau/dt)(1 - a), so
+
+    .. math::  G(z) = b \\frac{1 - z^{-1}}{1 - a z^{-1}},\\quad z = e^{j 2\\pi f\\,dt}.
+
+    It tends to the continuous gain * j w tau / (1 + j w tau) for f dt << 1.
+    """
+    a = np.exp(-dt_s / tau_s)
+    b = gain * (tau_s / dt_s) * (-np.expm1(-dt_s / tau_s))
+    zi = np.exp(-2j * np.pi * np.asarray(freq_Hz, dtype=float) * dt_s)
+    return b * (1 - zi) / (1 - a * zi)
+
+
+@dataclass(frozen=True)
+class ForwardModel:
+    """The RC baseline with a tuple of effects.
+
+    Parameters
+    ----------
+    circuit : SensorCircuit
+        Nominal circuit (its R is replaced by the parameter ``resistance_ohm``).
+    effects : tuple of Effect
+        Effects switched on, in the order they were added.
+    """
+
+    circuit: SensorCircuit
+    effects: tuple[Effect, ...] = ()
+
+    @classmethod
+    def build(
+        cls, circuit: SensorCircuit, names: list[str] | tuple[str, ...] = (), key: str = "model.effects"
+    ) -> "ForwardModel":
+        """A model from effect identifiers; an unknown name raises a one-line EffectError naming ``key``."""
+        return cls(circuit, tuple(resolve(names, key)))
+
+    @property
+    def names(self) -> list[str]:
+        return [e.name for e in self.effects]
+
+    @property
+    def label(self) -> str:
+        return " + ".join(["baseline", *self.names])
+
+    def with_effect(self, effect: Effect) -> "ForwardModel":
+        return ForwardModel(self.circuit, (*self.effects, effect))
+
+    def _chain(self) -> list[Effect]:
+        return sorted(self.effects, key=lambda e: e.order)
+
+    # ----------------------------------------------------------------- parameters
+    def effect_params(self, record: Record) -> list[EffectParam]:
+        return [p for e in self.effects for p in e.params(record)]
+
+    def defaults(self, record: Record) -> dict[str, float]:
+        """Values that leave every effect neutral, with the nominal R."""
+        out = {"resistance_ohm": self.circuit.resistance_ohm}
+        for e in self.effects:
+            out.update(e.defaults(record))
+        return out
+
+    def params(self, record: Record, start: dict[str, float] | None = None) -> list[Param]:
+        """The free parameters (R first) with start values from ``start`` (else defaults)."""
+        start = {**self.defaults(record), **(start or {})}
+        return [resistance_param(start["resistance_ohm"])] + [
+            p.to_param(start.get(p.name)) for p in self.effect_params(record)
+        ]
+
+    def complete(self, values: dict, record: Record, key: str = "params") -> dict[str, float]:
+        """Defaults overridden by ``values``; an unknown name raises a one-line EffectError."""
+        full = self.defaults(record)
+        unknown = sorted(set(values) - set(full))
+        if unknown:
+            raise EffectError(f"{key}: unknown parameter '{unknown[0]}'; the model has {', '.join(full)}")
+        full.update({k: float(v) for k, v in values.items()})
+        return full
+
+    # ----------------------------------------------------------------- simulation
+    def fitted_circuit(self, values: dict) -> SensorCircuit:
+        c = self.circuit.with_resistance(values["resistance_ohm"])
+        for e in self._chain():
+            c = e.circuit(c, values)
+        return c
+
+    def simulate(self, values: dict, record: Record, force_N: np.ndarray | None = None) -> np.ndarray:
+        """Voltage [V] for the recorded force (or ``force_N`` on the record's clock).
+
+        The circuit starts at rest at the force's initial level, the median of
+        its first 10 ms (``PAD`` samples at that level precede the record and
+        are dropped): starting at the first, noisy sample instead would put
+        that sample's noise (amplified by a lead, if any) into a decaying
+        transient that the measured voltage does not have.
+        """
+        chain = self._chain()
+        f = record.force_N if force_N is None else np.asarray(force_N, dtype=float)
+        head = f[: max(int(round(0.01 / record.dt_s)), 1)]
+        f = np.concatenate([np.full(PAD, np.median(head)), f])
+        for e in chain:
+            f = e.force(f, values, record)
+        v = circuit_voltage(f, record.dt_s, self.fitted_circuit(values))
+        for e in chain:
+            v = e.voltage(v, values, record)
+        v = v[PAD:]
+        for e in chain:
+            add = e.additive(values, record)
+            if add is not None:
+                v = v + add
+        return v
+
+    def response(self, values: dict, record: Record) -> np.ndarray:
+        """G(f) from recorded force to voltage at ``record.freq_Hz`` [V/N] (complex)."""
+        c = self.fitted_circuit(values)
+        g = rc_response(record.freq_Hz, record.dt_s, c.open_circuit_gain_V_per_N, c.tau_s)
+        for e in self.effects:
+            g = g * e.response(values, record)
+        return g
+
+
+def model_from_specs(
+    circuit: SensorCircuit, specs: list[dict], record: Record, key: str = "synthesis.hidden_effects"
+) -> tuple[ForwardModel, dict[str, float]]:
+    """A model and its parameter values from ``[{name: id, params: {key_unit: value}}]``.
+
+    Parameters not given take the effect's default; R is the circuit's. An
+    unknown effect or parameter raises a one-line EffectError naming the key.
+    """
+    model = ForwardModel.build(circuit, [s["name"] for s in specs], key=key)
+    values = model.defaults(record)
+    for i, (spec, effect) in enumerate(zip(specs, model.effects, strict=True)):
+        allowed = {p.name: p for p in effect.params(record)}
+        for name, val in (spec.get("params") or {}).items():
+            if name not in allowed:
+                raise EffectError(
+                    f"{key}[{i}].params.{name}: unknown parameter of '{effect.name}'; "
+                    f"it has: {', '.join(allowed) or 'none'}"
+                )
+            p = allowed[name]
+            if not p.lower <= float(val) <= p.upper:
+                raise EffectError(f"{key}[{i}].params.{name}: {val} outside [{p.lower:g}, {p.upper:g}]")
+            values[name] = float(val)
+    return model, values

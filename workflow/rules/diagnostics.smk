@@ -1,0 +1,59 @@
+# Model versus measurement (DESIGN.md section 4): the configured model (RC baseline
+# plus model.effects) fitted to the calibration record, residual tests, effect
+# ranking, stepwise selection and verdict; report in results/diagnostics/.
+from piezobearing.report import FIGURES as DIAGNOSIS_FIGURES
+
+TARGETS.extend(
+    [
+        f"{RESULTS}/diagnostics/diagnosis.json",
+        f"{RESULTS}/diagnostics/report.md",
+        f"{RESULTS}/notebooks/diagnosis.ipynb",
+    ]
+)
+
+
+rule diagnose:
+    input:
+        measurement=measurement_csv(),
+    output:
+        json=f"{RESULTS}/diagnostics/diagnosis.json",
+        arrays=f"{RESULTS}/diagnostics/diagnosis.npz",
+        report=f"{RESULTS}/diagnostics/report.md",
+        figures=[
+            report(
+                f"{RESULTS}/diagnostics/figures/{name}.png",
+                caption="../report/diagnosis.rst",
+                category="Model versus measurement",
+            )
+            for name in DIAGNOSIS_FIGURES
+        ],
+    log:
+        f"{RESULTS}/logs/diagnose.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/diagnose.tsv"
+    conda:
+        "../envs/piezobearing.yaml"
+    params:
+        sensor=config["sensor"],
+        calibration=config["calibration"],
+        model=config["model"],
+        diagnostics=config["diagnostics"],
+    script:
+        "../scripts/diagnose.py"
+
+
+rule diagnosis_notebook:
+    input:
+        notebook="notebooks/diagnosis.ipynb",
+        diagnosis=f"{RESULTS}/diagnostics/diagnosis.json",
+        arrays=f"{RESULTS}/diagnostics/diagnosis.npz",
+    output:
+        figure=f"{RESULTS}/figures/diagnosis_ladder.png",
+        notebook=f"{RESULTS}/notebooks/diagnosis.ipynb",
+    log:
+        f"{RESULTS}/logs/diagnosis_notebook.log",
+    conda:
+        "../envs/piezobearing.yaml"
+    shell:
+        "papermill {input.notebook} {output.notebook} -k python3 -p diagnosis {input.diagnosis}"
+        " -p arrays {input.arrays} -p figure {output.figure} > {log} 2>&1"
