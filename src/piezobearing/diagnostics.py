@@ -6,15 +6,24 @@ predicts V from F. This module
 
 1. measures the noise floor in the quiet stretches between impulses: the
    white-noise levels s_v of the voltage channel and s_f of the force
-   channel (median of the periodogram above 5% of the sampling rate, so that
-   drift, decaying tails and mains lines do not inflate them);
-2. fits a model by maximum likelihood with both channels noisy (errors in
-   variables): the residual r = V - M(F) of a correct model is
-   n_v - G n_f, white noise through the model's response G, with spectrum
-   S(f) = s_v^2 + s_f^2 |G(f)|^2. The fit minimises
-   chi2 = sum_k |R_k|^2 / (n S_k / 2) over the DFT bins (the Pintelon-
-   Schoukens frequency-domain cost with measured noise levels), so that
-   chi2 ~ n for a correct model and BIC = chi2 + k ln n;
+   channel (line-free trimmed mean of the periodogram between 5% and 45% of
+   the sampling rate, so that drift, decaying tails and mains lines do not
+   inflate them). A correct model driven by the recorded force leaves
+   r = V - M(F) = n_v - G n_f: white noise through the model's response G,
+   with spectrum S(f) = s_v^2 + s_f^2 |G(f)|^2 (the floor of that model);
+2. fits a model by maximum likelihood with a known noise spectrum,
+   chi2 = sum_k |R_k|^2 / (n S_k / 2) over the DFT bins, so that chi2 ~ n
+   for a correct model and BIC = chi2 + k ln n (the noise level measured,
+   not fitted). The force channel is noisy too (errors in variables): a
+   delay or a lead applied to the recorded force rotates and amplifies its
+   noise at every frequency, and a fit could then "explain" part of the
+   carried noise (false discoveries) while its Gauss-Newton steps slow
+   down. The fit therefore drives the model with the force low-passed at
+   twice its band (:func:`~piezobearing.effects.base.denoised_force`; the
+   force's content is untouched, the carried noise remains only in the
+   band) and weights by the floor of that input, S_fit = s_v^2 +
+   s_f^2 |G W|^2. The residual, NRMSE and tests reported use the recorded
+   force as it is;
 3. tests the residual whitened by S (which is white for a correct model):
    autocorrelation (Ljung-Box), cross-correlation with the force, its
    spectrum against the floor, and its energy in short time windows, each

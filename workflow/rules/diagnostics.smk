@@ -1,7 +1,31 @@
 # Model versus measurement (DESIGN.md section 4): the configured model (RC baseline
 # plus model.effects) fitted to the calibration record, residual tests, effect
 # ranking, stepwise selection and verdict; report in results/diagnostics/.
+import sys
+
+import numpy as np
+
 from piezobearing.report import FIGURES as DIAGNOSIS_FIGURES
+
+
+def check_effects():
+    """Stop before any job runs when model.effects or synthesis.hidden_effects names an unknown effect."""
+    from piezobearing.effects import EffectError, Record, resolve
+    from piezobearing.model import model_from_specs
+    from piezobearing.stages.calibration import nominal_circuit
+
+    try:
+        resolve(config["model"]["effects"])
+        dummy = Record(np.arange(1000) / 1000.0, np.zeros(1000))
+        model_from_specs(
+            nominal_circuit(config), config["synthesis"]["hidden_effects"], dummy
+        )
+    except EffectError as e:
+        print(f"piezobearing: {e}", file=sys.stderr)
+        sys.exit(1)
+
+
+check_effects()
 
 TARGETS.extend(
     [

@@ -20,7 +20,7 @@ import numpy as np
 
 from .. import diagnostics as dg
 from .. import report
-from ..effects import Record
+from ..effects import Record, resolve
 from .calibration import load_record, nominal_circuit
 
 #: Config sections a diagnosis depends on (copied into diagnosis.json).
@@ -31,6 +31,7 @@ def run(
     measurement_csv: str, config: dict, progress: Callable[[str], None] | None = None
 ) -> tuple[dict, dict]:
     """Diagnose one record; returns (JSON-ready dict, arrays)."""
+    resolve(config["model"]["effects"])  # an unknown effect stops before any work
     m, imps = load_record(measurement_csv, config)
     c = config["calibration"]
     d = dg.diagnose(

@@ -1,0 +1,113 @@
+"""The ``piezobearing`` console script: diagnose and validate, with one-line errors and no tracebacks."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from piezobearing.cli import main
+from piezobearing.io import write_measurement
+from piezobearing.stages.calibration import nominal_circuit
+from piezobearing.synthesis import PressProtocol, synthesize
+
+CI_OVERRIDE = "seed: 7\nsynthesis: {duration_s: 12.0, sample_rate_Hz: 500.0, n_impulses: 6}\n"
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory, ci_config) -> dict:
+    """A short record with a 15 ms channel delay, a config file, a broken CSV."""
+    d = tmp_path_factory.mktemp("cli")
+    c = ci_config
+    m = synthesize(
+        PressProtocol.from_config(c["synthesis"]),
+        nominal_circuit(c),
+        c["seed"],
+        [{"name": "channel_delay", "params": {"delay_s": 0.015}}],
+    )
+    write_measurement(m, d / "record.csv")
+    (d / "ci.yaml").write_text(CI_OVERRIDE)
+    (d / "bad_effect.yaml").write_text(CI_OVERRIDE + "model: {effects: [ringing]}\n")
+    (d / "bad_key.yaml").write_text("diagnostics: {max_step: 3}\n")
+    (d / "broken.csv").write_text("time_s,force_N,volts\n0,0,0\n0.001,0,0\n0.002,0,0\n")
+    return {"dir": d, "record": d / "record.csv"}
+
+
+def run_cli(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "piezobearing.cli", *args], capture_output=True, text=True)
+
+
+def test_validate_ok(files, capsys):
+    assert main(["validate", str(files["record"])]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("OK: ") and "500 Hz" in out
+
+
+def test_validate_bad_file_is_one_line_without_traceback(files):
+    r = run_cli("validate", str(files["dir"] / "broken.csv"))
+    assert r.returncode == 1
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in r.stderr
+    assert "column 'voltage_V' missing" in lines[0] and "broken.csv" in lines[0]
+    r = run_cli("validate", str(files["dir"] / "nope.csv"))
+    assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and "not found" in r.stderr
+
+
+def test_diagnose_writes_json_report_and_figures(files, capsys):
+    out = files["dir"] / "out"
+    rc = main(
+        [
+            "diagnose",
+            str(files["record"]),
+            "--out",
+            str(out),
+            "--config",
+            str(files["dir"] / "ci.yaml"),
+            "--quiet",
+        ]
+    )
+    assert rc == 0
+    printed = capsys.readouterr().out
+    assert "verdict: explained" in printed and "channel_delay" in printed
+    d = json.loads((out / "diagnosis.json").read_text())
+    assert d["selected"] == ["channel_delay"]
+    assert d["config"]["calibration"]["measurement"] == str(files["record"])
+    assert d["config"]["diagnostics"]["min_delta_bic"] == 10.0
+    report = (out / "report.md").read_text()
+    for name in ("overlay", "residuals", "spectrum", "correlations", "ranking", "ladder"):
+        assert (out / "figures" / f"{name}.png").stat().st_size > 10_000
+        assert f"(figures/{name}.png)" in report
+    assert "Most likely missing: `channel_delay`" in report and "Verdict: explained" in report
+    assert (out / "diagnosis.npz").exists()
+
+
+@pytest.mark.parametrize(
+    ("config", "message"),
+    [
+        ("bad_effect.yaml", "model.effects[0]: unknown effect 'ringing'"),
+        ("bad_key.yaml", "key 'diagnostics'"),
+        ("missing.yaml", "config file not found"),
+    ],
+)
+def test_diagnose_user_errors_are_one_line(files, config, message):
+    r = run_cli(
+        "diagnose",
+        str(files["record"]),
+        "--out",
+        str(files["dir"] / "x"),
+        "--config",
+        str(files["dir"] / config),
+        "--quiet",
+    )
+    assert r.returncode == 1
+    assert "Traceback" not in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and message in r.stderr
+    assert not (files["dir"] / "x" / "diagnosis.json").exists()
+
+
+def test_console_script_is_declared():
+    text = (Path(__file__).resolve().parents[1] / "pyproject.toml").read_text()
+    assert 'piezobearing = "piezobearing.cli:main"' in text
