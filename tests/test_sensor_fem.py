@@ -146,6 +146,18 @@ def test_symmetry_families(stack):
     assert opened[0] > 1.1 * short[0]
 
 
+def test_modes_are_bit_identical_from_call_to_call(stack):
+    """Fixed ARPACK start vector and sign convention: the same system gives the same bits (reproducible runs)."""
+    _, rs = stack
+    for circuit in ("short", "open"):
+        a, b = fem.modes(rs, 4, circuit), fem.modes(rs, 4, circuit)
+        assert np.array_equal(a.frequency_Hz, b.frequency_Hz)
+        assert np.array_equal(a.shapes, b.shapes)
+        cols = np.arange(a.shapes.shape[1])
+        assert np.all(a.shapes[np.abs(a.shapes).argmax(axis=0), cols] > 0)
+        np.testing.assert_allclose(a.shapes.T @ (rs.M @ a.shapes), np.eye(len(cols)), atol=1e-8)
+
+
 def test_paper_placement_gives_the_papers_first_resonance(stack):
     """The first axial mode with the 3 mm disk clamped is within 2% of the paper's 121 kHz (coarse mesh)."""
     _, rs = stack

@@ -27,6 +27,8 @@ rule sensor_mesh:
         json=f"{RESULTS}/sensor/mesh/mesh.json",
     log:
         f"{RESULTS}/logs/sensor_mesh.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/sensor_mesh.tsv"
     conda:
         "../envs/piezobearing.yaml"
     params:
@@ -45,6 +47,8 @@ rule sensor_convergence:
         csv=f"{RESULTS}/sensor/convergence.csv",
     log:
         f"{RESULTS}/logs/sensor_convergence.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/sensor_convergence.tsv"
     conda:
         "../envs/piezobearing.yaml"
     params:
@@ -62,6 +66,8 @@ rule sensor_modal:
         mode=f"{RESULTS}/sensor/first_axial_mode.npz",
     log:
         f"{RESULTS}/logs/sensor_modal.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/sensor_modal.tsv"
     conda:
         "../envs/piezobearing.yaml"
     params:
@@ -82,6 +88,8 @@ rule sensor_harmonic:
         band=f"{RESULTS}/sensor/band.json",
     log:
         f"{RESULTS}/logs/sensor_harmonic.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/sensor_harmonic.tsv"
     conda:
         "../envs/piezobearing.yaml"
     params:
@@ -100,6 +108,8 @@ rule scorecard_sensor_fem:
         csv=f"{RESULTS}/scorecard/sensor_fem.csv",
     log:
         f"{RESULTS}/logs/scorecard_sensor_fem.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/scorecard_sensor_fem.tsv"
     conda:
         "../envs/piezobearing.yaml"
     script:
@@ -120,6 +130,8 @@ rule fig07:
         notebook=f"{RESULTS}/notebooks/fig07_sensor_mode.ipynb",
     log:
         f"{RESULTS}/logs/fig07.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/fig07.tsv"
     conda:
         "../envs/piezobearing.yaml"
     shell:
@@ -141,6 +153,8 @@ rule fig08b:
         notebook=f"{RESULTS}/notebooks/fig08b_sensor_harmonic.ipynb",
     log:
         f"{RESULTS}/logs/fig08b.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/fig08b.tsv"
     conda:
         "../envs/piezobearing.yaml"
     shell:
