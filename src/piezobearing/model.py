@@ -18,7 +18,7 @@ noise floor of a model is S(f) = s_v^2 + s_f^2 |G(f)|^2.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -60,6 +60,7 @@ class ForwardModel:
 
     circuit: SensorCircuit
     effects: tuple[Effect, ...] = ()
+    _cache: dict = field(default_factory=dict, compare=False, repr=False, hash=False)
 
     @classmethod
     def build(
@@ -126,7 +127,15 @@ class ForwardModel:
         transient that the measured voltage does not have.
         """
         chain = self._chain()
-        f = record.force_N if force_N is None else np.asarray(force_N, dtype=float)
+        f0 = record.force_N if force_N is None else np.asarray(force_N, dtype=float)
+        v = self._cached("path", f0, values, record, lambda: self._force_path(f0, values, record, chain))
+        for e in chain:
+            add = e.additive(values, record)
+            if add is not None:
+                v = v + add
+        return v
+
+    def _force_path(self, f: np.ndarray, values: dict, record: Record, chain: list[Effect]) -> np.ndarray:
         head = f[: max(int(round(0.01 / record.dt_s)), 1)]
         f = np.concatenate([np.full(PAD, np.median(head)), f])
         for e in chain:
@@ -134,15 +143,31 @@ class ForwardModel:
         v = circuit_voltage(f, record.dt_s, self.fitted_circuit(values))
         for e in chain:
             v = e.voltage(v, values, record)
-        v = v[PAD:]
-        for e in chain:
-            add = e.additive(values, record)
-            if add is not None:
-                v = v + add
-        return v
+        return v[PAD:]
+
+    def _cached(self, what: str, obj, values: dict, record: Record, compute):
+        """Results of the force path (and response) by the values of the non-additive parameters.
+
+        A fit's finite differences in an additive parameter (mains, drift) then
+        reuse the force path. Entries hold their input array, so a key cannot
+        meet a different array with a recycled id.
+        """
+        additive = {p.name for e in self.effects if e.additive_only for p in e.params(record)}
+        key = (what, id(obj), tuple(sorted((k, v) for k, v in values.items() if k not in additive)))
+        hit = self._cache.get(key)
+        if hit is not None and hit[0] is obj:
+            return hit[1]
+        out = compute()
+        self._cache[key] = (obj, out)
+        while len(self._cache) > 8:
+            self._cache.pop(next(iter(self._cache)))
+        return out
 
     def response(self, values: dict, record: Record) -> np.ndarray:
         """G(f) from recorded force to voltage at ``record.freq_Hz`` [V/N] (complex)."""
+        return self._cached("response", record, values, record, lambda: self._response(values, record))
+
+    def _response(self, values: dict, record: Record) -> np.ndarray:
         c = self.fitted_circuit(values)
         g = rc_response(record.freq_Hz, record.dt_s, c.open_circuit_gain_V_per_N, c.tau_s)
         for e in self.effects:

@@ -201,12 +201,15 @@ class Effect:
         Position in the chain among effects using the same hook (lower first).
     physics : str
         A paragraph for the report: the mechanism, the model, plausible sizes.
+    additive_only : bool
+        True when the effect only adds a voltage (its parameters do not touch the force path).
     """
 
     name: str = ""
     title: str = ""
     order: int = 0
     physics: str = ""
+    additive_only: bool = False
 
     # ----------------------------------------------------------------- parameters
     def params(self, record: Record) -> list[EffectParam]:

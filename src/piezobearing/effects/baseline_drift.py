@@ -43,6 +43,7 @@ class BaselineDrift(Effect):
     name = "baseline_drift"
     title = "slow additive drift (pyroelectric/thermal)"
     order = 310
+    additive_only = True
     physics = (
         "PZT is pyroelectric: a hand or rod warming the disk drives a current p A dT/dt through R (about "
         "35 mV for 0.1 K/s at R = 50 MOhm), and offsets and thermal EMFs add to it. The model adds a smooth "

@@ -54,6 +54,7 @@ class MainsPickup(Effect):
     name = "mains_pickup"
     title = "mains interference (50/60 Hz + odd harmonics)"
     order = 300
+    additive_only = True
     physics = (
         "The PZT is a high-impedance source (hundreds of pF behind tens of MOhm): an unshielded lead or a "
         "ground loop between the two acquisition devices picks up the mains field at 50 or 60 Hz, with odd "
