@@ -106,3 +106,45 @@ def test_contact_force_files(run):
     assert df.shape[1] == 1 + 2 * z
     npz = np.load(paths["faulty"]["npz"].with_suffix(".npz"))
     assert npz["fine_load_N"].shape[1] == z and len(npz["fine_time_s"]) > 30 * len(npz["time_s"])
+
+
+def test_a_second_run_writes_identical_files(run, tmp_path):
+    """Result files hold no wall-clock times and no unseeded randomness: a rerun is byte-identical."""
+    cfg, d, paths = run
+    p = paths["healthy"]
+    st.bearing_lpm(
+        tmp_path / "kinematics.json",
+        {c: tmp_path / f"contact_{c}.npz" for c in st.CASES},
+        {c: tmp_path / f"contact_{c}.csv" for c in st.CASES},
+        tmp_path / "lpm.json",
+        cfg,
+    )
+    st.housing_transient(
+        "healthy",
+        p["mesh"].with_suffix(".npz"),
+        p["npz"].with_suffix(".npz"),
+        tmp_path / "force.csv",
+        tmp_path / "modes.json",
+        tmp_path / "transient.json",
+        tmp_path / "influence.csv",
+        cfg,
+    )
+    conv = copy.deepcopy(cfg)
+    conv["housing"]["convergence_levels"] = [0.25, 0.3, 0.35]
+    for k in ("a", "b"):
+        st.mesh_convergence(
+            p["npz"].with_suffix(".npz"), tmp_path / f"conv_{k}.json", tmp_path / f"conv_{k}.csv", conv
+        )
+    pairs = [
+        (d / "kinematics.json", tmp_path / "kinematics.json"),
+        (d / "lpm.json", tmp_path / "lpm.json"),
+        *[(paths[c]["csv"].with_suffix(".csv"), tmp_path / f"contact_{c}.csv") for c in st.CASES],
+        (p["force"].with_suffix(".csv"), tmp_path / "force.csv"),
+        (p["modes"].with_suffix(".json"), tmp_path / "modes.json"),
+        (p["json"].with_suffix(".json"), tmp_path / "transient.json"),
+        (p["inf"].with_suffix(".csv"), tmp_path / "influence.csv"),
+        (tmp_path / "conv_a.json", tmp_path / "conv_b.json"),
+        (tmp_path / "conv_a.csv", tmp_path / "conv_b.csv"),
+    ]
+    for first, second in pairs:
+        assert first.read_bytes() == second.read_bytes(), first.name

@@ -159,6 +159,8 @@ rule scorecard_bearing:
         csv=f"{RESULTS}/scorecard/bearing.csv",
     log:
         f"{RESULTS}/logs/scorecard_bearing.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/scorecard_bearing.tsv"
     conda:
         "../envs/piezobearing.yaml"
     params:
