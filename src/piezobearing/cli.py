@@ -74,6 +74,12 @@ def _diagnose(args) -> int:
     bar.close()
     base, final = d["baseline"], d["final"]
     print(f"baseline NRMSE {100 * base['nrmse']:.2f}% (noise floor {100 * base['noise_floor_nrmse']:.2f}%)")
+    conf = d["configured"]
+    if conf["effects"]:
+        print(
+            f"configured model (baseline + {' + '.join(conf['effects'])}) NRMSE {100 * conf['nrmse']:.2f}% "
+            f"(noise floor {100 * conf['noise_floor_nrmse']:.2f}%)"
+        )
     if d["winner"]:
         print(f"most likely missing: {d['winner']['effect']} ({d['winner']['summary']})")
     print(

@@ -196,7 +196,7 @@ def render(d: dict, figures: dict[str, str] | None = None) -> str:
         white = "yes" if r["white"] else "no"
         add(
             f"| {i + 1} | `{r['effect']}` | {r['delta_bic']:.4g} | {_pct(r['excess_explained'])} | "
-            f"{_pct(r['nrmse'])} | {white} | {r['summary']} |"
+            f"{_pct(r['nrmse'])} | {white} | {r['summary'].replace('|', '/')} |"
         )
     add("")
     w = d.get("winner")
@@ -229,10 +229,8 @@ def render(d: dict, figures: dict[str, str] | None = None) -> str:
         name = " + ".join(["baseline", *s["effects"]])
         db = "" if s["delta_bic"] is None else f"{s['delta_bic']:.4g}"
         sh = "" if s["excess_explained"] is None else _pct(s["excess_explained"])
-        add(
-            f"| {i if configured_on else i} | {name} | {_pct(s['nrmse'])} | {_pct(s['noise_floor_nrmse'])} | "
-            f"{db} | {sh} |"
-        )
+        step = "configured" if i == 0 else str(i)
+        add(f"| {step} | {name} | {_pct(s['nrmse'])} | {_pct(s['noise_floor_nrmse'])} | {db} | {sh} |")
     add("")
     for s in d.get("dropped_steps", []):
         add(f"- Tried and dropped: `{s['added']}` ({s['reason']}).")

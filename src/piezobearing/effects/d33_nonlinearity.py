@@ -60,7 +60,7 @@ class D33Nonlinearity(Effect):
 
     def summary(self, values):
         b = values["beta_per_N"]
-        return f"beta = {b:.3g} 1/N (sensitivity +{200 * b * 10:.2g}% at 10 N)"
+        return f"beta = {b:.3g} 1/N (sensitivity {2000 * b:+.2g}% at 10 N)"
 
 
 EFFECT = D33Nonlinearity()

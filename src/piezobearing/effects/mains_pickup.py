@@ -116,7 +116,7 @@ class MainsPickup(Effect):
         for k in HARMONICS:
             if f"mains_h{k}_cos_V" in values:
                 a = np.hypot(values[f"mains_h{k}_cos_V"], values[f"mains_h{k}_sin_V"])
-                parts.append(f"|h{k}| = {a * 1e3:.2f} mV")
+                parts.append(f"h{k} amplitude {a * 1e3:.2f} mV")
         return ", ".join(parts)
 
 
