@@ -3,29 +3,15 @@
 # ranking, stepwise selection and verdict; report in results/diagnostics/.
 import sys
 
-import numpy as np
-
+from piezobearing.effects import EffectError
 from piezobearing.report import FIGURES as DIAGNOSIS_FIGURES
+from piezobearing.stages.diagnostics import check_effect_names
 
-
-def check_effects():
-    """Stop before any job runs when model.effects or synthesis.hidden_effects names an unknown effect."""
-    from piezobearing.effects import EffectError, Record, resolve
-    from piezobearing.model import model_from_specs
-    from piezobearing.stages.calibration import nominal_circuit
-
-    try:
-        resolve(config["model"]["effects"])
-        dummy = Record(np.arange(1000) / 1000.0, np.zeros(1000))
-        model_from_specs(
-            nominal_circuit(config), config["synthesis"]["hidden_effects"], dummy
-        )
-    except EffectError as e:
-        print(f"piezobearing: {e}", file=sys.stderr)
-        sys.exit(1)
-
-
-check_effects()
+try:  # an unknown effect in model.effects or synthesis.hidden_effects stops before any job
+    check_effect_names(config)
+except EffectError as e:
+    print(f"piezobearing: {e}", file=sys.stderr)
+    sys.exit(1)
 
 TARGETS.extend(
     [
@@ -72,7 +58,11 @@ rule diagnosis_notebook:
         diagnosis=f"{RESULTS}/diagnostics/diagnosis.json",
         arrays=f"{RESULTS}/diagnostics/diagnosis.npz",
     output:
-        figure=f"{RESULTS}/figures/diagnosis_ladder.png",
+        figure=report(
+            f"{RESULTS}/figures/diagnosis_ladder.png",
+            caption="../report/diagnosis.rst",
+            category="Model versus measurement",
+        ),
         notebook=f"{RESULTS}/notebooks/diagnosis.ipynb",
     log:
         f"{RESULTS}/logs/diagnosis_notebook.log",

@@ -27,6 +27,16 @@ from .calibration import load_record, nominal_circuit
 CONFIG_KEYS = ("sensor", "calibration", "model", "diagnostics")
 
 
+def check_effect_names(config: dict) -> None:
+    """Raise a one-line EffectError if ``model.effects`` or ``synthesis.hidden_effects`` names an unknown
+    effect or parameter (the workflow calls this before any job runs)."""
+    from ..model import model_from_specs
+
+    resolve(config["model"]["effects"])
+    probe = Record(np.arange(1000) / 1000.0, np.zeros(1000))
+    model_from_specs(nominal_circuit(config), config["synthesis"]["hidden_effects"], probe)
+
+
 def run(
     measurement_csv: str, config: dict, progress: Callable[[str], None] | None = None
 ) -> tuple[dict, dict]:
