@@ -147,7 +147,8 @@ class NoiseFloor:
 
     def spectrum(self, response: np.ndarray) -> np.ndarray:
         """S(f) = s_v^2 + s_f^2 |G(f)|^2: variance per sample of the residual noise at each bin [V^2]."""
-        return self.voltage_noise_V**2 + self.force_noise_N**2 * np.abs(response) ** 2
+        s = self.voltage_noise_V**2 + self.force_noise_N**2 * np.abs(response) ** 2
+        return np.maximum(s, 1e-30)  # noise-free (synthetic) records: finite weights
 
     def rms_V(self, response: np.ndarray, n: int) -> float:
         """rms of the residual noise of a model with response G on n samples [V] (Parseval)."""

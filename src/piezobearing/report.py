@@ -209,10 +209,20 @@ def render(d: dict, figures: dict[str, str] | None = None) -> str:
         add("")
     else:
         best = d["ranking"][0] if d["ranking"] else None
-        if best:
+        st = d.get("settings", {})
+        tried = [s["added"] for s in d.get("dropped_steps", [])]
+        if best and best["effect"] in tried:
+            add(
+                f"No effect was kept. The best candidate, `{best['effect']}` (delta BIC {best['delta_bic']:.3g}), "
+                f"explains only {_pct(best['excess_explained'])} of the misfit and the residual keeps structure "
+                "after the search: it would stand in for a mechanism outside the catalogue (see the verdict)."
+            )
+            add("")
+        elif best:
             add(
                 f"No effect is supported by the evidence (best: `{best['effect']}`, delta BIC "
-                f"{best['delta_bic']:.3g}, share {_pct(best['excess_explained'])})."
+                f"{best['delta_bic']:.3g} against the {st.get('min_delta_bic')} needed, share "
+                f"{_pct(best['excess_explained'])} against {st.get('min_share')})."
             )
             add("")
     fig("ranking", "Evidence for each effect of the catalogue (BIC drop when added).")
