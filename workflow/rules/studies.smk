@@ -13,8 +13,30 @@ STUDIES = {
     for s in config["studies"]
 }
 
+# Workflow results a study kind reads that its varied keys do not affect, by kind
+# (keyword arguments of its function in piezobearing.stages.studies.KINDS).
+STUDY_INPUTS = {
+    "fault_detection": {
+        "resistance": f"{RESULTS}/calibration/resistance.json",
+        **(
+            {"harmonic": f"{RESULTS}/sensor/harmonic.csv"}
+            if config["signals"]["sensor_fem_correction"]
+            else {}
+        ),
+    },
+}
+# Memory of one case by kind [MB] (the housing FEM of fault_detection peaks near 1.5 GB).
+STUDY_MEM_MB = {"fault_detection": 3000}
+# Config sections a kind's cases depend on (as params: a changed value reruns the cases).
+STUDY_SECTIONS = {
+    "calibration_circuit": "seed sensor synthesis calibration lowfreq".split(),
+    "fault_detection": "seed sensor sensor_fem bearing housing signals".split(),
+}
+
 
 rule study_case:
+    input:
+        unpack(lambda wc: STUDY_INPUTS.get(wc.study, {})),
     output:
         json=f"{RESULTS}/studies/{{study}}/{{case}}/summary.json",
     log:
@@ -23,8 +45,11 @@ rule study_case:
         f"{RESULTS}/benchmarks/rules/study_case_{{study}}_{{case}}.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    resources:
+        mem_mb=lambda wc: STUDY_MEM_MB.get(wc.study, 1000),
     params:
         overrides=lambda wc: dict(STUDIES[wc.study].instance(wc)),
+        sections=lambda wc: {k: config[k] for k in STUDY_SECTIONS.get(wc.study, [])},
     script:
         "../scripts/study_case.py"
 

@@ -10,4 +10,5 @@ run_case(
     snakemake.params.overrides,
     snakemake.config,
     snakemake.output.json,
+    dict(snakemake.input.items()),
 )

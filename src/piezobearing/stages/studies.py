@@ -6,11 +6,14 @@ process, into the case's own folder, and reduces them to one summary row.
 
 from __future__ import annotations
 
+import copy
 import json
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
+from ..bearing import BearingGeometry
 from ..studies import case_config
 from .calibration import (
     extract_sensitivity,
@@ -44,18 +47,137 @@ def calibration_circuit_case(config: dict, outdir: Path) -> dict:
     }
 
 
-#: Study kinds by name: the function that runs one case and returns its summary row.
-KINDS = {"calibration_circuit": calibration_circuit_case}
+def fault_detection_case(config: dict, outdir: Path, resistance: str, harmonic: str | None = None) -> dict:
+    """Bearing LPM, housing (reduced), voltage, noise over seeds, envelope and indicator for one case.
+
+    The stage functions of the bearing and signals areas run in turn into
+    ``outdir``, healthy and faulty: bearing_lpm, housing_mesh and
+    housing_transient (the reduced modal solve only: ``housing.method`` =
+    reduced, no direct check), sensor_voltage (the workflow's fitted
+    ``resistance`` JSON and, if ``signals.sensor_fem_correction``, the sensor
+    FEM's ``harmonic`` CSV: neither depends on the bearing), noisy, envelope
+    and indicator (noise replicate 0: ``fault_indicator.json``), then the
+    indicator at ``signals.snr_dB`` over ``signals.study_n_seeds`` noise
+    replicates (``seeds.csv``; replicate 0 is the noisy stage's record).
+    The large binary intermediates (contact-force NPZ, mesh NPZ and VTK) are
+    deleted once used.
+    """
+    from .. import signals as sig
+    from . import bearing as brs
+    from . import signals as sgs
+
+    cfg = copy.deepcopy(config)
+    cfg["housing"].update(method="reduced", direct_check_s=0.0)
+    s = cfg["signals"]
+    if s["sensor_fem_correction"] and not harmonic:
+        raise ValueError(
+            "signals.sensor_fem_correction is on but no sensor FEM response was given; "
+            "pass results/sensor/harmonic.csv as input 'harmonic'"
+        )
+    d = Path(outdir)
+    cases = brs.CASES
+    kin_json = d / "kinematics.json"
+    contact = {c: d / f"contact_forces_{c}.npz" for c in cases}
+    brs.bearing_lpm(kin_json, contact, {c: d / f"contact_forces_{c}.csv" for c in cases}, d / "lpm.json", cfg)
+    for c in cases:
+        mesh = d / f"housing_mesh_{c}.npz"
+        brs.housing_mesh(c, mesh, d / f"housing_mesh_{c}.vtk", d / f"housing_mesh_{c}.json", cfg)
+        brs.housing_transient(
+            c,
+            mesh,
+            contact[c],
+            d / f"sensor_force_{c}.csv",
+            d / f"housing_modes_{c}.json",
+            d / f"housing_transient_{c}.json",
+            d / f"influence_line_{c}.csv",
+            cfg,
+        )
+        for p in (mesh, d / f"housing_mesh_{c}.vtk", contact[c]):
+            p.unlink()
+        sgs.sensor_voltage(
+            d / f"sensor_force_{c}.csv",
+            resistance,
+            harmonic if s["sensor_fem_correction"] else None,
+            d / f"voltage_{c}.csv",
+            d / f"voltage_{c}.json",
+            cfg,
+        )
+        sgs.noisy(d / f"voltage_{c}.csv", c, d / f"noisy_{c}.csv", d / f"noisy_{c}.json", cfg)
+        sgs.envelope(
+            d / f"noisy_{c}.csv",
+            d / f"voltage_{c}.csv",
+            kin_json,
+            d / f"envelope_{c}.csv",
+            d / f"envelope_{c}.json",
+            cfg,
+        )
+    ind_json = d / "fault_indicator.json"
+    sgs.indicator(
+        {c: (d / f"envelope_{c}.csv", d / f"envelope_{c}.json") for c in cases},
+        kin_json,
+        {c: d / f"noisy_{c}.json" for c in cases},
+        ind_json,
+        cfg,
+    )
+    kin = sgs.kinematics(kin_json)
+    f0 = kin["bpfo_Hz"]
+    b = cfg["bearing"]
+    # time a roller centre takes to cross the groove (it sinks over this arc; Defect.drop_m)
+    crossing_s = b["defect_width_m"] / (
+        BearingGeometry.from_config(b).outer_raceway_radius_m * 2 * np.pi * kin["ftf_Hz"]
+    )
+    es, ins = sig.EnvelopeSettings.from_config(s), sig.IndicatorSettings.from_config(s)
+    rows = []
+    for c in cases:
+        _, v, dt = sgs.read_series(d / f"voltage_{c}.csv", "voltage_V")
+        rows += sig.snr_sweep(v, dt, f0, c, [s["snr_dB"]], s["study_n_seeds"], cfg["seed"], es, ins)
+    seeds = pd.DataFrame(rows)
+    sgs.write_csv(seeds, d / "seeds.csv")
+    ind, lpm = read_json(ind_json), read_json(d / "lpm.json")
+    tr = {c: read_json(d / f"housing_transient_{c}.json") for c in cases}
+    by = {c: seeds[seeds["case"] == c] for c in cases}
+    return {
+        "bpfo_Hz": f0,
+        "snr_dB": s["snr_dB"],
+        "n_seeds": s["study_n_seeds"],
+        "band_rule": s["band_rule"],
+        "indicator_healthy": float(np.median(by["healthy"]["indicator"])),
+        "indicator_faulty": float(np.median(by["faulty"]["indicator"])),
+        "threshold": float(seeds["threshold"].max()),
+        "detection_rate_healthy": float(by["healthy"]["detected"].mean()),
+        "detection_rate_faulty": float(by["faulty"]["detected"].mean()),
+        "noiseless_indicator_healthy": ind["healthy"]["noiseless"]["indicator"],
+        "noiseless_indicator_faulty": ind["faulty"]["noiseless"]["indicator"],
+        "in_band_snr_healthy_dB": ind["healthy"]["in_band_snr_dB"],
+        "in_band_snr_faulty_dB": ind["faulty"]["in_band_snr_dB"],
+        "defect_max_drop_m": lpm["faulty"]["defect_max_drop_m"],
+        "defect_crossing_s": crossing_s,
+        "defect_crossing_steps": crossing_s / b["time_step_s"],
+        "sensor_force_peak_to_peak_healthy_N": tr["healthy"]["sensor_force_max_N"]
+        - tr["healthy"]["sensor_force_min_N"],
+        "sensor_force_peak_to_peak_faulty_N": tr["faulty"]["sensor_force_max_N"]
+        - tr["faulty"]["sensor_force_min_N"],
+    }
 
 
-def run_case(study: str, case: str, overrides: dict, config: dict, out_json: str) -> None:
-    """Run one case of ``study`` with the table row ``overrides``; write its summary."""
+#: Study kinds by name: the function that runs one case and returns its summary row. A kind that reads
+#: workflow results its varied keys do not affect takes them as keyword arguments (studies.smk: STUDY_INPUTS).
+KINDS = {"calibration_circuit": calibration_circuit_case, "fault_detection": fault_detection_case}
+
+
+def run_case(
+    study: str, case: str, overrides: dict, config: dict, out_json: str, inputs: dict | None = None
+) -> None:
+    """Run one case of ``study`` with the table row ``overrides``; write its summary.
+
+    ``inputs``: workflow results the kind reads (keyword arguments of its function).
+    """
     if study not in KINDS:
         raise KeyError(f"study '{study}' is unknown; known: {', '.join(sorted(KINDS))}")
     cfg = case_config(config, overrides, source=f"study {study}, case {case}")
     outdir = Path(out_json).parent
     outdir.mkdir(parents=True, exist_ok=True)
-    row = KINDS[study](cfg, outdir)
+    row = KINDS[study](cfg, outdir, **(inputs or {}))
     write_json({"study": study, "case": case, "overrides": overrides, "summary": row}, out_json)
 
 
