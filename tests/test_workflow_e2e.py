@@ -69,8 +69,14 @@ def _numbers(root: Path) -> dict[str, str]:
     return out
 
 
+def _first_difference(a: str, b: str) -> str:
+    """Where two texts first differ, with a little context."""
+    i = next((k for k, (x, y) in enumerate(zip(a, b, strict=False)) if x != y), min(len(a), len(b)))
+    return f"...{a[max(0, i - 60) : i + 40]!r} vs ...{b[max(0, i - 60) : i + 40]!r}"
+
+
 def test_a_second_clean_run_gives_identical_numbers(ci_run: Path, ci_rerun: Path):
     first, second = _numbers(ci_run), _numbers(ci_rerun)
     assert first.keys() == second.keys()
-    differ = [k for k in first if first[k] != second[k]]
-    assert not differ, f"results differ between two clean runs: {differ}"
+    differ = {k: _first_difference(first[k], second[k]) for k in first if first[k] != second[k]}
+    assert not differ, "results differ between two clean runs:\n" + "\n".join(f"{k}: {v}" for k, v in differ.items())
