@@ -7,6 +7,8 @@ or column, and the fix. Nothing here writes next to the input.
 
 from __future__ import annotations
 
+import json
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -124,3 +126,44 @@ def write_measurement(m: Measurement, path: str | Path) -> None:
     """Write a record as CSV (used for the synthetic record under results/)."""
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     m.to_frame().to_csv(path, index=False, float_format="%.9g")
+
+
+# --------------------------------------------------------------------------- result files
+
+
+class ResultFileError(ValueError):
+    """A result file of an earlier stage that is missing or incomplete."""
+
+
+def _jsonable(obj):
+    """numpy scalars and arrays to plain values; non-finite floats to null (strict JSON)."""
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if hasattr(obj, "tolist"):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def write_json(obj: dict, path: str | Path) -> None:
+    """Write a result as strict JSON (NaN and inf become null), creating the folder."""
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    Path(path).write_text(json.dumps(_jsonable(obj), indent=2, allow_nan=False) + "\n")
+
+
+def read_json(path: str | Path, keys=(), error: type[Exception] = ResultFileError) -> dict:
+    """Read a result; raise ``error`` naming the file when it is missing, invalid or lacks one of ``keys``."""
+    p = Path(path)
+    if not p.exists():
+        raise error(f"{p}: file not found; run the rule that writes it")
+    try:
+        d = json.loads(p.read_text())
+    except json.JSONDecodeError as e:
+        raise error(f"{p}: not valid JSON ({e}); rerun the rule that writes it") from e
+    for k in keys:
+        if k not in d:
+            raise error(f"{p}: key '{k}' missing; rerun the rule that writes it")
+    return d

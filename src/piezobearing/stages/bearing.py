@@ -18,6 +18,7 @@ import pandas as pd
 from .. import bearing as brg
 from .. import housing_fem as fem
 from ..housing_mesh import HousingGeometry, HousingMesh, build_housing_mesh, mesh_quality
+from ..io import read_json, write_json
 from ..materials import ALUMINA, CAST_IRON, STEEL, paper_pzt
 from ..scorecard import Row, write_part
 
@@ -38,15 +39,6 @@ log = logging.getLogger("piezobearing.bearing")
 def _setup_logging() -> None:
     if not logging.getLogger().handlers:
         logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
-
-
-def write_json(obj: dict, path: str | Path) -> None:
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    Path(path).write_text(json.dumps(obj, indent=2, allow_nan=True, default=float) + "\n")
-
-
-def read_json(path: str | Path) -> dict:
-    return json.loads(Path(path).read_text())
 
 
 def _case(case: str) -> bool:

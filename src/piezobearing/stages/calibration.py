@@ -2,27 +2,15 @@
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
 import numpy as np
 import pandas as pd
 
 from .. import calibration as cal
 from ..fitting import nrmse
-from ..io import Measurement, MeasurementError, read_measurement, write_measurement
+from ..io import Measurement, MeasurementError, read_json, read_measurement, write_json, write_measurement
 from ..lowfreq import asymptote_onset_Hz, lowfreq_sensitivity
 from ..scorecard import Row, write_part
 from ..synthesis import PressProtocol, synthesize
-
-
-def write_json(obj: dict, path: str | Path) -> None:
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    Path(path).write_text(json.dumps(obj, indent=2, allow_nan=True) + "\n")
-
-
-def read_json(path: str | Path) -> dict:
-    return json.loads(Path(path).read_text())
 
 
 def nominal_circuit(config: dict, resistance_ohm: float | None = None) -> cal.SensorCircuit:

@@ -12,7 +12,6 @@ with the configured model (``model.effects``) and settings
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Callable
 
@@ -21,6 +20,7 @@ import numpy as np
 from .. import diagnostics as dg
 from .. import report
 from ..effects import Record, resolve
+from ..io import write_json
 from .calibration import load_record, nominal_circuit
 
 #: Config sections a diagnosis depends on (copied into diagnosis.json).
@@ -83,7 +83,7 @@ def diagnose(
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     diag, arrays = run(measurement_csv, config, progress)
-    (out_dir / "diagnosis.json").write_text(json.dumps(diag, indent=2, allow_nan=True) + "\n")
+    write_json(diag, out_dir / "diagnosis.json")
     np.savez_compressed(out_dir / "diagnosis.npz", **arrays)
     figs = write_figures(arrays, diag, out_dir / "figures")
     rel = {k: str(Path(v).relative_to(out_dir)) for k, v in figs.items()}

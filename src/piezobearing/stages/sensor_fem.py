@@ -5,7 +5,6 @@ sensor_mesh -> sensor_convergence, sensor_modal -> sensor_harmonic -> scorecard_
 
 from __future__ import annotations
 
-import json
 import logging
 import time
 from dataclasses import asdict, dataclass, replace
@@ -15,8 +14,10 @@ import numpy as np
 import pandas as pd
 from scipy.constants import epsilon_0
 
+from .. import io
 from .. import sensor_fem as fem
 from ..calibration import SensorCircuit, frequency_response
+from ..io import write_json
 from ..materials import IsotropicMaterial, paper_pzt, stress_charge_form, transverse_isotropy_report
 from ..scorecard import Row, write_part
 from ..sensor_mesh import MeshDensity, StackGeometry, StackMesh, stack_mesh
@@ -127,34 +128,13 @@ class SensorFemParams:
         )
 
 
+def read_json(path: str | Path, keys=()) -> dict:
+    """A result of an earlier stage (missing file or key: :class:`SensorFemError`)."""
+    return io.read_json(path, keys, error=SensorFemError)
+
+
 def _config_record(config: dict) -> dict:
     return {"sensor": config["sensor"], "sensor_fem": config["sensor_fem"]}
-
-
-def _plain(o):
-    """numpy scalars and arrays to plain JSON values."""
-    if hasattr(o, "tolist"):
-        return o.tolist()
-    raise TypeError(f"not JSON serializable: {type(o).__name__}")
-
-
-def write_json(obj: dict, path: str | Path) -> None:
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    Path(path).write_text(json.dumps(obj, indent=2, allow_nan=True, default=_plain) + "\n")
-
-
-def read_json(path: str | Path, keys=()) -> dict:
-    p = Path(path)
-    if not p.exists():
-        raise SensorFemError(f"{p}: file not found; run the rule that writes it")
-    try:
-        d = json.loads(p.read_text())
-    except json.JSONDecodeError as e:
-        raise SensorFemError(f"{p}: not valid JSON ({e}); rerun the rule that writes it") from e
-    for k in keys:
-        if k not in d:
-            raise SensorFemError(f"{p}: key '{k}' missing; rerun the rule that writes it")
-    return d
 
 
 # --------------------------------------------------------------------------- mesh I/O

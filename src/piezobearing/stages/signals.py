@@ -9,7 +9,6 @@ markers) and the scorecard rows.
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
@@ -18,6 +17,7 @@ import pandas as pd
 
 from .. import signals as sig
 from ..calibration import SensorCircuit, circuit_voltage, frequency_response
+from ..io import read_json, write_json
 from ..scorecard import Row, write_part
 
 #: Largest relative deviation of a time step from the mean step of a record.
@@ -28,26 +28,6 @@ PAPER = {"bpfo_Hz": 70.8, "snr": 10.0}
 
 class SignalFileError(ValueError):
     """A time series or result file that cannot be used as it is."""
-
-
-def _strict(obj):
-    """NaN and inf as null, so the JSON is strict."""
-    if isinstance(obj, dict):
-        return {k: _strict(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_strict(v) for v in obj]
-    if isinstance(obj, float) and not np.isfinite(obj):
-        return None
-    return obj
-
-
-def write_json(obj: dict, path: str | Path) -> None:
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    Path(path).write_text(json.dumps(_strict(obj), indent=2, allow_nan=False) + "\n")
-
-
-def read_json(path: str | Path) -> dict:
-    return json.loads(Path(path).read_text())
 
 
 def write_csv(df: pd.DataFrame, path: str | Path) -> None:

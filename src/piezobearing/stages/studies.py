@@ -7,22 +7,15 @@ process, into the case's own folder, and reduces them to one summary row.
 from __future__ import annotations
 
 import copy
-import json
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from ..bearing import BearingGeometry
+from ..io import read_json, write_json
 from ..studies import case_config
-from .calibration import (
-    extract_sensitivity,
-    fit_resistance,
-    lowfreq,
-    read_json,
-    synthesize_calibration,
-    write_json,
-)
+from .calibration import extract_sensitivity, fit_resistance, lowfreq, synthesize_calibration
 
 
 def calibration_circuit_case(config: dict, outdir: Path) -> dict:
@@ -188,13 +181,10 @@ def summarize(study: str, case_jsons: list[str], out_csv: str, out_png: str) -> 
 
     rows = []
     for p in case_jsons:
-        d = json.loads(Path(p).read_text())
+        d = read_json(p)
         rows.append({**d["overrides"], **{k: v for k, v in d["summary"].items() if not isinstance(v, list)}})
     df = pd.DataFrame(rows)
     Path(out_csv).parent.mkdir(parents=True, exist_ok=True)
     df.to_csv(out_csv, index=False)
     use_style()
     save(SUMMARY_FIGURES[study](df), out_png)
-
-
-__all__ = ["run_case", "summarize", "KINDS", "write_json"]
