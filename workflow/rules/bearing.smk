@@ -31,6 +31,10 @@ rule bearing_lpm:
         f"{RESULTS}/benchmarks/rules/bearing_lpm.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     params:
         bearing=config["bearing"],
     script:
@@ -50,6 +54,10 @@ rule housing_mesh:
         case="healthy|faulty",
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     params:
         bearing=config["bearing"],
         housing=config["housing"],
@@ -75,8 +83,10 @@ rule housing_transient:
         case="healthy|faulty",
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
     resources:
         mem_mb=3000,
+        runtime=2,
     params:
         seed=config["seed"],
         sensor=config["sensor"],
@@ -99,8 +109,10 @@ rule housing_convergence:
         f"{RESULTS}/benchmarks/rules/housing_convergence.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
     resources:
         mem_mb=5000,
+        runtime=3,
     params:
         sensor=config["sensor"],
         sensor_fem=config["sensor_fem"],
@@ -122,6 +134,10 @@ rule bearing_sampling:
         f"{RESULTS}/benchmarks/rules/bearing_sampling.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     params:
         bearing=config["bearing"],
     script:
@@ -142,6 +158,10 @@ rule fig03:
         f"{RESULTS}/benchmarks/rules/fig03.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p healthy {input.healthy}"
         " -p faulty {input.faulty} -p figure {output.figure} > {log} 2>&1"
@@ -163,6 +183,10 @@ rule scorecard_bearing:
         f"{RESULTS}/benchmarks/rules/scorecard_bearing.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     params:
         bearing=config["bearing"],
     script:

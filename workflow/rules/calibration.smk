@@ -21,6 +21,10 @@ rule synthesize_calibration:
         f"{RESULTS}/benchmarks/rules/synthesize_calibration.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     params:
         seed=config["seed"],
         sensor=config["sensor"],
@@ -40,6 +44,10 @@ rule extract_sensitivity:
         f"{RESULTS}/benchmarks/rules/extract_sensitivity.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     params:
         calibration=config["calibration"],
     script:
@@ -58,6 +66,10 @@ rule fit_resistance:
         f"{RESULTS}/benchmarks/rules/fit_resistance.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     params:
         sensor=config["sensor"],
         calibration=config["calibration"],
@@ -77,6 +89,10 @@ rule lowfreq_sensitivity:
         f"{RESULTS}/benchmarks/rules/lowfreq_sensitivity.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     params:
         sensor=config["sensor"],
         lowfreq=config["lowfreq"],
@@ -97,5 +113,9 @@ rule scorecard_calibration:
         f"{RESULTS}/benchmarks/rules/scorecard_calibration.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     script:
         "../scripts/scorecard_calibration.py"

@@ -43,6 +43,10 @@ rule diagnose:
         f"{RESULTS}/benchmarks/rules/diagnose.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     params:
         sensor=config["sensor"],
         calibration=config["calibration"],
@@ -66,8 +70,14 @@ rule diagnosis_notebook:
         notebook=f"{RESULTS}/notebooks/diagnosis.ipynb",
     log:
         f"{RESULTS}/logs/diagnosis_notebook.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/diagnosis_notebook.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p diagnosis {input.diagnosis}"
         " -p arrays {input.arrays} -p figure {output.figure} > {log} 2>&1"

@@ -22,6 +22,10 @@ rule fig05:
         f"{RESULTS}/benchmarks/rules/fig05.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p measurement {input.measurement}"
         " -p sensitivity {input.sensitivity} -p figure {output.figure} > {log} 2>&1"
@@ -45,6 +49,10 @@ rule fig06:
         f"{RESULTS}/benchmarks/rules/fig06.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p fit {input.fit}"
         " -p resistance {input.resistance} -p figure {output.figure} > {log} 2>&1"
@@ -68,6 +76,10 @@ rule fig08a:
         f"{RESULTS}/benchmarks/rules/fig08a.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p curve {input.curve}"
         " -p lowfreq {input.lowfreq} -p figure {output.figure} > {log} 2>&1"

@@ -17,5 +17,9 @@ rule scorecard:
         f"{RESULTS}/benchmarks/rules/scorecard.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     script:
         "../scripts/scorecard.py"

@@ -31,6 +31,10 @@ rule sensor_mesh:
         f"{RESULTS}/benchmarks/rules/sensor_mesh.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     params:
         sensor=config["sensor"],
         sensor_fem=config["sensor_fem"],
@@ -51,6 +55,10 @@ rule sensor_convergence:
         f"{RESULTS}/benchmarks/rules/sensor_convergence.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=3200,
+        runtime=2,
     params:
         sensor=config["sensor"],
         sensor_fem=config["sensor_fem"],
@@ -70,6 +78,10 @@ rule sensor_modal:
         f"{RESULTS}/benchmarks/rules/sensor_modal.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=2600,
+        runtime=3,
     params:
         sensor=config["sensor"],
         sensor_fem=config["sensor_fem"],
@@ -92,6 +104,10 @@ rule sensor_harmonic:
         f"{RESULTS}/benchmarks/rules/sensor_harmonic.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=2600,
+        runtime=2,
     params:
         sensor=config["sensor"],
         sensor_fem=config["sensor_fem"],
@@ -112,6 +128,10 @@ rule scorecard_sensor_fem:
         f"{RESULTS}/benchmarks/rules/scorecard_sensor_fem.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     script:
         "../scripts/scorecard_sensor_fem.py"
 
@@ -134,6 +154,10 @@ rule fig07:
         f"{RESULTS}/benchmarks/rules/fig07.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p modal {input.modal}"
         " -p mode {input.mode} -p figure {output.figure} > {log} 2>&1"
@@ -157,6 +181,10 @@ rule fig08b:
         f"{RESULTS}/benchmarks/rules/fig08b.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p harmonic {input.harmonic}"
         " -p band {input.band} -p figure {output.figure} > {log} 2>&1"

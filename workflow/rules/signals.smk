@@ -33,6 +33,10 @@ rule sensor_voltage:
         case="healthy|faulty",
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     params:
         sensor=config["sensor"],
         signals=config["signals"],
@@ -54,6 +58,10 @@ rule noisy:
         case="healthy|faulty",
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     params:
         seed=config["seed"],
         snr_dB=config["signals"]["snr_dB"],
@@ -77,6 +85,10 @@ rule envelope:
         case="healthy|faulty",
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     params:
         signals=config["signals"],
     script:
@@ -100,6 +112,10 @@ rule fault_indicator:
         f"{RESULTS}/benchmarks/rules/fault_indicator.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     params:
         signals=config["signals"],
     script:
@@ -121,6 +137,10 @@ rule snr_study:
         f"{RESULTS}/benchmarks/rules/snr_study.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=4,
     params:
         seed=config["seed"],
         signals=config["signals"],
@@ -144,6 +164,10 @@ rule snr_study_figure:
         f"{RESULTS}/benchmarks/rules/snr_study_figure.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     script:
         "../scripts/snr_study_figure.py"
 
@@ -161,6 +185,10 @@ rule defect_events:
         f"{RESULTS}/benchmarks/rules/defect_events.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     script:
         "../scripts/defect_events.py"
 
@@ -185,6 +213,10 @@ rule fig09:
         f"{RESULTS}/benchmarks/rules/fig09.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p healthy {input.healthy}"
         " -p faulty {input.faulty} -p events {input.events} -p kinematics {input.kinematics}"
@@ -211,6 +243,10 @@ rule fig10:
         f"{RESULTS}/benchmarks/rules/fig10.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p healthy {input.healthy}"
         " -p faulty {input.faulty} -p indicator {input.indicator} -p kinematics {input.kinematics}"
@@ -230,5 +266,9 @@ rule scorecard_signals:
         f"{RESULTS}/benchmarks/rules/scorecard_signals.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     script:
         "../scripts/scorecard_signals.py"

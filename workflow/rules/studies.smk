@@ -26,7 +26,9 @@ STUDY_INPUTS = {
     },
 }
 # Memory of one case by kind [MB] (the housing FEM of fault_detection peaks near 1.5 GB).
-STUDY_MEM_MB = {"fault_detection": 3000}
+STUDY_MEM_MB = {"calibration_circuit": 500, "fault_detection": 3000}
+# Measured per case (results/benchmarks/rules_config.json): calibration 2 s, fault_detection 32 s.
+STUDY_RUNTIME_MIN = {"calibration_circuit": 2, "fault_detection": 2}
 # Config sections a kind's cases depend on (as params: a changed value reruns the cases).
 STUDY_SECTIONS = {
     "calibration_circuit": "seed sensor synthesis calibration lowfreq".split(),
@@ -45,8 +47,10 @@ rule study_case:
         f"{RESULTS}/benchmarks/rules/study_case_{{study}}_{{case}}.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
     resources:
         mem_mb=lambda wc: STUDY_MEM_MB.get(wc.study, 1000),
+        runtime=lambda wc: STUDY_RUNTIME_MIN.get(wc.study, 10),
     params:
         overrides=lambda wc: dict(STUDIES[wc.study].instance(wc)),
         sections=lambda wc: {k: config[k] for k in STUDY_SECTIONS.get(wc.study, [])},
@@ -74,6 +78,10 @@ rule study_summary:
         f"{RESULTS}/benchmarks/rules/study_summary_{{study}}.tsv"
     conda:
         "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
     script:
         "../scripts/study_summary.py"
 
