@@ -73,9 +73,14 @@ def test_report_holds_every_figure_with_its_caption(ci_run: Path):
     out = run(BIN / "snakemake", "--configfile", "config/ci.yaml", "--report", "report.html", cwd=ci_run)
     assert out.returncode == 0, out.stderr[-3000:]
     html = (ci_run / "report.html").read_text()
+    assert "System Message" not in html, "a caption is not valid reStructuredText"
     figures = sorted(p.name for p in (ci_run / "results/figures").glob("*.png"))
     assert figures
     for name in figures:
         assert name in html, name
+        caption = REPO / "workflow/report" / f"{Path(name).stem}.rst"
+        assert caption.exists(), f"{name} has no caption ({caption.name}) for the report"
+        text = caption.read_text().replace("**", "").split(": ", 1)[-1]
+        assert text[:25] in html, caption.name
     for caption in sorted((REPO / "workflow/report").glob("fig*.rst")):
         assert f"Fig. {caption.stem[3:].lstrip('0')}" in html, caption.name

@@ -150,7 +150,11 @@ rule fig03:
         healthy=f"{RESULTS}/bearing/housing_mesh_healthy.npz",
         faulty=f"{RESULTS}/bearing/housing_mesh_faulty.npz",
     output:
-        figure=f"{RESULTS}/figures/fig03.png",
+        figure=report(
+            f"{RESULTS}/figures/fig03.png",
+            caption="../report/fig03.rst",
+            category="Bearing and housing",
+        ),
         notebook=f"{RESULTS}/notebooks/fig03_housing_mesh.ipynb",
     log:
         f"{RESULTS}/logs/fig03.log",

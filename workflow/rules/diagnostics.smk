@@ -64,7 +64,7 @@ rule diagnosis_notebook:
     output:
         figure=report(
             f"{RESULTS}/figures/diagnosis_ladder.png",
-            caption="../report/diagnosis.rst",
+            caption="../report/diagnosis_ladder.rst",
             category="Model versus measurement",
         ),
         notebook=f"{RESULTS}/notebooks/diagnosis.ipynb",
