@@ -672,17 +672,21 @@ def _spectral_peaks(
     return out
 
 
+def peak_where(pk: dict) -> str:
+    """Where a spectral peak of the residual lies: its frequency, or its band and peak [Hz]."""
+    f = pk["frequency_Hz"]
+    if pk["kind"] == "narrowband":
+        return f"{f:.2f} Hz"
+    return f"{pk['band_Hz'][0]:.2f}-{pk['band_Hz'][1]:.2f} Hz (peak {f:.2f} Hz)"
+
+
 def findings(tests: ResidualTests) -> list[dict]:
     """What structure remains and where, one dict per failed test (empty when all pass)."""
     out = []
     if not tests.spectrum_ok:
         for pk in tests.peaks[:5]:
             f = pk["frequency_Hz"]
-            where = (
-                f"{f:.2f} Hz"
-                if pk["kind"] == "narrowband"
-                else f"{pk['band_Hz'][0]:.2f}-{pk['band_Hz'][1]:.2f} Hz (peak {f:.2f} Hz)"
-            )
+            where = peak_where(pk)
             out.append(
                 {
                     "test": "spectrum",

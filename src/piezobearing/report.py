@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import json
 
+from .diagnostics import peak_where
+
 #: Figures of a diagnosis, in the order the report shows them.
 FIGURES = ("overlay", "residuals", "spectrum", "correlations", "ranking", "ladder")
 
@@ -308,12 +310,7 @@ def _baseline_findings(tests: dict) -> list[dict]:
     """The baseline's findings, rebuilt from its test summary (same wording as the verdict's)."""
     out = []
     for pk in tests["spectrum"]["peaks"][:5]:
-        f = pk["frequency_Hz"]
-        where = (
-            f"{f:.2f} Hz"
-            if pk["kind"] == "narrowband"
-            else f"{pk['band_Hz'][0]:.2f}-{pk['band_Hz'][1]:.2f} Hz (peak {f:.2f} Hz)"
-        )
+        where = peak_where(pk)
         out.append(
             {
                 "test": "spectrum",
