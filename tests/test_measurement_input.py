@@ -71,6 +71,21 @@ def test_nan_and_inf(good, tmp_path, paper_config, bad):
     expect(write(df, tmp_path), paper_config, "line 12", "column force_N", "not a finite number")
 
 
+@pytest.mark.parametrize("cell", ["nan", "NaN", "NA", "inf"])
+def test_cell_written_as_nan_is_quoted_not_called_empty(good, tmp_path, paper_config, cell):
+    df = good.astype({"voltage_V": object})
+    df.loc[20, "voltage_V"] = cell
+    msg = expect(write(df, tmp_path), paper_config, "line 22", "column voltage_V", f"'{cell}' is not a finite")
+    assert "empty" not in msg
+
+
+@pytest.mark.parametrize("sep", [";", "\t"])
+def test_other_separator_is_named(good, tmp_path, paper_config, sep):
+    p = tmp_path / "m.csv"
+    good.to_csv(p, index=False, sep=sep)
+    expect(p, paper_config, f"separated by {sep!r}", "comma-separated", "time_s,force_N,voltage_V")
+
+
 def test_non_monotonic_time(good, tmp_path, paper_config):
     df = good.copy()
     df.loc[100, "time_s"] = df.loc[98, "time_s"]

@@ -70,7 +70,8 @@ def read_measurement(path: str | Path, resample_to_uniform: bool = False) -> Mea
     if not path.exists():
         raise MeasurementError(f"{path}: file not found; set calibration.measurement to an existing CSV")
     try:
-        raw = pd.read_csv(path, dtype=str, skipinitialspace=True)
+        # keep_default_na=False: a cell reading 'nan' or 'NA' is reported as written, not as empty
+        raw = pd.read_csv(path, dtype=str, skipinitialspace=True, keep_default_na=False)
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as e:
         first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
         raise MeasurementError(
@@ -78,13 +79,22 @@ def read_measurement(path: str | Path, resample_to_uniform: bool = False) -> Mea
         ) from None
     raw.columns = [str(c).strip() for c in raw.columns]
     missing = [c for c in COLUMNS if c not in raw.columns]
+    seps = [s for s in (";", "\t", "|", " ") if len(raw.columns) == 1 and s in raw.columns[0].strip()]
+    if missing and seps:
+        raise MeasurementError(
+            f"{path}: the columns are separated by {seps[0]!r}, not commas (header: {raw.columns[0]}); "
+            f"save it as comma-separated text with a decimal point, header {','.join(COLUMNS)}"
+        )
     if missing:
         raise MeasurementError(
             f"{path}: column '{missing[0]}' missing (header has: {', '.join(raw.columns)}); "
             f"the header must be {','.join(COLUMNS)} with values in s, N, V"
         )
     if len(raw) < 3:
-        raise MeasurementError(f"{path}: only {len(raw)} data rows; a calibration record needs a time series")
+        raise MeasurementError(
+            f"{path}: only {len(raw)} data rows below the header; a calibration record needs a time series, "
+            "one row per sample"
+        )
     data = {}
     for col in COLUMNS:
         num = pd.to_numeric(raw[col], errors="coerce").to_numpy(dtype=float)
