@@ -243,3 +243,11 @@ def test_synthesis_puts_the_forward_model_into_the_voltage(paper_config, circuit
     assert np.sqrt(np.mean((m.voltage_V - plain.voltage_V) ** 2)) > 0.01  # the delay is in there
     with pytest.raises(EffectError, match=r"synthesis\.hidden_effects\[0\]: unknown effect"):
         synthesize(noiseless, circuit, 5, [{"name": "ringing"}])
+
+
+def test_channel_delay_summary_names_the_direction():
+    """A negative fitted delay means the voltage comes before the force; the summary must not say 'after'."""
+    from piezobearing.effects.channel_delay import EFFECT
+
+    assert EFFECT.summary({"delay_s": 0.015}) == "delay = 15.00 ms (voltage after force)"
+    assert EFFECT.summary({"delay_s": -0.008}) == "delay = -8.00 ms (voltage before force)"

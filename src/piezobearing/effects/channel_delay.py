@@ -88,7 +88,8 @@ class ChannelDelay(Effect):
         return [{}, {"delay_s": best_lag_s(ctx)}]
 
     def summary(self, values):
-        return f"delay = {values['delay_s'] * 1e3:.2f} ms (voltage after force)"
+        d = values["delay_s"]
+        return f"delay = {d * 1e3:.2f} ms (voltage {'after' if d >= 0 else 'before'} force)"
 
 
 EFFECT = ChannelDelay()
