@@ -43,7 +43,25 @@ def run_cli(*args: str) -> subprocess.CompletedProcess:
 def test_validate_ok(files, capsys):
     assert main(["validate", str(files["record"])]) == 0
     out = capsys.readouterr().out
-    assert out.startswith("OK: ") and "500 Hz" in out
+    assert out.startswith("OK: ") and "500 Hz" in out and "6 impulses" in out
+
+
+def test_validate_runs_the_workflows_checks(files, capsys):
+    # A file the workflow rejects before any job must not pass validate: inverted polarity, one press.
+    import pandas as pd
+
+    df = pd.read_csv(files["record"])
+    inverted = files["dir"] / "inverted.csv"
+    df.assign(voltage_V=-df["voltage_V"]).to_csv(inverted, index=False)
+    assert main(["validate", str(inverted)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "polarity inverted" in err[0] and "inverted.csv" in err[0]
+    one_press = files["dir"] / "one_press.csv"
+    df[df["time_s"] < 2.5].to_csv(one_press, index=False)
+    assert main(["validate", str(one_press)]) == 1
+    assert "at least 2 are needed" in capsys.readouterr().err
+    assert main(["validate", str(files["record"]), "--config", str(files["dir"] / "bad_key.yaml")]) == 1
+    assert "max_step" in capsys.readouterr().err
 
 
 def test_validate_bad_file_is_one_line_without_traceback(files):
@@ -88,7 +106,7 @@ def test_diagnose_writes_json_report_and_figures(files, capsys):
     ("config", "message"),
     [
         ("bad_effect.yaml", "model.effects[0]: unknown effect 'ringing'"),
-        ("bad_key.yaml", "key 'diagnostics'"),
+        ("bad_key.yaml", "key 'diagnostics.max_step' is not a config key"),
         ("missing.yaml", "config file not found"),
     ],
 )

@@ -5,9 +5,11 @@
     tests, effect ranking, stepwise selection, verdict; writes
     DIR/diagnosis.json, DIR/report.md, DIR/figures/ and DIR/diagnosis.npz.
 
-``piezobearing validate FILE``
-    Check a calibration CSV (time_s, force_N, voltage_V); prints ``OK`` and
-    a summary, or the one-line problem (exit status 1).
+``piezobearing validate FILE [--config FILE]``
+    Check a calibration CSV (time_s, force_N, voltage_V) as the workflow
+    does before any job runs (file checks, at least two impulses, voltage
+    polarity); prints ``OK`` and a summary, or the one-line problem (exit
+    status 1).
 
 A user error (bad file, bad config, unknown effect) prints one line and
 exits with status 1, without a traceback.
@@ -25,15 +27,23 @@ def _fail(msg: str) -> int:
 
 
 def _validate(args) -> int:
-    from .io import MeasurementError, read_measurement
+    from . import config as cfg
+    from .io import MeasurementError
+    from .stages.calibration import load_record
 
     try:
-        m = read_measurement(args.file, resample_to_uniform=args.resample_to_uniform)
+        config = cfg.load(args.config) if args.config else cfg.load()
+    except (cfg.ConfigError, OSError) as e:
+        return _fail(str(e))
+    if args.resample_to_uniform:
+        config["calibration"]["resample_to_uniform"] = True
+    try:  # the same checks as the workflow's, so that OK here means the workflow accepts the file
+        m, imps = load_record(args.file, config)
     except MeasurementError as e:
         return _fail(str(e))
     print(
         f"OK: {args.file}: {m.time_s.size} rows, {m.sample_rate_Hz:.6g} Hz, "
-        f"{m.time_s[-1] - m.time_s[0]:.6g} s"
+        f"{m.time_s[-1] - m.time_s[0]:.6g} s, {len(imps)} impulses"
     )
     return 0
 
@@ -107,6 +117,7 @@ def main(argv: list[str] | None = None) -> int:
     v = sub.add_parser("validate", help="check a calibration CSV")
     v.add_argument("file")
     v.add_argument("--resample-to-uniform", action="store_true", help="accept an uneven clock (resampled)")
+    v.add_argument("--config", help="config file merged over config/config.yaml (calibration.* settings)")
     v.set_defaults(func=_validate)
     args = p.parse_args(argv)
     return args.func(args)

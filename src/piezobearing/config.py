@@ -7,6 +7,8 @@ Snakemake validates with the same schema (``config/schema.yaml``) through
 from __future__ import annotations
 
 import copy
+import difflib
+import functools
 from pathlib import Path
 
 import yaml
@@ -32,19 +34,44 @@ def deep_merge(base: dict, override: dict) -> dict:
     return out
 
 
-def validate(config: dict, source: str = "config") -> dict:
-    """Validate against the schema; raise :class:`ConfigError` naming the key."""
+@functools.lru_cache(maxsize=4)
+def _validator(schema_path: str):
+    """The schema's validator, built once per schema file (studies validate one config per case)."""
     import jsonschema
 
-    schema = yaml.safe_load(SCHEMA_PATH.read_text())
-    validator = jsonschema.Draft202012Validator(schema)
-    errors = sorted(validator.iter_errors(config), key=lambda e: list(e.path))
+    return jsonschema.Draft202012Validator(yaml.safe_load(Path(schema_path).read_text()))
+
+
+def _message(e) -> str:
+    """One line for a jsonschema error: the key by its dotted path, what is wrong, the fix."""
+    path = [str(p) for p in e.path]
+    see = "see config/schema.yaml for the allowed values"
+    if e.validator == "additionalProperties" and isinstance(e.instance, dict):
+        allowed = list(e.schema.get("properties", {}))
+        unknown = sorted(k for k in e.instance if k not in allowed)
+        if unknown:
+            close = difflib.get_close_matches(str(unknown[0]), allowed, n=1)
+            hint = f"did you mean '{'.'.join([*path, close[0]])}'? " if close else ""
+            return f"key '{'.'.join([*path, str(unknown[0])])}' is not a config key; {hint}{see}"
+    key = ".".join(path) or "(top level)"
+    if e.validator == "type" and isinstance(e.instance, str):
+        try:
+            float(e.instance)
+        except ValueError:
+            pass
+        else:
+            return (
+                f"key '{key}': {e.message}; write numbers with a dot or a signed exponent "
+                f"(50.0e+6, not 50e6: YAML reads 50e6 as a string)"
+            )
+    return f"key '{key}': {e.message}; {see}"
+
+
+def validate(config: dict, source: str = "config", schema_path: str | Path = SCHEMA_PATH) -> dict:
+    """Validate against the schema; raise :class:`ConfigError` with one line naming the key and the fix."""
+    errors = sorted(_validator(str(schema_path)).iter_errors(config), key=lambda e: list(map(str, e.path)))
     if errors:
-        e = errors[0]
-        key = ".".join(str(p) for p in e.path) or "(top level)"
-        raise ConfigError(
-            f"{source}: key '{key}': {e.message}; see config/schema.yaml for the allowed values"
-        )
+        raise ConfigError(f"{source}: {_message(errors[0])}")
     return config
 
 

@@ -40,6 +40,20 @@ def read_table(path: str | Path, config: dict) -> pd.DataFrame:
     return df
 
 
+def check_studies(config: dict) -> dict[str, pd.DataFrame]:
+    """Read every configured study table and validate each case's config; the tables by study name.
+
+    Raises :class:`ConfigError` naming the table, the case (its row, 1-based) and the key.
+    """
+    tables = {}
+    for s in config["studies"]:
+        df = read_table(s["table"], config)
+        for i, row in enumerate(df.to_dict("records")):
+            case_config(config, row, source=f"{s['table']}, case {i + 1} (study {s['name']})")
+        tables[s["name"]] = df
+    return tables
+
+
 def _plain(value):
     """numpy scalars to Python scalars (YAML/JSON-friendly, schema-valid)."""
     if isinstance(value, np.generic):

@@ -3,10 +3,27 @@
 # Each stage's .smk file registers what `rule all` must build by appending to
 # FIGURES, SCORECARD_PARTS and TARGETS; the lists are read lazily, after every
 # include, so adding a stage is adding one .smk file and its include line.
+import os
 import sys
 
 from snakemake.utils import validate
 
+from piezobearing.config import ConfigError
+from piezobearing.config import validate as validate_config
+
+CONFIG_FILES = [
+    "config/config.yaml",
+    *map(os.path.relpath, workflow.overwrite_configfiles or []),
+]
+try:  # one line naming the key and the fix (snakemake's validate below would print the whole schema)
+    validate_config(
+        config,
+        source=" + ".join(CONFIG_FILES),
+        schema_path=f"{workflow.basedir}/config/schema.yaml",
+    )
+except ConfigError as e:
+    print(f"piezobearing: {e}", file=sys.stderr)
+    sys.exit(1)
 validate(config, schema="../../config/schema.yaml")
 
 RESULTS = "results"

@@ -1,16 +1,23 @@
 # Parameter studies (config `studies`, tables in config/studies/*.tsv), built by
 # the target `study_all`, not by `all`. Each case runs only the stages its
 # study affects; a summary table and figure gather the cases.
+import sys
+
 import pandas as pd
 from snakemake.utils import Paramspace
 
-from piezobearing.studies import read_table
+from piezobearing.config import ConfigError
+from piezobearing.studies import check_studies
+
+try:  # a bad study table or case value stops before any job, in one line
+    STUDY_TABLES = check_studies(config)
+except ConfigError as e:
+    print(f"piezobearing: {e}", file=sys.stderr)
+    sys.exit(1)
 
 STUDIES = {
-    s["name"]: Paramspace(
-        read_table(s["table"], config), filename_params="*", single_wildcard="case"
-    )
-    for s in config["studies"]
+    name: Paramspace(df, filename_params="*", single_wildcard="case")
+    for name, df in STUDY_TABLES.items()
 }
 
 # Workflow results a study kind reads that its varied keys do not affect, by kind

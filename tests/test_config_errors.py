@@ -1,0 +1,85 @@
+"""A bad config or study table stops with one line naming the key and the fix (CLI and workflow alike)."""
+
+import copy
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from piezobearing import config as cfg
+from piezobearing.studies import check_studies
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def error(config: dict) -> str:
+    with pytest.raises(cfg.ConfigError) as e:
+        cfg.validate(config, source="my.yaml")
+    msg = str(e.value)
+    assert "\n" not in msg and msg.startswith("my.yaml: ")
+    return msg
+
+
+def test_unknown_key_is_named_by_its_path_with_the_closest_key(paper_config):
+    c = copy.deepcopy(paper_config)
+    c["synthesis"]["resistence_ohm"] = 20.0e6
+    msg = error(c)
+    assert "key 'synthesis.resistence_ohm' is not a config key" in msg
+    assert "did you mean 'synthesis.resistance_ohm'?" in msg
+
+
+def test_unknown_top_level_key(paper_config):
+    c = copy.deepcopy(paper_config)
+    c["sead"] = 3
+    assert "key 'sead' is not a config key; did you mean 'seed'?" in error(c)
+
+
+def test_number_written_as_a_string_gets_the_yaml_hint(paper_config):
+    c = copy.deepcopy(paper_config)
+    c["synthesis"]["resistance_ohm"] = "50e6"  # what PyYAML makes of 50e6
+    msg = error(c)
+    assert "key 'synthesis.resistance_ohm'" in msg and "50.0e+6" in msg
+
+
+def test_out_of_range_value(paper_config):
+    c = copy.deepcopy(paper_config)
+    c["synthesis"]["resistance_ohm"] = -5.0
+    msg = error(c)
+    assert "key 'synthesis.resistance_ohm': -5.0 is less than the minimum" in msg
+
+
+def test_study_case_out_of_range_is_named_before_any_job(paper_config, tmp_path):
+    table = tmp_path / "bad.tsv"
+    table.write_text("synthesis__resistance_ohm\tsensor__cable_length_m\n50.0e+6\t2.0\n-5.0\t2.0\n")
+    c = copy.deepcopy(paper_config)
+    c["studies"] = [{"name": "calibration_circuit", "table": str(table)}]
+    with pytest.raises(cfg.ConfigError) as e:
+        check_studies(c)
+    msg = str(e.value)
+    assert f"{table}, case 2 (study calibration_circuit)" in msg and "synthesis.resistance_ohm" in msg
+    assert set(check_studies(paper_config)) == {s["name"] for s in paper_config["studies"]}
+
+
+@pytest.mark.parametrize(
+    "override, fragment",
+    [
+        ("synthesis:\n  resistence_ohm: 20.0e+6\n", "key 'synthesis.resistence_ohm' is not a config key"),
+        ("synthesis:\n  resistance_ohm: 50e6\n", "write numbers with a dot or a signed exponent"),
+    ],
+)
+def test_workflow_stops_with_one_line_not_the_schema(tmp_path, override, fragment):
+    user = tmp_path / "user.yaml"
+    user.write_text(override)
+    snakemake = Path(sys.executable).with_name("snakemake")
+    out = subprocess.run(
+        [str(snakemake), "-n", "--configfile", str(user)],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert out.returncode != 0
+    err = [line for line in out.stderr.splitlines() if line.startswith("piezobearing:")]
+    assert len(err) == 1 and fragment in err[0] and "user.yaml" in err[0], out.stderr[-2000:]
+    assert "Failed validating" not in out.stderr and "Traceback" not in out.stderr
