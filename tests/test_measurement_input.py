@@ -101,6 +101,12 @@ def test_uneven_time_step_stops_unless_resampling_asked(good, tmp_path, paper_co
     assert np.allclose(np.diff(m.time_s), 1e-3)
 
 
+def test_time_in_milliseconds_is_caught(good, tmp_path, paper_config):
+    df = good.copy()
+    df["time_s"] = 1e3 * df["time_s"]  # a 1 kHz record written in ms reads as 1 Hz
+    expect(write(df, tmp_path), paper_config, "column time_s", "milliseconds", "seconds")
+
+
 def test_fewer_than_two_impulses(good, tmp_path, paper_config):
     df = good[good["time_s"] < 1.8]  # only the first press
     expect(write(df, tmp_path), paper_config, "1 impulse(s) found", "at least 2")

@@ -16,6 +16,9 @@ import numpy as np
 import pandas as pd
 
 COLUMNS = ("time_s", "force_N", "voltage_V")
+#: Slowest sampling that can still resolve a hand press (about 0.3 s rise) [Hz]; a coarser
+#: clock is almost always a time column in milliseconds.
+MIN_SAMPLE_RATE_HZ = 20.0
 #: Largest relative deviation of a time step from the median step for a uniform clock.
 UNIFORM_RTOL = 0.01
 
@@ -118,6 +121,11 @@ def read_measurement(path: str | Path, resample_to_uniform: bool = False) -> Mea
             "sort the rows by time and remove duplicates"
         )
     step = float(np.median(dt))
+    if step > 1.0 / MIN_SAMPLE_RATE_HZ:
+        raise MeasurementError(
+            f"{path}: column time_s: median step {step:g} s ({1 / step:g} Hz) is too coarse for a calibration "
+            f"record (at least {MIN_SAMPLE_RATE_HZ:g} Hz); is time in milliseconds? time_s must be in seconds"
+        )
     off = np.flatnonzero(np.abs(dt - step) > UNIFORM_RTOL * step)
     if off.size:
         if not resample_to_uniform:
