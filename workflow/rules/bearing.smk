@@ -85,7 +85,7 @@ rule housing_transient:
         "../envs/piezobearing.yaml"
     threads: 1
     resources:
-        mem_mb=3000,
+        mem_mb=2300,
         runtime=2,
     params:
         seed=config["seed"],
@@ -111,8 +111,8 @@ rule housing_convergence:
         "../envs/piezobearing.yaml"
     threads: 1
     resources:
-        mem_mb=5000,
-        runtime=3,
+        mem_mb=5900,
+        runtime=4,
     params:
         sensor=config["sensor"],
         sensor_fem=config["sensor_fem"],

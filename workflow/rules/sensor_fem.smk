@@ -80,7 +80,7 @@ rule sensor_modal:
         "../envs/piezobearing.yaml"
     threads: 1
     resources:
-        mem_mb=2600,
+        mem_mb=3800,
         runtime=3,
     params:
         sensor=config["sensor"],
