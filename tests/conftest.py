@@ -66,6 +66,15 @@ def run_workflow(
     )
 
 
+def dry_run_errors(configfile: Path) -> tuple[subprocess.CompletedProcess, list[str]]:
+    """`snakemake -n --configfile FILE` in the repository; its result and its `piezobearing:` error lines."""
+    exe = Path(sys.executable).with_name("snakemake")
+    out = subprocess.run(
+        [str(exe), "-n", "--configfile", str(configfile)], cwd=REPO, capture_output=True, text=True, timeout=120
+    )
+    return out, [line for line in out.stderr.splitlines() if line.startswith("piezobearing:")]
+
+
 @pytest.fixture(scope="session")
 def ci_run(tmp_path_factory) -> Path:
     """A complete `snakemake --cores 2 --configfile config/ci.yaml` in a fresh copy; its folder."""

@@ -1,11 +1,10 @@
 """A bad config or study table stops with one line naming the key and the fix (CLI and workflow alike)."""
 
 import copy
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+from conftest import dry_run_errors
 
 from piezobearing import config as cfg
 from piezobearing.studies import check_studies
@@ -71,15 +70,7 @@ def test_study_case_out_of_range_is_named_before_any_job(paper_config, tmp_path)
 def test_workflow_stops_with_one_line_not_the_schema(tmp_path, override, fragment):
     user = tmp_path / "user.yaml"
     user.write_text(override)
-    snakemake = Path(sys.executable).with_name("snakemake")
-    out = subprocess.run(
-        [str(snakemake), "-n", "--configfile", str(user)],
-        cwd=REPO,
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    out, err = dry_run_errors(user)
     assert out.returncode != 0
-    err = [line for line in out.stderr.splitlines() if line.startswith("piezobearing:")]
     assert len(err) == 1 and fragment in err[0] and "user.yaml" in err[0], out.stderr[-2000:]
     assert "Failed validating" not in out.stderr and "Traceback" not in out.stderr

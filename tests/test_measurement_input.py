@@ -1,12 +1,11 @@
 """A user's calibration CSV: every problem gets one line naming the file, the place and the fix."""
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import dry_run_errors
 
 from piezobearing.io import MeasurementError, read_measurement
 from piezobearing.stages.calibration import load_record
@@ -145,15 +144,7 @@ def test_workflow_stops_with_one_line_and_no_traceback(good, tmp_path):
     p = write(df, tmp_path)
     cfg = tmp_path / "user.yaml"
     cfg.write_text(f"calibration:\n  measurement: {p}\n")
-    snakemake = Path(sys.executable).with_name("snakemake")
-    out = subprocess.run(
-        [str(snakemake), "-n", "--configfile", str(cfg)],
-        cwd=REPO,
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    out, err = dry_run_errors(cfg)
     assert out.returncode != 0
-    err = [line for line in out.stderr.splitlines() if line.startswith("piezobearing:")]
     assert len(err) == 1 and "column 'voltage_V' missing" in err[0]
     assert "Traceback" not in out.stderr + out.stdout
