@@ -1,15 +1,12 @@
 """A bad config or study table stops with one line naming the key and the fix (CLI and workflow alike)."""
 
 import copy
-from pathlib import Path
 
 import pytest
 from conftest import dry_run_errors
 
 from piezobearing import config as cfg
 from piezobearing.studies import check_studies
-
-REPO = Path(__file__).resolve().parents[1]
 
 
 def error(config: dict) -> str:

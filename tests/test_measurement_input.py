@@ -10,8 +10,6 @@ from conftest import dry_run_errors
 from piezobearing.io import MeasurementError, read_measurement
 from piezobearing.stages.calibration import load_record
 
-REPO = Path(__file__).resolve().parents[1]
-
 
 @pytest.fixture()
 def good(paper_record) -> pd.DataFrame:
