@@ -99,3 +99,19 @@ def test_density_and_alumina_table_I():
     s = np.linalg.inv(c)
     assert 1 / s[0, 0] == pytest.approx(330e9) and -s[0, 1] / s[0, 0] == pytest.approx(0.22)
     assert mu == pytest.approx(330e9 / (2 * 1.22))
+
+
+def test_materials_from_config_follow_the_config(paper_config):
+    # The sensor FEM and the housing's sensor spring build the PZT and alumina from the config, the same way.
+    from scipy.constants import epsilon_0
+
+    from piezobearing.materials import ALUMINA, alumina_from_config, pzt_from_config
+
+    s = {**paper_config["sensor"], "d33_C_per_N": 300e-12, "eps33_T_rel": 1500.0}
+    pzt = pzt_from_config(s)
+    assert pzt.d33_C_per_N == 300e-12
+    assert pzt.eps33_T_F_per_m == 1500.0 * epsilon_0
+    assert pzt.d_C_per_N[2, 0] == -175e-12  # the rest stays the paper's
+    assert alumina_from_config(paper_config["sensor_fem"]) == ALUMINA.__class__(
+        "alumina", ALUMINA.young_Pa, ALUMINA.poisson, ALUMINA.density_kg_per_m3
+    )

@@ -12,7 +12,7 @@ The conversion between them lives in :func:`to_sfepy_voigt` and nowhere else.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.constants import epsilon_0
@@ -202,6 +202,27 @@ def paper_pzt(c66_rule: str = "isotropy", density_kg_per_m3: float = 7700.0) -> 
     )
     eps_t = 1800 * epsilon_0 * np.eye(3)
     return PiezoMaterial("APC 850", c, d, eps_t, density_kg_per_m3)
+
+
+def pzt_from_config(sensor: dict) -> PiezoMaterial:
+    """The PZT of the validated ``sensor`` config section: the paper's APC 850 (Eq. 7-9) with the
+    configured c66 rule, density, d33 and eps33^T (the calibration's constants) in place."""
+    pzt = paper_pzt(c66_rule=sensor["c66_rule"], density_kg_per_m3=sensor["pzt_density_kg_per_m3"])
+    d = pzt.d_C_per_N.copy()
+    d[2, 2] = sensor["d33_C_per_N"]
+    eps = pzt.eps_T_F_per_m.copy()
+    eps[2, 2] = sensor["eps33_T_rel"] * epsilon_0
+    return replace(pzt, d_C_per_N=d, eps_T_F_per_m=eps)
+
+
+def alumina_from_config(sensor_fem: dict) -> IsotropicMaterial:
+    """The alumina of the validated ``sensor_fem`` config section (Table I by default)."""
+    return IsotropicMaterial(
+        "alumina",
+        sensor_fem["alumina_young_Pa"],
+        sensor_fem["alumina_poisson"],
+        sensor_fem["alumina_density_kg_per_m3"],
+    )
 
 
 #: Table I of the paper.

@@ -19,7 +19,7 @@ from .. import bearing as brg
 from .. import housing_fem as fem
 from ..housing_mesh import HousingGeometry, HousingMesh, build_housing_mesh, mesh_quality
 from ..io import read_json, write_json
-from ..materials import ALUMINA, CAST_IRON, STEEL, paper_pzt
+from ..materials import CAST_IRON, STEEL, alumina_from_config, pzt_from_config
 from ..scorecard import Row, write_part
 
 CASES = ("healthy", "faulty")
@@ -247,12 +247,11 @@ def housing_mesh(case: str, out_npz: str, out_vtk: str, out_json: str, config: d
 def sensor_spring(config: dict) -> float:
     """Axial stiffness of the sensor stack from the config [N/m]."""
     s, h, sf = config["sensor"], config["housing"], config["sensor_fem"]
-    pzt = paper_pzt(s["c66_rule"], s["pzt_density_kg_per_m3"])
     return fem.sensor_stiffness(
-        pzt,
+        pzt_from_config(s),
         s["pzt_diameter_m"],
         s["pzt_height_m"],
-        ALUMINA,
+        alumina_from_config(sf),
         sf["bottom_disk_diameter_m"],
         sf["bottom_disk_height_m"],
         h["sensor_electrical"],

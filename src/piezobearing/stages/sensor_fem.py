@@ -12,13 +12,18 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy.constants import epsilon_0
 
 from .. import io
 from .. import sensor_fem as fem
 from ..calibration import SensorCircuit, frequency_response
 from ..io import write_json
-from ..materials import IsotropicMaterial, paper_pzt, stress_charge_form, transverse_isotropy_report
+from ..materials import (
+    alumina_from_config,
+    paper_pzt,
+    pzt_from_config,
+    stress_charge_form,
+    transverse_isotropy_report,
+)
 from ..scorecard import Row, write_part
 from ..sensor_mesh import MeshDensity, StackGeometry, StackMesh, stack_mesh
 
@@ -90,15 +95,8 @@ class SensorFemParams:
             top_disk_diameter_m=f["top_disk_diameter_m"],
             top_disk_height_m=f["top_disk_height_m"],
         )
-        pzt = paper_pzt(c66_rule=s["c66_rule"], density_kg_per_m3=s["pzt_density_kg_per_m3"])
-        d = pzt.d_C_per_N.copy()
-        d[2, 2] = s["d33_C_per_N"]
-        eps = pzt.eps_T_F_per_m.copy()
-        eps[2, 2] = s["eps33_T_rel"] * epsilon_0
-        pzt = replace(pzt, d_C_per_N=d, eps_T_F_per_m=eps)
-        alu = IsotropicMaterial(
-            "alumina", f["alumina_young_Pa"], f["alumina_poisson"], f["alumina_density_kg_per_m3"]
-        )
+        pzt = pzt_from_config(s)
+        alu = alumina_from_config(f)
         mats = fem.StackMaterials(stress_charge_form(pzt), s["pzt_density_kg_per_m3"], alu)
         dens = MeshDensity(
             n_core=f["mesh_n_core"],
