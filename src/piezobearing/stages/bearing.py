@@ -21,6 +21,7 @@ from ..housing_mesh import HousingGeometry, HousingMesh, build_housing_mesh, mes
 from ..io import read_json, write_json
 from ..materials import CAST_IRON, STEEL, alumina_from_config, pzt_from_config
 from ..scorecard import Row, write_part
+from . import log_progress
 
 CASES = ("healthy", "faulty")
 PAPER = {
@@ -34,11 +35,6 @@ PAPER = {
 }
 
 log = logging.getLogger("piezobearing.bearing")
-
-
-def _setup_logging() -> None:
-    if not logging.getLogger().handlers:
-        logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
 
 
 def _case(case: str) -> bool:
@@ -139,7 +135,7 @@ def bearing_lpm(out_kinematics: str, out_npz: dict, out_csv: dict, out_json: str
     and a CSV at the FEM step (time_s, load_N_jj, angle_rad_jj), and a JSON
     of the checks.
     """
-    _setup_logging()
+    log_progress()
     b = config["bearing"]
     geo = brg.BearingGeometry.from_config(b)
     kin = brg.kinematic_frequencies(geo, b["shaft_speed_rpm"] / 60.0)
@@ -311,7 +307,7 @@ def housing_transient(
     config: dict,
 ) -> None:
     """Stage housing_transient_{case}: the sensor force over time, the modes, the method check."""
-    _setup_logging()
+    log_progress()
     h, b = config["housing"], config["bearing"]
     dt = b["time_step_s"]
     timings = {}
@@ -456,7 +452,7 @@ def mesh_convergence(contact_npz: str, out_json: str, out_csv: str, config: dict
     transient_healthy.json), so the convergence of the quasi-static force
     measures the mesh's. One factorisation a level.
     """
-    _setup_logging()
+    log_progress()
     h, b = config["housing"], config["bearing"]
     c = load_contact(contact_npz)
     kin = brg.kinematic_frequencies(brg.BearingGeometry.from_config(b), b["shaft_speed_rpm"] / 60.0)

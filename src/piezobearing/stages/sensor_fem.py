@@ -26,6 +26,7 @@ from ..materials import (
 )
 from ..scorecard import Row, write_part
 from ..sensor_mesh import MeshDensity, StackGeometry, StackMesh, stack_mesh
+from . import log_progress
 
 log = logging.getLogger(__name__)
 
@@ -237,6 +238,7 @@ def convergence_table(meshes: list[StackMesh], p: SensorFemParams) -> pd.DataFra
 
 def sensor_convergence(mesh_paths: list[str], out_csv: str, config: dict) -> None:
     """Mesh convergence of the first axial frequency over all refinement levels (SS quarter)."""
+    log_progress()
     p = SensorFemParams.from_config(config)
     meshes = [read_mesh(path, p, m) for path, m in zip(mesh_paths, p.multipliers, strict=True)]
     df = convergence_table(meshes, p)
@@ -356,6 +358,7 @@ def modal_results(mesh: StackMesh, p: SensorFemParams) -> tuple[dict, fem.ModalS
 
 def sensor_modal(mesh_vtk: str, out_json: str, out_mode_npz: str, config: dict) -> None:
     """Modes below the configured limit, short and open circuit, labelled; the first axial mode shape."""
+    log_progress()
     p = SensorFemParams.from_config(config)
     mesh = read_mesh(mesh_vtk, p, p.multiplier)
     out, survey = modal_results(mesh, p)
@@ -465,6 +468,7 @@ def sensor_harmonic(
     config: dict,
 ) -> None:
     """1 N harmonic force on the bottom, top clamped, the fitted R and the cable across the electrodes."""
+    log_progress()
     p = SensorFemParams.from_config(config)
     modal = read_json(modal_json, ["first_resonance_short_Hz", "first_resonance_open_Hz"])
     res = read_json(resistance_json, ["resistance_ohm"])
