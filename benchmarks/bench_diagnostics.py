@@ -25,8 +25,8 @@ import numpy as np
 
 from piezobearing import config as cfg
 from piezobearing import diagnostics as dg
-from piezobearing.calibration import detect_impulses
 from piezobearing.effects import CATALOGUE, Record
+from piezobearing.sensor.calibration import detect_impulses
 from piezobearing.stages.calibration import nominal_circuit
 from piezobearing.synthesis import PressProtocol, synthesize
 
@@ -42,7 +42,7 @@ def ringing(config: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The reference sensor seen through a 35 Hz, 3%-damped fixture mode (see tests/test_diagnostics.py)."""
     from scipy.signal import cont2discrete, lfilter
 
-    from piezobearing.calibration import circuit_voltage
+    from piezobearing.sensor.calibration import circuit_voltage
     from piezobearing.synthesis import press_force
 
     p = PressProtocol.from_config(config["synthesis"])

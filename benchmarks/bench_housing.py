@@ -28,8 +28,8 @@ import numpy as np
 import scipy.sparse.linalg as spla
 
 from piezobearing import config as cfg
-from piezobearing import housing_fem as fem
-from piezobearing.housing_mesh import build_housing_mesh
+from piezobearing.bearing import housing_fem as fem
+from piezobearing.bearing.housing_mesh import build_housing_mesh
 from piezobearing.stages import bearing as st
 
 

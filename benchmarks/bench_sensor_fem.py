@@ -20,9 +20,9 @@ from pathlib import Path
 import numpy as np
 
 from piezobearing import config as cfg
-from piezobearing import sensor_fem as fem
-from piezobearing.calibration import SensorCircuit
-from piezobearing.sensor_mesh import stack_mesh
+from piezobearing.sensor import fem as fem
+from piezobearing.sensor.calibration import SensorCircuit
+from piezobearing.sensor.mesh import stack_mesh
 from piezobearing.stages.sensor_fem import SensorFemParams, harmonic_results, modal_results
 
 BUDGET_S = 120.0  # the budget for modal + harmonic on the default mesh (2 cores)

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from piezobearing import signals as S
+from piezobearing.signals import detection as S
 
 FS = 2550.0
 DT = 1 / FS

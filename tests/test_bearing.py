@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from piezobearing import bearing as brg
+from piezobearing.bearing import lpm as brg
 
 
 @pytest.fixture(scope="module")

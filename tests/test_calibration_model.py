@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from piezobearing.calibration import SensorCircuit, circuit_voltage, frequency_response, rc_voltage
+from piezobearing.sensor.calibration import SensorCircuit, circuit_voltage, frequency_response, rc_voltage
 
 G, TAU = 1.5, 0.013  # gain [V/N], time constant [s]
 

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from piezobearing import calibration as cal
-from piezobearing.lowfreq import asymptote_onset_Hz, lowfreq_sensitivity
+from piezobearing.sensor import calibration as cal
+from piezobearing.sensor.lowfreq import asymptote_onset_Hz, lowfreq_sensitivity
 from piezobearing.stages.calibration import nominal_circuit
 from piezobearing.synthesis import PressProtocol, synthesize
 

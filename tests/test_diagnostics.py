@@ -16,8 +16,8 @@ import pytest
 from scipy.signal import cont2discrete, lfilter
 
 from piezobearing import diagnostics as dg
-from piezobearing.calibration import circuit_voltage, detect_impulses
 from piezobearing.effects import Record
+from piezobearing.sensor.calibration import circuit_voltage, detect_impulses
 from piezobearing.stages.calibration import nominal_circuit
 from piezobearing.synthesis import PressProtocol, press_force, synthesize
 

@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from piezobearing.calibration import SensorCircuit, circuit_voltage
 from piezobearing.effects import CATALOGUE, EffectError, Record, register, resolve, unregister
 from piezobearing.effects.base import Effect, force_band_Hz
 from piezobearing.effects.channel_delay import fractional_delay
 from piezobearing.effects.reference_lag import lead
 from piezobearing.model import ForwardModel, model_from_specs, rc_response
+from piezobearing.sensor.calibration import SensorCircuit, circuit_voltage
 from piezobearing.synthesis import PressProtocol, press_force, synthesize
 
 REQUIRED = {
@@ -134,7 +134,7 @@ def test_rc_response_is_the_exact_discrete_filter_and_tends_to_eq6():
     n = 4096
     x = np.zeros(n)
     x[5] = 1.0  # a unit force sample (piecewise linear: a triangle) after rest
-    from piezobearing.calibration import rc_voltage
+    from piezobearing.sensor.calibration import rc_voltage
 
     h = rc_voltage(x, dt, g, tau)
     f = np.fft.rfftfreq(n, dt)

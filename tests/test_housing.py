@@ -7,16 +7,16 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from piezobearing import bearing as brg
-from piezobearing import housing_fem as fem
-from piezobearing.housing_mesh import (
+from piezobearing.bearing import housing_fem as fem
+from piezobearing.bearing import lpm as brg
+from piezobearing.bearing.housing_mesh import (
     GROUP_HOUSING,
     GROUP_RING,
     build_housing_mesh,
     mesh_quality,
     nested_dissection_order,
 )
-from piezobearing.materials import ALUMINA, CAST_IRON, STEEL, paper_pzt
+from piezobearing.sensor.materials import ALUMINA, CAST_IRON, STEEL, paper_pzt
 from piezobearing.stages import bearing as st
 
 LEVEL = 0.35  # a coarse mesh: a few thousand DOFs

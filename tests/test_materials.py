@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.constants import epsilon_0
 
-from piezobearing.materials import (
+from piezobearing.sensor.materials import (
     ALUMINA,
     paper_pzt,
     stress_charge_form,
@@ -105,7 +105,7 @@ def test_materials_from_config_follow_the_config(paper_config):
     # The sensor FEM and the housing's sensor spring build the PZT and alumina from the config, the same way.
     from scipy.constants import epsilon_0
 
-    from piezobearing.materials import ALUMINA, alumina_from_config, pzt_from_config
+    from piezobearing.sensor.materials import ALUMINA, alumina_from_config, pzt_from_config
 
     s = {**paper_config["sensor"], "d33_C_per_N": 300e-12, "eps33_T_rel": 1500.0}
     pzt = pzt_from_config(s)

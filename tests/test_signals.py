@@ -1,12 +1,12 @@
-"""The fault-detection chain (piezobearing.signals) on signals of known content."""
+"""The fault-detection chain (piezobearing.signals.detection) on signals of known content."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from piezobearing import signals as S
-from piezobearing.calibration import SensorCircuit, circuit_voltage
+from piezobearing.sensor.calibration import SensorCircuit, circuit_voltage
+from piezobearing.signals import detection as S
 
 FS = 2550.0  # the paper's sampling rate [Hz]
 DT = 1.0 / FS
@@ -238,7 +238,7 @@ def test_snr_sweep_replicate_zero_is_the_noisy_stage_record():
 
 def test_fem_correction_factor():
     c = SensorCircuit()
-    from piezobearing.calibration import frequency_response
+    from piezobearing.sensor.calibration import frequency_response
 
     f = np.array([500.0, 1000.0, 5000.0, 1e5])
     rc = np.abs(frequency_response(f, c))

@@ -10,8 +10,8 @@ import pandas as pd
 import pytest
 from test_signals import BPFO, DT, bearing_force
 
-from piezobearing import signals as S
-from piezobearing.calibration import SensorCircuit, frequency_response
+from piezobearing.sensor.calibration import SensorCircuit, frequency_response
+from piezobearing.signals import detection as S
 from piezobearing.stages import signals as st
 
 

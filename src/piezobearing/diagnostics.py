@@ -53,11 +53,11 @@ from scipy.signal import correlate
 from scipy.stats import chi2 as chi2_dist
 from scipy.stats import norm
 
-from .calibration import Impulse
 from .effects import CATALOGUE, Effect, Record, StartContext
 from .effects.base import denoised_force, prefilter_response
 from .fitting import FitResult, fit, nrmse
 from .model import ForwardModel
+from .sensor.calibration import Impulse
 
 Z99 = float(norm.isf(0.005))  # 2.576: the 99% two-sided band of a correlation, times 1/sqrt(n)
 

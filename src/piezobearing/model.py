@@ -5,7 +5,7 @@ The baseline maps the recorded reference force F to the voltage V by
 .. math::  C \\dot V + V / R = d_{33} \\dot F,\\qquad C = C_p + C_{cable},
 
 integrated exactly for a force piecewise linear between samples
-(:func:`piezobearing.calibration.circuit_voltage`). Its free parameter is R.
+(:func:`piezobearing.sensor.calibration.circuit_voltage`). Its free parameter is R.
 Each effect of the catalogue (:mod:`piezobearing.effects`) changes one link
 of the chain (recorded force -> force on the disk -> circuit -> DAQ input ->
 additive interference) and brings its own parameters.
@@ -22,16 +22,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .calibration import SensorCircuit, circuit_voltage, resistance_param
 from .effects import Effect, EffectError, EffectParam, Record, resolve
 from .fitting import Param
+from .sensor.calibration import SensorCircuit, circuit_voltage, resistance_param
 
 #: Samples at the initial force level put before the record (see :meth:`ForwardModel.simulate`).
 PAD = 16
 
 
 def rc_response(freq_Hz: np.ndarray, dt_s: float, gain: float, tau_s: float) -> np.ndarray:
-    """Frequency response of :func:`piezobearing.calibration.rc_voltage` as a discrete filter.
+    """Frequency response of :func:`piezobearing.sensor.calibration.rc_voltage` as a discrete filter.
 
     The exact discretisation is V_k = a V_{k-1} + b (F_k - F_{k-1}) with
     a = exp(-dt/tau), b = gain (tau/dt)(1 - a), so

@@ -4,7 +4,7 @@ A hand presses a rod onto the PZT disk, which sits on a reference force
 sensor: n impulses over the record, each a smooth press and release,
 with amplitudes, durations and timing that vary from press to press. The
 PZT disk on its cable into the DAQ turns the true force into a voltage
-through the RC model (:mod:`piezobearing.calibration`); both channels then
+through the RC model (:mod:`piezobearing.sensor.calibration`); both channels then
 get white sensor noise. Every draw comes from one seeded generator.
 
 Why the pulses look as they do: the impulse-peak sensitivity of a
@@ -24,8 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .calibration import SensorCircuit, circuit_voltage
 from .io import Measurement
+from .sensor.calibration import SensorCircuit, circuit_voltage
 
 
 @dataclass(frozen=True)

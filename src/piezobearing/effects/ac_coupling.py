@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..calibration import rc_voltage
+from ..sensor.calibration import rc_voltage
 from .base import Effect, EffectParam, Record, StartContext
 
 

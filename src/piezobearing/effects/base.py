@@ -225,7 +225,7 @@ class Effect:
         return force_N
 
     def circuit(self, circuit: Any, values: dict) -> Any:
-        """Change the :class:`~piezobearing.calibration.SensorCircuit`."""
+        """Change the :class:`~piezobearing.sensor.calibration.SensorCircuit`."""
         return circuit
 
     def voltage(self, voltage_V: np.ndarray, values: dict, record: Record) -> np.ndarray:

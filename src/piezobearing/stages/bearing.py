@@ -15,12 +15,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .. import bearing as brg
-from .. import housing_fem as fem
-from ..housing_mesh import HousingGeometry, HousingMesh, build_housing_mesh, mesh_quality
+from ..bearing import housing_fem as fem
+from ..bearing import lpm as brg
+from ..bearing.housing_mesh import HousingGeometry, HousingMesh, build_housing_mesh, mesh_quality
 from ..io import read_json, write_json
-from ..materials import CAST_IRON, STEEL, alumina_from_config, pzt_from_config
 from ..scorecard import Row, write_part
+from ..sensor.materials import CAST_IRON, STEEL, alumina_from_config, pzt_from_config
 from . import log_progress
 
 CASES = ("healthy", "faulty")
@@ -34,7 +34,7 @@ PAPER = {
     "defect_depth_m": 1.0e-3,
 }
 
-log = logging.getLogger("piezobearing.bearing")
+log = logging.getLogger("piezobearing.bearing.lpm")
 
 
 def _case(case: str) -> bool:

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from .. import calibration as cal
 from ..fitting import nrmse
 from ..io import Measurement, MeasurementError, read_json, read_measurement, write_json, write_measurement
-from ..lowfreq import asymptote_onset_Hz, lowfreq_sensitivity
 from ..scorecard import Row, write_part
+from ..sensor import calibration as cal
+from ..sensor.lowfreq import asymptote_onset_Hz, lowfreq_sensitivity
 from ..synthesis import PressProtocol, synthesize
 
 

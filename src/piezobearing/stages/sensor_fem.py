@@ -14,18 +14,18 @@ import numpy as np
 import pandas as pd
 
 from .. import io
-from .. import sensor_fem as fem
-from ..calibration import SensorCircuit, frequency_response
 from ..io import write_json
-from ..materials import (
+from ..scorecard import Row, write_part
+from ..sensor import fem as fem
+from ..sensor.calibration import SensorCircuit, frequency_response
+from ..sensor.materials import (
     alumina_from_config,
     paper_pzt,
     pzt_from_config,
     stress_charge_form,
     transverse_isotropy_report,
 )
-from ..scorecard import Row, write_part
-from ..sensor_mesh import MeshDensity, StackGeometry, StackMesh, stack_mesh
+from ..sensor.mesh import MeshDensity, StackGeometry, StackMesh, stack_mesh
 from . import log_progress
 
 log = logging.getLogger(__name__)

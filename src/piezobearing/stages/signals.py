@@ -15,10 +15,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .. import signals as sig
-from ..calibration import SensorCircuit, circuit_voltage, frequency_response
 from ..io import read_json, write_json
 from ..scorecard import Row, write_part
+from ..sensor.calibration import SensorCircuit, circuit_voltage, frequency_response
+from ..signals import detection as sig
 
 #: Largest relative deviation of a time step from the mean step of a record.
 UNIFORM_RTOL = 1e-3

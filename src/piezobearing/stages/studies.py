@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..bearing import BearingGeometry
+from ..bearing.lpm import BearingGeometry
 from ..io import read_json, write_json
 from ..studies import case_config
 from .calibration import extract_sensitivity, fit_resistance, lowfreq, synthesize_calibration
@@ -55,7 +55,7 @@ def fault_detection_case(config: dict, outdir: Path, resistance: str, harmonic: 
     The large binary intermediates (contact-force NPZ, mesh NPZ and VTK) are
     deleted once used.
     """
-    from .. import signals as sig
+    from ..signals import detection as sig
     from . import bearing as brs
     from . import signals as sgs
 

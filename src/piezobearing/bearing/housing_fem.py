@@ -1,6 +1,6 @@
 r"""Transient FEM of outer ring, housing and sensor under the moving roller loads.
 
-Linear elastodynamics on the half model of :mod:`piezobearing.housing_mesh`
+Linear elastodynamics on the half model of :mod:`piezobearing.bearing.housing_mesh`
 (x = 0 a mirror plane, U_x = 0; the foot's underside held):
 
 .. math::
@@ -44,8 +44,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..sensor.materials import IsotropicMaterial, PiezoMaterial
 from .housing_mesh import GROUP_HOUSING, GROUP_RING, HousingMesh, nested_dissection_order
-from .materials import IsotropicMaterial, PiezoMaterial
 
 # ---------------------------------------------------------------------------
 # The sensor as a spring
@@ -324,7 +324,7 @@ def splu_symmetric(a: sp.spmatrix, ordering: str = "NATURAL"):
     """SuperLU of a symmetric positive definite matrix, without pivoting.
 
     The model's DOFs are numbered in nested-dissection order already
-    (:func:`piezobearing.housing_mesh.nested_dissection_order`), so the
+    (:func:`piezobearing.bearing.housing_mesh.nested_dissection_order`), so the
     natural column order is the fill-reducing one.
     """
     return spla.splu(

@@ -21,7 +21,7 @@ import numpy as np
 from scipy.constants import epsilon_0
 from scipy.signal import find_peaks, lfilter
 
-from .fitting import FitResult, Param, fit
+from ..fitting import FitResult, Param, fit
 
 
 @dataclass(frozen=True)

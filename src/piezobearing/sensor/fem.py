@@ -45,7 +45,7 @@ circuit is :math:`Y = 0`, short circuit :math:`V = 0`. With
 from a real modal reduction (short-circuit modes plus the two static
 vectors :math:`K_s^{-1}f, K_s^{-1}b`), which is exact at zero frequency.
 
-Only a quarter of the stack is meshed (:mod:`piezobearing.sensor_mesh`). The
+Only a quarter of the stack is meshed (:mod:`piezobearing.sensor.mesh`). The
 planes x = 0 and y = 0 carry symmetric (S: normal displacement zero,
 potential free) or antisymmetric (A: in-plane displacements and potential
 zero) conditions; SS holds every axisymmetric mode (all that a centred axial
@@ -69,8 +69,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from piezobearing.materials import IsotropicMaterial, StressChargeForm
-from piezobearing.sensor_mesh import GROUP_BOTTOM_DISK, GROUP_PZT, GROUP_TOP_DISK, StackMesh
+from piezobearing.sensor.materials import IsotropicMaterial, StressChargeForm
+from piezobearing.sensor.mesh import GROUP_BOTTOM_DISK, GROUP_PZT, GROUP_TOP_DISK, StackMesh
 
 log = logging.getLogger(__name__)
 

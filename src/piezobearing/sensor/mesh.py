@@ -4,7 +4,7 @@ The stack is three coaxial disks along z (bottom to top): the narrow alumina
 disk that touches the bearing's outer ring, the PZT disk, and the wide alumina
 disk that bears against the housing. Only the quarter x >= 0, y >= 0 is
 meshed; the planes x = 0 and y = 0 are mirror planes of the geometry, and
-:mod:`piezobearing.sensor_fem` recovers every mode of the full stack from the
+:mod:`piezobearing.sensor.fem` recovers every mode of the full stack from the
 four combinations of symmetric and antisymmetric conditions on them.
 
 The cross-section is an O-grid: a square core, a transition ring out to the

@@ -1,0 +1,1 @@
+"""The bearing: geometry, kinematics and the lumped-parameter model (LPM), the housing's mesh and FEM."""

@@ -1,0 +1,1 @@
+"""The sensor: the PZT stack's materials, its calibration circuit (RC model), mesh and piezoelectric FEM."""

@@ -1,0 +1,1 @@
+"""The signals: noise, envelope analysis and the fault indicator."""
