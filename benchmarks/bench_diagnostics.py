@@ -24,8 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from piezobearing import config as cfg
-from piezobearing import diagnostics as dg
-from piezobearing.effects import CATALOGUE, Record
+from piezobearing.diagnosis import engine as dg
+from piezobearing.diagnosis.calibration.effects import CATALOGUE, Record
 from piezobearing.sensor.calibration import detect_impulses
 from piezobearing.stages.calibration import nominal_circuit
 from piezobearing.synthesis import PressProtocol, synthesize

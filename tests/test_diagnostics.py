@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from scipy.signal import cont2discrete, lfilter
 
-from piezobearing import diagnostics as dg
-from piezobearing.effects import Record
+from piezobearing.diagnosis import engine as dg
+from piezobearing.diagnosis.calibration.effects import Record
 from piezobearing.sensor.calibration import circuit_voltage, detect_impulses
 from piezobearing.stages.calibration import nominal_circuit
 from piezobearing.synthesis import PressProtocol, press_force, synthesize

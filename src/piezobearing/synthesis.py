@@ -98,7 +98,7 @@ def synthesize(
 
     ``hidden_effects`` ([{name, params}], as ``synthesis.hidden_effects``)
     puts catalogue effects into the voltage: it is then the forward model
-    of the diagnosis (:class:`piezobearing.model.ForwardModel`, baseline plus
+    of the diagnosis (:class:`piezobearing.diagnosis.calibration.model.ForwardModel`, baseline plus
     those effects) driven by the noise-free force. Parameters not given take
     the effect's neutral default.
     """
@@ -106,8 +106,8 @@ def synthesize(
     t, force = press_force(protocol, rng)
     force_meas = force + rng.normal(0.0, protocol.force_noise_N, t.size)
     if hidden_effects:
-        from .effects import Record
-        from .model import model_from_specs
+        from .diagnosis.calibration.effects import Record
+        from .diagnosis.calibration.model import model_from_specs
 
         # the effects see the record the diagnosis will see (e.g. the force band), driven by the true force
         record = Record(t, force_meas)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..fitting import nrmse
+from ..diagnosis.least_squares import nrmse
 from ..io import Measurement, MeasurementError, read_json, read_measurement, write_json, write_measurement
 from ..scorecard import Row, write_part
 from ..sensor import calibration as cal

@@ -1,6 +1,6 @@
 """Stage of the model-versus-measurement loop (rule ``diagnose``, CLI ``piezobearing diagnose``).
 
-Reads a calibration record, runs :func:`piezobearing.diagnostics.diagnose`
+Reads a calibration record, runs :func:`piezobearing.diagnosis.engine.diagnose`
 with the configured model (``model.effects``) and settings
 (``diagnostics``), and writes into one folder:
 
@@ -17,9 +17,9 @@ from typing import Callable
 
 import numpy as np
 
-from .. import diagnostics as dg
-from .. import report
-from ..effects import Record, resolve
+from ..diagnosis import engine as dg
+from ..diagnosis import report
+from ..diagnosis.calibration.effects import Record, resolve
 from ..io import write_json
 from .calibration import load_record, nominal_circuit
 
@@ -30,7 +30,7 @@ CONFIG_KEYS = ("sensor", "calibration", "model", "diagnostics")
 def check_effect_names(config: dict) -> None:
     """Raise a one-line EffectError if ``model.effects`` or ``synthesis.hidden_effects`` names an unknown
     effect or parameter (the workflow calls this before any job runs)."""
-    from ..model import model_from_specs
+    from ..diagnosis.calibration.model import model_from_specs
 
     resolve(config["model"]["effects"])
     probe = Record(np.arange(1000) / 1000.0, np.zeros(1000))

@@ -27,7 +27,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.polynomial import legendre
 
-from .base import Effect, EffectParam, Record, StartContext
+from ...params import Param
+from .base import Effect, Record, StartContext
 
 DEGREE = 3
 
@@ -50,9 +51,9 @@ class BaselineDrift(Effect):
         "curve (Legendre polynomials to degree 3 over the record) to the voltage."
     )
 
-    def params(self, record: Record) -> list[EffectParam]:
+    def params(self, record: Record) -> list[Param]:
         return [
-            EffectParam(
+            Param(
                 f"drift_p{k}_V",
                 0.0,
                 -10.0,

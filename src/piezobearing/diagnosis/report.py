@@ -1,7 +1,7 @@
 """The Markdown report of a diagnosis (``DIR/report.md``), rendered from ``diagnosis.json`` alone.
 
 :func:`render` takes the JSON-ready dict of
-:meth:`piezobearing.diagnostics.Diagnosis.to_dict` (plus ``source`` and
+:meth:`piezobearing.diagnosis.engine.Diagnosis.to_dict` (plus ``source`` and
 ``config``) and the relative paths of the figures, and returns the text.
 """
 
@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import json
 
-from .diagnostics import peak_where
+from .engine import peak_where
+from .units import format_value
 
 #: Figures of a diagnosis, in the order the report shows them.
 FIGURES = ("overlay", "residuals", "spectrum", "correlations", "ranking", "ladder")
@@ -19,34 +20,16 @@ def _pct(x: float) -> str:
     return f"{100 * x:.2f}%"
 
 
-def _fmt(name: str, value: float) -> str:
-    """A parameter value in a readable unit, from its unit suffix."""
-    if value is None:
-        return "-"
-    scales = [
-        ("_ohm", 1e6, "MOhm"),
-        ("_F", 1e-12, "pF"),
-        ("_s", 1e-3, "ms"),
-        ("_V", 1e-3, "mV"),
-        ("_Hz", 1.0, "Hz"),
-        ("_per_N", 1.0, "1/N"),
-    ]
-    for suffix, scale, unit in scales:
-        if name.endswith(suffix):
-            return f"{value / scale:.4g} {unit}"
-    return f"{value:.4g}"
-
-
 def _ci(name: str, ci) -> str:
     if not ci:
         return ""
-    return f"[{_fmt(name, ci[0])}, {_fmt(name, ci[1])}]"
+    return f"[{format_value(name, ci[0])}, {format_value(name, ci[1])}]"
 
 
 def _param_table(params: dict, ci95: dict) -> list[str]:
     rows = ["| parameter | value | 95% interval |", "|---|---|---|"]
     for k, v in params.items():
-        rows.append(f"| `{k}` | {_fmt(k, v)} | {_ci(k, ci95.get(k))} |")
+        rows.append(f"| `{k}` | {format_value(k, v)} | {_ci(k, ci95.get(k))} |")
     return rows
 
 

@@ -5,8 +5,9 @@ The baseline maps the recorded reference force F to the voltage V by
 .. math::  C \\dot V + V / R = d_{33} \\dot F,\\qquad C = C_p + C_{cable},
 
 integrated exactly for a force piecewise linear between samples
-(:func:`piezobearing.sensor.calibration.circuit_voltage`). Its free parameter is R.
-Each effect of the catalogue (:mod:`piezobearing.effects`) changes one link
+(:func:`piezobearing.sensor.calibration.circuit_voltage`, response
+:func:`piezobearing.sensor.calibration.rc_response`). Its free parameter is R.
+Each effect of the catalogue (:mod:`piezobearing.diagnosis.calibration.effects`) changes one link
 of the chain (recorded force -> force on the disk -> circuit -> DAQ input ->
 additive interference) and brings its own parameters.
 
@@ -22,28 +23,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .effects import Effect, EffectError, EffectParam, Record, resolve
-from .fitting import Param
-from .sensor.calibration import SensorCircuit, circuit_voltage, resistance_param
+from ...sensor.calibration import SensorCircuit, circuit_voltage, rc_response, resistance_param
+from ..params import Param
+from .effects import Effect, EffectError, Record, resolve
 
 #: Samples at the initial force level put before the record (see :meth:`ForwardModel.simulate`).
 PAD = 16
-
-
-def rc_response(freq_Hz: np.ndarray, dt_s: float, gain: float, tau_s: float) -> np.ndarray:
-    """Frequency response of :func:`piezobearing.sensor.calibration.rc_voltage` as a discrete filter.
-
-    The exact discretisation is V_k = a V_{k-1} + b (F_k - F_{k-1}) with
-    a = exp(-dt/tau), b = gain (tau/dt)(1 - a), so
-
-    .. math::  G(z) = b \\frac{1 - z^{-1}}{1 - a z^{-1}},\\quad z = e^{j 2\\pi f\\,dt}.
-
-    It tends to the continuous gain * j w tau / (1 + j w tau) for f dt << 1.
-    """
-    a = np.exp(-dt_s / tau_s)
-    b = gain * (tau_s / dt_s) * (-np.expm1(-dt_s / tau_s))
-    zi = np.exp(-2j * np.pi * np.asarray(freq_Hz, dtype=float) * dt_s)
-    return b * (1 - zi) / (1 - a * zi)
 
 
 @dataclass(frozen=True)
@@ -84,7 +69,7 @@ class ForwardModel:
         return sorted(self.effects, key=lambda e: e.order)
 
     # ----------------------------------------------------------------- parameters
-    def effect_params(self, record: Record) -> list[EffectParam]:
+    def effect_params(self, record: Record) -> list[Param]:
         return [p for e in self.effects for p in e.params(record)]
 
     def defaults(self, record: Record) -> dict[str, float]:
@@ -98,7 +83,7 @@ class ForwardModel:
         """The free parameters (R first) with start values from ``start`` (else defaults)."""
         start = {**self.defaults(record), **(start or {})}
         return [resistance_param(start["resistance_ohm"])] + [
-            p.to_param(start.get(p.name)) for p in self.effect_params(record)
+            p.with_value(start.get(p.name)) for p in self.effect_params(record)
         ]
 
     def complete(self, values: dict, record: Record, key: str = "params") -> dict[str, float]:

@@ -28,7 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Effect, EffectParam, Record, StartContext
+from ...params import Param
+from .base import Effect, Record, StartContext
 
 HARMONICS = (1, 3, 5)
 F_LO, F_HI = 49.5, 60.5
@@ -61,14 +62,14 @@ class MainsPickup(Effect):
         "harmonics from non-linear loads. It adds to the voltage whatever the force does."
     )
 
-    def params(self, record: Record) -> list[EffectParam]:
+    def params(self, record: Record) -> list[Param]:
         out = [
-            EffectParam("mains_frequency_Hz", 50.0, F_LO, F_HI, scale=1.0, description="mains frequency [Hz]")
+            Param("mains_frequency_Hz", 50.0, F_LO, F_HI, scale=1.0, description="mains frequency [Hz]")
         ]
         for k in harmonics(record):
             for part in ("cos", "sin"):
                 out.append(
-                    EffectParam(
+                    Param(
                         f"mains_h{k}_{part}_V",
                         0.0,
                         -1.0,

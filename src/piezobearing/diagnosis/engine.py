@@ -1,7 +1,7 @@
 """Model versus measurement: fit, residual tests, effect ranking, stepwise selection, verdict.
 
 The measured record gives the recorded force F and voltage V on one clock.
-A :class:`~piezobearing.model.ForwardModel` (the RC baseline plus effects)
+A :class:`~piezobearing.diagnosis.calibration.model.ForwardModel` (the RC baseline plus effects)
 predicts V from F. This module
 
 1. measures the noise floor in the quiet stretches between impulses: the
@@ -19,7 +19,7 @@ predicts V from F. This module
    noise at every frequency, and a fit could then "explain" part of the
    carried noise (false discoveries) while its Gauss-Newton steps slow
    down. The fit therefore drives the model with the force low-passed at
-   twice its band (:func:`~piezobearing.effects.base.denoised_force`; the
+   twice its band (:func:`~piezobearing.diagnosis.calibration.effects.base.denoised_force`; the
    force's content is untouched, the carried noise remains only in the
    band) and weights by the floor of that input, S_fit = s_v^2 +
    s_f^2 |G W|^2. The residual, NRMSE and tests reported use the recorded
@@ -53,11 +53,11 @@ from scipy.signal import correlate
 from scipy.stats import chi2 as chi2_dist
 from scipy.stats import norm
 
-from .effects import CATALOGUE, Effect, Record, StartContext
-from .effects.base import denoised_force, prefilter_response
-from .fitting import FitResult, fit, nrmse
-from .model import ForwardModel
-from .sensor.calibration import Impulse
+from ..sensor.calibration import Impulse
+from .calibration.effects import CATALOGUE, Effect, Record, StartContext
+from .calibration.effects.base import denoised_force, prefilter_response
+from .calibration.model import ForwardModel
+from .least_squares import FitResult, fit, nrmse
 
 Z99 = float(norm.isf(0.005))  # 2.576: the 99% two-sided band of a correlation, times 1/sqrt(n)
 

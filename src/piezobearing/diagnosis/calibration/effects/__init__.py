@@ -1,7 +1,7 @@
 """The effect catalogue: physical effects the RC baseline leaves out.
 
 Each effect is one module defining ``EFFECT``, an instance of a subclass of
-:class:`~piezobearing.effects.base.Effect`, registered below under a stable
+:class:`~piezobearing.diagnosis.calibration.effects.base.Effect`, registered below under a stable
 identifier. Adding an effect is adding one module and one entry in
 ``_MODULES`` (or calling :func:`register` at run time).
 
@@ -20,7 +20,8 @@ identifier             what it models
 
 from __future__ import annotations
 
-from .base import Effect, EffectError, EffectParam, Record, StartContext
+from ...params import Param
+from .base import Effect, EffectError, Record, StartContext
 
 CATALOGUE: dict[str, Effect] = {}
 
@@ -78,7 +79,7 @@ __all__ = [
     "CATALOGUE",
     "Effect",
     "EffectError",
-    "EffectParam",
+    "Param",
     "Record",
     "StartContext",
     "register",

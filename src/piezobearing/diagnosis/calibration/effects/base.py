@@ -1,6 +1,6 @@
 """What an effect is: a small, documented change to the forward model.
 
-The forward model (:mod:`piezobearing.model`) maps the recorded reference
+The forward model (:mod:`piezobearing.diagnosis.calibration.model`) maps the recorded reference
 force to the DAQ voltage along one signal chain::
 
     recorded force --force()--> force on the disk --circuit()--> RC voltage
@@ -22,45 +22,11 @@ import numpy as np
 from scipy import fft as sfft
 from scipy.signal import welch
 
-from ..fitting import Param
+from ...params import Param
 
 
 class EffectError(ValueError):
     """An unknown effect name or parameter in the configuration."""
-
-
-@dataclass(frozen=True)
-class EffectParam:
-    """A parameter of an effect.
-
-    Parameters
-    ----------
-    name : str
-        Identifier with a unit suffix (``delay_s``), unique across the catalogue.
-    default : float
-        Value that switches the effect off (or its neutral start) [unit of name].
-    lower, upper : float
-        Physical bounds [unit of name].
-    log : bool
-        Fit on a log10 scale (for quantities spanning decades; requires lower > 0).
-    scale : float
-        Typical magnitude [unit of name] (linear parameters).
-    description : str
-        One line: what it is, with its unit.
-    """
-
-    name: str
-    default: float
-    lower: float
-    upper: float
-    log: bool = False
-    scale: float = 1.0
-    description: str = ""
-
-    def to_param(self, value: float | None = None) -> Param:
-        v = self.default if value is None else float(value)
-        v = float(np.clip(v, self.lower, self.upper))
-        return Param(self.name, v, self.lower, self.upper, log=self.log, scale=self.scale)
 
 
 @dataclass(frozen=True, eq=False)
@@ -212,7 +178,7 @@ class Effect:
     additive_only: bool = False
 
     # ----------------------------------------------------------------- parameters
-    def params(self, record: Record) -> list[EffectParam]:
+    def params(self, record: Record) -> list[Param]:
         """The parameters for a record (a few effects depend on its sampling rate)."""
         return []
 

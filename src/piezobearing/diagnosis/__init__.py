@@ -1,0 +1,1 @@
+"""Model versus measurement: one engine and its subjects (see :mod:`piezobearing.diagnosis.subject`)."""
