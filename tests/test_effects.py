@@ -8,7 +8,7 @@ import pytest
 from piezobearing.diagnosis.calibration.effects import (
     CATALOGUE,
     EffectError,
-    Record,
+    ForceRecord,
     register,
     resolve,
     unregister,
@@ -43,10 +43,10 @@ ON = {
 
 
 @pytest.fixture(scope="module")
-def record(paper_config) -> Record:
+def record(paper_config) -> ForceRecord:
     p = PressProtocol.from_config(paper_config["synthesis"])
     t, f = press_force(p, np.random.default_rng(1))
-    return Record(t, f + np.random.default_rng(2).normal(0, p.force_noise_N, t.size))
+    return ForceRecord(t, f + np.random.default_rng(2).normal(0, p.force_noise_N, t.size))
 
 
 @pytest.fixture(scope="module")
@@ -188,7 +188,7 @@ def test_reference_lag_undoes_a_first_order_lag_within_the_force_band(record):
     dt, a = 1e-3, np.exp(-0.1)
     lagged = lfilter([1 - a], [1, -a], f)  # y_k = a y_k-1 + (1 - a) F_k: a lag of tau = a dt / (1 - a)
     tau = a * dt / (1 - a)  # 9.5 ms
-    rec = Record(t, lagged + np.random.default_rng(4).normal(0, 0.005, t.size))
+    rec = ForceRecord(t, lagged + np.random.default_rng(4).normal(0, 0.005, t.size))
     fs = rec.sample_rate_Hz
     from piezobearing.diagnosis.calibration.effects.base import fd_filter
 
@@ -210,7 +210,7 @@ def test_d33_nonlinearity_scales_the_charge_as_f_plus_beta_f2(record, circuit):
     m = ForwardModel.build(circuit, ["d33_nonlinearity"])
     t = np.arange(2000) * 1e-3
     f = 10.0 * 0.5 * (1 - np.cos(np.pi * np.clip(t, 0, 1)))
-    rec = Record(t, f)
+    rec = ForceRecord(t, f)
     v = m.simulate({"resistance_ohm": 1e16, "beta_per_N": 2e-3}, rec)  # tau = 2.6e6 s: open circuit
     g = circuit.open_circuit_gain_V_per_N
     np.testing.assert_allclose(v[-1], g * (10 + 2e-3 * 100), rtol=1e-4)
@@ -219,7 +219,7 @@ def test_d33_nonlinearity_scales_the_charge_as_f_plus_beta_f2(record, circuit):
 def test_additive_effects_closed_forms(record, circuit):
     m = ForwardModel.build(circuit, ["mains_pickup", "baseline_drift"])
     vals = {**m.defaults(record), **ON["mains_pickup"], "drift_p0_V": 0.003, "drift_p1_V": 0.02}
-    zero = Record(record.time_s, np.zeros(record.n))
+    zero = ForceRecord(record.time_s, np.zeros(record.n))
     v = m.simulate(vals, zero)
     t = record.time_s
     x = 2 * t / t[-1] - 1
@@ -228,7 +228,7 @@ def test_additive_effects_closed_forms(record, circuit):
 
 
 def test_mains_harmonics_above_nyquist_are_left_out():
-    slow = Record(np.arange(1000) / 500.0, np.zeros(1000))
+    slow = ForceRecord(np.arange(1000) / 500.0, np.zeros(1000))
     names = [p.name for p in CATALOGUE["mains_pickup"].params(slow)]
     assert "mains_h3_cos_V" in names and "mains_h5_cos_V" not in names
 
@@ -243,7 +243,7 @@ def test_synthesis_puts_the_forward_model_into_the_voltage(paper_config, circuit
     ]
     noiseless = PressProtocol(**{**p.__dict__, "force_noise_N": 0.0, "voltage_noise_V": 0.0})
     m = synthesize(noiseless, circuit, 5, specs)
-    rec = Record(m.time_s, m.force_N)
+    rec = ForceRecord(m.time_s, m.force_N)
     model, vals = model_from_specs(circuit, specs, rec)
     np.testing.assert_allclose(m.voltage_V, model.simulate(vals, rec), atol=1e-12)
     plain = synthesize(noiseless, circuit, 5)

@@ -1,5 +1,7 @@
-"""The package's import graph, read with ``ast`` (no module is imported): no cycles, and the
-diagnosis engine imports no subject.
+"""The package's structure, read with ``ast`` (no module is imported): no import cycle in ``src``,
+the diagnosis engine imports no subject (nor any physics, stage or plotting module), and the
+diagnosis package keeps its modules under ~600 lines and its functions under ~80 (or says why
+with a ``# long:`` comment in the function).
 
 Every ``import`` counts, also those inside functions: a lazy import only hides a cycle
 (``effects/ac_coupling.py`` and ``model.py`` once imported each other that way).
@@ -92,3 +94,52 @@ def test_the_cycle_finder_finds_a_lazy_import_cycle():
 def test_no_import_cycle_in_src():
     cycle = find_cycle(import_graph())
     assert cycle is None, "import cycle: " + " -> ".join(cycle)
+
+
+DIAGNOSIS = f"{PACKAGE}.diagnosis"
+
+
+def _subject_packages(modules: dict[str, Path]) -> set[str]:
+    """Subpackages of diagnosis/ that are subjects (they hold a ``subject`` module)."""
+    return {
+        m.rsplit(".", 1)[0] for m in modules if m.startswith(DIAGNOSIS + ".") and m.endswith(".subject")
+    } - {DIAGNOSIS}
+
+
+def test_the_engine_imports_no_subject_and_no_physics():
+    modules = _modules()
+    subjects = _subject_packages(modules)
+    assert f"{DIAGNOSIS}.calibration" in subjects
+    g = import_graph()
+
+    def in_subject(m: str) -> bool:
+        return any(m == s or m.startswith(s + ".") for s in subjects)
+
+    engine = [m for m in g if (m == DIAGNOSIS or m.startswith(DIAGNOSIS + ".")) and not in_subject(m)]
+    assert f"{DIAGNOSIS}.engine" in engine and f"{DIAGNOSIS}.report.sections" in engine
+    for m in engine:
+        bad = sorted(t for t in g[m] if in_subject(t) or not t.startswith(DIAGNOSIS))
+        assert not bad, (
+            f"engine module {m} imports {bad}: the engine must not know its subjects or the physics"
+        )
+
+
+def _functions(tree: ast.AST):
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            yield node
+
+
+def test_diagnosis_modules_and_functions_stay_short():
+    for name, path in _modules().items():
+        if not name.startswith(DIAGNOSIS):
+            continue
+        text = path.read_text()
+        lines = text.splitlines()
+        assert len(lines) <= 600 or "long module:" in text, (
+            f"{path}: {len(lines)} lines (split it, or say why)"
+        )
+        for fn in _functions(ast.parse(text)):
+            body = lines[fn.lineno - 1 : fn.end_lineno]
+            if len(body) > 80:
+                assert any("# long:" in b for b in body), f"{path}:{fn.lineno} {fn.name}: {len(body)} lines"

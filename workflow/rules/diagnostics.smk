@@ -4,7 +4,7 @@
 import sys
 
 from piezobearing.diagnosis.calibration.effects import EffectError
-from piezobearing.diagnosis.report import FIGURES as DIAGNOSIS_FIGURES
+from piezobearing.diagnosis.calibration.report import FIGURES as DIAGNOSIS_FIGURES
 from piezobearing.stages.diagnostics import check_effect_names
 
 try:  # an unknown effect in model.effects or synthesis.hidden_effects stops before any job

@@ -27,7 +27,7 @@ import numpy as np
 
 from ....sensor.calibration import rc_response, rc_voltage
 from ...params import Param
-from .base import Effect, Record, StartContext
+from .base import Effect, ForceRecord, StartContext
 
 
 def _tau(values) -> float:
@@ -44,7 +44,7 @@ class ACCoupling(Effect):
         "each is followed by a slow undershoot that R alone cannot produce."
     )
 
-    def params(self, record: Record) -> list[Param]:
+    def params(self, record: ForceRecord) -> list[Param]:
         return [
             Param(
                 "corner_Hz",

@@ -28,12 +28,12 @@ import numpy as np
 from numpy.polynomial import legendre
 
 from ...params import Param
-from .base import Effect, Record, StartContext
+from .base import Effect, ForceRecord, StartContext
 
 DEGREE = 3
 
 
-def basis(record: Record) -> np.ndarray:
+def basis(record: ForceRecord) -> np.ndarray:
     """Legendre polynomials P_0..P_3 over the record [-]."""
     t = record.time_s
     x = 2 * (t - t[0]) / (t[-1] - t[0]) - 1
@@ -51,7 +51,7 @@ class BaselineDrift(Effect):
         "curve (Legendre polynomials to degree 3 over the record) to the voltage."
     )
 
-    def params(self, record: Record) -> list[Param]:
+    def params(self, record: ForceRecord) -> list[Param]:
         return [
             Param(
                 f"drift_p{k}_V",

@@ -31,7 +31,7 @@ import numpy as np
 from scipy.signal import correlate
 
 from ...params import Param
-from .base import Effect, Record, StartContext, fd_filter
+from .base import Effect, ForceRecord, StartContext, fd_filter
 
 MAX_DELAY_S = 0.1
 
@@ -65,7 +65,7 @@ class ChannelDelay(Effect):
         "unsynchronised triggers give a few to a few tens of milliseconds."
     )
 
-    def params(self, record: Record) -> list[Param]:
+    def params(self, record: ForceRecord) -> list[Param]:
         return [
             Param(
                 "delay_s",

@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...params import Param
-from .base import Effect, Record
+from .base import Effect, ForceRecord
 
 
 class D33Nonlinearity(Effect):
@@ -41,7 +41,7 @@ class D33Nonlinearity(Effect):
         "give relatively more voltage, which no R can reproduce."
     )
 
-    def params(self, record: Record) -> list[Param]:
+    def params(self, record: ForceRecord) -> list[Param]:
         return [
             Param(
                 "beta_per_N",

@@ -25,7 +25,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from ...params import Param
-from .base import Effect, Record
+from .base import Effect, ForceRecord
 
 
 class ExtraCapacitance(Effect):
@@ -38,7 +38,7 @@ class ExtraCapacitance(Effect):
         "the gain, so every impulse comes out too large by the same factor."
     )
 
-    def params(self, record: Record) -> list[Param]:
+    def params(self, record: ForceRecord) -> list[Param]:
         return [
             Param(
                 "extra_capacitance_F",

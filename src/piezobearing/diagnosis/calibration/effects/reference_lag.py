@@ -36,7 +36,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...params import Param
-from .base import Effect, Record, StartContext, fd_filter, force_band_Hz
+from .base import Effect, ForceRecord, StartContext, fd_filter, force_band_Hz
 
 ORDER = 8
 
@@ -58,7 +58,7 @@ class ReferenceLag(Effect):
         "at second order in w tau_r (it also rounds the force)."
     )
 
-    def params(self, record: Record) -> list[Param]:
+    def params(self, record: ForceRecord) -> list[Param]:
         return [
             Param(
                 "lag_tau_s",
