@@ -265,3 +265,36 @@ def test_defects_from_config_and_schema(paper_config):
     with pytest.raises(cfg.ConfigError) as e:
         cfg.validate(c, source="my.yaml")
     assert "bearing.defects" in str(e.value) and "\n" not in str(e.value)
+
+
+def test_bearing_lpm_stage_with_slip_tachometer_and_two_defects(ci_config, tmp_path):
+    """The stage's outputs for a rig-like case: kinematic lines without and with slip, the tachometer,
+    one entry per defect with its drop and impact rate."""
+    import json
+
+    from piezobearing.stages import bearing as st
+
+    c = copy.deepcopy(ci_config)
+    b = c["bearing"]
+    b.update(duration_s=0.2, settle_s=0.01, cage_slip=0.015, slip_jitter=0.003, tachometer_pulses_per_rev=1)
+    b["defects"] = [
+        {"type": "outer_race", "width_m": 0.9e-3, "depth_m": 1.0e-3, "angle_deg": 0.0},
+        {"type": "rolling_element", "width_m": 0.6e-3, "depth_m": 1.0e-3, "angle_deg": 30.0},
+    ]
+    c = cfg.validate(c)
+    npz = {k: tmp_path / f"contact_{k}.npz" for k in st.CASES}
+    st.bearing_lpm(tmp_path / "kin.json", npz, {k: tmp_path / f"cf_{k}.csv" for k in st.CASES}, tmp_path / "l.json", c)
+    kin = json.loads((tmp_path / "kin.json").read_text())
+    assert kin["bpfo_Hz"] == pytest.approx(70.833, rel=1e-4)  # the kinematic line, as signals.fault_bands expects
+    assert kin["with_slip"]["bpfo_Hz"] == pytest.approx(0.985 * kin["bpfo_Hz"], rel=1e-12)
+    assert kin["cage_slip"] == 0.015 and kin["defect_types"] == ["outer_race", "rolling_element"]
+    tach = np.load(npz["faulty"])["tachometer_time_s"]
+    np.testing.assert_allclose(np.diff(tach), 60 / 1000, rtol=1e-12)
+    lpm = json.loads((tmp_path / "l.json").read_text())
+    d0, d1 = lpm["faulty"]["defects"]
+    assert d0["max_drop_m"] == pytest.approx(16.5e-6, rel=2e-3) and d0["max_drop_flat_raceway_m"] > d0["max_drop_m"]
+    assert d1["impact_rate_Hz"] == pytest.approx(2 * kin["with_slip"]["bsf_Hz"], rel=1e-12)
+    assert lpm["faulty"]["impact_frequency_Hz"] == pytest.approx(kin["with_slip"]["bpfo_Hz"], rel=0.02)
+    # the same seed gives both cases the same cage: the healthy and faulty roller angles agree
+    h, f = np.load(npz["healthy"]), np.load(npz["faulty"])
+    np.testing.assert_array_equal(h["angle_rad"], f["angle_rad"])
