@@ -626,7 +626,7 @@ def read_bearing_record(
         warnings.append(
             f"{path}: {place(a)}, column voltage_V: clipped at {v[a]:g} V for {b - a} samples "
             f"({clipped.sum()} samples in {len(runs)} runs, {100 * clipped.mean():.2g}% of the record); "
-            "the diagnosis leaves them out of the residual; lower the DAQ gain or widen its range"
+            "the model cannot follow them there (expect residual at those samples); lower the DAQ gain or widen its range"
         )
     return BearingRecord(t, v, speed, str(path), tuple(warnings), clipped)
 
