@@ -1,7 +1,8 @@
 """The calibration record: reader and validator, and the record the forward model runs on.
 
-A calibration record is a CSV of time, the reference force under the press
-and the PZT voltage (:func:`piezobearing.io.read_measurement`). Beyond the
+A calibration record holds time, the reference force under the press and
+the PZT voltage, in any format :func:`piezobearing.io.read_measurement`
+reads (``calibration.channels`` and ``wav_full_scale_V`` name the channels). Beyond the
 file checks, :func:`read_record` needs at least two impulses and a voltage
 that swings positive under compression (an inverted polarity is reported,
 never fitted). The forward model runs on a :class:`ForceRecord`: the engine's
@@ -47,7 +48,12 @@ def read_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]
     the initial R of the polarity check) and ``sensor`` (the nominal circuit).
     """
     c = config["calibration"]
-    m = read_measurement(path, resample_to_uniform=c["resample_to_uniform"])
+    m = read_measurement(
+        path,
+        resample_to_uniform=c["resample_to_uniform"],
+        channels=c.get("channels"),
+        wav_full_scale_V=c.get("wav_full_scale_V"),
+    )
     imps = cal.detect_impulses(
         m.force_N, m.voltage_V, m.dt_s, c["min_prominence_fraction"], c["min_separation_s"]
     )
