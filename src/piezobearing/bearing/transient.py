@@ -35,15 +35,16 @@ def time_grid(bearing: dict) -> np.ndarray:
     return dt * np.arange(int(round(bearing["duration_s"] / dt)))
 
 
-def run_lpm(bearing: dict, faulty: bool) -> dict:
-    """The LPM on its fine grid and resampled at the FEM step (dict of arrays; ``params``: the LPMParameters)."""
+def run_lpm(bearing: dict, faulty: bool, method: str = "compiled") -> dict:
+    """The LPM on its fine grid and resampled at the FEM step (dict of arrays; ``params``: the LPMParameters);
+    ``method`` as in :func:`~piezobearing.bearing.lpm.simulate_lpm`."""
     p = brg.LPMParameters.from_config(bearing, faulty)
     dt = bearing["time_step_s"]
     h = dt / bearing["substeps"]
     t_out = time_grid(bearing)
     t_start = -bearing["settle_s"] - dt
     n_steps = int(np.ceil((t_out[-1] + dt - t_start) / h))
-    res = brg.simulate_lpm(p, t_start, n_steps, h)
+    res = brg.simulate_lpm(p, t_start, n_steps, h, method=method)
     keep = res.time_s >= -dt / 2 - 1e-12
     q_out = brg.resample_loads(res.time_s, res.load_N, t_out, dt, bearing["resample"])
     return {

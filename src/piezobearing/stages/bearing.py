@@ -46,13 +46,15 @@ PAPER = {
 log = logging.getLogger("piezobearing.bearing.lpm")
 
 
-def bearing_lpm(out_kinematics: str, out_npz: dict, out_csv: dict, out_json: str, config: dict) -> None:
+def bearing_lpm(
+    out_kinematics: str, out_npz: dict, out_csv: dict, out_json: str, config: dict, method: str = "compiled"
+) -> None:
     """Stage bearing_lpm: kinematic frequencies and both cases' roller contact loads.
 
     Writes ``kinematics.json`` (shaft_Hz, ftf_Hz, bpfo_Hz, bpfi_Hz, bsf_Hz),
     per case an NPZ with the fine integration grid and the FEM-step series
     and a CSV at the FEM step (time_s, load_N_jj, angle_rad_jj), and a JSON
-    of the checks.
+    of the checks. ``method``: the LPM's step loop (simulate_lpm), for the benchmark.
     """
     log_progress()
     b = config["bearing"]
@@ -66,7 +68,7 @@ def bearing_lpm(out_kinematics: str, out_npz: dict, out_csv: dict, out_json: str
     }
     for case in CASES:
         t0 = time.perf_counter()
-        run = run_lpm(b, is_faulty(case))
+        run = run_lpm(b, is_faulty(case), method)
         log.info("LPM %s: %d steps in %.1f s", case, len(run["fine_time_s"]), time.perf_counter() - t0)
         write_npz(out_npz[case], **{k: v for k, v in run.items() if k != "params"})
         df = pd.DataFrame({"time_s": run["time_s"]})
