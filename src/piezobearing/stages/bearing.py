@@ -30,18 +30,9 @@ from ..io import (
     write_json,
     write_npz,
 )
-from ..scorecard import Row, write_part
+from ..scorecard import write_part
+from ..scorecard.bearing import rows as scorecard_rows
 from . import log_progress
-
-PAPER = {
-    "bpfo_Hz": 70.8,
-    "n_rollers": 11,
-    "radial_load_N": 500.0,
-    "shaft_speed_rpm": 1000.0,
-    "time_step_s": 0.392156e-3,
-    "defect_width_m": 0.9e-3,
-    "defect_depth_m": 1.0e-3,
-}
 
 log = logging.getLogger("piezobearing.bearing.lpm")
 
@@ -160,133 +151,9 @@ def scorecard(
     out_csv: str,
     config: dict,
 ) -> None:
-    """Rows of results/scorecard/bearing.csv."""
-    b = config["bearing"]
+    """Rows of results/scorecard/bearing.csv (:mod:`piezobearing.scorecard.bearing`)."""
     kin, lpm, conv, samp = (
         read_json(p) for p in (kinematics_json, lpm_json, convergence_json, sampling_json)
     )
     tr = {k: read_json(v) for k, v in transient_jsons.items()}
-    chk = tr["healthy"]["direct_check"] or {}
-    rows = [
-        Row(
-            "IV",
-            "BPFO at 1000 rpm",
-            PAPER["bpfo_Hz"],
-            kin["bpfo_Hz"],
-            "Hz",
-            "D_r/D_p = 10/44 (derived from the paper's BPFO; README); FTF x Z",
-        ),
-        Row("IV", "rollers", PAPER["n_rollers"], float(b["n_rollers"]), "-", "config bearing.n_rollers"),
-        Row(
-            "IV",
-            "radial load",
-            PAPER["radial_load_N"],
-            b["radial_load_N"],
-            "N",
-            f"mean vertical roller load over the healthy record {lpm['healthy']['mean_vertical_load_N']:.2f} N",
-        ),
-        Row("IV", "shaft speed", PAPER["shaft_speed_rpm"], b["shaft_speed_rpm"], "rpm", ""),
-        Row(
-            "III-A",
-            "FEM time step",
-            PAPER["time_step_s"],
-            b["time_step_s"],
-            "s",
-            f"= 1/(36 BPFO) = {1 / (36 * kin['bpfo_Hz']):.7g} s: every sample at the same phase of the roller passage",
-        ),
-        Row(
-            "III-A",
-            "defect width",
-            PAPER["defect_width_m"],
-            b["defect_width_m"],
-            "m",
-            f"a roller sinks at most {lpm['faulty']['defect_max_drop_m'] * 1e6:.1f} um, not the 1 mm depth",
-        ),
-        Row(
-            "III-A", "defect depth (removed material)", PAPER["defect_depth_m"], b["defect_depth_m"], "m", ""
-        ),
-        Row(
-            "IV",
-            "defect impact frequency (LPM)",
-            PAPER["bpfo_Hz"],
-            lpm["faulty"]["impact_frequency_Hz"],
-            "Hz",
-            f"{lpm['faulty']['n_impacts']} impacts; paper's BPFO for comparison",
-        ),
-        Row(
-            "III-A",
-            "Harris discrete load distribution vs LPM (max rel. diff.)",
-            None,
-            max(
-                lpm["healthy"]["harris_roller_at_bottom"]["max_rel_diff"],
-                lpm["healthy"]["harris_rollers_straddling"]["max_rel_diff"],
-            ),
-            "-",
-            f"radial clearance {b['radial_clearance_m'] * 1e6:.0f} um",
-        ),
-        Row(
-            "III-A",
-            "housing model: first natural frequency",
-            None,
-            tr["healthy"]["first_natural_frequency_Hz"],
-            "Hz",
-            f"above the {0.5 / b['time_step_s']:.0f} Hz Nyquist frequency of the paper's step",
-        ),
-        Row(
-            "IV",
-            "sensor force, healthy: mean",
-            None,
-            tr["healthy"]["sensor_force_mean_N"],
-            "N",
-            "the paper shows voltage only (Fig. 9)",
-        ),
-        Row(
-            "IV",
-            "sensor force, healthy: peak-to-peak",
-            None,
-            tr["healthy"]["sensor_force_max_N"] - tr["healthy"]["sensor_force_min_N"],
-            "N",
-            "",
-        ),
-        Row(
-            "IV",
-            "sensor force, faulty: peak-to-peak",
-            None,
-            tr["faulty"]["sensor_force_max_N"] - tr["faulty"]["sensor_force_min_N"],
-            "N",
-            "",
-        ),
-        Row(
-            "III-A",
-            "reduced vs direct FEM, healthy (RMS rel. diff.)",
-            None,
-            chk.get("rms_rel_diff", float("nan")),
-            "-",
-            f"over {chk.get('duration_s', float('nan')):.3g} s; sfepy generalized-alpha reference",
-        ),
-        Row(
-            "III-A",
-            "mesh convergence: peak-to-peak change to finest level",
-            None,
-            float(conv["levels"][1]["peak_to_peak_N"] / conv["levels"][2]["peak_to_peak_N"] - 1),
-            "-",
-            f"levels {[r['level'] for r in conv['levels']]}, {[r['n_dofs'] for r in conv['levels']]} DOFs",
-        ),
-        Row(
-            "III-A",
-            "sampling phase: spread of the faulty BPFO amplitude, point sampling",
-            None,
-            samp["sample"]["bpfo_amplitude_spread"],
-            "-",
-            "max/min - 1 over the 36 phases of a step",
-        ),
-        Row(
-            "III-A",
-            "sampling phase: spread of the faulty BPFO amplitude, step averaging",
-            None,
-            samp["average"]["bpfo_amplitude_spread"],
-            "-",
-            "what the workflow uses (bearing.resample)",
-        ),
-    ]
-    write_part(rows, out_csv)
+    write_part(scorecard_rows(kin, lpm, tr, conv, samp, config["bearing"]), out_csv)
