@@ -38,8 +38,7 @@ rule sensor_voltage:
         mem_mb=500,
         runtime=2,
     params:
-        sensor=config["sensor"],
-        signals=config["signals"],
+        **stage_params("sensor_voltage", "workflow/scripts/sensor_voltage.py"),
     script:
         "../scripts/sensor_voltage.py"
 
@@ -63,8 +62,7 @@ rule noisy:
         mem_mb=500,
         runtime=2,
     params:
-        seed=config["seed"],
-        snr_dB=config["signals"]["snr_dB"],
+        **stage_params("noisy", "workflow/scripts/noisy.py"),
     script:
         "../scripts/noisy.py"
 
@@ -90,7 +88,7 @@ rule envelope:
         mem_mb=500,
         runtime=2,
     params:
-        signals=config["signals"],
+        **stage_params("envelope", "workflow/scripts/envelope.py"),
     script:
         "../scripts/envelope.py"
 
@@ -117,7 +115,7 @@ rule fault_indicator:
         mem_mb=500,
         runtime=2,
     params:
-        signals=config["signals"],
+        **stage_params("fault_indicator", "workflow/scripts/fault_indicator.py"),
     script:
         "../scripts/fault_indicator.py"
 
@@ -142,8 +140,7 @@ rule snr_study:
         mem_mb=500,
         runtime=4,
     params:
-        seed=config["seed"],
-        signals=config["signals"],
+        **stage_params("snr_study", "workflow/scripts/snr_study.py"),
     script:
         "../scripts/snr_study.py"
 
@@ -168,6 +165,8 @@ rule snr_study_figure:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("snr_study_figure", "workflow/scripts/snr_study_figure.py"),
     script:
         "../scripts/snr_study_figure.py"
 
@@ -189,6 +188,8 @@ rule defect_events:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("defect_events", "workflow/scripts/defect_events.py"),
     script:
         "../scripts/defect_events.py"
 
@@ -217,6 +218,8 @@ rule fig09:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("fig09", "notebooks/fig09_voltage.ipynb"),
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p healthy {input.healthy}"
         " -p faulty {input.faulty} -p events {input.events} -p kinematics {input.kinematics}"
@@ -247,6 +250,8 @@ rule fig10:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("fig10", "notebooks/fig10_envelope.ipynb"),
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p healthy {input.healthy}"
         " -p faulty {input.faulty} -p indicator {input.indicator} -p kinematics {input.kinematics}"
@@ -270,5 +275,7 @@ rule scorecard_signals:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("scorecard_signals", "workflow/scripts/scorecard_signals.py"),
     script:
         "../scripts/scorecard_signals.py"

@@ -42,6 +42,35 @@ class SensorFemError(ValueError):
 # --------------------------------------------------------------------------- parameters
 
 
+def mesh_inputs(config: dict) -> tuple[StackGeometry, MeshDensity, tuple]:
+    """The stack's geometry, the mesh density and the refinement multipliers from the config (the sensor mesh
+    reads these only: the PZT's material constants and the cable do not change the mesh)."""
+    s, f = config["sensor"], config["sensor_fem"]
+    mult = tuple(float(m) for m in f["refinement_multipliers"])
+    if list(mult) != sorted(set(mult)):
+        raise SensorFemError("config key sensor_fem.refinement_multipliers: must increase strictly")
+    if not 1 <= f["mesh_level"] <= len(mult):
+        raise SensorFemError(
+            f"config key sensor_fem.mesh_level = {f['mesh_level']}: must be 1..{len(mult)} "
+            "(an index into sensor_fem.refinement_multipliers)"
+        )
+    geo = StackGeometry(
+        bottom_disk_diameter_m=f["bottom_disk_diameter_m"],
+        bottom_disk_height_m=f["bottom_disk_height_m"],
+        pzt_diameter_m=s["pzt_diameter_m"],
+        pzt_height_m=s["pzt_height_m"],
+        top_disk_diameter_m=f["top_disk_diameter_m"],
+        top_disk_height_m=f["top_disk_height_m"],
+    )
+    dens = MeshDensity(
+        n_core=f["mesh_n_core"],
+        n_rings=tuple(f["mesh_n_rings"]),
+        n_layers=tuple(f["mesh_n_layers"]),
+        grading=f["mesh_grading_ratio"],
+    )
+    return geo, dens, mult
+
+
 @dataclass(frozen=True)
 class SensorFemParams:
     """Everything the sensor FEM stages take from the validated config."""
@@ -71,14 +100,7 @@ class SensorFemParams:
     @classmethod
     def from_config(cls, config: dict) -> "SensorFemParams":
         s, f = config["sensor"], config["sensor_fem"]
-        mult = tuple(float(m) for m in f["refinement_multipliers"])
-        if list(mult) != sorted(set(mult)):
-            raise SensorFemError("config key sensor_fem.refinement_multipliers: must increase strictly")
-        if not 1 <= f["mesh_level"] <= len(mult):
-            raise SensorFemError(
-                f"config key sensor_fem.mesh_level = {f['mesh_level']}: must be 1..{len(mult)} "
-                "(an index into sensor_fem.refinement_multipliers)"
-            )
+        geo, dens, mult = mesh_inputs(config)
         if f["sweep_min_frequency_Hz"] >= f["reference_frequency_Hz"] or (
             f["reference_frequency_Hz"] >= f["sweep_max_frequency_Hz"]
         ):
@@ -86,23 +108,9 @@ class SensorFemParams:
                 "config keys sensor_fem.sweep_min_frequency_Hz < reference_frequency_Hz < sweep_max_frequency_Hz "
                 "must hold"
             )
-        geo = StackGeometry(
-            bottom_disk_diameter_m=f["bottom_disk_diameter_m"],
-            bottom_disk_height_m=f["bottom_disk_height_m"],
-            pzt_diameter_m=s["pzt_diameter_m"],
-            pzt_height_m=s["pzt_height_m"],
-            top_disk_diameter_m=f["top_disk_diameter_m"],
-            top_disk_height_m=f["top_disk_height_m"],
-        )
         pzt = pzt_from_config(s)
         alu = alumina_from_config(f)
         mats = fem.StackMaterials(stress_charge_form(pzt), s["pzt_density_kg_per_m3"], alu)
-        dens = MeshDensity(
-            n_core=f["mesh_n_core"],
-            n_rings=tuple(f["mesh_n_rings"]),
-            n_layers=tuple(f["mesh_n_layers"]),
-            grading=f["mesh_grading_ratio"],
-        )
         q = f["mechanical_quality_factor"]
         return cls(
             geometry=geo,

@@ -22,7 +22,6 @@ from ..bearing.housing_mesh import build_housing_mesh, mesh_quality
 from ..bearing.transient import CASES, housing_geometry, is_faulty, run_lpm, transient, transient_summary
 from ..io import (
     read_housing_mesh,
-    read_json,
     read_npz,
     write_csv,
     write_housing_mesh,
@@ -30,8 +29,6 @@ from ..io import (
     write_json,
     write_npz,
 )
-from ..scorecard import write_part
-from ..scorecard.bearing import rows as scorecard_rows
 from . import log_progress
 
 log = logging.getLogger("piezobearing.bearing.lpm")
@@ -135,25 +132,3 @@ def sampling_phase(contact_npz: str, influence_csv: str, out_json: str, config: 
         config["bearing"],
     )
     write_json(out, out_json)
-
-
-# ---------------------------------------------------------------------------
-# Scorecard
-# ---------------------------------------------------------------------------
-
-
-def scorecard(
-    kinematics_json: str,
-    lpm_json: str,
-    transient_jsons: dict,
-    convergence_json: str,
-    sampling_json: str,
-    out_csv: str,
-    config: dict,
-) -> None:
-    """Rows of results/scorecard/bearing.csv (:mod:`piezobearing.scorecard.bearing`)."""
-    kin, lpm, conv, samp = (
-        read_json(p) for p in (kinematics_json, lpm_json, convergence_json, sampling_json)
-    )
-    tr = {k: read_json(v) for k, v in transient_jsons.items()}
-    write_part(scorecard_rows(kin, lpm, tr, conv, samp, config["bearing"]), out_csv)

@@ -7,8 +7,6 @@ import pandas as pd
 
 from ..fitting import nrmse
 from ..io import Measurement, MeasurementError, read_json, read_measurement, write_json, write_measurement
-from ..scorecard import write_part
-from ..scorecard.calibration import rows as scorecard_rows
 from ..sensor import calibration as cal
 from ..sensor.lowfreq import asymptote_onset_Hz, lowfreq_sensitivity
 from ..synthesis import PressProtocol, synthesize
@@ -131,12 +129,3 @@ def lowfreq(resistance_json: str, out_json: str, out_csv: str, config: dict) -> 
             "deviation_asymptote": lf.deviation_asymptote,
         }
     ).to_csv(out_csv, index=False, float_format="%.9g")
-
-
-def scorecard(
-    sensitivity_json: str, resistance_json: str, lowfreq_json: str, out_csv: str, config: dict
-) -> None:
-    """The calibration rows of the scorecard (:mod:`piezobearing.scorecard.calibration`)."""
-    sens, res, lf = read_json(sensitivity_json), read_json(resistance_json), read_json(lowfreq_json)
-    c = nominal_circuit(config, res["resistance_ohm"])
-    write_part(scorecard_rows(sens, res, lf, c, config), out_csv)

@@ -10,18 +10,16 @@ from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from .. import io
 from ..io import read_stack_mesh, write_csv, write_json, write_npz, write_stack_mesh
-from ..scorecard import write_part
-from ..scorecard.sensor_fem import rows as scorecard_rows
 from ..sensor.analysis import (
     SensorFemError,
     SensorFemParams,
     convergence_table,
     first_axial_mode_fields,
     harmonic_results,
+    mesh_inputs,
     modal_results,
     placement_check,
 )
@@ -46,12 +44,12 @@ def read_mesh(path: str | Path, params: SensorFemParams, level: float) -> StackM
 
 def sensor_mesh(out_meshes: list[str], out_json: str, config: dict) -> None:
     """Write the quarter mesh at every refinement multiplier, and a summary with their sizes."""
-    p = SensorFemParams.from_config(config)
-    if len(out_meshes) != len(p.multipliers):
+    geo, dens, multipliers = mesh_inputs(config)
+    if len(out_meshes) != len(multipliers):
         raise SensorFemError("one mesh output per sensor_fem.refinement_multipliers entry is expected")
     levels = []
-    for k, (mult, path) in enumerate(zip(p.multipliers, out_meshes, strict=True), start=1):
-        mesh = stack_mesh(p.geometry, p.density, mult)
+    for k, (mult, path) in enumerate(zip(multipliers, out_meshes, strict=True), start=1):
+        mesh = stack_mesh(geo, dens, mult)
         write_stack_mesh(mesh, path)
         levels.append(
             {
@@ -64,8 +62,8 @@ def sensor_mesh(out_meshes: list[str], out_json: str, config: dict) -> None:
         )
     write_json(
         {
-            "geometry": asdict(p.geometry),
-            "z_interfaces_m": p.geometry.z_interfaces_m.tolist(),
+            "geometry": asdict(geo),
+            "z_interfaces_m": geo.z_interfaces_m.tolist(),
             "sector": "quarter (x >= 0, y >= 0), mirror planes x = 0 and y = 0",
             "levels": levels,
             "config": _config_record(config),
@@ -126,11 +124,3 @@ def sensor_harmonic(
     band["config"] = _config_record(config)
     write_csv(df, out_csv, None)
     write_json(band, out_json)
-
-
-def scorecard_sensor_fem(modal_json: str, band_json: str, convergence_csv: str, out_csv: str) -> None:
-    """Write results/scorecard/sensor_fem.csv."""
-    modal = read_json(modal_json, ["first_resonance_short_Hz", "modes", "placement_check"])
-    band = read_json(band_json, ["band_high_Hz", "band_low_Hz"])
-    conv = pd.read_csv(convergence_csv)
-    write_part(scorecard_rows(modal, band, conv), out_csv)

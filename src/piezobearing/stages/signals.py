@@ -24,8 +24,6 @@ from ..io import (
     write_csv,
     write_json,
 )
-from ..scorecard import write_part
-from ..scorecard.signals import rows as scorecard_rows
 from ..sensor.calibration import SensorCircuit, circuit_voltage, frequency_response
 from ..signals import detection as sig
 from ..signals.analysis import (
@@ -239,8 +237,3 @@ def defect_events(healthy_csv: str, faulty_csv: str, kinematics_json: str, out_c
     times = sig.defect_event_times(vf, vh, dt, f0, th[0])
     idx = np.round((times - th[0]) / dt).astype(int)
     write_csv(pd.DataFrame({"time_s": times, "voltage_V": vf[idx], "difference_V": vf[idx] - vh[idx]}), out_csv)
-
-
-def scorecard(indicator_json: str, study_json: str, kinematics_json: str, out_csv: str) -> None:
-    """The Sec. IV rows of the scorecard → results/scorecard/signals.csv (:mod:`piezobearing.scorecard.signals`)."""
-    write_part(scorecard_rows(read_json(indicator_json), read_json(study_json), kinematics(kinematics_json)), out_csv)
