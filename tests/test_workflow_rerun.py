@@ -78,10 +78,8 @@ def _jobs(out: str) -> set[str]:
     return {m.group(1) for m in re.finditer(r"^(\w+)\s+\d+\s*$", table, re.M)} - {"all", "job"}
 
 
-@pytest.fixture(scope="module")
-def scratch(tmp_path_factory):
-    """A built scratch copy of the workflow (stand-in stages), its environment and its rule graph."""
-    d = tmp_path_factory.mktemp("rerun")
+def build_scratch(d: Path) -> tuple[Path, dict, dict[str, set[str]]]:
+    """Build a scratch copy of the workflow in ``d`` (stand-in stages); its environment and its rule graph."""
     for name in ("Snakefile", "workflow", "config", "notebooks", "src"):
         src = ROOT / name
         (shutil.copytree if src.is_dir() else shutil.copy)(src, d / name)
@@ -104,6 +102,12 @@ def scratch(tmp_path_factory):
     return d, env, children
 
 
+@pytest.fixture(scope="module")
+def scratch(tmp_path_factory):
+    """A built scratch copy of the workflow (stand-in stages), its environment and its rule graph."""
+    return build_scratch(tmp_path_factory.mktemp("rerun"))
+
+
 def _downstream(rules: set[str], children: dict[str, set[str]]) -> set[str]:
     out, todo = set(rules), list(rules)
     while todo:
@@ -112,6 +116,12 @@ def _downstream(rules: set[str], children: dict[str, set[str]]) -> set[str]:
                 out.add(c)
                 todo.append(c)
     return out - {"all"}
+
+
+def _value(config: dict, path: str):
+    for k in path.split("."):
+        config = config[k]
+    return config
 
 
 def _leaves(config: dict, path: str) -> list[str]:
@@ -123,29 +133,38 @@ def _leaves(config: dict, path: str) -> list[str]:
     return [path]
 
 
-def _changed(value, key: str):
-    """Another valid value of a config key (schema bounds and cross-field checks kept)."""
+def _changed(value, key: str, up: bool = False):
+    """Another value of a config key: numbers 1% down (or up), integers by one, flags flipped, choices swapped."""
     if isinstance(value, bool):
         return not value
     if isinstance(value, int):
-        return value - 1 if value > 1 else value + 1
+        return value + 1 if up or value <= 1 else value - 1
     if isinstance(value, float):
-        return value * 1.01
+        return value * (1.01 if up else 0.99) if value else 1e-3
     if isinstance(value, list):
-        return [_changed(v, key) for v in value]
+        return [_changed(v, key, up) for v in value]
     if isinstance(value, str):
         return OTHER[key.rsplit(".", 1)[-1]]
     raise AssertionError(f"no change rule for {key} = {value!r}")
 
 
 def _override(config: dict, keys: list[str]) -> dict:
+    """The changed values of ``keys`` as a config override; each change is one the schema accepts."""
     out: dict = {}
     for path in keys:
         node, src = out, config
         *parents, last = path.split(".")
         for k in parents:
             node, src = node.setdefault(k, {}), src[k]
-        node[last] = _changed(src[last], path)
+        for up in (False, True):
+            node[last] = _changed(src[last], path, up)
+            try:
+                cfg.validate(cfg.deep_merge(config, out))
+                break
+            except cfg.ConfigError:
+                continue
+        else:
+            raise AssertionError(f"no valid change of {path}")
     return out
 
 
@@ -158,20 +177,23 @@ def test_every_rule_reruns_on_the_keys_its_stage_reads_and_no_other_rule_does(sc
     d, env, children = scratch
     config = cfg.load(d / "config/ci.yaml")
 
-    def check(rule: str):
-        keys = sorted({leaf for p in READS[rule] for leaf in _leaves(config, p)} - SKIP)
-        extra = d / f"change_{rule}.yaml"
-        extra.write_text(yaml.safe_dump(_override(config, keys)))
-        out = _run(["-n", "--configfile", "config/ci.yaml", extra.name], d, env)
-        assert out.returncode == 0, f"{rule}: {out.stderr[-2000:]}"
-        expected = _downstream(set().union(*(_readers(k) for k in keys)), children)
-        return rule, keys, expected, _jobs(out.stdout + out.stderr)
-
     with ThreadPoolExecutor(2) as pool:
-        results = list(pool.map(check, sorted(READS)))
+        results = list(pool.map(lambda rule: check_rule(d, env, children, config, rule), sorted(READS)))
     for rule, keys, expected, listed in results:
         assert rule in listed, f"{rule} does not rerun after a change of {keys}"
         assert listed == expected, f"after a change of {rule}'s keys: extra {listed - expected}, missing {expected - listed}"
+
+
+def check_rule(d: Path, env: dict, children: dict, config: dict, rule: str):
+    """Change every key ``rule`` reads; (rule, keys, the rules expected to rerun, the rules snakemake -n lists)."""
+    keys = sorted(k for k in {leaf for p in READS[rule] for leaf in _leaves(config, p)} - SKIP
+                  if _value(config, k) is not None)  # an unset optional key (a path, a WAV scale) stays unset
+    extra = d / f"change_{rule}.yaml"
+    extra.write_text(yaml.safe_dump(_override(config, keys)))
+    out = _run(["-n", "--configfile", "config/ci.yaml", extra.name], d, env)
+    assert out.returncode == 0, f"{rule}: {out.stderr[-2000:]}"
+    expected = _downstream(set().union(*(_readers(k) for k in keys)), children)
+    return rule, keys, expected, _jobs(out.stdout + out.stderr)
 
 
 def test_an_undeclared_key_read_raises_naming_the_rule_and_the_fix():

@@ -86,6 +86,35 @@ _HOUSING_GEOMETRY = [
     "sensor_fem.bottom_disk_diameter_m",
 ]
 
+#: The bearing model (geometry, operation, LPM and its record), without the running-bearing record's keys
+#: (bearing.measurement, channels, wav_full_scale_V: the diagnosis reads those).
+_BEARING = [
+    "bearing.n_rollers",
+    "bearing.roller_diameter_m",
+    "bearing.pitch_diameter_m",
+    "bearing.roller_length_m",
+    "bearing.radial_clearance_m",
+    "bearing.outer_diameter_m",
+    "bearing.width_m",
+    "bearing.contact_angle_deg",
+    "bearing.shaft_speed_rpm",
+    "bearing.radial_load_N",
+    "bearing.shaft_mass_kg",
+    "bearing.pedestal_mass_kg",
+    "bearing.pedestal_stiffness_N_per_m",
+    "bearing.bearing_damping_N_s_per_m",
+    "bearing.pedestal_damping_N_s_per_m",
+    "bearing.defect_width_m",
+    "bearing.defect_depth_m",
+    "bearing.defect_angle_deg",
+    "bearing.start_angle_deg",
+    "bearing.time_step_s",
+    "bearing.duration_s",
+    "bearing.settle_s",
+    "bearing.substeps",
+    "bearing.resample",
+]
+
 #: Config keys each rule's stage reads, by rule.
 READS: dict[str, list[str]] = {
     # calibration.smk
@@ -100,16 +129,16 @@ READS: dict[str, list[str]] = {
     "sensor_modal": ["sensor", "sensor_fem"],
     "sensor_harmonic": ["sensor", "sensor_fem"],
     # bearing.smk
-    "bearing_lpm": ["bearing"],
+    "bearing_lpm": _BEARING,
     "housing_mesh": [*_HOUSING_GEOMETRY, "housing.mesh_level"],
     "housing_transient": [
         "seed", "bearing.time_step_s", "housing", *_PZT, *_ALUMINA_DISK,
     ],
     "housing_convergence": [
-        "bearing", *_HOUSING_GEOMETRY, "housing", *_PZT, *_ALUMINA_DISK,
+        *_BEARING, *_HOUSING_GEOMETRY, "housing", *_PZT, *_ALUMINA_DISK,
     ],
-    "bearing_sampling": ["bearing"],
-    "scorecard_bearing": ["bearing"],
+    "bearing_sampling": _BEARING,
+    "scorecard_bearing": _BEARING,
     # signals.smk
     "sensor_voltage": ["signals.skip_s", "signals.sensor_fem_correction", *_CIRCUIT],
     "noisy": ["seed", "signals.snr_dB"],
