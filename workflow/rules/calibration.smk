@@ -26,7 +26,9 @@ rule synthesize_calibration:
         mem_mb=500,
         runtime=2,
     params:
-        **stage_params("synthesize_calibration", "workflow/scripts/synthesize_calibration.py"),
+        **stage_params(
+            "synthesize_calibration", "workflow/scripts/synthesize_calibration.py"
+        ),
     script:
         "../scripts/synthesize_calibration.py"
 
@@ -114,6 +116,8 @@ rule scorecard_calibration:
         mem_mb=500,
         runtime=2,
     params:
-        **stage_params("scorecard_calibration", "workflow/scripts/scorecard_calibration.py"),
+        **stage_params(
+            "scorecard_calibration", "workflow/scripts/scorecard_calibration.py"
+        ),
     script:
         "../scripts/scorecard_calibration.py"

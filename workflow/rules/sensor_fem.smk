@@ -129,7 +129,9 @@ rule scorecard_sensor_fem:
         mem_mb=500,
         runtime=2,
     params:
-        **stage_params("scorecard_sensor_fem", "workflow/scripts/scorecard_sensor_fem.py"),
+        **stage_params(
+            "scorecard_sensor_fem", "workflow/scripts/scorecard_sensor_fem.py"
+        ),
     script:
         "../scripts/scorecard_sensor_fem.py"
 
