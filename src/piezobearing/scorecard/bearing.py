@@ -10,6 +10,7 @@ from . import Row
 def rows(kin: dict, lpm: dict, tr: dict, conv: dict, samp: dict, b: dict) -> list[Row]:
     """The rows from kinematics.json, lpm.json, the transient records by case, mesh_convergence.json,
     sampling_phase.json and the config's ``bearing`` section."""
+    # longer than 80 lines: a table, one Row literal a paper number, read top to bottom like the scorecard
     chk = tr["healthy"]["direct_check"] or {}
     return [
         Row(

@@ -12,6 +12,7 @@ from . import Row
 
 def rows(modal: dict, band: dict, convergence: pd.DataFrame) -> list[Row]:
     """The paper's numbers of Sec. III-C beside ours, with the reasons where they differ."""
+    # longer than 80 lines: a table, one Row literal a paper number, read top to bottom like the scorecard
     sec = "III-C sensor FEM"
     pc = modal["placement_check"]
     lower = [m for m in modal["modes"] if m["frequency_short_Hz"] < modal["first_resonance_short_Hz"]]
