@@ -52,7 +52,7 @@ for p in [a[1]] + [a[i + 2] for i, x in enumerate(a[:-2]) if x == "-p" and a[i +
 #: Keys left out of the perturbation: a path (the record has its own test) and a list of effect names.
 SKIP = {"calibration.measurement", "synthesis.hidden_effects"}
 #: String choices: another valid value.
-OTHER = {"band_rule": "kurtogram", "method": "direct", "sensor_electrical": "short", "resample": "sample",
+OTHER = {"type": "inner_race", "band_rule": "kurtogram", "method": "direct", "sensor_electrical": "short", "resample": "sample",
          "c66_rule": "paper"}
 
 
@@ -143,6 +143,8 @@ def _changed(value, key: str, up: bool = False):
         return value * (1.01 if up else 0.99) if value else 1e-3
     if isinstance(value, list):
         return [_changed(v, key, up) for v in value]
+    if isinstance(value, dict):  # an entry of a list of tables (bearing.defects)
+        return {k: _changed(v, f"{key}.{k}", up) for k, v in value.items()}
     if isinstance(value, str):
         return OTHER[key.rsplit(".", 1)[-1]]
     raise AssertionError(f"no change rule for {key} = {value!r}")

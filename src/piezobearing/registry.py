@@ -73,9 +73,7 @@ _HOUSING_GEOMETRY = [
     "bearing.roller_length_m",
     "bearing.outer_diameter_m",
     "bearing.width_m",
-    "bearing.defect_angle_deg",
-    "bearing.defect_width_m",
-    "bearing.defect_depth_m",
+    "bearing.defects",
     "housing.centre_height_m",
     "housing.body_half_width_m",
     "housing.body_top_m",
@@ -104,9 +102,12 @@ _BEARING = [
     "bearing.pedestal_stiffness_N_per_m",
     "bearing.bearing_damping_N_s_per_m",
     "bearing.pedestal_damping_N_s_per_m",
-    "bearing.defect_width_m",
-    "bearing.defect_depth_m",
-    "bearing.defect_angle_deg",
+    "bearing.defects",
+    "bearing.cage_slip",
+    "bearing.slip_jitter",
+    "bearing.speed_ramp_rpm_per_s",
+    "bearing.tachometer_pulses_per_rev",
+    "bearing.roller_diameter_scatter_m",
     "bearing.start_angle_deg",
     "bearing.time_step_s",
     "bearing.duration_s",
@@ -165,6 +166,10 @@ class DeclaredConfig(dict):
             (k, DeclaredConfig(v, rule, f"{prefix}{k}.") if isinstance(v, dict) else v) for k, v in data.items()
         )
         self._rule, self._prefix = rule, prefix
+
+    def get(self, key, default=None):
+        """As dict.get for a declared key; an undeclared key raises (a default would hide the missing declaration)."""
+        return self[key]
 
     def __missing__(self, key):
         raise UndeclaredKeyError(

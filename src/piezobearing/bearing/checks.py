@@ -63,9 +63,23 @@ def lpm_checks(run: dict, kin: brg.KinematicFrequencies) -> dict:
     out["mean_horizontal_load_N"] = float(fy.mean())
     out["max_roller_load_N"] = float(q.max())
     out["loaded_rollers_min_max"] = [int((q > 0).sum(1).min()), int((q > 0).sum(1).max())]
-    if p.defect is not None:
+    if p.defects:
+        rate = {"outer_race": kin.bpfo_Hz, "inner_race": kin.bpfi_Hz, "rolling_element": 2 * kin.bsf_Hz}
+        drops = p.defect_max_drops_m()
+        out["defects"] = [
+            {
+                "type": d.kind,
+                "width_m": d.width_m,
+                "max_drop_m": drop,
+                "max_drop_flat_raceway_m": d.max_drop_m(0.5 * g.roller_diameter_m),
+                "impact_rate_Hz": rate[d.kind],
+            }
+            for d, drop in zip(p.defects, drops, strict=True)
+        ]
+        out["defect_max_drop_m"] = drops[0]
+    if p.defects and p.defects[0].kind == "outer_race":
+        # the paper's case: a fixed groove, every roller strikes it at BPFO
         iv = impact_intervals(run["fine_time_s"], q.max(axis=1), kin.bpfo_Hz)
-        out["defect_max_drop_m"] = p.defect.max_drop_m(0.5 * g.roller_diameter_m)
         out["impact_interval_mean_s"] = float(iv.mean()) if len(iv) else float("nan")
         out["impact_interval_std_s"] = float(iv.std()) if len(iv) else float("nan")
         out["impact_frequency_Hz"] = float(1 / iv.mean()) if len(iv) else float("nan")
@@ -177,7 +191,9 @@ def off_harmonic_fraction(x: np.ndarray, dt: float, f0: float) -> float:
     return float(np.var(resid) / np.var(x))
 
 
-def sampling_phase(contact: dict, angle_rad: np.ndarray, sensor_per_radial_load: np.ndarray, bearing: dict) -> dict:
+def sampling_phase(
+    contact: dict, angle_rad: np.ndarray, sensor_per_radial_load: np.ndarray, bearing: dict, seed: int = 0
+) -> dict:
     """What the step 1/(36 BPFO) does to the sensor force of the faulty bearing.
 
     The quasi-static sensor force (the LPM's fine-grid loads ``contact`` times
@@ -189,8 +205,8 @@ def sampling_phase(contact: dict, angle_rad: np.ndarray, sensor_per_radial_load:
     at a step of 1/2500 s, not commensurate with the roller passage.
     """
     b = bearing
-    p = brg.LPMParameters.from_config(b, True)
-    kin = brg.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
+    p = brg.LPMParameters.from_config(b, True, seed)
+    kin = brg.kinematic_frequencies(p.geometry, p.shaft_speed_Hz, p.cage_slip)
     tf = contact["fine_time_s"]
     psi = p.roller_angles(tf)
     order = np.argsort(angle_rad)

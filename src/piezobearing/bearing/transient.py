@@ -35,10 +35,14 @@ def time_grid(bearing: dict) -> np.ndarray:
     return dt * np.arange(int(round(bearing["duration_s"] / dt)))
 
 
-def run_lpm(bearing: dict, faulty: bool, method: str = "compiled") -> dict:
-    """The LPM on its fine grid and resampled at the FEM step (dict of arrays; ``params``: the LPMParameters);
-    ``method`` as in :func:`~piezobearing.bearing.lpm.simulate_lpm`."""
-    p = brg.LPMParameters.from_config(bearing, faulty)
+def run_lpm(bearing: dict, faulty: bool, method: str = "compiled", seed: int = 0) -> dict:
+    """The LPM on its fine grid and resampled at the FEM step (dict of arrays; ``params``: the LPMParameters).
+
+    ``method`` as in :func:`~piezobearing.bearing.lpm.simulate_lpm`; ``seed``: the config's seed (roller
+    diameters, slip jitter). With ``bearing.tachometer_pulses_per_rev`` > 0 the dict has the tachometer's
+    pulse times over the record.
+    """
+    p = brg.LPMParameters.from_config(bearing, faulty, seed)
     dt = bearing["time_step_s"]
     h = dt / bearing["substeps"]
     t_out = time_grid(bearing)
@@ -47,7 +51,13 @@ def run_lpm(bearing: dict, faulty: bool, method: str = "compiled") -> dict:
     res = brg.simulate_lpm(p, t_start, n_steps, h, method=method)
     keep = res.time_s >= -dt / 2 - 1e-12
     q_out = brg.resample_loads(res.time_s, res.load_N, t_out, dt, bearing["resample"])
+    extra = {}
+    if bearing["tachometer_pulses_per_rev"] > 0:
+        extra["tachometer_time_s"] = p.tachometer_times(
+            -dt / 2, t_out[-1] + dt / 2, bearing["tachometer_pulses_per_rev"]
+        )
     return {
+        **extra,
         "fine_time_s": res.time_s[keep],
         "fine_load_N": res.load_N[keep],
         "fine_shaft_m": res.shaft_m[keep],

@@ -12,6 +12,7 @@ def rows(kin: dict, lpm: dict, tr: dict, conv: dict, samp: dict, b: dict) -> lis
     sampling_phase.json and the config's ``bearing`` section."""
     # longer than 80 lines: a table, one Row literal a paper number, read top to bottom like the scorecard
     chk = tr["healthy"]["direct_check"] or {}
+    groove = next((d for d in b["defects"] if d["type"] == "outer_race"), None)  # the paper's defect
     return [
         Row(
             "IV",
@@ -43,20 +44,33 @@ def rows(kin: dict, lpm: dict, tr: dict, conv: dict, samp: dict, b: dict) -> lis
             "III-A",
             "defect width",
             P["defect_width_m"].value,
-            b["defect_width_m"],
+            groove["width_m"] if groove else None,
             "m",
-            f"a roller sinks at most {lpm['faulty']['defect_max_drop_m'] * 1e6:.1f} um, not the 1 mm depth",
+            (
+                f"a roller sinks at most {lpm['faulty']['defect_max_drop_m'] * 1e6:.1f} um against the concave "
+                f"raceway ({lpm['faulty']['defects'][0]['max_drop_flat_raceway_m'] * 1e6:.1f} um on a flat one, "
+                "as before issue 11), not the 1 mm depth"
+                if groove
+                else "no outer-race defect configured"
+            ),
         ),
         Row(
-            "III-A", "defect depth (removed material)", P["defect_depth_m"].value, b["defect_depth_m"], "m", ""
+            "III-A",
+            "defect depth (removed material)",
+            P["defect_depth_m"].value,
+            groove["depth_m"] if groove else None,
+            "m",
+            "",
         ),
         Row(
             "IV",
             "defect impact frequency (LPM)",
             P["bpfo_Hz"].value,
-            lpm["faulty"]["impact_frequency_Hz"],
+            lpm["faulty"].get("impact_frequency_Hz"),
             "Hz",
-            f"{lpm['faulty']['n_impacts']} impacts; paper's BPFO for comparison",
+            f"{lpm['faulty']['n_impacts']} impacts; paper's BPFO for comparison"
+            if "n_impacts" in lpm["faulty"]
+            else "the first configured defect is not on the outer race",
         ),
         Row(
             "III-A",

@@ -39,7 +39,8 @@ def bearing_lpm(
 ) -> None:
     """Stage bearing_lpm: kinematic frequencies and both cases' roller contact loads.
 
-    Writes ``kinematics.json`` (shaft_Hz, ftf_Hz, bpfo_Hz, bpfi_Hz, bsf_Hz),
+    Writes ``kinematics.json`` (shaft_Hz, ftf_Hz, bpfo_Hz, bpfi_Hz, bsf_Hz without slip; cage_slip,
+    slip_jitter, the same frequencies at the mean slip under ``with_slip``, speed_ramp_Hz_per_s, defect_types),
     per case an NPZ with the fine integration grid and the FEM-step series
     and a CSV at the FEM step (time_s, load_N_jj, angle_rad_jj), and a JSON
     of the checks. ``method``: the LPM's step loop (simulate_lpm), for the benchmark.
@@ -47,16 +48,27 @@ def bearing_lpm(
     log_progress()
     b = config["bearing"]
     geo = brg.BearingGeometry.from_config(b)
-    kin = brg.kinematic_frequencies(geo, b["shaft_speed_rpm"] / 60.0)
-    write_json({**kin.to_dict(), "config": {"bearing": b}}, out_kinematics)
+    # top level: the kinematic (no-slip) lines, which signals.fault_bands slips itself; "with_slip": at the
+    # configured mean cage slip, what the LPM's cage does on average
+    kin0 = brg.kinematic_frequencies(geo, b["shaft_speed_rpm"] / 60.0)
+    kin = brg.kinematic_frequencies(geo, b["shaft_speed_rpm"] / 60.0, b["cage_slip"])
+    operating = {
+        "cage_slip": b["cage_slip"],
+        "slip_jitter": b["slip_jitter"],
+        "with_slip": kin.to_dict(),
+        "speed_ramp_Hz_per_s": b["speed_ramp_rpm_per_s"] / 60.0,
+        "defect_types": [d["type"] for d in b["defects"]],
+    }
+    write_json({**kin0.to_dict(), **operating, "config": {"bearing": b}}, out_kinematics)
     summary = {
-        "kinematics": kin.to_dict(),
+        "kinematics": kin0.to_dict(),
+        "kinematics_with_slip": kin.to_dict(),
         "contact_stiffness_N_per_m10_9": brg.line_contact_stiffness(geo.roller_length_m),
         "config": {"bearing": b},
     }
     for case in CASES:
         t0 = time.perf_counter()
-        run = run_lpm(b, is_faulty(case), method)
+        run = run_lpm(b, is_faulty(case), method, config["seed"])
         log.info("LPM %s: %d steps in %.1f s", case, len(run["fine_time_s"]), time.perf_counter() - t0)
         write_npz(out_npz[case], **{k: v for k, v in run.items() if k != "params"})
         df = pd.DataFrame({"time_s": run["time_s"]})
@@ -130,5 +142,6 @@ def sampling_phase(contact_npz: str, influence_csv: str, out_json: str, config: 
         inf["angle_rad"].to_numpy(),
         inf["sensor_per_radial_load"].to_numpy(),
         config["bearing"],
+        config["seed"],
     )
     write_json(out, out_json)
