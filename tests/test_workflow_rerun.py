@@ -140,7 +140,7 @@ def _changed(value, key: str, up: bool = False):
     if isinstance(value, int):
         return value + 1 if up or value <= 1 else value - 1
     if isinstance(value, float):
-        return value * (1.01 if up else 0.99) if value else 1e-3
+        return value * (1.01 if up else 0.99) if value else (1e-6 if up else 1e-3)
     if isinstance(value, list):
         return [_changed(v, key, up) for v in value]
     if isinstance(value, dict):  # an entry of a list of tables (bearing.defects)

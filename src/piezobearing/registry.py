@@ -130,7 +130,7 @@ READS: dict[str, list[str]] = {
     "sensor_modal": ["sensor", "sensor_fem"],
     "sensor_harmonic": ["sensor", "sensor_fem"],
     # bearing.smk
-    "bearing_lpm": _BEARING,
+    "bearing_lpm": ["seed", *_BEARING],
     "housing_mesh": [*_HOUSING_GEOMETRY, "housing.mesh_level"],
     "housing_transient": [
         "seed", "bearing.time_step_s", "housing", *_PZT, *_ALUMINA_DISK,
@@ -138,7 +138,7 @@ READS: dict[str, list[str]] = {
     "housing_convergence": [
         *_BEARING, *_HOUSING_GEOMETRY, "housing", *_PZT, *_ALUMINA_DISK,
     ],
-    "bearing_sampling": _BEARING,
+    "bearing_sampling": ["seed", *_BEARING],
     "scorecard_bearing": _BEARING,
     # signals.smk
     "sensor_voltage": ["signals.skip_s", "signals.sensor_fem_correction", *_CIRCUIT],
