@@ -142,10 +142,11 @@ READS: dict[str, list[str]] = {
     "scorecard_bearing": _BEARING,
     # signals.smk
     "sensor_voltage": ["signals.skip_s", "signals.sensor_fem_correction", *_CIRCUIT],
-    "noisy": ["seed", "signals.snr_dB"],
+    "noisy": ["seed", "signals"],  # the DAQ model: sampling, noise (relative at snr_dB, or absolute), ADC
     "envelope": ["signals"],
     "fault_indicator": ["seed", "signals"],
     "snr_study": ["seed", "signals"],
+    "fault_classification": ["seed", "signals", "bearing.defects"],
     # diagnostics.smk
     "diagnose": ["seed", "sensor", "synthesis", "calibration", "model", "diagnostics"],
 }

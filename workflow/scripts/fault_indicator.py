@@ -10,4 +10,5 @@ config = declared_config(snakemake.params.reads, snakemake.rule)  # only what th
 i = snakemake.input
 envelopes = {c: (i[f"{c}_csv"], i[f"{c}_json"]) for c in ("healthy", "faulty")}
 noisy = {c: i[f"{c}_noisy"] for c in ("healthy", "faulty")}
-indicator(envelopes, i.kinematics, noisy, snakemake.output.json, config)
+noisy_csvs = {c: i[f"{c}_noisy_csv"] for c in ("healthy", "faulty")}
+indicator(envelopes, i.kinematics, noisy, snakemake.output.json, config, noisy_csvs)
