@@ -34,7 +34,7 @@ def _timed(fn):
 def bench_housing(config: dict, max_level: float) -> dict:
     from piezobearing.bearing import housing_fem as fem
     from piezobearing.bearing.housing_mesh import build_housing_mesh
-    from piezobearing.stages import bearing as st
+    from piezobearing.bearing import transient as st
 
     h = config["housing"]
     out = {}
@@ -75,7 +75,7 @@ def bench_housing(config: dict, max_level: float) -> dict:
 def bench_sensor(config: dict) -> dict:
     from piezobearing.sensor import fem
     from piezobearing.sensor.mesh import stack_mesh
-    from piezobearing.stages import sensor_fem as st
+    from piezobearing.sensor import analysis as st
 
     p = st.SensorFemParams.from_config(config)
     asm = st._assemble(stack_mesh(p.geometry, p.density, p.multiplier), p)
@@ -98,7 +98,7 @@ def bench_sensor(config: dict) -> dict:
 
 def bench_snr(config: dict) -> dict:
     from piezobearing.signals import detection as S
-    from piezobearing.stages.signals import snr_grid
+    from piezobearing.signals.analysis import snr_grid
 
     s = config["signals"]
     fs = 2550.0
