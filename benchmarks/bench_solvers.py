@@ -33,8 +33,8 @@ def _timed(fn):
 
 def bench_housing(config: dict, max_level: float) -> dict:
     from piezobearing.bearing import housing_fem as fem
-    from piezobearing.bearing.housing_mesh import build_housing_mesh
     from piezobearing.bearing import transient as st
+    from piezobearing.bearing.housing_mesh import build_housing_mesh
 
     h = config["housing"]
     out = {}
@@ -73,9 +73,9 @@ def bench_housing(config: dict, max_level: float) -> dict:
 
 
 def bench_sensor(config: dict) -> dict:
+    from piezobearing.sensor import analysis as st
     from piezobearing.sensor import fem
     from piezobearing.sensor.mesh import stack_mesh
-    from piezobearing.sensor import analysis as st
 
     p = st.SensorFemParams.from_config(config)
     asm = st._assemble(stack_mesh(p.geometry, p.density, p.multiplier), p)
