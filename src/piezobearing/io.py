@@ -7,8 +7,12 @@ or column, and the fix. Nothing here writes next to the input.
 
 from __future__ import annotations
 
+import codecs
+import functools
+import hashlib
 import json
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -56,6 +60,89 @@ class Measurement:
         return pd.DataFrame({"time_s": self.time_s, "force_N": self.force_N, "voltage_V": self.voltage_V})
 
 
+#: A number written with a decimal comma ("0,25", "-1,5e-3").
+_DECIMAL_COMMA = re.compile(r"^[-+]?\d+,\d+([eE][-+]?\d+)?$")
+#: Bytes read to check a file's encoding and first lines before parsing it.
+_HEAD_BYTES = 1 << 16
+
+
+def _not_utf8(path: Path, e: UnicodeDecodeError) -> str:
+    byte = e.object[e.start : e.start + 1].hex() if isinstance(e.object, bytes) else "?"
+    return (
+        f"{path}: not UTF-8 text (byte 0x{byte} at offset {e.start}; Latin-1 or Windows-1252?); "
+        "save it as UTF-8 (spreadsheet: 'CSV UTF-8'; shell: iconv -f latin1 -t utf-8 IN > OUT)"
+    )
+
+
+def _check_readable_text(path: Path) -> None:
+    """A regular, readable, non-empty UTF-8 file, or one line saying what it is and the fix."""
+    if not path.exists():
+        raise MeasurementError(f"{path}: file not found; set calibration.measurement to an existing CSV")
+    if path.is_dir():
+        raise MeasurementError(
+            f"{path}: is a folder, not a file; set calibration.measurement to the CSV file inside it"
+        )
+    if not path.is_file():
+        raise MeasurementError(f"{path}: not a regular file; save the record as a CSV file and give its path")
+    try:
+        with open(path, "rb") as f:
+            head = f.read(_HEAD_BYTES)
+    except OSError as e:
+        raise MeasurementError(
+            f"{path}: cannot be read ({e.strerror or type(e).__name__}); give yourself read permission "
+            "(chmod u+r) or copy the file somewhere readable"
+        ) from None
+    if not head.strip():
+        raise MeasurementError(
+            f"{path}: the file is empty; export the record again, header time_s,force_N,voltage_V"
+        )
+    try:
+        codecs.getincrementaldecoder("utf-8")().decode(head, final=len(head) < _HEAD_BYTES)
+    except UnicodeDecodeError as e:
+        raise MeasurementError(_not_utf8(path, e)) from None
+
+
+def _decimal_comma_hint(path: Path) -> str | None:
+    """The fix for a comma-separated file whose numbers also use decimal commas, else None."""
+    with open(path, encoding="utf-8-sig", errors="replace") as f:
+        lines = [f.readline() for _ in range(3)]
+    header, row = lines[0].strip(), lines[1].strip()
+    if "," in header and row.count(",") > header.count(",") and re.search(r"\d,\d", row):
+        return (
+            f"the numbers use a decimal comma (line 2: {row[:40]}); use a dot as the decimal mark "
+            "(export with '.' as decimal separator) and commas between columns"
+        )
+    return None
+
+
+def _read_numeric(path: Path) -> dict | None:
+    """The three columns as float arrays when every cell parses as a finite number, else None.
+
+    The fast path: the C reader straight into float64 (about 8 bytes a cell),
+    where reading every cell as a string first needs several times the file
+    size. Anything unusual returns None and the per-cell checks find it.
+    """
+    try:
+        df = pd.read_csv(
+            path,
+            usecols=lambda c: str(c).strip() in COLUMNS,
+            dtype=float,
+            skipinitialspace=True,
+            encoding="utf-8-sig",
+            engine="c",
+        )
+    except (ValueError, pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError):
+        return None
+    df.columns = [str(c).strip() for c in df.columns]
+    if sorted(df.columns) != sorted(COLUMNS) or len(df) < 3:
+        return None
+    data = {c: df[c].to_numpy(dtype=float) for c in COLUMNS}
+    del df
+    if not all(np.isfinite(v).all() for v in data.values()):
+        return None
+    return data
+
+
 def _line(i: int) -> int:
     """File line number of data row i (line 1 is the header)."""
     return int(i) + 2
@@ -70,15 +157,24 @@ def read_measurement(path: str | Path, resample_to_uniform: bool = False) -> Mea
     (or, with ``resample_to_uniform``, linear resampling onto the median step).
     """
     path = Path(path)
-    if not path.exists():
-        raise MeasurementError(f"{path}: file not found; set calibration.measurement to an existing CSV")
+    _check_readable_text(path)
+    hint = _decimal_comma_hint(path)
+    if hint:
+        raise MeasurementError(f"{path}: {hint}")
+    fast = _read_numeric(path)
+    if fast is not None:  # every cell a finite number: no per-cell checks needed
+        return _checked(path, fast, resample_to_uniform)
     try:
         # keep_default_na=False: a cell reading 'nan' or 'NA' is reported as written, not as empty
-        raw = pd.read_csv(path, dtype=str, skipinitialspace=True, keep_default_na=False)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as e:
+        raw = pd.read_csv(path, dtype=str, skipinitialspace=True, keep_default_na=False, encoding="utf-8-sig")
+    except UnicodeDecodeError as e:
+        raise MeasurementError(_not_utf8(path, e)) from None
+    except (pd.errors.ParserError, pd.errors.EmptyDataError) as e:
         first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        hint = _decimal_comma_hint(path)
         raise MeasurementError(
-            f"{path}: not a readable CSV ({first}); save it as comma-separated text"
+            f"{path}: not a readable CSV ({first}); "
+            + (hint or "save it as comma-separated text, header time_s,force_N,voltage_V")
         ) from None
     raw.columns = [str(c).strip() for c in raw.columns]
     missing = [c for c in COLUMNS if c not in raw.columns]
@@ -106,11 +202,21 @@ def read_measurement(path: str | Path, resample_to_uniform: bool = False) -> Mea
             i = int(bad[0])
             cell = raw[col].iloc[i]
             what = "empty" if pd.isna(cell) or str(cell).strip() == "" else f"'{cell}'"
+            fix = (
+                "use a dot as the decimal mark (or export the file with '.' as decimal separator)"
+                if _DECIMAL_COMMA.match(str(cell).strip())
+                else "fix or remove those rows"
+            )
             raise MeasurementError(
                 f"{path}: line {_line(i)}, column {col}: {what} is not a finite number "
-                f"({bad.size} such cells); fix or remove those rows"
+                f"({bad.size} such cells); {fix}"
             )
         data[col] = num
+    return _checked(path, data, resample_to_uniform)
+
+
+def _checked(path: Path, data: dict, resample_to_uniform: bool) -> Measurement:
+    """The clock checks on parsed columns (see :func:`read_measurement`)."""
     t = data["time_s"]
     dt = np.diff(t)
     back = np.flatnonzero(dt <= 0)
@@ -138,6 +244,57 @@ def read_measurement(path: str | Path, resample_to_uniform: bool = False) -> Mea
         tu = t[0] + step * np.arange(n)
         data = {"time_s": tu, **{c: np.interp(tu, t, data[c]) for c in COLUMNS[1:]}}
     return Measurement(data["time_s"], data["force_N"], data["voltage_V"], str(path))
+
+
+#: Samples at exactly the channel's extreme value beyond which the channel counts as clipped
+#: (at least this many, and at least CLIPPED_FRACTION of the record).
+CLIPPED_MIN_SAMPLES = 5
+CLIPPED_FRACTION = 1.0e-3
+
+
+def check_channels(m: Measurement) -> None:
+    """Refuse a dead, constant or clipped channel (one line naming the column and the fix).
+
+    A dead voltage channel (every sample 0 V) or a constant one would be
+    fitted as a sensitivity of 0 V/N with a confident interval; a clipped one
+    (many samples at exactly its largest or smallest value: the DAQ's range)
+    cuts the impulse peaks and biases the sensitivity low.
+    """
+    for col, v in (("voltage_V", m.voltage_V), ("force_N", m.force_N)):
+        lo, hi = float(v.min()), float(v.max())
+        if hi == 0.0 and lo == 0.0:
+            raise MeasurementError(
+                f"{m.source}: column {col}: every sample is 0 (a dead channel); check the sensor cable and the "
+                "DAQ channel, and record again"
+            )
+        if hi == lo:
+            raise MeasurementError(
+                f"{m.source}: column {col}: constant at {hi:g} in every sample (no signal); check the sensor "
+                "cable and the DAQ channel, and record again"
+            )
+        limit = max(CLIPPED_MIN_SAMPLES, CLIPPED_FRACTION * v.size)
+        for side, value in (("largest", hi), ("smallest", lo)):
+            n = int(np.count_nonzero(v == value))
+            if n >= limit:
+                raise MeasurementError(
+                    f"{m.source}: column {col}: clipped ({n} samples sit at exactly the {side} value {value:g}, "
+                    "the DAQ's range); widen the input range or lower the gain and record again"
+                )
+
+
+@functools.lru_cache(maxsize=16)
+def _digest(path: str, size: int, mtime_ns: int, inode: int) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def file_digest(path: str | Path) -> str:
+    """SHA-256 of a file's content (hex); computed once per process for an unchanged file."""
+    st = Path(path).stat()
+    return _digest(str(Path(path).resolve()), st.st_size, st.st_mtime_ns, st.st_ino)
 
 
 def write_measurement(m: Measurement, path: str | Path) -> None:

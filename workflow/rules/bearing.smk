@@ -167,8 +167,8 @@ rule fig03:
         mem_mb=500,
         runtime=2,
     shell:
-        "papermill {input.notebook} {output.notebook} -k python3 -p healthy {input.healthy}"
-        " -p faulty {input.faulty} -p figure {output.figure} > {log} 2>&1"
+        "papermill {input.notebook:q} {output.notebook:q} -k python3 -r healthy {input.healthy:q}"
+        " -r faulty {input.faulty:q} -r figure {output.figure:q} > {log:q} 2>&1"
 
 
 rule scorecard_bearing:

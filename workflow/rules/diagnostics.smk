@@ -79,5 +79,5 @@ rule diagnosis_notebook:
         mem_mb=500,
         runtime=2,
     shell:
-        "papermill {input.notebook} {output.notebook} -k python3 -p diagnosis {input.diagnosis}"
-        " -p arrays {input.arrays} -p figure {output.figure} > {log} 2>&1"
+        "papermill {input.notebook:q} {output.notebook:q} -k python3 -r diagnosis {input.diagnosis:q}"
+        " -r arrays {input.arrays:q} -r figure {output.figure:q} > {log:q} 2>&1"

@@ -27,8 +27,8 @@ rule fig05:
         mem_mb=500,
         runtime=2,
     shell:
-        "papermill {input.notebook} {output.notebook} -k python3 -p measurement {input.measurement}"
-        " -p sensitivity {input.sensitivity} -p figure {output.figure} > {log} 2>&1"
+        "papermill {input.notebook:q} {output.notebook:q} -k python3 -r measurement {input.measurement:q}"
+        " -r sensitivity {input.sensitivity:q} -r figure {output.figure:q} > {log:q} 2>&1"
 
 
 rule fig06:
@@ -54,8 +54,8 @@ rule fig06:
         mem_mb=500,
         runtime=2,
     shell:
-        "papermill {input.notebook} {output.notebook} -k python3 -p fit {input.fit}"
-        " -p resistance {input.resistance} -p figure {output.figure} > {log} 2>&1"
+        "papermill {input.notebook:q} {output.notebook:q} -k python3 -r fit {input.fit:q}"
+        " -r resistance {input.resistance:q} -r figure {output.figure:q} > {log:q} 2>&1"
 
 
 rule fig08a:
@@ -81,5 +81,5 @@ rule fig08a:
         mem_mb=500,
         runtime=2,
     shell:
-        "papermill {input.notebook} {output.notebook} -k python3 -p curve {input.curve}"
-        " -p lowfreq {input.lowfreq} -p figure {output.figure} > {log} 2>&1"
+        "papermill {input.notebook:q} {output.notebook:q} -k python3 -r curve {input.curve:q}"
+        " -r lowfreq {input.lowfreq:q} -r figure {output.figure:q} > {log:q} 2>&1"

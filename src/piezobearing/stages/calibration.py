@@ -6,11 +6,26 @@ import numpy as np
 import pandas as pd
 
 from ..fitting import nrmse
-from ..io import Measurement, MeasurementError, read_json, read_measurement, write_json, write_measurement
+from ..io import (
+    Measurement,
+    MeasurementError,
+    check_channels,
+    read_json,
+    read_measurement,
+    write_json,
+    write_measurement,
+)
 from ..scorecard import Row, write_part
 from ..sensor import calibration as cal
 from ..sensor.lowfreq import asymptote_onset_Hz, lowfreq_sensitivity
 from ..synthesis import PressProtocol, synthesize
+
+#: A voltage that correlates less than this with the model's prediction from the measured force, for
+#: every resistance of FLAT_RESISTANCE_FACTORS x calibration.initial_resistance_ohm, carries no sensor
+#: signal (a disconnected channel: noise only). A good synthetic record reaches 0.99, a record whose
+#: signal is 1/1000 of its 2 mV noise 0.17 (measured on the CI record).
+FLAT_CORRELATION = 0.3
+FLAT_RESISTANCE_FACTORS = np.array([0.1, 1.0, 10.0, 100.0])
 
 
 def nominal_circuit(config: dict, resistance_ohm: float | None = None) -> cal.SensorCircuit:
@@ -37,6 +52,7 @@ def load_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]
     """
     c = config["calibration"]
     m = read_measurement(path, resample_to_uniform=c["resample_to_uniform"])
+    check_channels(m)
     imps = cal.detect_impulses(
         m.force_N, m.voltage_V, m.dt_s, c["min_prominence_fraction"], c["min_separation_s"]
     )
@@ -46,6 +62,23 @@ def load_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]
             "or lower calibration.min_prominence_fraction / min_separation_s"
         )
     nominal = nominal_circuit(config, c["initial_resistance_ohm"])
+    corr = [
+        abs(
+            float(
+                np.corrcoef(
+                    cal.circuit_voltage(m.force_N - m.force_N[0], m.dt_s, nominal_circuit(config, r)),
+                    m.voltage_V,
+                )[0, 1]
+            )
+        )
+        for r in c["initial_resistance_ohm"] * FLAT_RESISTANCE_FACTORS
+    ]
+    if not max(corr) >= FLAT_CORRELATION:
+        raise MeasurementError(
+            f"{path}: column voltage_V: flat, no sensor signal (correlation {max(corr):.2f} at best with the "
+            "voltage the sensor model predicts from force_N, for any resistance from 0.1 to 100 times "
+            "calibration.initial_resistance_ohm); check the sensor cable, the DAQ channel and its gain"
+        )
     neg = cal.polarity_votes(m.force_N, m.voltage_V, m.dt_s, imps, nominal)
     if neg > len(imps) / 2:
         raise MeasurementError(
@@ -53,6 +86,61 @@ def load_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]
             "is anti-correlated with the model's); swap the electrode leads or negate voltage_V in a copy of the file"
         )
     return m, imps
+
+
+def _checks_digest(path: str, config: dict) -> str:
+    """What a record's check depends on: its content, the settings the checks read, the checking code."""
+    import hashlib
+    import json
+    from pathlib import Path
+
+    from .. import io
+    from ..sensor import calibration as sensor_cal
+
+    h = hashlib.sha256(io.file_digest(path).encode())
+    h.update(
+        json.dumps({k: config[k] for k in ("calibration", "sensor")}, sort_keys=True, default=str).encode()
+    )
+    for mod in (io, sensor_cal):
+        h.update(Path(mod.__file__).read_bytes())
+    h.update(Path(__file__).read_bytes())
+    return h.hexdigest()
+
+
+def check_record_once(path: str, config: dict, cache_dir: str) -> dict:
+    """:func:`load_record`'s checks, done once per record content and settings.
+
+    The workflow checks the user's record at every start (even ``-n``); a
+    record that passed is remembered in ``cache_dir``/<digest>.json, keyed by
+    the SHA-256 of the file's content, the calibration and sensor settings
+    and the checking code, so an unchanged 200 MB record costs one hash per
+    start, not a parse. Failures are not cached. Returns the summary.
+    """
+    import json
+    from pathlib import Path
+
+    from ..io import _check_readable_text
+
+    _check_readable_text(Path(path))  # a folder or unreadable file: one line before hashing
+    key = _checks_digest(path, config)
+    memo = Path(cache_dir) / f"{key}.json"
+    if memo.is_file():
+        try:
+            return json.loads(memo.read_text())
+        except (OSError, json.JSONDecodeError):
+            pass
+    m, imps = load_record(path, config)
+    summary = {
+        "measurement": str(path),
+        "rows": int(m.time_s.size),
+        "sample_rate_Hz": m.sample_rate_Hz,
+        "impulses": len(imps),
+    }
+    try:
+        write_json(summary, memo)
+    except OSError:
+        pass  # a read-only results/ only costs the next start another check
+    return summary
 
 
 def extract_sensitivity(measurement_csv: str, out_json: str, config: dict) -> None:
