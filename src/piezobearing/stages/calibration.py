@@ -51,7 +51,12 @@ def load_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]
     under compression (an inverted polarity is reported, never fitted).
     """
     c = config["calibration"]
-    m = read_measurement(path, resample_to_uniform=c["resample_to_uniform"])
+    m = read_measurement(
+        path,
+        resample_to_uniform=c["resample_to_uniform"],
+        channels=c.get("channels"),
+        wav_full_scale_V=c.get("wav_full_scale_V"),
+    )
     check_channels(m)
     imps = cal.detect_impulses(
         m.force_N, m.voltage_V, m.dt_s, c["min_prominence_fraction"], c["min_separation_s"]
@@ -119,9 +124,9 @@ def check_record_once(path: str, config: dict, cache_dir: str) -> dict:
     import json
     from pathlib import Path
 
-    from ..io import _check_readable_text
+    from ..io import check_readable
 
-    _check_readable_text(Path(path))  # a folder or unreadable file: one line before hashing
+    check_readable(Path(path), text=False)  # a folder or unreadable file: one line before hashing
     key = _checks_digest(path, config)
     memo = Path(cache_dir) / f"{key}.json"
     if memo.is_file():
