@@ -82,7 +82,9 @@ def check_readable(path: Path, key: str = "calibration", text: bool = True) -> N
     if not path.exists():
         raise MeasurementError(f"{path}: file not found; set {key}.measurement to an existing record file")
     if path.is_dir():
-        raise MeasurementError(f"{path}: is a folder, not a file; set {key}.measurement to the record file inside it")
+        raise MeasurementError(
+            f"{path}: is a folder, not a file; set {key}.measurement to the record file inside it"
+        )
     if not path.is_file():
         raise MeasurementError(f"{path}: not a regular file; save the record as a file and give its path")
     try:
@@ -94,9 +96,9 @@ def check_readable(path: Path, key: str = "calibration", text: bool = True) -> N
             "(chmod u+r) or copy the file somewhere readable"
         ) from None
     if not head.strip():
-        raise MeasurementError(
-            f"{path}: the file is empty; export the record again, header time_s,force_N,voltage_V"
-        )
+        raise MeasurementError(f"{path}: the file is empty; export the record again")
+    if not text:
+        return
     try:
         codecs.getincrementaldecoder("utf-8")().decode(head, final=len(head) < _HEAD_BYTES)
     except UnicodeDecodeError as e:
