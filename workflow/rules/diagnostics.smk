@@ -45,8 +45,8 @@ rule diagnose:
         "../envs/piezobearing.yaml"
     threads: 1
     resources:
-        mem_mb=500,
-        runtime=2,
+        mem_mb=lambda wc, input: 500 + int(30 * input.size_mb),
+        runtime=lambda wc, input: 2 + int(0.6 * input.size_mb),
     params:
         sensor=config["sensor"],
         calibration=config["calibration"],

@@ -24,8 +24,8 @@ rule fig05:
         "../envs/piezobearing.yaml"
     threads: 1
     resources:
-        mem_mb=500,
-        runtime=2,
+        mem_mb=lambda wc, input: 500 + int(5 * input.size_mb),
+        runtime=lambda wc, input: 2 + int(0.03 * input.size_mb),
     shell:
         "papermill {input.notebook:q} {output.notebook:q} -k python3 -r measurement {input.measurement:q}"
         " -r sensitivity {input.sensitivity:q} -r figure {output.figure:q} > {log:q} 2>&1"
@@ -51,8 +51,8 @@ rule fig06:
         "../envs/piezobearing.yaml"
     threads: 1
     resources:
-        mem_mb=500,
-        runtime=2,
+        mem_mb=lambda wc, input: 500 + int(5 * input.size_mb),
+        runtime=lambda wc, input: 2 + int(0.03 * input.size_mb),
     shell:
         "papermill {input.notebook:q} {output.notebook:q} -k python3 -r fit {input.fit:q}"
         " -r resistance {input.resistance:q} -r figure {output.figure:q} > {log:q} 2>&1"
