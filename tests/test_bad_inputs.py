@@ -97,7 +97,7 @@ def workdir() -> Path:
         "string_number.yaml": "synthesis:\n  resistance_ohm: 50e6\n",
         "nan.yaml": "sensor:\n  cable_length_m: .nan\n",
         "pitch.yaml": "bearing:\n  pitch_diameter_m: 5.0e-3\n",
-        "defect.yaml": "bearing:\n  defect_width_m: 12.0e-3\n",
+        "defect.yaml": "bearing:\n  defects:\n    - {type: outer_race, width_m: 12.0e-3, depth_m: 1.0e-3, angle_deg: 0.0}\n",
         "mesh_level.yaml": "sensor_fem:\n  mesh_level: 5\n",
         "rollers.yaml": "bearing:\n  n_rollers: 14\n",
         "band.yaml": "signals:\n  band_Hz: [1250.0, 500.0]\n",

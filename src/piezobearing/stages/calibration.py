@@ -5,27 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..fitting import nrmse
-from ..io import (
-    Measurement,
-    MeasurementError,
-    check_channels,
-    read_json,
-    read_measurement,
-    write_json,
-    write_measurement,
-)
+from ..diagnosis.calibration.record import read_record
+from ..diagnosis.least_squares import nrmse
+from ..io import Measurement, read_json, write_json, write_measurement
 from ..scorecard import Row, write_part
 from ..sensor import calibration as cal
 from ..sensor.lowfreq import asymptote_onset_Hz, lowfreq_sensitivity
 from ..synthesis import PressProtocol, synthesize
-
-#: A voltage that correlates less than this with the model's prediction from the measured force, for
-#: every resistance of FLAT_RESISTANCE_FACTORS x calibration.initial_resistance_ohm, carries no sensor
-#: signal (a disconnected channel: noise only). A good synthetic record reaches 0.99, a record whose
-#: signal is 1/1000 of its 2 mV noise 0.17 (measured on the CI record).
-FLAT_CORRELATION = 0.3
-FLAT_RESISTANCE_FACTORS = np.array([0.1, 1.0, 10.0, 100.0])
 
 
 def nominal_circuit(config: dict, resistance_ohm: float | None = None) -> cal.SensorCircuit:
@@ -44,53 +30,9 @@ def synthesize_calibration(config: dict, out_csv: str) -> None:
 
 
 def load_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]]:
-    """Read and check a calibration record and detect its impulses.
-
-    Beyond the file checks of :func:`piezobearing.io.read_measurement`, the
-    record needs at least two impulses and the voltage must swing positive
-    under compression (an inverted polarity is reported, never fitted).
-    """
-    c = config["calibration"]
-    m = read_measurement(
-        path,
-        resample_to_uniform=c["resample_to_uniform"],
-        channels=c.get("channels"),
-        wav_full_scale_V=c.get("wav_full_scale_V"),
-    )
-    check_channels(m)
-    imps = cal.detect_impulses(
-        m.force_N, m.voltage_V, m.dt_s, c["min_prominence_fraction"], c["min_separation_s"]
-    )
-    if len(imps) < 2:
-        raise MeasurementError(
-            f"{path}: column force_N: {len(imps)} impulse(s) found, at least 2 are needed; record more presses "
-            "or lower calibration.min_prominence_fraction / min_separation_s"
-        )
-    nominal = nominal_circuit(config, c["initial_resistance_ohm"])
-    corr = [
-        abs(
-            float(
-                np.corrcoef(
-                    cal.circuit_voltage(m.force_N - m.force_N[0], m.dt_s, nominal_circuit(config, r)),
-                    m.voltage_V,
-                )[0, 1]
-            )
-        )
-        for r in c["initial_resistance_ohm"] * FLAT_RESISTANCE_FACTORS
-    ]
-    if not max(corr) >= FLAT_CORRELATION:
-        raise MeasurementError(
-            f"{path}: column voltage_V: flat, no sensor signal (correlation {max(corr):.2f} at best with the "
-            "voltage the sensor model predicts from force_N, for any resistance from 0.1 to 100 times "
-            "calibration.initial_resistance_ohm); check the sensor cable, the DAQ channel and its gain"
-        )
-    neg = cal.polarity_votes(m.force_N, m.voltage_V, m.dt_s, imps, nominal)
-    if neg > len(imps) / 2:
-        raise MeasurementError(
-            f"{path}: column voltage_V: polarity inverted (in {neg} of {len(imps)} impulses the voltage "
-            "is anti-correlated with the model's); swap the electrode leads or negate voltage_V in a copy of the file"
-        )
-    return m, imps
+    """Read and check a calibration record and detect its impulses (the calibration subject's reader,
+    :func:`piezobearing.diagnosis.calibration.record.read_record`)."""
+    return read_record(path, config)
 
 
 def _checks_digest(path: str, config: dict) -> str:
@@ -100,13 +42,14 @@ def _checks_digest(path: str, config: dict) -> str:
     from pathlib import Path
 
     from .. import io
+    from ..diagnosis.calibration import record
     from ..sensor import calibration as sensor_cal
 
     h = hashlib.sha256(io.file_digest(path).encode())
     h.update(
         json.dumps({k: config[k] for k in ("calibration", "sensor")}, sort_keys=True, default=str).encode()
     )
-    for mod in (io, sensor_cal):
+    for mod in (io, record, sensor_cal):
         h.update(Path(mod.__file__).read_bytes())
     h.update(Path(__file__).read_bytes())
     return h.hexdigest()
