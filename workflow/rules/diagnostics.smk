@@ -45,7 +45,7 @@ rule diagnose:
         "../envs/piezobearing.yaml"
     threads: 1
     resources:
-        mem_mb=lambda wc, input: 500 + int(30 * input.size_mb),
+        mem_mb=lambda wc, input: 500 + int(45 * input.size_mb),
         runtime=lambda wc, input: 2 + int(0.6 * input.size_mb),
     params:
         sensor=config["sensor"],
