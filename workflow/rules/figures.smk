@@ -26,6 +26,8 @@ rule fig05:
     resources:
         mem_mb=lambda wc, input: 500 + int(5 * input.size_mb),
         runtime=lambda wc, input: 2 + int(0.03 * input.size_mb),
+    params:
+        **stage_params("fig05", "notebooks/fig05_calibration_impulses.ipynb"),
     shell:
         "papermill {input.notebook:q} {output.notebook:q} -k python3 -r measurement {input.measurement:q}"
         " -r sensitivity {input.sensitivity:q} -r figure {output.figure:q} > {log:q} 2>&1"
@@ -53,6 +55,8 @@ rule fig06:
     resources:
         mem_mb=lambda wc, input: 500 + int(5 * input.size_mb),
         runtime=lambda wc, input: 2 + int(0.03 * input.size_mb),
+    params:
+        **stage_params("fig06", "notebooks/fig06_resistance_fit.ipynb"),
     shell:
         "papermill {input.notebook:q} {output.notebook:q} -k python3 -r fit {input.fit:q}"
         " -r resistance {input.resistance:q} -r figure {output.figure:q} > {log:q} 2>&1"
@@ -80,6 +84,8 @@ rule fig08a:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("fig08a", "notebooks/fig08a_lowfreq_sensitivity.ipynb"),
     shell:
         "papermill {input.notebook:q} {output.notebook:q} -k python3 -r curve {input.curve:q}"
         " -r lowfreq {input.lowfreq:q} -r figure {output.figure:q} > {log:q} 2>&1"
