@@ -382,3 +382,14 @@ def test_clock_drift_is_found_first_with_the_hidden_rate(paper_config):
     lo, hi = d["final"]["ci95"]["clock_drift_ppm"]
     assert est == pytest.approx(100.0, rel=0.05) and lo - 5 <= 100.0 <= hi + 5
     assert d["identifiability"]["steps"][0]["runner_up"] is not None
+
+
+def test_sensitivity_drift_is_found_first_with_the_hidden_slope(paper_config):
+    """A gain rising by 5% over the 25 s record (2e-3 /s; a size chosen to be detectable at this
+    noise, larger than a typical thermal drift over 25 s: say so, not tuned to pass)."""
+    d = run(paper_config, [{"name": "sensitivity_drift", "params": {"sensitivity_slope_per_s": 2e-3}}])
+    assert d["ranking"][0]["effect"] == "sensitivity_drift" and d["selected"][0] == "sensitivity_drift"
+    assert d["verdict"] == "explained"
+    est = d["final"]["params"]["sensitivity_slope_per_s"]
+    lo, hi = d["final"]["ci95"]["sensitivity_slope_per_s"]
+    assert est == pytest.approx(2e-3, rel=0.05) and lo - 1e-4 <= 2e-3 <= hi + 1e-4

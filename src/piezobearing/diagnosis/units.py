@@ -36,10 +36,11 @@ class Unit:
 
 
 #: Allowed suffixes, in the order they are matched (the longest ambiguous ones first:
-#: ``_per_N`` before ``_N``). The report shows values in ``display`` units.
+#: ``_per_N`` before ``_N``, ``_per_s`` before ``_s``). The report shows values in ``display`` units.
 UNITS: tuple[Unit, ...] = (
     Unit("_ohm", "ohm", 1e6, "MOhm"),
     Unit("_F", "F", 1e-12, "pF"),
+    Unit("_per_s", "1/s", 1.0, "1/s"),
     Unit("_s", "s", 1e-3, "ms"),
     Unit("_V", "V", 1e-3, "mV"),
     Unit("_Hz", "Hz", 1.0, "Hz"),

@@ -19,6 +19,7 @@ identifier             what it models
 ``extra_capacitance``  capacitance across the electrodes beyond Cp + cable
 ``d33_scale``          d33 off the datasheet by a factor (same record as extra C)
 ``clock_drift``        sample-clock rate difference force/voltage (ppm)
+``sensitivity_drift``  gain changing along the record
 =====================  ==========================================================
 """
 
@@ -57,6 +58,7 @@ from . import (  # noqa: E402  (the modules import .base, registered in this ord
     extra_capacitance,
     mains_pickup,
     reference_lag,
+    sensitivity_drift,
 )
 
 _MODULES = (
@@ -69,6 +71,7 @@ _MODULES = (
     extra_capacitance,
     d33_scale,
     clock_drift,
+    sensitivity_drift,
 )
 for _m in _MODULES:
     register(_m.EFFECT)
