@@ -41,6 +41,11 @@ from .lpm import BearingGeometry, contact_law, kinematic_frequencies, line_conta
 
 #: Points of the cage-phase table over one roller pitch.
 TABLE_POINTS = 4096
+#: The table with an outer-race groove is this many times finer (the groove's edges are kinks that a
+#: coarse table would put at grid points: a bias of the fitted angle of about one table step).
+GROOVE_REFINE = 16
+#: Points per roller pitch of the table over a cage turn (roller scatter, no groove).
+SCATTER_POINTS = 256
 
 
 @dataclass(frozen=True)
@@ -247,31 +252,42 @@ class Surrogate:
         hit = self._cache.get(ck)
         if hit is not None:
             return hit
-        if offsets is None:
-            period, m = self.geometry.roller_pitch_rad, self.table_points
-        else:
-            period, m = 2 * np.pi, self.table_points * self.geometry.n_rollers
-        phi = np.linspace(0.0, period, m + 1)
-        base = 0.0 if offsets is None else np.asarray(offsets)[None, :]
+        z = self.geometry.n_rollers
+        period = self.geometry.roller_pitch_rad if offsets is None else 2 * np.pi
+        base = np.zeros(z) if offsets is None else np.asarray(offsets)
         if outer_drop is None:
-            base = np.broadcast_to(base, (m + 1, self.geometry.n_rollers))
-            f, _ = self.sensor_force_at(phi, op, base)
+            # with scatter the table spans a cage turn: a coarser grid, the loads smooth without a groove
+            m = self.table_points if offsets is None else SCATTER_POINTS * z
+            phi = np.linspace(0.0, period, m + 1)
+            psi = self.roller_angles(phi)
+            e0 = None
+            if offsets is not None:  # start from the equal rollers' equilibrium
+                ft = self.table(op)
+                grid = np.linspace(0.0, ft[2], ft[4].shape[0])
+                e0 = np.stack([np.interp(np.mod(phi, ft[2]), grid, ft[4][:, i]) for i in (0, 1)], 1)
+            q, e = quasi_static_loads(
+                psi, np.broadcast_to(base, psi.shape), op.radial_load_N, 0.5 * op.radial_clearance_m,
+                self.k_contact, e0_m=e0, return_offset=True,
+            )
+            f = np.sum(q * self.influence(psi), axis=1)
+            f[-1] = f[0]
+            g = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(phi))])
+            out = (f, g, period, q > 0, e)
         else:
-            # only the phases at which a roller stands in the defect differ from the table without it
-            f = self.table(op, None, None, offsets)[0].copy()
+            # only the phases at which a roller stands in the groove differ from the table without it
+            m = GROOVE_REFINE * self.table_points * (1 if offsets is None else z)
+            phi = np.linspace(0.0, period, m + 1)
+            bt = self.table(op, None, None, offsets)
+            grid = np.linspace(0.0, period, bt[0].size)
+            f = np.interp(phi, grid, bt[0])
             drop = outer_drop(self.roller_angles(phi))
             rows = np.flatnonzero(drop.max(axis=1) > 0)
             if rows.size:
-                f[rows] = self.sensor_force_at(phi[rows], op, drop[rows] + base)[0]
-        f[-1] = f[0]
-        g = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(phi))])
-        out = (f, g, period)
-        if outer_drop is None:  # which rollers carry load at each phase (for moving defects)
-            psi = self.roller_angles(phi)
-            q, e = quasi_static_loads(
-                psi, base, op.radial_load_N, 0.5 * op.radial_clearance_m, self.k_contact, return_offset=True
-            )
-            out = (f, g, period, q > 0, e)
+                k = np.rint(phi[rows] / period * (bt[0].size - 1)).astype(int)
+                f[rows] = self.sensor_force_at(phi[rows], op, drop[rows] + base[None, :], e0_m=bt[4][k])[0]
+            f[-1] = f[0]
+            g = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(phi))])
+            out = (f, g, period)
         self._cache[ck] = out
         while len(self._cache) > 16:
             self._cache.pop(next(iter(self._cache)))
@@ -318,9 +334,14 @@ class Surrogate:
         out = np.interp(np.mod(phi, period), grid, f)
         # a drop under a roller that carries nothing changes nothing: solve only where a loaded roller drops
         # (loaded at the nearest table phase or either neighbour)
-        k = np.rint(np.mod(phi, period) / period * (f.size - 1)).astype(int)
-        m = f.size - 1
-        near = loaded[k] | loaded[np.mod(k - 1, m)] | loaded[np.mod(k + 1, m)]
+        m = loaded.shape[0] - 1
+        k = np.rint(np.mod(phi, period) / period * m).astype(int) % m
+        # the record's roller j stands where the table's roller j + n does, n = whole pitches turned
+        # (a pitch: the labels shift by one roller; a cage turn: none)
+        z = loaded.shape[1]
+        n = np.floor(phi / period).astype(int) * int(round(z * period / (2 * np.pi)))
+        cols = (np.arange(z)[None, :] + n[:, None]) % z
+        near = loaded[k[:, None], cols] | loaded[np.mod(k - 1, m)[:, None], cols] | loaded[np.mod(k + 1, m)[:, None], cols]
         rows = np.flatnonzero(np.any((drop_m > 0) & near, axis=1))
         if rows.size:
             psi = self.roller_angles(phi[rows])
