@@ -37,7 +37,7 @@ from typing import Callable
 
 import numpy as np
 
-from .lpm import BearingGeometry, contact_law, kinematic_frequencies, line_contact_stiffness
+from .lpm import BearingGeometry, chord_drop_m, contact_law, kinematic_frequencies, line_contact_stiffness
 
 #: Points of the cage-phase table over one roller pitch.
 TABLE_POINTS = 4096
@@ -389,19 +389,10 @@ def phase_edges(phase_rad: np.ndarray) -> np.ndarray:
 
 
 def groove_drop(u_m: np.ndarray, width_m: float, rho_m: float) -> np.ndarray:
-    """Radial drop [m] where a cylinder of relative radius rho bridges a groove of width w.
-
-    ``u_m`` is the arc length from the groove's centre. Resting on the nearer
-    edge, the contact sinks rho - sqrt(rho^2 - m^2), m = w/2 - |u| the
-    distance to that edge; 0 outside the groove. rho is the relative radius
-    of the two surfaces, 1/(1/r - 1/R) on a concave (outer) raceway and
-    1/(1/r + 1/R) on a convex (inner) one (NOTES-ENGINEERING).
-    """
-    half = 0.5 * width_m
-    m = half - np.abs(u_m)
-    inside = m > 0
-    mm = np.minimum(np.where(inside, np.minimum(m, half), 0.0), rho_m)
-    return np.where(inside, rho_m - np.sqrt(rho_m * rho_m - mm * mm), 0.0)
+    """Radial drop [m] where a cylinder of relative radius rho bridges a groove of width w, at arc u
+    from its centre: the LPM's :func:`~piezobearing.bearing.lpm.chord_drop_m`, without a depth cap
+    (the drop of a groove a roller can bridge is far below any groove's depth)."""
+    return chord_drop_m(u_m, width_m, np.inf, rho_m)
 
 
 def wrap(angle_rad: np.ndarray) -> np.ndarray:
@@ -415,8 +406,8 @@ def outer_race_drop(psi_rad: np.ndarray, angle_rad: float, width_m: float, geome
     The roller bridges the groove on the concave raceway (radius (D_p + D_r)/2)
     with the relative radius 1/(1/r - 1/R_o).
     """
-    r, ro = 0.5 * geometry.roller_diameter_m, geometry.outer_raceway_radius_m
-    return groove_drop(ro * wrap(np.asarray(psi_rad) - angle_rad), width_m, 1.0 / (1.0 / r - 1.0 / ro))
+    ro = geometry.outer_raceway_radius_m
+    return groove_drop(ro * wrap(np.asarray(psi_rad) - angle_rad), width_m, geometry.relative_radius_m("outer"))
 
 
 def inner_race_drop(
@@ -430,7 +421,6 @@ def inner_race_drop(
     within the groove's arc on the inner raceway (radius (D_p - D_r)/2); a
     groove narrower than the roller pitch holds one roller at a time.
     """
-    r = 0.5 * geometry.roller_diameter_m
     ri = 0.5 * (geometry.pitch_diameter_m - geometry.roller_diameter_m)
     z, pitch = geometry.n_rollers, geometry.roller_pitch_rad
     psi0 = np.asarray(psi_rad)[:, 0]
@@ -438,7 +428,7 @@ def inner_race_drop(
     j = np.mod(np.rint((theta - psi0) / pitch), z).astype(int)
     u = ri * wrap(psi0 + j * pitch - theta)
     out = np.zeros((psi0.size, z))
-    out[np.arange(psi0.size), j] = groove_drop(u, width_m, 1.0 / (1.0 / r + 1.0 / ri))
+    out[np.arange(psi0.size), j] = groove_drop(u, width_m, geometry.relative_radius_m("inner"))
     return out
 
 
@@ -452,11 +442,9 @@ def rolling_element_drop(
     relative radius of each contact.
     """
     r = 0.5 * geometry.roller_diameter_m
-    ro = geometry.outer_raceway_radius_m
-    ri = 0.5 * (geometry.pitch_diameter_m - geometry.roller_diameter_m)
     beta = np.asarray(spin_rad)
-    d = groove_drop(r * wrap(beta), width_m, 1.0 / (1.0 / r - 1.0 / ro)) + groove_drop(
-        r * wrap(beta - np.pi), width_m, 1.0 / (1.0 / r + 1.0 / ri)
+    d = groove_drop(r * wrap(beta), width_m, geometry.relative_radius_m("outer")) + groove_drop(
+        r * wrap(beta - np.pi), width_m, geometry.relative_radius_m("inner")
     )
     out = np.zeros((beta.size, n_rollers))
     out[:, roller] = d

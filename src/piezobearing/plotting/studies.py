@@ -38,7 +38,7 @@ def fault_detection(df: pd.DataFrame):
     threshold dotted.
     """
     fig, axes = plt.subplots(1, 2, figsize=(10.0, 3.8), gridspec_kw={"width_ratios": [1.6, 1.0]})
-    s_col, w_col = "bearing__shaft_speed_rpm", "bearing__defect_width_m"
+    s_col, w_col = "bearing__shaft_speed_rpm", "bearing__defects__0__width_m"
     groups = df.groupby(w_col) if w_col in df else [(None, df)]
     for i, (width, g) in enumerate(groups):
         g = g.sort_values(s_col)

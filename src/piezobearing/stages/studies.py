@@ -115,8 +115,8 @@ def fault_detection_case(config: dict, outdir: Path, resistance: str, harmonic: 
     kin = sgs.kinematics(kin_json)
     f0 = kin["bpfo_Hz"]
     b = cfg["bearing"]
-    # time a roller centre takes to cross the groove (it sinks over this arc; Defect.drop_m)
-    crossing_s = b["defect_width_m"] / (
+    # time a roller centre takes to cross the (first) groove (it sinks over this arc; lpm.chord_drop_m)
+    crossing_s = b["defects"][0]["width_m"] / (
         BearingGeometry.from_config(b).outer_raceway_radius_m * 2 * np.pi * kin["ftf_Hz"]
     )
     es, ins = sig.EnvelopeSettings.from_config(s), sig.IndicatorSettings.from_config(s)
