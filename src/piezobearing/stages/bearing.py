@@ -366,6 +366,13 @@ def housing_transient(
     t0 = time.perf_counter()
     modes = fem.compute_modes(model, h["n_modes"], seed=config["seed"])
     timings["modes_s"] = time.perf_counter() - t0
+    top, nyq = float(modes.frequencies_Hz.max()), 0.5 / dt
+    if h["method"] == "reduced" and top < nyq:
+        # the static correction holds for modes well above the band only (README, housing at DAQ rates)
+        raise ValueError(
+            f"housing.n_modes = {h['n_modes']}: the highest mode, {top:.0f} Hz, lies below the Nyquist frequency "
+            f"{nyq:.0f} Hz of bearing.time_step_s; raise housing.n_modes until it passes {nyq:.0f} Hz"
+        )
     alpha, beta = fem.rayleigh_coefficients(h["damping_ratio"], h["damping_band_Hz"])
     c = load_contact(contact_npz)
     t, q, psi = c["time_s"], c["load_N"], c["angle_rad"]
