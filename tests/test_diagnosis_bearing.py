@@ -25,7 +25,7 @@ HIDDEN = {
     "clearance": {"radial_clearance_m": 35e-6},
     "load_share": {"load_share_ratio": 0.5},
     "roller_scatter": {"roller_4_offset_m": 2e-6},
-    "mains_pickup": {"mains_frequency_Hz": 50.02, "mains_h1_cos_V": 2.0, "mains_h1_sin_V": 2.0},
+    "mains_pickup": {"mains_frequency_Hz": 50.02, "mains_h1_cos_V": 3.0, "mains_h1_sin_V": 3.0},
 }
 
 

@@ -42,7 +42,8 @@ from .lpm import BearingGeometry, chord_drop_m, contact_law, kinematic_frequenci
 #: Points of the cage-phase table over one roller pitch.
 TABLE_POINTS = 4096
 #: The table with an outer-race groove is this many times finer (the groove's edges are kinks that a
-#: coarse table would put at grid points: a bias of the fitted angle of about one table step).
+#: coarse table would put at grid points: a bias of the fitted angle of about one table step); over a
+#: cage turn (with roller scatter) twice.
 GROOVE_REFINE = 16
 #: Points per roller pitch of the table over a cage turn (roller scatter, no groove).
 SCATTER_POINTS = 256
@@ -275,7 +276,7 @@ class Surrogate:
             out = (f, g, period, q > 0, e)
         else:
             # only the phases at which a roller stands in the groove differ from the table without it
-            m = GROOVE_REFINE * self.table_points * (1 if offsets is None else z)
+            m = (GROOVE_REFINE * self.table_points) if offsets is None else (2 * self.table_points * z)
             phi = np.linspace(0.0, period, m + 1)
             bt = self.table(op, None, None, offsets)
             grid = np.linspace(0.0, period, bt[0].size)

@@ -227,7 +227,9 @@ class EnvelopeBands:
         lines = fault_lines(kin["frequencies"], min(band[1] - band[0], 0.5 * fs))
         df = f[1] - f[0]
         hw = max(2, int(np.ceil(0.01 * kin["frequencies"]["bpfo_Hz"] / df)))
-        # the residual's envelope noise: median over the band (Rayleigh-like amplitudes; the median is robust)
+        # the residual's envelope noise near each band: the median of the bins within 20 bins either side
+        # of the band's window (the envelope spectrum of noise is not flat: it falls from 0 Hz to the
+        # band's width), so the amplitudes there are Rayleigh-like with that median
         sel = (f > 2.0) & (f < band[1] - band[0])
         floor = float(np.median(a_res[sel])) if sel.any() else 0.0
         # the largest of M Rayleigh amplitudes exceeds c x median with prob 1 - (1 - exp(-c^2 ln 2))^M
@@ -238,7 +240,9 @@ class EnvelopeBands:
             i = int(np.argmin(np.abs(f - ln["frequency_Hz"])))
             win = slice(max(i - hw, 0), i + hw + 1)
             j = win.start + int(np.argmax(a_res[win]))
-            ratio = float(a_res[j] / floor) if floor > 0 else 0.0
+            near = np.r_[a_res[max(i - hw - 20, 1) : max(i - hw, 1)], a_res[i + hw + 1 : i + hw + 21]]
+            local = float(np.median(near)) if near.size >= 8 else floor
+            ratio = float(a_res[j] / local) if local > 0 else 0.0
             marks.append({**ln, "residual_ratio": ratio, "measured_V": float(a_meas[i])})
             if ratio > c:
                 found.append(
@@ -248,7 +252,7 @@ class EnvelopeBands:
                         "frequency_Hz": float(f[j]),
                         "ratio": ratio,
                         "where": f"residual envelope line at {ln['name']} ({f[j]:.2f} Hz), {ratio:.1f}x the "
-                        f"envelope floor (threshold {c:.1f}x)",
+                        f"envelope floor around it (threshold {c:.1f}x)",
                     }
                 )
         found.sort(key=lambda d: -d["ratio"])

@@ -8,10 +8,12 @@ source, and on a rig the motor and its drive sit next to the sensor's lead,
 so 50 or 60 Hz and odd harmonics add to the voltage, whatever the bearing does.
 
 Parameters: ``mains_frequency_Hz`` in [49.5, 60.5] Hz; ``mains_h{k}_cos_V``,
-``mains_h{k}_sin_V`` in [-1, 1] V for the odd harmonics below 0.49 f_s.
+``mains_h{k}_sin_V`` in [-100, 100] V for the odd harmonics below 0.49 f_s.
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 from .base import Effect
 
@@ -32,7 +34,11 @@ class MainsPickup(Effect):
     )
 
     def params(self, record):
-        return _calib().params(record)
+        """The calibration effect's parameters, the amplitudes' bounds widened to +-100 V (a running rig's
+        voltage swings tens of volts, the calibration's millivolts)."""
+        return [
+            replace(p, lower=-100.0, upper=100.0) if p.name.endswith("_V") else p for p in _calib().params(record)
+        ]
 
     def additive(self, values, record):
         return _calib().additive(values, record)
