@@ -38,6 +38,12 @@ def measurement_csv():
     return user if user else f"{RESULTS}/calibration/measurement.csv"
 
 
+def bearing_record():
+    """The running-bearing record: the user's file (bearing.measurement) or the synthetic one."""
+    user = config["bearing"]["measurement"]
+    return user if user else f"{RESULTS}/diagnostics_bearing/synthetic_record.csv"
+
+
 def final_outputs():
     return FIGURES + TARGETS + [f"{RESULTS}/scorecard.md", f"{RESULTS}/scorecard.csv"]
 

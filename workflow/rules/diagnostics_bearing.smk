@@ -22,12 +22,6 @@ TARGETS.extend(
 )
 
 
-def bearing_record():
-    """The running-bearing record: the user's file or the synthetic one."""
-    user = config["bearing"]["measurement"]
-    return user if user else f"{RESULTS}/diagnostics_bearing/synthetic_record.csv"
-
-
 rule synthesize_bearing_record:
     input:
         influence=f"{RESULTS}/bearing/influence_line_healthy.csv",
