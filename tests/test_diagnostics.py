@@ -347,3 +347,27 @@ def test_clean_record_says_how_strongly_it_speaks_against_the_best_candidate(pap
     assert idf["stop"]["best"] == d["ranking"][0]["effect"]
     assert idf["stop"]["strength"] in ("weak", "positive")
     assert list(idf["correlation"]) == ["resistance_ohm"] and idf["correlated_pairs"] == []
+
+
+def test_d33_scale_is_found_as_the_same_record_as_extra_capacitance(paper_config):
+    """d33 15% below the datasheet (batch tolerance, ageing): the record cannot tell it from 46 pF of
+    extra capacitance (C (1/k - 1) at C = 261 pF), so the two tie at the top of the ranking, the
+    diagnosis states the exact equivalence, and both fitted values map onto the hidden k."""
+    from piezobearing.diagnosis.calibration.report import render
+
+    k = 0.85
+    d = run(paper_config, [{"name": "d33_scale", "params": {"d33_scale_ratio": k}}])
+    top = {r["effect"]: r for r in d["ranking"][:2]}
+    assert set(top) == {"d33_scale", "extra_capacitance"}
+    assert abs(top["d33_scale"]["delta_bic"] - top["extra_capacitance"]["delta_bic"]) < 2.0
+    assert d["ranking"][0]["effect"] == "extra_capacitance"  # the declaring effect yields the tie
+    assert d["identifiability"]["steps"][0]["margin_strength"] == "weak"
+    assert d["verdict"] == "explained" and len(d["selected"]) == 1
+    fit_k = top["d33_scale"]["params"]["d33_scale_ratio"]
+    lo, hi = top["d33_scale"]["ci95"]["d33_scale_ratio"]
+    assert fit_k == pytest.approx(k, rel=0.01) and lo <= k <= hi
+    c0 = nominal_circuit(paper_config).capacitance_F
+    assert top["extra_capacitance"]["params"]["extra_capacitance_F"] == pytest.approx(c0 * (1 / k - 1), rel=0.03)
+    eq = d["identifiability"]["equivalences"]
+    assert eq and set(eq[0]["effects"]) == {"d33_scale", "extra_capacitance"}
+    assert "R d33 and d33/C" in eq[0]["statement"] and "R d33 and d33/C" in render(d)

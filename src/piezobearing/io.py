@@ -4,12 +4,21 @@ voltage_V[, speed_rpm]) as DAQs export them: CSV, MATLAB .mat (v5, v7.3), UFF58,
 Every problem a user can make with a file raises :class:`MeasurementError`
 with one line that names the file, the row (as the line number in the file)
 or column, and the fix. Nothing here writes next to the input.
+
+Beyond the records, every other file format of the workflow lives here too (the house rule: file formats in
+io.py): JSON results, NPZ arrays, CSV tables and time series, the housing and sensor meshes. That makes this module
+longer than 600 lines; its sections (records as DAQs export them, result files, arrays and series, meshes,
+running-bearing records) are independent.
 """
 
 from __future__ import annotations
 
+import codecs
+import functools
+import hashlib
 import json
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -56,6 +65,87 @@ class Measurement:
 
     def to_frame(self) -> pd.DataFrame:
         return pd.DataFrame({"time_s": self.time_s, "force_N": self.force_N, "voltage_V": self.voltage_V})
+
+
+#: A number written with a decimal comma ("0,25", "-1,5e-3").
+_DECIMAL_COMMA = re.compile(r"^[-+]?\d+,\d+([eE][-+]?\d+)?$")
+#: Bytes read to check a file's encoding and first lines before parsing it.
+_HEAD_BYTES = 1 << 16
+
+
+def _not_utf8(path: Path, e: UnicodeDecodeError) -> str:
+    byte = e.object[e.start : e.start + 1].hex() if isinstance(e.object, bytes) else "?"
+    return (
+        f"{path}: not UTF-8 text (byte 0x{byte} at offset {e.start}; Latin-1 or Windows-1252?); "
+        "save it as UTF-8 (spreadsheet: 'CSV UTF-8'; shell: iconv -f latin1 -t utf-8 IN > OUT)"
+    )
+
+
+def check_readable(path: Path, key: str = "calibration", text: bool = True) -> None:
+    """A regular, readable, non-empty file (and with ``text``, UTF-8), or one line saying what it is
+    and the fix."""
+    if not path.exists():
+        raise MeasurementError(f"{path}: file not found; set {key}.measurement to an existing record file")
+    if path.is_dir():
+        raise MeasurementError(
+            f"{path}: is a folder, not a file; set {key}.measurement to the record file inside it"
+        )
+    if not path.is_file():
+        raise MeasurementError(f"{path}: not a regular file; save the record as a file and give its path")
+    try:
+        with open(path, "rb") as f:
+            head = f.read(_HEAD_BYTES)
+    except OSError as e:
+        raise MeasurementError(
+            f"{path}: cannot be read ({e.strerror or type(e).__name__}); give yourself read permission "
+            "(chmod u+r) or copy the file somewhere readable"
+        ) from None
+    if not head.strip():
+        raise MeasurementError(f"{path}: the file is empty; export the record again")
+    if not text:
+        return
+    try:
+        codecs.getincrementaldecoder("utf-8")().decode(head, final=len(head) < _HEAD_BYTES)
+    except UnicodeDecodeError as e:
+        raise MeasurementError(_not_utf8(path, e)) from None
+
+
+def _decimal_comma_hint(path: Path) -> str | None:
+    """The fix for a comma-separated file whose numbers also use decimal commas, else None."""
+    with open(path, encoding="utf-8-sig", errors="replace") as f:
+        lines = [f.readline() for _ in range(3)]
+    header, row = lines[0].strip(), lines[1].strip()
+    if "," in header and row.count(",") > header.count(",") and re.search(r"\d,\d", row):
+        return (
+            f"the numbers use a decimal comma (line 2: {row[:40]}); use a dot as the decimal mark "
+            "(export with '.' as decimal separator) and commas between columns"
+        )
+    return None
+
+
+def _read_numeric(path: Path, wanted: tuple[str, ...]) -> pd.DataFrame | None:
+    """The ``wanted`` columns that the file has, as floats, when every cell parses as a finite number,
+    else None.
+
+    The fast path: the C reader straight into float64 (about 8 bytes a cell),
+    where reading every cell as a string first needs several times the file
+    size. Anything unusual returns None and the per-cell checks find it.
+    """
+    try:
+        df = pd.read_csv(
+            path,
+            usecols=lambda c: str(c).strip() in wanted,
+            dtype=float,
+            skipinitialspace=True,
+            encoding="utf-8-sig",
+            engine="c",
+        )
+    except (ValueError, pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError):
+        return None
+    df.columns = [str(c).strip() for c in df.columns]
+    if len(df) < 3 or not all(np.isfinite(df[c].to_numpy()).all() for c in df.columns):
+        return None
+    return df
 
 
 def _line(i: int) -> int:
@@ -143,6 +233,7 @@ def read_table(
     if not path.exists():
         raise MeasurementError(f"{path}: file not found; set {key}.measurement to an existing record file")
     ext = path.suffix.lower()
+    check_readable(path, key, text=ext == ".csv")
     if ext not in RECORD_FORMATS:
         kinds = ", ".join(f"{e} ({d})" for e, d in RECORD_FORMATS.items())
         raise MeasurementError(
@@ -164,13 +255,22 @@ def read_table(
 
 
 def _read_csv_table(path: Path, columns, optional, unit_hint: str) -> RawTable:
+    hint = _decimal_comma_hint(path)
+    if hint:
+        raise MeasurementError(f"{path}: {hint}")
+    fast = _read_numeric(path, (*columns, *optional))
+    if fast is not None and all(c in fast.columns for c in columns):  # every cell a finite number
+        return RawTable(fast[[*columns, *(c for c in optional if c in fast.columns)]], _csv_place)
+    del fast
     try:
         # keep_default_na=False: a cell reading 'nan' or 'NA' is reported as written, not as empty
-        raw = pd.read_csv(path, dtype=str, skipinitialspace=True, keep_default_na=False)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as e:
+        raw = pd.read_csv(path, dtype=str, skipinitialspace=True, keep_default_na=False, encoding="utf-8-sig")
+    except UnicodeDecodeError as e:
+        raise MeasurementError(_not_utf8(path, e)) from None
+    except (pd.errors.ParserError, pd.errors.EmptyDataError) as e:
         first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
         raise MeasurementError(
-            f"{path}: not a readable CSV ({first}); save it as comma-separated text"
+            f"{path}: not a readable CSV ({first}); save it as comma-separated text, header {','.join(columns)}"
         ) from None
     raw.columns = [str(c).strip() for c in raw.columns]
     missing = [c for c in columns if c not in raw.columns]
@@ -358,9 +458,13 @@ def _finite_column(raw: pd.DataFrame, col: str, path: Path, place) -> np.ndarray
         i = int(bad[0])
         cell = raw[col].iloc[i]
         what = "empty" if pd.isna(cell) or str(cell).strip() == "" else f"'{cell}'"
+        fix = (
+            "use a dot as the decimal mark (or export the file with '.' as decimal separator)"
+            if _DECIMAL_COMMA.match(str(cell).strip())
+            else "fix or remove those rows"
+        )
         raise MeasurementError(
-            f"{path}: {place(i)}, column {col}: {what} is not a finite number "
-            f"({bad.size} such cells); fix or remove those rows"
+            f"{path}: {place(i)}, column {col}: {what} is not a finite number ({bad.size} such cells); {fix}"
         )
     return num
 
@@ -425,6 +529,57 @@ def read_measurement(
     return Measurement(data["time_s"], data["force_N"], data["voltage_V"], str(path))
 
 
+#: Samples at exactly the channel's extreme value beyond which the channel counts as clipped
+#: (at least this many, and at least CLIPPED_FRACTION of the record).
+CLIPPED_MIN_SAMPLES = 5
+CLIPPED_FRACTION = 1.0e-3
+
+
+def check_channels(m: Measurement) -> None:
+    """Refuse a dead, constant or clipped channel (one line naming the column and the fix).
+
+    A dead voltage channel (every sample 0 V) or a constant one would be
+    fitted as a sensitivity of 0 V/N with a confident interval; a clipped one
+    (many samples at exactly its largest or smallest value: the DAQ's range)
+    cuts the impulse peaks and biases the sensitivity low.
+    """
+    for col, v in (("voltage_V", m.voltage_V), ("force_N", m.force_N)):
+        lo, hi = float(v.min()), float(v.max())
+        if hi == 0.0 and lo == 0.0:
+            raise MeasurementError(
+                f"{m.source}: column {col}: every sample is 0 (a dead channel); check the sensor cable and the "
+                "DAQ channel, and record again"
+            )
+        if hi == lo:
+            raise MeasurementError(
+                f"{m.source}: column {col}: constant at {hi:g} in every sample (no signal); check the sensor "
+                "cable and the DAQ channel, and record again"
+            )
+        limit = max(CLIPPED_MIN_SAMPLES, CLIPPED_FRACTION * v.size)
+        for side, value in (("largest", hi), ("smallest", lo)):
+            n = int(np.count_nonzero(v == value))
+            if n >= limit:
+                raise MeasurementError(
+                    f"{m.source}: column {col}: clipped ({n} samples sit at exactly the {side} value {value:g}, "
+                    "the DAQ's range); widen the input range or lower the gain and record again"
+                )
+
+
+@functools.lru_cache(maxsize=16)
+def _digest(path: str, size: int, mtime_ns: int, inode: int) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def file_digest(path: str | Path) -> str:
+    """SHA-256 of a file's content (hex); computed once per process for an unchanged file."""
+    st = Path(path).stat()
+    return _digest(str(Path(path).resolve()), st.st_size, st.st_mtime_ns, st.st_ino)
+
+
 def write_measurement(m: Measurement, path: str | Path) -> None:
     """Write a record as CSV (used for the synthetic record under results/)."""
     Path(path).parent.mkdir(parents=True, exist_ok=True)
@@ -471,6 +626,161 @@ def read_json(path: str | Path, keys=(), error: type[Exception] = ResultFileErro
             raise error(f"{p}: key '{k}' missing; rerun the rule that writes it")
     return d
 
+
+# --------------------------------------------------------------------------- arrays, tables, series
+
+
+def write_npz(path: str | Path, **arrays) -> None:
+    """Arrays as a compressed NPZ, creating the folder."""
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(path, **arrays)
+
+
+def read_npz(path: str | Path) -> dict:
+    """Every array of an NPZ, by name."""
+    d = np.load(path)
+    return {k: d[k] for k in d.files}
+
+
+def write_csv(df: pd.DataFrame, path: str | Path, float_format: str | None = "%.10g") -> None:
+    """A table as CSV without the index, creating the folder."""
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    df.to_csv(path, index=False, float_format=float_format)
+
+
+class SignalFileError(ValueError):
+    """A time series or result file of the signal stages that cannot be used as it is."""
+
+
+#: Largest relative deviation of a time step from the mean step of a time series.
+SERIES_UNIFORM_RTOL = 1e-3
+
+
+def read_series(path: str | Path, column: str) -> tuple[np.ndarray, np.ndarray, float]:
+    """Read ``time_s`` and ``column`` of a CSV on a uniform clock.
+
+    Returns time [s], the column's values and the step dt = (t_end - t_0)/(n - 1) [s].
+    """
+    path = Path(path)
+    if not path.exists():
+        raise SignalFileError(f"{path}: file not found; run the stage that writes it")
+    df = pd.read_csv(path)
+    for c in ("time_s", column):
+        if c not in df.columns:
+            raise SignalFileError(f"{path}: column '{c}' missing (header: {', '.join(df.columns)}); "
+                                  f"write time_s,{column}")
+    t = df["time_s"].to_numpy(dtype=float)
+    x = df[column].to_numpy(dtype=float)
+    bad = np.flatnonzero(~(np.isfinite(t) & np.isfinite(x)))
+    if bad.size:
+        raise SignalFileError(f"{path}: line {int(bad[0]) + 2}: not a finite number ({bad.size} rows); "
+                              "fix the stage that writes it")
+    if t.size < 8:
+        raise SignalFileError(f"{path}: only {t.size} rows; a signal needs a time series")
+    dt = float((t[-1] - t[0]) / (t.size - 1))
+    off = np.flatnonzero(np.abs(np.diff(t) - dt) > SERIES_UNIFORM_RTOL * dt)
+    if dt <= 0 or off.size:
+        i = int(off[0]) + 1 if off.size else 1
+        raise SignalFileError(f"{path}: line {i + 2}, column time_s: uneven or decreasing time step; "
+                              "the signal stages need a uniform clock")
+    return t, x, dt
+
+
+def read_kinematics(path: str | Path) -> dict:
+    """The bearing's kinematic frequencies [Hz] (shaft, FTF, BPFO, BPFI, BSF) from kinematics.json."""
+    k = read_json(path)
+    need = ("shaft_Hz", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz")
+    miss = [n for n in need if n not in k]
+    if miss:
+        raise SignalFileError(f"{path}: key '{miss[0]}' missing; kinematics.json needs {', '.join(need)}")
+    return {n: float(k[n]) for n in need}
+
+
+def read_harmonic(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """Frequencies [Hz] and |V/F| [V/N] of the sensor FEM's harmonic response (harmonic.csv)."""
+    df = pd.read_csv(path)
+    for c in ("frequency_Hz", "voltage_per_force_V_per_N"):
+        if c not in df.columns:
+            raise SignalFileError(f"{path}: column '{c}' missing; the sensor FEM writes frequency_Hz, "
+                                  "voltage_per_force_V_per_N, phase")
+    return df["frequency_Hz"].to_numpy(dtype=float), np.abs(df["voltage_per_force_V_per_N"].to_numpy(dtype=float))
+
+
+# --------------------------------------------------------------------------- meshes
+
+
+def write_housing_mesh(m, path: str | Path) -> None:
+    """A :class:`~piezobearing.bearing.housing_mesh.HousingMesh` and its node sets as NPZ (with its geometry)."""
+    from dataclasses import asdict
+
+    write_npz(
+        path,
+        coors=m.coors,
+        conn=m.conn,
+        group=m.group,
+        raceway_psi=m.raceway_psi,
+        raceway_x=m.raceway_x,
+        raceway_nodes=m.raceway_nodes,
+        ring_outer_psi=m.ring_outer_psi,
+        ring_outer_nodes=m.ring_outer_nodes,
+        base_nodes=m.base_nodes,
+        faulty=m.faulty,
+        level=m.level,
+        geometry=json.dumps(asdict(m.geometry)),
+    )
+
+
+def read_housing_mesh(path: str | Path):
+    """A housing mesh written by :func:`write_housing_mesh`."""
+    from .bearing.housing_mesh import HousingGeometry, HousingMesh
+
+    d = np.load(path)
+    geo = HousingGeometry(**json.loads(str(d["geometry"])))
+    keys = (
+        "coors conn group raceway_psi raceway_x raceway_nodes ring_outer_psi ring_outer_nodes base_nodes"
+    ).split()
+    return HousingMesh(
+        **{k: d[k] for k in keys}, geometry=geo, faulty=bool(d["faulty"]), level=float(d["level"])
+    )
+
+
+def write_housing_vtk(m, path: str | Path) -> None:
+    """A housing mesh as VTK (hexahedra with the cell array ``group``), to view."""
+    import meshio
+
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    meshio.write(path, meshio.Mesh(m.coors, [("hexahedron", m.conn)], cell_data={"group": [m.group]}))
+
+
+def write_stack_mesh(mesh, path: str | Path) -> None:
+    """The sensor's quarter mesh as binary legacy VTK with the cell groups (1 bottom disk, 2 PZT, 3 top disk)."""
+    import meshio
+
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    m = meshio.Mesh(
+        mesh.coors, [("hexahedron", mesh.cells)], cell_data={"group": [mesh.groups.astype(np.int32)]}
+    )
+    meshio.write(str(path), m, file_format="vtk", binary=True)
+
+
+def read_stack_mesh(path: str | Path, geometry, level: float, error: type[Exception] = ResultFileError):
+    """Read a mesh written by :func:`write_stack_mesh` and check it against ``geometry`` (a StackGeometry)."""
+    import meshio
+
+    from .sensor.mesh import StackMesh
+
+    p = Path(path)
+    if not p.exists():
+        raise error(f"{p}: mesh file not found; run rule sensor_mesh")
+    m = meshio.read(str(p))
+    cells = m.cells_dict.get("hexahedron")
+    if cells is None or "group" not in m.cell_data_dict:
+        raise error(f"{p}: no hexahedra with a 'group' cell array; rerun rule sensor_mesh")
+    groups = np.asarray(m.cell_data_dict["group"]["hexahedron"], dtype=int)
+    z = geometry.z_interfaces_m
+    if not np.isclose(m.points[:, 2].max(), z[-1], rtol=1e-9) or not set(groups) <= {1, 2, 3}:
+        raise error(f"{p}: mesh does not match the configured stack geometry; rerun rule sensor_mesh")
+    return StackMesh(np.asarray(m.points, float), np.asarray(cells, int), groups, geometry, level)
 
 # --------------------------------------------------------------------------- running-bearing records
 

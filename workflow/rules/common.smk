@@ -10,6 +10,7 @@ from snakemake.utils import validate
 
 from piezobearing.config import ConfigError
 from piezobearing.config import validate as validate_config
+from piezobearing.registry import RECORD_RULES, code_hash, rule_params
 
 CONFIG_FILES = [
     "config/config.yaml",
@@ -44,6 +45,14 @@ def bearing_record():
     return user if user else f"{RESULTS}/diagnostics_bearing/synthetic_record.csv"
 
 
+def stage_params(rule, entry):
+    """A rule's params, from piezobearing.registry: the config values its stage reads (``reads``, all the
+    stage receives), the hash of the package code its script or notebook ``entry`` runs (``code``) and, for
+    a rule reading the calibration record, the record's checksum (``record``)."""
+    record = config["calibration"]["measurement"] if rule in RECORD_RULES else None
+    return rule_params(rule, config, f"{workflow.basedir}/{entry}", record)
+
+
 def final_outputs():
     return FIGURES + TARGETS + [f"{RESULTS}/scorecard.md", f"{RESULTS}/scorecard.csv"]
 
@@ -53,13 +62,37 @@ def check_measurement():
     if not config["calibration"]["measurement"]:
         return
     from piezobearing.io import MeasurementError
-    from piezobearing.stages.calibration import load_record
+    from piezobearing.stages.calibration import check_record_once
 
-    try:
-        load_record(config["calibration"]["measurement"], config)
+    try:  # once per record content and settings (results/.checked/), not at every start
+        check_record_once(
+            config["calibration"]["measurement"], config, f"{RESULTS}/.checked"
+        )
     except MeasurementError as e:
         print(f"piezobearing: {e}", file=sys.stderr)
         sys.exit(1)
 
 
 check_measurement()
+
+
+def check_single_run():
+    """Stop a second run while another snakemake works in this folder (Snakemake would advise
+    --unlock or --rerun-incomplete, which break the live run); claim the folder for this run.
+    """
+    from piezobearing import runlock
+
+    if not workflow.is_main_process:
+        return
+    other = runlock.active_run()
+    if other is None:
+        if not runlock.inspecting(sys.argv):
+            runlock.claim()
+    elif runlock.inspecting(sys.argv):
+        print(f"piezobearing: note: {runlock.message(other)}", file=sys.stderr)
+    else:
+        print(f"piezobearing: {runlock.message(other)}", file=sys.stderr)
+        sys.exit(1)
+
+
+check_single_run()

@@ -45,13 +45,10 @@ rule diagnose:
         "../envs/piezobearing.yaml"
     threads: 1
     resources:
-        mem_mb=500,
-        runtime=2,
+        mem_mb=lambda wc, input: 500 + int(45 * input.size_mb),
+        runtime=lambda wc, input: 2 + int(0.6 * input.size_mb),
     params:
-        sensor=config["sensor"],
-        calibration=config["calibration"],
-        model=config["model"],
-        diagnostics=config["diagnostics"],
+        **stage_params("diagnose", "workflow/scripts/diagnose.py"),
     script:
         "../scripts/diagnose.py"
 
@@ -78,6 +75,8 @@ rule diagnosis_notebook:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("diagnosis_notebook", "notebooks/diagnosis.ipynb"),
     shell:
-        "papermill {input.notebook} {output.notebook} -k python3 -p diagnosis {input.diagnosis}"
-        " -p arrays {input.arrays} -p figure {output.figure} > {log} 2>&1"
+        "papermill {input.notebook:q} {output.notebook:q} -k python3 -r diagnosis {input.diagnosis:q}"
+        " -r arrays {input.arrays:q} -r figure {output.figure:q} > {log:q} 2>&1"

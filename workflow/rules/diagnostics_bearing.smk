@@ -38,10 +38,10 @@ rule synthesize_bearing_record:
         mem_mb=500,
         runtime=2,
     params:
-        seed=config["seed"],
-        sensor=config["sensor"],
-        bearing=config["bearing"],
-        bearing_diagnosis=config["bearing_diagnosis"],
+        **stage_params(
+            "synthesize_bearing_record",
+            "workflow/scripts/synthesize_bearing_record.py",
+        ),
     script:
         "../scripts/synthesize_bearing_record.py"
 
@@ -73,11 +73,7 @@ rule diagnose_bearing:
         mem_mb=1000,
         runtime=15,
     params:
-        seed=config["seed"],
-        sensor=config["sensor"],
-        bearing=config["bearing"],
-        bearing_diagnosis=config["bearing_diagnosis"],
-        diagnostics=config["diagnostics"],
+        **stage_params("diagnose_bearing", "workflow/scripts/diagnose_bearing.py"),
     script:
         "../scripts/diagnose_bearing.py"
 
@@ -104,6 +100,10 @@ rule diagnosis_bearing_notebook:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params(
+            "diagnosis_bearing_notebook", "notebooks/diagnosis_bearing.ipynb"
+        ),
     shell:
-        "papermill {input.notebook} {output.notebook} -k python3 -p diagnosis {input.diagnosis}"
-        " -p arrays {input.arrays} -p figure {output.figure} > {log} 2>&1"
+        "papermill {input.notebook:q} {output.notebook:q} -k python3 -r diagnosis {input.diagnosis:q}"
+        " -r arrays {input.arrays:q} -r figure {output.figure:q} > {log:q} 2>&1"

@@ -22,24 +22,40 @@ STUDIES = {
 
 # Workflow results a study kind reads that its varied keys do not affect, by kind
 # (keyword arguments of its function in piezobearing.stages.studies.KINDS).
+_SENSOR_INPUTS = {
+    "resistance": f"{RESULTS}/calibration/resistance.json",
+    **(
+        {"harmonic": f"{RESULTS}/sensor/harmonic.csv"}
+        if config["signals"]["sensor_fem_correction"]
+        else {}
+    ),
+}
+# the detector studies (issue 11) run the fault_detection chain and the classification
+DETECTOR_STUDIES = ("daq_noise", "defect_position", "fault_type_speed")
 STUDY_INPUTS = {
-    "fault_detection": {
-        "resistance": f"{RESULTS}/calibration/resistance.json",
-        **(
-            {"harmonic": f"{RESULTS}/sensor/harmonic.csv"}
-            if config["signals"]["sensor_fem_correction"]
-            else {}
-        ),
-    },
+    "fault_detection": _SENSOR_INPUTS,
+    **{name: _SENSOR_INPUTS for name in DETECTOR_STUDIES},
 }
 # Measured per case (benchmarks/bench_rules.py, results/benchmarks/rules_config.json): calibration
 # 2 s and 0.2 GB, fault_detection 30-35 s (75 s on a loaded machine) and 0.2 GB peak.
-STUDY_MEM_MB = {"calibration_circuit": 500, "fault_detection": 1000}
-STUDY_RUNTIME_MIN = {"calibration_circuit": 2, "fault_detection": 4}
+STUDY_MEM_MB = {
+    "calibration_circuit": 500,
+    "fault_detection": 1000,
+    **{name: 2000 for name in DETECTOR_STUDIES},
+}
+STUDY_RUNTIME_MIN = {
+    "calibration_circuit": 2,
+    "fault_detection": 4,
+    **{name: 20 for name in DETECTOR_STUDIES},
+}
 # Config sections a kind's cases depend on (as params: a changed value reruns the cases).
 STUDY_SECTIONS = {
     "calibration_circuit": "seed sensor synthesis calibration lowfreq".split(),
     "fault_detection": "seed sensor sensor_fem bearing housing signals".split(),
+    **{
+        name: "seed sensor sensor_fem bearing housing signals".split()
+        for name in DETECTOR_STUDIES
+    },
 }
 
 
@@ -59,6 +75,7 @@ rule study_case:
         mem_mb=lambda wc: STUDY_MEM_MB.get(wc.study, 1000),
         runtime=lambda wc: STUDY_RUNTIME_MIN.get(wc.study, 10),
     params:
+        code=code_hash(f"{workflow.basedir}/workflow/scripts/study_case.py"),
         overrides=lambda wc: dict(STUDIES[wc.study].instance(wc)),
         sections=lambda wc: {k: config[k] for k in STUDY_SECTIONS.get(wc.study, [])},
     script:
@@ -89,6 +106,8 @@ rule study_summary:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("study_summary", "workflow/scripts/study_summary.py"),
     script:
         "../scripts/study_summary.py"
 

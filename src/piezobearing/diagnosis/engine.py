@@ -28,7 +28,7 @@ from typing import Callable
 import numpy as np
 
 from .fit import ModelFit, fit_model
-from .identifiability import identifiability
+from .identifiability import equivalences, identifiability
 from .noise import NoiseFloor
 from .record import Record, Segments
 from .residual_tests import Z99, ResidualTests, residual_tests
@@ -165,7 +165,17 @@ def diagnose(
         verdict(found),
         found,
         sel.dropped,
-        identifiability(sel.steps, sel.stop, final, cut),
+        identifiability(
+            sel.steps,
+            sel.stop,
+            final,
+            cut,
+            equivalences(
+                p.catalogue.values(),
+                {c.effect.name for c in sel.added} | {c.effect.name for c in sel.ranking[:1]},
+                sel.ranking,
+            ),
+        ),
     )
 
 

@@ -13,6 +13,10 @@
   ``log`` parameters, to first order the correlation of the relative
   errors), and every pair with |r| >= :data:`CORRELATED`: such a pair is
   determined as a combination, not one by one.
+- The exact equivalences that effects of the catalogue declare
+  (``Effect.equivalent_to``) between an effect selected or ranked first and
+  another: the record cannot choose between them, and the statement says
+  which combinations it determines.
 """
 
 from __future__ import annotations
@@ -35,14 +39,48 @@ def correlated_pairs(correlation: dict[str, dict[str, float]], threshold: float 
     return sorted(out, key=lambda p: -abs(p["correlation"]))
 
 
-def identifiability(steps: list[dict], stop: dict | None, final: ModelFit, cut: bool) -> dict:
+def equivalences(catalogue, named: set[str], ranking: list) -> list[dict]:
+    """The declared exact equivalences (``Effect.equivalent_to``) that touch an effect in ``named``.
+
+    Each with its statement and, from the first ranking, both effects' BIC drops and fitted values.
+    """
+    first = {c.effect.name: c for c in ranking}
+    out = []
+    for e in catalogue:
+        for other, text in e.equivalent_to.items():
+            if not ({e.name, other} & named):
+                continue
+            row = {"effects": [other, e.name], "statement": text}
+            for n in (other, e.name):
+                if n in first:
+                    row[n] = {
+                        "delta_bic": float(first[n].delta_bic),
+                        "summary": first[n].effect.summary(
+                            {k: first[n].fit.values[k] for k in first[n].param_names}
+                        ),
+                    }
+            out.append(row)
+    return out
+
+
+def identifiability(
+    steps: list[dict], stop: dict | None, final: ModelFit, cut: bool, equivalent: list[dict] | None = None
+) -> dict:
     """The JSON block ``identifiability`` of a diagnosis.
 
     ``steps`` are the kept steps (``steps[0]`` the configured model), ``stop``
     the step that added nothing (ignored when stand-ins were ``cut``: the search
     then stopped for want of a whitening effect, not for want of evidence).
     """
-    keys = ("added", "delta_bic", "strength", "runner_up", "runner_up_delta_bic", "margin_bic", "margin_strength")
+    keys = (
+        "added",
+        "delta_bic",
+        "strength",
+        "runner_up",
+        "runner_up_delta_bic",
+        "margin_bic",
+        "margin_strength",
+    )
     corr = final.result.correlation
     return {
         "scale": "Kass & Raftery (1995) on the BIC difference: >10 decisive, 6-10 strong, 2-6 positive, <2 weak",
@@ -51,4 +89,5 @@ def identifiability(steps: list[dict], stop: dict | None, final: ModelFit, cut: 
         "correlation": corr,
         "correlated_pairs": correlated_pairs(corr),
         "correlation_threshold": CORRELATED,
+        "equivalences": equivalent or [],
     }

@@ -129,7 +129,28 @@ def rank(
             )
         )
     out.sort(key=lambda c: -c.delta_bic)
+    return yield_ties(out)
+
+
+def yield_ties(cands: list[Candidate]) -> list[Candidate]:
+    """Put an effect after the one it declares itself exactly equivalent to when they tie (margin < 2).
+
+    Exactly equivalent effects fit a record equally well; which comes first is then decided by
+    rounding in the optimiser. The declaring effect yields, so the order is reproducible, and the
+    diagnosis states the equivalence (:mod:`~piezobearing.diagnosis.identifiability`).
+    """
+    out = list(cands)
+    for i in range(len(out) - 1):
+        a, b = out[i], out[i + 1]
+        if b.effect.name in a.effect.equivalent_to and a.delta_bic - b.delta_bic < 2.0:
+            out[i], out[i + 1] = b, a
     return out
+
+
+def equivalent_in(effect: Effect, model_effects) -> bool:
+    """Whether ``effect`` is exactly equivalent to an effect already in the model (adding it adds nothing)."""
+    names = {e.name for e in model_effects}
+    return bool(names & set(effect.equivalent_to)) or any(effect.name in e.equivalent_to for e in model_effects)
 
 
 def accepted(c: Candidate, settings: DiagnosticsSettings) -> bool:
@@ -222,7 +243,11 @@ def stepwise(
     ranking: list[Candidate] = []
     stop = None
     for step in range(settings.max_steps):
-        remaining = [e for e in catalogue if e not in current.model.effects]
+        remaining = [
+            e
+            for e in catalogue
+            if e not in current.model.effects and not equivalent_in(e, current.model.effects)
+        ]
         if not remaining:
             break
         cands = rank(current, remaining, record, voltage_V, floor, settings, progress, baseline_names)

@@ -44,12 +44,12 @@ UNITS: tuple[Unit, ...] = (
     Unit("_V", "V", 1e-3, "mV"),
     Unit("_Hz", "Hz", 1.0, "Hz"),
     Unit("_per_N", "1/N", 1.0, "1/N"),
-    # the running bearing (diagnosis/bearing): loads, widths and clearances, angles, ratios, a roller's index
+    Unit("_ratio", "1", 1.0, "x"),
+    # the running bearing (diagnosis/bearing): loads, widths and clearances, angles, a roller's index
     Unit("_N", "N", 1.0, "N"),
     Unit("_m", "m", 1e-3, "mm"),
     Unit("_rad", "rad", 0.017453292519943295, "deg"),  # pi / 180
-    Unit("_ratio", "-", 1.0, "-"),
-    Unit("_index", "-", 1.0, "-"),
+    Unit("_index", "1", 1.0, ""),
 )
 
 #: The suffixes alone (for ``str.endswith``).

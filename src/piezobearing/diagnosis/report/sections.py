@@ -323,6 +323,16 @@ def identifiability(d: dict) -> list[str]:
             f"{pct(stop['excess_explained'])} of the misfit left.",
             "",
         ]
+    for eq in idf.get("equivalences", []):
+        a, b = eq["effects"]
+        fitted = "; ".join(
+            f"`{n}`: {eq[n]['summary']} (delta BIC {eq[n]['delta_bic']:.6g})" for n in (a, b) if n in eq
+        )
+        out += [
+            f"**`{a}` and `{b}` are {eq['statement']}.** "
+            + (f"Fitted each alone: {fitted}." if fitted else ""),
+            "",
+        ]
     pairs = idf["correlated_pairs"]
     if pairs:
         out.append(f"Parameters of the final fit correlated beyond |r| = {idf['correlation_threshold']}:")
