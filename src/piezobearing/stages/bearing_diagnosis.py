@@ -39,8 +39,8 @@ def read_influence(path: str | Path) -> InfluenceLine:
 
 def influence_from_config(config: dict) -> InfluenceLine:
     """Solve the config's healthy housing once for its influence line (mesh, assembly, one solve)."""
+    from ..bearing import transient as st
     from ..bearing.housing_mesh import build_housing_mesh
-    from . import bearing as st
 
     mesh = build_housing_mesh(st.housing_geometry(config), False, config["housing"]["mesh_level"])
     _, _, radial = st.make_model(mesh, config).influence_line()
