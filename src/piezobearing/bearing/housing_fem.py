@@ -76,18 +76,26 @@ def sensor_stiffness(
     tip_diameter_m: float,
     tip_height_m: float,
     electrical: str = "open",
+    adhesive: IsotropicMaterial | None = None,
+    adhesive_height_m: float = 0.0,
 ) -> float:
-    """Axial stiffness of the sensor stack: the alumina tip and the PZT disk in series [N/m].
+    """Axial stiffness of the sensor stack: the alumina tip, its bond layer and the PZT disk in series [N/m].
 
-    k_s = 1 / (t / (E_tip A_tip) + h / (E_3 A_pzt)). The far alumina disk is
-    left out, as the paper holds the PZT's far face (U_z = 0). The stack's
-    first resonance (1.2e5 Hz) lies far above the FEM's band, so its mass is
-    negligible and a spring represents it.
+    k_s = 1 / (t / (E_tip A_tip) + t_a / (E_a A_a) + h / (E_3 A_pzt)), the bond
+    layer (if any, ``adhesive_height_m`` > 0) over the smaller of the tip's and
+    the PZT's areas. The far alumina disk is left out, as the paper holds the
+    PZT's far face (U_z = 0). The stack's first resonance (1.2e5 Hz) lies far
+    above the FEM's band, so its mass is negligible and a spring represents it.
     """
     a_tip = np.pi * tip_diameter_m**2 / 4
     a_pzt = np.pi * pzt_diameter_m**2 / 4
     e3 = pzt_axial_modulus(pzt, electrical)
-    return float(1 / (tip_height_m / (tip.young_Pa * a_tip) + pzt_height_m / (e3 * a_pzt)))
+    compliance = tip_height_m / (tip.young_Pa * a_tip) + pzt_height_m / (e3 * a_pzt)
+    if adhesive_height_m > 0.0:
+        if adhesive is None:
+            raise ValueError("an adhesive layer needs its material")
+        compliance += adhesive_height_m / (adhesive.young_Pa * min(a_tip, a_pzt))
+    return float(1 / compliance)
 
 
 # ---------------------------------------------------------------------------

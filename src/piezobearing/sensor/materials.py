@@ -97,6 +97,12 @@ class PiezoMaterial:
     def eps33_T_F_per_m(self) -> float:
         return float(self.eps_T_F_per_m[2, 2])
 
+    @property
+    def eps33_T_rel(self) -> float:
+        """eps33^T / eps0 [-], to 9 significant digits (datasheets give at most 4; this undoes the
+        last-bit rounding of eps0 x eps_rel / eps0)."""
+        return float(f"{self.eps33_T_F_per_m / epsilon_0:.9g}")
+
 
 def to_sfepy_voigt(a: np.ndarray) -> np.ndarray:
     """Reorder the Voigt axes of ``a`` from datasheet to sfepy order.
