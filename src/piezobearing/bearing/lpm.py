@@ -515,7 +515,12 @@ def lpm_rhs(p: LPMParameters):
 
 
 def simulate_lpm(
-    p: LPMParameters, t_start_s: float, n_steps: int, step_s: float, tol_m: float = 1e-16
+    p: LPMParameters,
+    t_start_s: float,
+    n_steps: int,
+    step_s: float,
+    tol_m: float = 1e-16,
+    method: str = "compiled",
 ) -> LPMResult:
     """Integrate the 4-DOF model with the implicit trapezoidal rule (Newmark, beta = 1/4, gamma = 1/2).
 
@@ -545,7 +550,13 @@ def simulate_lpm(
         Integration step h [s].
     tol_m : float
         Newton tolerance on the displacement update [m].
+    method : {"compiled", "python"}
+        ``compiled``: the step loop in :mod:`.lpm_kernel` (numba); ``python``:
+        the same algorithm as a numpy loop (the reference, ~50x slower; kept
+        for the benchmark and as the check of the kernel).
     """
+    if method not in ("compiled", "python"):
+        raise ValueError(f"simulate_lpm: method must be 'compiled' or 'python', got {method!r}")
     m, c, k = _matrices(p)
     fext = np.array([0.0, -p.radial_load_N, 0.0, 0.0])
     kc, gap = p.k_contact, p.gap_m
@@ -558,6 +569,15 @@ def simulate_lpm(
     e0 = static_offset(fext[:2], psi[0], gap, drop[0], kc)
     up0 = fext[:2] / p.pedestal_stiffness_N_per_m
     u = np.r_[up0 + e0, up0]
+    if method == "compiled":
+        from .lpm_kernel import newmark_lpm
+
+        us, q_out, n_iter, failed = newmark_lpm(
+            np.ascontiguousarray(sn), np.ascontiguousarray(cn), gap + drop, m, c, k, fext, u, step_s, kc, tol_m, 50
+        )
+        if failed >= 0:
+            raise RuntimeError(f"simulate_lpm: Newton did not converge at t = {t[failed]:.6g} s")
+        return LPMResult(t, psi, q_out, us[:, :2], us[:, 2:], int(n_iter))
     v = np.zeros(4)
     a = np.zeros(4)
 

@@ -54,15 +54,15 @@ def time_grid(bearing: dict) -> np.ndarray:
 # ---------------------------------------------------------------------------
 
 
-def run_lpm(bearing: dict, faulty: bool) -> dict:
-    """The LPM on its fine grid and resampled at the FEM step (dict of arrays)."""
+def run_lpm(bearing: dict, faulty: bool, method: str = "compiled") -> dict:
+    """The LPM on its fine grid and resampled at the FEM step (dict of arrays); ``method`` as in simulate_lpm."""
     p = brg.LPMParameters.from_config(bearing, faulty)
     dt = bearing["time_step_s"]
     h = dt / bearing["substeps"]
     t_out = time_grid(bearing)
     t_start = -bearing["settle_s"] - dt
     n_steps = int(np.ceil((t_out[-1] + dt - t_start) / h))
-    res = brg.simulate_lpm(p, t_start, n_steps, h)
+    res = brg.simulate_lpm(p, t_start, n_steps, h, method=method)
     keep = res.time_s >= -dt / 2 - 1e-12
     q_out = brg.resample_loads(res.time_s, res.load_N, t_out, dt, bearing["resample"])
     return {
@@ -127,13 +127,15 @@ def lpm_checks(run: dict, kin: brg.KinematicFrequencies) -> dict:
     return out
 
 
-def bearing_lpm(out_kinematics: str, out_npz: dict, out_csv: dict, out_json: str, config: dict) -> None:
+def bearing_lpm(
+    out_kinematics: str, out_npz: dict, out_csv: dict, out_json: str, config: dict, method: str = "compiled"
+) -> None:
     """Stage bearing_lpm: kinematic frequencies and both cases' roller contact loads.
 
     Writes ``kinematics.json`` (shaft_Hz, ftf_Hz, bpfo_Hz, bpfi_Hz, bsf_Hz),
     per case an NPZ with the fine integration grid and the FEM-step series
     and a CSV at the FEM step (time_s, load_N_jj, angle_rad_jj), and a JSON
-    of the checks.
+    of the checks. ``method``: the LPM's step loop (simulate_lpm), for the benchmark.
     """
     log_progress()
     b = config["bearing"]
@@ -147,7 +149,7 @@ def bearing_lpm(out_kinematics: str, out_npz: dict, out_csv: dict, out_json: str
     }
     for case in CASES:
         t0 = time.perf_counter()
-        run = run_lpm(b, _case(case))
+        run = run_lpm(b, _case(case), method)
         secs = time.perf_counter() - t0
         log.info("LPM %s: %d steps in %.1f s", case, len(run["fine_time_s"]), secs)
         Path(out_npz[case]).parent.mkdir(parents=True, exist_ok=True)
