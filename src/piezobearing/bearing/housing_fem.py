@@ -328,6 +328,28 @@ class HousingModel:
         return gy, gz, gy * np.sin(psi) - gz * np.cos(psi)
 
 
+    def sensor_port_compliance_m_per_N(self) -> float:
+        """Flexibility of the housing at the sensor without the sensor, a0 = w . K0^-1 w [m/N] (half model).
+
+        The sensor is the rank-one spring K = K0 + (k_s/2) w w^T, so with z = K^-1 c (c = -k_s w, the
+        influence solve) a = w . K^-1 w = (c . z) / k_s^2, and a0 = a / (1 - (k_s/2) a).
+        """
+        k = self.sensor_stiffness_N_per_m
+        a = float(self.sensor @ self.factor().solve(self.sensor)) / k**2
+        return a / (1.0 - 0.5 * k * a)
+
+
+def spring_share_factor(k_new_N_per_m: float, k_ref_N_per_m: float, port_compliance_m_per_N: float) -> float:
+    """Sensor force with spring k_new over that with k_ref, for any load on the housing [-].
+
+    With the housing's flexibility a0 at the sensor (half model, :meth:`HousingModel.sensor_port_compliance_m_per_N`)
+    the sensor force is F = k g0 / (1 + k a0 / 2) for every load (g0: the displacement there without the sensor),
+    so one factor scales the whole influence line: k_new (1 + k_ref a0/2) / (k_ref (1 + k_new a0/2)).
+    """
+    a0 = port_compliance_m_per_N
+    return k_new_N_per_m * (1 + 0.5 * k_ref_N_per_m * a0) / (k_ref_N_per_m * (1 + 0.5 * k_new_N_per_m * a0))
+
+
 def splu_symmetric(a: sp.spmatrix, ordering: str = "NATURAL"):
     """SuperLU of a symmetric positive definite matrix, without pivoting.
 

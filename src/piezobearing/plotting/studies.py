@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import matplotlib.pyplot as plt
+import numpy as np
 import pandas as pd
 
 
@@ -68,4 +69,67 @@ def fault_detection(df: pd.DataFrame):
     return fig
 
 
-SUMMARY_FIGURES = {"calibration_circuit": calibration_circuit, "fault_detection": fault_detection}
+#: The paper's stack (Sec. III-A, Fig. 2c) as the sensor_design table names it.
+PAPER_DESIGN = {"material": "apc850_paper", "pzt_diameter_m": 4.7e-3, "pzt_thickness_m": 3.4e-3,
+                "top_disk_diameter_m": 3.0e-3, "adhesive_thickness_m": 0.0, "cable_length_m": 2.0}
+
+
+def pareto_front(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Indices of the points no other point beats in both x and y (larger is better), by increasing x."""
+    order = np.argsort(-np.asarray(x), kind="stable")
+    front, best = [], -np.inf
+    for i in order:
+        if y[i] > best:
+            front.append(i)
+            best = y[i]
+    return np.array(front[::-1], dtype=int)
+
+
+def _is_paper(df: pd.DataFrame) -> np.ndarray:
+    ok = np.ones(len(df), bool)
+    for k, v in PAPER_DESIGN.items():
+        ok &= (df[k] == v).to_numpy() if isinstance(v, str) else np.isclose(df[k].to_numpy(float), v)
+    return ok
+
+
+def sensor_design(df: pd.DataFrame):
+    """Mid-band sensitivity against the +3 dB band edge, colour the detection margin; the paper's stack
+    marked, the trade-off front drawn. Right: where the DAQ resistance puts the low-frequency corner."""
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.4), gridspec_kw={"width_ratios": [1.7, 1.0]})
+    ax = axes[0]
+    bw, sens = df["band_high_Hz"].to_numpy(float) / 1e3, df["sensitivity_V_per_N"].to_numpy(float)
+    margin = df["detection_margin_dB"].to_numpy(float)
+    sc = ax.scatter(bw, sens, c=margin, cmap="viridis", s=36, edgecolors="k", linewidths=0.4, zorder=3)
+    fig.colorbar(sc, ax=ax, label="detection margin [dB] (noise density at the limit / configured)")
+    front = pareto_front(bw, sens)
+    ax.plot(bw[front], sens[front], "k--", lw=1, zorder=2, label="trade-off front")
+    paper = _is_paper(df) & np.isclose(df["resistance_ohm"].to_numpy(float), 50e6)
+    ax.scatter(bw[paper], sens[paper], s=160, facecolors="none", edgecolors="r", linewidths=1.5, zorder=4,
+               label="the paper's stack")
+    for i in range(len(df)):
+        r = df.iloc[i]
+        ax.annotate(f"{r['material']} {1e3 * r['pzt_diameter_m']:g}x{1e3 * r['pzt_thickness_m']:g}",
+                    (bw[i], sens[i]), fontsize=5, xytext=(3, 2), textcoords="offset points")
+    ax.set_xlabel("+3 dB band edge [kHz]")
+    ax.set_ylabel("mid-band sensitivity [V/N]")
+    ax.set_yscale("log")
+    ax.legend(fontsize=7, loc="lower left")
+    ax = axes[1]
+    rr = df["resistance_ohm"].to_numpy(float)
+    ax.loglog(rr / 1e6, df["corner_Hz"], "o", label="RC corner f_c")
+    ax.loglog(rr / 1e6, df["linear_from_Hz"], "s", mfc="none", label="within 5% of mid-band from")
+    ax.axhline(df["bpfo_Hz"].iloc[0] if "bpfo_Hz" in df else 70.8, color="0.5", lw=0.8, ls=":")
+    ax.set_xlabel("DAQ input resistance [MOhm]")
+    ax.set_ylabel("frequency [Hz]")
+    ax.legend(fontsize=7)
+    fig.suptitle(f"Sensor designs ({len(df)}): sensitivity, bandwidth and fault detection at the DAQ's noise "
+                 f"({df['noise_density_V_per_sqrtHz'].iloc[0]:.3g} V/sqrt(Hz))", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+SUMMARY_FIGURES = {
+    "calibration_circuit": calibration_circuit,
+    "fault_detection": fault_detection,
+    "sensor_design": sensor_design,
+}

@@ -112,6 +112,12 @@ class SensorCircuit:
         )
 
 
+def design_resistance_ohm(sensor: dict, fitted_ohm: float) -> float:
+    """The DAQ input resistance of the ``sensor`` config section, or the calibration's fitted R where it is null [Ohm]."""
+    r = sensor.get("daq_resistance_ohm")
+    return float(fitted_ohm) if r is None else float(r)
+
+
 def rc_voltage(force_N: np.ndarray, dt_s: float, gain_V_per_N: float, tau_s: float) -> np.ndarray:
     """Voltage of the first-order high-pass tau dV/dt + V = gain tau dF/dt.
 

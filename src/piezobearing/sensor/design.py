@@ -123,3 +123,85 @@ def design_figures(mesh: StackMesh, materials: fem.StackMaterials, circuit: fem.
         "stack_stiffness_open_N_per_m": k_open,
         "n_dof": int(asm.n_u + asm.p_coors.shape[0]),
     }
+
+
+# --------------------------------------------------------------------------- detection at absolute noise
+
+
+def _detect(v: np.ndarray, dt_s: float, f0_Hz: float, noise, shapes: np.ndarray, seeds: list, es, ins) -> dict:
+    """Median indicator, detection rate and clipping of record ``v`` under ``noise`` over the noise shapes."""
+    from ..signals import daq
+    from ..signals import detection as sig
+
+    ind, det, clip, thr = [], [], [], []
+    for shape, rng_seed in zip(shapes, seeds, strict=True):
+        acq = daq.add_noise(v, dt_s, noise, np.random.default_rng(rng_seed), shape=shape)
+        r = sig.analyse(acq.voltage_V, dt_s, f0_Hz, es, ins).result
+        ind.append(r["indicator"])
+        det.append(r["detected"])
+        thr.append(r["threshold"])
+        clip.append(acq.clipped_fraction)
+    return {
+        "indicator": float(np.median(ind)),
+        "detection_rate": float(np.mean(det)),
+        "threshold": float(max(thr)),
+        "clipped_fraction": float(max(clip)),
+    }
+
+
+def detection_at_noise(voltages: dict, dt_s: float, f0_Hz: float, noise, n_seeds: int, master_seed: int,
+                       es, ins, required_rate: float) -> dict:
+    """Envelope fault indicator of the healthy and faulty voltages under the DAQ's absolute noise.
+
+    ``voltages``: {"healthy": v, "faulty": v} noiseless [V] on step ``dt_s``;
+    ``noise``: :class:`piezobearing.signals.daq.NoiseSettings` (absolute:
+    input noise density, ADC bits over +-range_V, clipping). Replicate j of
+    a case draws its noise shape from :func:`piezobearing.signals.detection.noise_rng`
+    (master_seed, case, j) and keeps it at every noise level (common random
+    numbers). Besides the indicator at the configured density, the largest
+    density at which the faulty record is still detected in ``required_rate``
+    of the replicates is found by bisection on a log scale (ADC and
+    interference as configured); the margin is its ratio to the configured
+    density in dB (20 log10), the headroom a design has against a noisier rig.
+    """
+    from dataclasses import replace
+
+    from ..signals import detection as sig
+
+    out = {}
+    draws = {}
+    for case, v in voltages.items():
+        rngs = [sig.noise_rng(master_seed, case, j) for j in range(n_seeds)]
+        shapes = np.array([r.standard_normal(len(v)) for r in rngs])
+        seeds = [master_seed * 1000 + 17 * j + (1 if case == "faulty" else 0) for j in range(n_seeds)]
+        draws[case] = (shapes, seeds)
+        out[case] = _detect(v, dt_s, f0_Hz, noise, shapes, seeds, es, ins)
+    shapes, seeds = draws["faulty"]
+
+    def detected(log_density):
+        n = replace(noise, noise_density_V_per_sqrtHz=10.0**log_density)
+        return _detect(voltages["faulty"], dt_s, f0_Hz, n, shapes, seeds, es, ins)["detection_rate"] >= required_rate
+
+    lo, hi = -9.0, 3.0  # 1 nV/sqrt(Hz) .. 1 kV/sqrt(Hz)
+    if not detected(lo):
+        limit = float("nan")
+    elif detected(hi):
+        limit = 10.0**hi
+    else:
+        for _ in range(24):  # 12 decades / 2^24: 1e-6 decade
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if detected(mid) else (lo, mid)
+        limit = 10.0**lo
+    margin = 20 * np.log10(limit / noise.noise_density_V_per_sqrtHz) if np.isfinite(limit) else float("nan")
+    return {
+        "indicator_faulty": out["faulty"]["indicator"],
+        "indicator_healthy": out["healthy"]["indicator"],
+        "threshold": max(out["faulty"]["threshold"], out["healthy"]["threshold"]),
+        "detection_rate_faulty": out["faulty"]["detection_rate"],
+        "detection_rate_healthy": out["healthy"]["detection_rate"],
+        "clipped_fraction": max(out["faulty"]["clipped_fraction"], out["healthy"]["clipped_fraction"]),
+        "noise_density_V_per_sqrtHz": noise.noise_density_V_per_sqrtHz,
+        "noise_std_V": float(noise.noise_density_V_per_sqrtHz * np.sqrt(0.5 / dt_s)),
+        "noise_limit_V_per_sqrtHz": limit,
+        "detection_margin_dB": float(margin),
+    }

@@ -20,7 +20,7 @@ from ..bearing import lpm as brg
 from ..bearing.housing_mesh import HousingGeometry, HousingMesh, build_housing_mesh, mesh_quality
 from ..io import read_json, write_json
 from ..scorecard import Row, write_part
-from ..sensor.materials import CAST_IRON, STEEL, alumina_from_config, pzt_from_config
+from ..sensor.materials import CAST_IRON, STEEL, adhesive_from_config, alumina_from_config, pzt_from_config
 from . import log_progress
 
 CASES = ("healthy", "faulty")
@@ -243,7 +243,7 @@ def housing_mesh(case: str, out_npz: str, out_vtk: str, out_json: str, config: d
 
 
 def sensor_spring(config: dict) -> float:
-    """Axial stiffness of the sensor stack from the config [N/m]."""
+    """Axial stiffness of the sensor stack from the config [N/m] (tip disk, its bond layer, PZT)."""
     s, h, sf = config["sensor"], config["housing"], config["sensor_fem"]
     return fem.sensor_stiffness(
         pzt_from_config(s),
@@ -253,6 +253,8 @@ def sensor_spring(config: dict) -> float:
         sf["bottom_disk_diameter_m"],
         sf["bottom_disk_height_m"],
         h["sensor_electrical"],
+        adhesive_from_config(sf),
+        sf["adhesive_height_m"],
     )
 
 

@@ -17,8 +17,9 @@ from .. import io
 from ..io import write_json
 from ..scorecard import Row, write_part
 from ..sensor import fem as fem
-from ..sensor.calibration import SensorCircuit, frequency_response
+from ..sensor.calibration import SensorCircuit, design_resistance_ohm, frequency_response
 from ..sensor.materials import (
+    adhesive_from_config,
     alumina_from_config,
     paper_pzt,
     pzt_from_config,
@@ -95,10 +96,13 @@ class SensorFemParams:
             pzt_height_m=s["pzt_height_m"],
             top_disk_diameter_m=f["top_disk_diameter_m"],
             top_disk_height_m=f["top_disk_height_m"],
+            adhesive_height_m=f["adhesive_height_m"],
         )
         pzt = pzt_from_config(s)
         alu = alumina_from_config(f)
-        mats = fem.StackMaterials(stress_charge_form(pzt), s["pzt_density_kg_per_m3"], alu)
+        mats = fem.StackMaterials(
+            stress_charge_form(pzt), pzt.density_kg_per_m3, alu, adhesive_from_config(f)
+        )
         dens = MeshDensity(
             n_core=f["mesh_n_core"],
             n_rings=tuple(f["mesh_n_rings"]),
@@ -123,7 +127,7 @@ class SensorFemParams:
             reference_frequency_Hz=f["reference_frequency_Hz"],
             band_ratio_dB=f["band_ratio_dB"],
             band_ratio_percent=f["band_ratio_percent"],
-            cable_capacitance_F=s["cable_length_m"] * s["cable_capacitance_F_per_m"],
+            cable_capacitance_F=s["cable_length_m"] * s["cable_capacitance_F_per_m"] + s["daq_capacitance_F"],
         )
 
 
@@ -163,7 +167,7 @@ def read_mesh(path: str | Path, params: SensorFemParams, level: float) -> StackM
         raise SensorFemError(f"{p}: no hexahedra with a 'group' cell array; rerun rule sensor_mesh")
     groups = np.asarray(m.cell_data_dict["group"]["hexahedron"], dtype=int)
     z = params.geometry.z_interfaces_m
-    if not np.isclose(m.points[:, 2].max(), z[-1], rtol=1e-9) or not set(groups) <= {1, 2, 3}:
+    if not np.isclose(m.points[:, 2].max(), z[-1], rtol=1e-9) or not set(groups) <= {1, 2, 3, 4}:
         raise SensorFemError(
             f"{p}: mesh does not match the configured stack geometry; rerun rule sensor_mesh"
         )
@@ -387,7 +391,7 @@ def harmonic_results(mesh: StackMesh, p: SensorFemParams, rc_paper: SensorCircui
     paper's d33 and Cp); its R and cable capacitance are the FEM's circuit.
     Returns (the sweep DataFrame, the band dict).
     """
-    resistance_ohm = rc_paper.resistance_ohm
+    resistance_ohm = rc_paper.resistance_ohm  # the design's R (sensor.daq_resistance_ohm or the fitted one)
     t0 = time.perf_counter()
     asm = _assemble(mesh, p)
     rs = fem.reduce(asm, fem.stack_conditions(p.geometry.z_interfaces_m, "SS"))
@@ -478,6 +482,7 @@ def sensor_harmonic(
         raise SensorFemError(
             f"{resistance_json}: resistance_ohm = {r} is not a positive number; rerun fit_resistance"
         )
+    r = design_resistance_ohm(config["sensor"], r)
     mesh = read_mesh(mesh_vtk, p, p.multiplier)
     rc = SensorCircuit.from_config(config["sensor"], r)
     df, band = harmonic_results(mesh, p, rc, float(low["linear_from_Hz"]))

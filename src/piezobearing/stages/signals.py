@@ -17,7 +17,7 @@ import pandas as pd
 
 from ..io import read_json, write_json
 from ..scorecard import Row, write_part
-from ..sensor.calibration import SensorCircuit, circuit_voltage, frequency_response
+from ..sensor.calibration import SensorCircuit, circuit_voltage, design_resistance_ohm, frequency_response
 from ..signals import detection as sig
 
 #: Largest relative deviation of a time step from the mean step of a record.
@@ -79,11 +79,12 @@ def kinematics(path: str | Path) -> dict:
 
 
 def sensor_circuit(config: dict, resistance_json: str) -> tuple[SensorCircuit, dict]:
-    """The calibrated sensor circuit (R from the fit) and the resistance record."""
+    """The sensor circuit (R: sensor.daq_resistance_ohm, or the fitted one where it is null) and the resistance record."""
     res = read_json(resistance_json)
     if "resistance_ohm" not in res:
         raise SignalFileError(f"{resistance_json}: key 'resistance_ohm' missing; rerun rule fit_resistance")
-    return SensorCircuit.from_config(config["sensor"], res["resistance_ohm"]), res
+    r = design_resistance_ohm(config["sensor"], res["resistance_ohm"])
+    return SensorCircuit.from_config(config["sensor"], r), res
 
 
 def read_harmonic(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
