@@ -55,7 +55,7 @@ from scipy.signal import fftconvolve
 from scipy.special import roots_genlaguerre
 
 from . import detection as det
-from .fault_bands import FaultLine, fault_bands, window_bins
+from .fault_bands import FaultLine, fault_bands, fault_lines, window_bins
 
 #: The fault types the classifier chooses among (plus "none").
 CLASSIFIED_TYPES = ("outer_race", "inner_race", "rolling_element")
@@ -297,8 +297,20 @@ def type_test(results: list[LineResult], alpha: float, window: str = "rectangula
             "n_lines": len(results)}
 
 
-def _overlaps(a: LineResult, others: list[LineResult]) -> bool:
-    return any(a.bins[0] <= o.bins[-1] and o.bins[0] <= a.bins[-1] for o in others)
+def _overlaps(a: LineResult, others: list[np.ndarray]) -> bool:
+    return any(a.bins[0] <= o[-1] and o[0] <= a.bins[-1] for o in others)
+
+
+def _lines_to(kinematics: dict, fault_type: str, top_Hz: float, carrier_Hz: float,
+              settings: DetectorSettings) -> list[FaultLine]:
+    """Lines of a type with as many harmonics as reach ``top_Hz``: its impacts have harmonics beyond K.
+
+    BPFO + BPFI = Z f_r, so high harmonics of one type fall on lines of
+    another (5 BPFO = 3 BPFI + f_r for Z = 11): the own-line test must leave
+    them out too.
+    """
+    k = max(settings.n_harmonics, int(np.ceil(top_Hz / ((1 - settings.slip_max) * carrier_Hz))) + 1)
+    return fault_lines(kinematics, fault_type, k, settings.n_sidebands, settings.slip_max)
 
 
 @dataclass(frozen=True)
@@ -340,8 +352,11 @@ def detect(spec: det.EnvelopeSpectrum, kinematics: dict, settings: DetectorSetti
     res = {t: search_lines(spec, bands[t], all_lines, carriers[t], settings) for t in settings.fault_types}
     per_type = {t: type_test(res[t], alpha, settings.window) for t in settings.fault_types}
     detected = [t for t in settings.fault_types if per_type[t]["detected"]]
+    top = max(ln.high_Hz for ln in all_lines)
     for t in settings.fault_types:
-        others = [r for u in detected if u != t for r in res[u]]
+        others = [window_bins(ln, spec.resolution_Hz, spec.frequency_Hz.size)
+                  for u in detected if u != t for ln in _lines_to(kinematics, u, top, carriers[u], settings)
+                  if ln.low_Hz < spec.frequency_Hz[-1]]
         own = type_test([r for r in res[t] if not _overlaps(r, others)], alpha, settings.window)
         per_type[t]["own_lines"] = own
         per_type[t]["margin"] = per_type[t]["indicator"] / per_type[t]["threshold"]
