@@ -1,4 +1,5 @@
-"""Reading and checking calibration records (CSV: time_s, force_N, voltage_V).
+"""Reading and checking records (calibration: time_s, force_N, voltage_V; running bearing: time_s,
+voltage_V[, speed_rpm]) as DAQs export them: CSV, MATLAB .mat (v5, v7.3), UFF58, TDMS, WAV.
 
 Every problem a user can make with a file raises :class:`MeasurementError`
 with one line that names the file, the row (as the line number in the file)
@@ -11,6 +12,7 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 import pandas as pd
@@ -61,17 +63,107 @@ def _line(i: int) -> int:
     return int(i) + 2
 
 
-def read_measurement(path: str | Path, resample_to_uniform: bool = False) -> Measurement:
-    """Read and check a calibration CSV.
+# --------------------------------------------------------------------------- records as DAQs export them
 
-    Checks, in order: the file exists; the columns time_s, force_N, voltage_V
-    are present; every cell is a finite number; at least 3 rows; time
-    strictly increasing; time steps uniform within 1% of the median step
-    (or, with ``resample_to_uniform``, linear resampling onto the median step).
+#: File extensions the record reader understands, and what they are.
+RECORD_FORMATS = {
+    ".csv": "comma-separated text with a header",
+    ".mat": "MATLAB v5 (scipy.io) or v7.3 (HDF5, h5py)",
+    ".uff": "universal file, dataset 58 (pyuff)",
+    ".unv": "universal file, dataset 58 (pyuff)",
+    ".tdms": "NI TDMS (npTDMS)",
+    ".wav": "WAV (scipy.io.wavfile)",
+}
+
+
+@dataclass(frozen=True, eq=False)
+class RawTable:
+    """The columns a record file holds, before any check of their values.
+
+    Attributes
+    ----------
+    raw : DataFrame
+        One column per requested record column found in the file (CSV: the
+        cells as text, as written; other formats: numbers).
+    place : callable
+        ``place(i)`` names data row i for a message: ``line 43`` in a CSV
+        (line 1 is the header), ``sample 42`` (1-based) in other formats.
+    """
+
+    raw: pd.DataFrame
+    place: Callable[[int], str]
+
+
+def _sample(i: int) -> str:
+    return f"sample {int(i) + 1}"
+
+
+def _csv_place(i: int) -> str:
+    return f"line {_line(i)}"
+
+
+def read_table(
+    path: str | Path,
+    columns: tuple[str, ...],
+    optional: tuple[str, ...] = (),
+    channels: dict | None = None,
+    key: str = "calibration",
+    wav_full_scale_V: float | None = None,
+    unit_hint: str = "",
+) -> RawTable:
+    """Read the record columns of a DAQ export, dispatching on the file's extension.
+
+    Parameters
+    ----------
+    path : path
+        ``.csv`` (header with the column names), ``.mat`` (MATLAB v5 or v7.3:
+        one variable per channel), ``.uff``/``.unv`` (datasets 58, one per
+        channel, named by their ID line 1 or their 0-based position),
+        ``.tdms`` (channels ``group/channel`` or ``channel``), ``.wav``
+        (channels by 0-based index).
+    columns, optional : tuple of str
+        Record columns required and optional (``time_s``, ``voltage_V``, ...).
+    channels : dict
+        Record column -> channel name in the file (``<key>.channels`` in the
+        config). Unnamed columns are looked up by their own name; a file with
+        one data channel gives it to ``voltage_V``. In binary formats without
+        a time channel, time comes from the sampling (TDMS ``wf_increment``,
+        UFF58 abscissa, WAV rate, a scalar ``sample_rate_Hz`` in a .mat file).
+    key : str
+        Config section named in messages (``calibration``, ``bearing``).
+    wav_full_scale_V : float
+        Voltage of a full-scale sample of an integer WAV [V].
+
+    Raises
+    ------
+    MeasurementError
+        One line naming the file, the channel and the fix.
     """
     path = Path(path)
     if not path.exists():
-        raise MeasurementError(f"{path}: file not found; set calibration.measurement to an existing CSV")
+        raise MeasurementError(f"{path}: file not found; set {key}.measurement to an existing record file")
+    ext = path.suffix.lower()
+    if ext not in RECORD_FORMATS:
+        kinds = ", ".join(f"{e} ({d})" for e, d in RECORD_FORMATS.items())
+        raise MeasurementError(
+            f"{path}: unknown record format '{ext or '(no extension)'}'; export the record as one of: {kinds}"
+        )
+    channels = {k: v for k, v in (channels or {}).items() if v not in (None, "")}
+    if ext == ".csv":
+        return _read_csv_table(path, columns, optional, unit_hint)
+    try:
+        found = _BINARY_READERS[ext](path, channels, wav_full_scale_V, key)
+    except MeasurementError:
+        raise
+    except Exception as e:  # noqa: BLE001 - a library's own error on a damaged file: one line, no traceback
+        first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        raise MeasurementError(
+            f"{path}: not a readable {RECORD_FORMATS[ext]} file ({first}); export it again from the DAQ software"
+        ) from None
+    return _pick_channels(path, found, columns, optional, channels, key)
+
+
+def _read_csv_table(path: Path, columns, optional, unit_hint: str) -> RawTable:
     try:
         # keep_default_na=False: a cell reading 'nan' or 'NA' is reported as written, not as empty
         raw = pd.read_csv(path, dtype=str, skipinitialspace=True, keep_default_na=False)
@@ -81,45 +173,238 @@ def read_measurement(path: str | Path, resample_to_uniform: bool = False) -> Mea
             f"{path}: not a readable CSV ({first}); save it as comma-separated text"
         ) from None
     raw.columns = [str(c).strip() for c in raw.columns]
-    missing = [c for c in COLUMNS if c not in raw.columns]
+    missing = [c for c in columns if c not in raw.columns]
     seps = [s for s in (";", "\t", "|", " ") if len(raw.columns) == 1 and s in raw.columns[0].strip()]
+    header = ",".join(columns)
     if missing and seps:
         raise MeasurementError(
             f"{path}: the columns are separated by {seps[0]!r}, not commas (header: {raw.columns[0]}); "
-            f"save it as comma-separated text with a decimal point, header {','.join(COLUMNS)}"
+            f"save it as comma-separated text with a decimal point, header {header}"
         )
     if missing:
+        extra = f"[,{','.join(optional)}]" if optional else ""
         raise MeasurementError(
             f"{path}: column '{missing[0]}' missing (header has: {', '.join(raw.columns)}); "
-            f"the header must be {','.join(COLUMNS)} with values in s, N, V"
+            f"the header must be {header}{extra}{' ' + unit_hint if unit_hint else ''}"
         )
+    keep = [*columns, *(c for c in optional if c in raw.columns)]
+    return RawTable(raw[keep], _csv_place)
+
+
+@dataclass
+class _Channel:
+    """One channel of a binary record: its samples and, if the file says, its time axis [s]."""
+
+    data: np.ndarray
+    time_s: np.ndarray | None = None
+
+
+def _pick_channels(path: Path, found: dict, columns, optional, channels: dict, key: str) -> RawTable:
+    """Assign the file's channels to the record columns (by the config's names, else by column name)."""
+    data_names = [n for n in found if not n.startswith("__")]
+    cols: dict[str, np.ndarray] = {}
+    time = found.get("__time__")
+    for col in (*columns, *optional):
+        if col == "time_s" and col not in channels and col not in found:
+            continue
+        name = channels.get(col, col)
+        ch = found.get(str(name))
+        if ch is None and col == "voltage_V" and "voltage_V" not in channels:
+            others = [n for n in data_names if n not in channels.values() and n != "time_s"]
+            if len(others) == 1:
+                ch = found[others[0]]
+        if ch is None:
+            if col in optional:
+                continue
+            what = f"channel '{name}'" + ("" if name == col else f" (for {col})")
+            raise MeasurementError(
+                f"{path}: {what} not found (the file holds: {', '.join(data_names) or 'no channels'}); "
+                f"name the channel of {col} in {key}.channels.{col}"
+            )
+        cols[col] = np.asarray(ch.data, dtype=float).ravel()
+        if time is None and ch.time_s is not None:
+            time = _Channel(ch.time_s)
+    if "time_s" not in cols:
+        if time is None:
+            raise MeasurementError(
+                f"{path}: no time axis (no channel 'time_s', no sampling interval in the file); "
+                f"name the time channel in {key}.channels.time_s"
+            )
+        cols["time_s"] = np.asarray(time.data, dtype=float).ravel()
+    n = {c: v.size for c, v in cols.items()}
+    if len(set(n.values())) > 1:
+        desc = ", ".join(f"{c} {k}" for c, k in n.items())
+        raise MeasurementError(
+            f"{path}: the channels have different lengths ({desc} samples); export them on one clock"
+        )
+    order = [c for c in (*columns, *optional) if c in cols]
+    return RawTable(pd.DataFrame({c: cols[c] for c in order}), _sample)
+
+
+def _mat_channels(path: Path, channels: dict, wav_full_scale_V, key: str) -> dict:
+    """MATLAB variables as channels (v5 by scipy.io, v7.3 by h5py); ``name[k]`` is column k of a matrix."""
+    import h5py
+
+    if h5py.is_hdf5(path):
+        with h5py.File(path, "r") as f:
+            # MATLAB stores arrays column-major: an n x k matrix reads as (k, n)
+            arrays = {
+                n: np.asarray(v[()]).T
+                for n, v in f.items()
+                if isinstance(v, h5py.Dataset) and np.issubdtype(v.dtype, np.number)
+            }
+    else:
+        from scipy.io import loadmat
+
+        arrays = {
+            n: np.asarray(v)
+            for n, v in loadmat(path, squeeze_me=False).items()
+            if not n.startswith("__") and isinstance(v, np.ndarray) and np.issubdtype(v.dtype, np.number)
+        }
+    out: dict[str, _Channel] = {}
+    rate = None
+    for n, a in arrays.items():
+        a = np.atleast_2d(a)
+        if a.size == 1:
+            if n == "sample_rate_Hz":
+                rate = float(a.ravel()[0])
+            continue
+        if 1 in a.shape:
+            out[n] = _Channel(a.ravel())
+        else:
+            m = a if a.shape[0] >= a.shape[1] else a.T
+            for k in range(m.shape[1]):
+                out[f"{n}[{k}]"] = _Channel(m[:, k])
+    if rate is not None and out:
+        n0 = next(iter(out.values())).data.size
+        out["__time__"] = _Channel(np.arange(n0) / rate)
+    return out
+
+
+def _uff_channels(path: Path, channels: dict, wav_full_scale_V, key: str) -> dict:
+    """Datasets 58 of a universal file, each by its ID line 1 and by its position among them."""
+    import pyuff
+
+    sets = pyuff.UFF(str(path)).read_sets()
+    sets = [s for s in ([sets] if isinstance(sets, dict) else sets) if s.get("type") == 58]
+    if not sets:
+        raise MeasurementError(f"{path}: no dataset 58 (function at nodal DOF) in the file; export time records as UFF58")
+    out: dict[str, _Channel] = {}
+    for i, s in enumerate(sets):
+        ch = _Channel(np.real(np.asarray(s["data"])), np.asarray(s["x"], dtype=float))
+        out[str(i)] = ch
+        name = str(s.get("id1", "")).strip()
+        if name and name not in out:
+            out[name] = ch
+    return out
+
+
+def _tdms_channels(path: Path, channels: dict, wav_full_scale_V, key: str) -> dict:
+    """TDMS channels as ``group/channel`` and, where unique, ``channel``; time from ``wf_increment``."""
+    from nptdms import TdmsFile
+
+    out: dict[str, _Channel] = {}
+    count: dict[str, int] = {}
+    f = TdmsFile.read(path)
+    for g in f.groups():
+        for c in g.channels():
+            t = None
+            if "wf_increment" in c.properties:
+                t = c.time_track()
+            ch = _Channel(np.asarray(c[:]), t)
+            out[f"{g.name}/{c.name}"] = ch
+            count[c.name] = count.get(c.name, 0) + 1
+            out.setdefault(c.name, ch)
+    for name, k in count.items():
+        if k > 1:
+            del out[name]  # ambiguous: only group/channel names it
+    return out
+
+
+def _wav_channels(path: Path, channels: dict, wav_full_scale_V, key: str) -> dict:
+    """WAV channels by 0-based index; integer samples scaled so that full scale is ``wav_full_scale_V``."""
+    from scipy.io import wavfile
+
+    rate, data = wavfile.read(path)
+    data = np.asarray(data)
+    if np.issubdtype(data.dtype, np.integer):
+        if wav_full_scale_V is None:
+            raise MeasurementError(
+                f"{path}: integer WAV samples ({data.dtype}) carry no unit; set {key}.wav_full_scale_V to the "
+                "voltage of a full-scale sample, or export 32-bit float samples in volts"
+            )
+        info = np.iinfo(data.dtype)
+        mid = 0.5 * (float(info.max) + float(info.min) + 1)
+        data = (data.astype(float) - mid) / (float(info.max) + 1 - mid) * wav_full_scale_V
+    data = data.reshape(len(data), -1)
+    t = np.arange(len(data)) / float(rate)
+    return {str(k): _Channel(data[:, k], t) for k in range(data.shape[1])}
+
+
+_BINARY_READERS = {
+    ".mat": _mat_channels,
+    ".uff": _uff_channels,
+    ".unv": _uff_channels,
+    ".tdms": _tdms_channels,
+    ".wav": _wav_channels,
+}
+
+
+def _finite_column(raw: pd.DataFrame, col: str, path: Path, place) -> np.ndarray:
+    """A column as floats; the first cell that is not a finite number stops with its place."""
+    num = pd.to_numeric(raw[col], errors="coerce").to_numpy(dtype=float)
+    bad = np.flatnonzero(~np.isfinite(num))
+    if bad.size:
+        i = int(bad[0])
+        cell = raw[col].iloc[i]
+        what = "empty" if pd.isna(cell) or str(cell).strip() == "" else f"'{cell}'"
+        raise MeasurementError(
+            f"{path}: {place(i)}, column {col}: {what} is not a finite number "
+            f"({bad.size} such cells); fix or remove those rows"
+        )
+    return num
+
+
+def _check_increasing(t: np.ndarray, path: Path, place) -> None:
+    back = np.flatnonzero(np.diff(t) <= 0)
+    if back.size:
+        i = int(back[0]) + 1
+        raise MeasurementError(
+            f"{path}: {place(i)}, column time_s: time does not increase ({t[i - 1]:g} s then {t[i]:g} s); "
+            "sort the rows by time and remove duplicates"
+        )
+
+
+def read_measurement(
+    path: str | Path,
+    resample_to_uniform: bool = False,
+    channels: dict | None = None,
+    wav_full_scale_V: float | None = None,
+) -> Measurement:
+    """Read and check a calibration record (CSV, .mat, UFF58, TDMS or WAV; see :func:`read_table`).
+
+    Checks, in order: the file exists; the columns time_s, force_N, voltage_V
+    are present; every cell is a finite number; at least 3 rows; time
+    strictly increasing; time steps uniform within 1% of the median step
+    (or, with ``resample_to_uniform``, linear resampling onto the median step).
+    ``channels`` names the channels of a file that holds several
+    (``calibration.channels``).
+    """
+    path = Path(path)
+    table = read_table(
+        path, COLUMNS, channels=channels, key="calibration", wav_full_scale_V=wav_full_scale_V,
+        unit_hint="with values in s, N, V",
+    )
+    raw, place = table.raw, table.place
     if len(raw) < 3:
         raise MeasurementError(
             f"{path}: only {len(raw)} data rows below the header; a calibration record needs a time series, "
             "one row per sample"
         )
-    data = {}
-    for col in COLUMNS:
-        num = pd.to_numeric(raw[col], errors="coerce").to_numpy(dtype=float)
-        bad = np.flatnonzero(~np.isfinite(num))
-        if bad.size:
-            i = int(bad[0])
-            cell = raw[col].iloc[i]
-            what = "empty" if pd.isna(cell) or str(cell).strip() == "" else f"'{cell}'"
-            raise MeasurementError(
-                f"{path}: line {_line(i)}, column {col}: {what} is not a finite number "
-                f"({bad.size} such cells); fix or remove those rows"
-            )
-        data[col] = num
+    data = {col: _finite_column(raw, col, path, place) for col in COLUMNS}
     t = data["time_s"]
     dt = np.diff(t)
-    back = np.flatnonzero(dt <= 0)
-    if back.size:
-        i = int(back[0]) + 1
-        raise MeasurementError(
-            f"{path}: line {_line(i)}, column time_s: time does not increase ({t[i - 1]:g} s then {t[i]:g} s); "
-            "sort the rows by time and remove duplicates"
-        )
+    _check_increasing(t, path, place)
     step = float(np.median(dt))
     if step > 1.0 / MIN_SAMPLE_RATE_HZ:
         raise MeasurementError(
@@ -131,7 +416,7 @@ def read_measurement(path: str | Path, resample_to_uniform: bool = False) -> Mea
         if not resample_to_uniform:
             i = int(off[0]) + 1
             raise MeasurementError(
-                f"{path}: line {_line(i)}, column time_s: uneven time step ({dt[i - 1]:g} s against the median "
+                f"{path}: {place(i)}, column time_s: uneven time step ({dt[i - 1]:g} s against the median "
                 f"{step:g} s, {off.size} such steps); set calibration.resample_to_uniform: true to resample"
             )
         n = int(np.floor((t[-1] - t[0]) / step)) + 1
@@ -185,3 +470,168 @@ def read_json(path: str | Path, keys=(), error: type[Exception] = ResultFileErro
         if k not in d:
             raise error(f"{p}: key '{k}' missing; rerun the rule that writes it")
     return d
+
+
+# --------------------------------------------------------------------------- running-bearing records
+
+BEARING_COLUMNS = ("time_s", "voltage_V")
+BEARING_OPTIONAL = ("speed_rpm",)
+#: Slowest sampling of a running-bearing record: the roller passages (BPFO ~ 70 Hz at 1000 rpm) and
+#: their first harmonics must lie well below Nyquist [Hz].
+MIN_BEARING_RATE_HZ = 2000.0
+#: Shortest running-bearing record: ~35 roller passages at 1000 rpm, a 2 Hz resolution [s].
+MIN_BEARING_DURATION_S = 0.5
+#: A step longer than this many median steps is a gap (lost samples), not jitter.
+GAP_FACTOR = 1.5
+#: Consecutive samples at the record's extreme value that count as clipping.
+CLIP_RUN = 3
+
+
+@dataclass(frozen=True)
+class BearingRecord:
+    """A running-bearing record on a uniform clock: the sensor voltage and, optionally, a tachometer.
+
+    Attributes
+    ----------
+    time_s, voltage_V : ndarray
+        Samples [s], [V].
+    speed_rpm : ndarray or None
+        Shaft speed from a tachometer [rpm].
+    source : str
+        Where it came from (a path or "synthetic").
+    warnings : tuple of str
+        Problems that do not stop the diagnosis (clipping), one line each, naming the place.
+    clipped : ndarray of bool or None
+        Samples at a clipping level.
+    """
+
+    time_s: np.ndarray
+    voltage_V: np.ndarray
+    speed_rpm: np.ndarray | None
+    source: str
+    warnings: tuple[str, ...] = ()
+    clipped: np.ndarray | None = None
+
+    @property
+    def dt_s(self) -> float:
+        return float((self.time_s[-1] - self.time_s[0]) / (len(self.time_s) - 1))
+
+    @property
+    def sample_rate_Hz(self) -> float:
+        return 1.0 / self.dt_s
+
+    @property
+    def duration_s(self) -> float:
+        return float(self.time_s[-1] - self.time_s[0] + self.dt_s)
+
+    def to_frame(self) -> pd.DataFrame:
+        d = {"time_s": self.time_s, "voltage_V": self.voltage_V}
+        if self.speed_rpm is not None:
+            d["speed_rpm"] = self.speed_rpm
+        return pd.DataFrame(d)
+
+
+def clipping_runs(x: np.ndarray, min_run: int = CLIP_RUN) -> list[tuple[int, int]]:
+    """[start, stop) of runs of at least ``min_run`` samples sitting exactly at the record's max or min.
+
+    A DAQ input driven past its range returns its full-scale code for as long
+    as the overload lasts; a live signal repeats its extreme value only by
+    such saturation (or by a coarse ADC, which the run length guards against).
+    """
+    runs = []
+    for level in (np.max(x), np.min(x)):
+        at = np.concatenate([[0], (x == level).astype(np.int8), [0]])
+        d = np.diff(at)
+        for a, b in zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1), strict=True):
+            if b - a >= min_run:
+                runs.append((int(a), int(b)))
+    return sorted(runs)
+
+
+def read_bearing_record(
+    path: str | Path,
+    channels: dict | None = None,
+    wav_full_scale_V: float | None = None,
+    key: str = "bearing",
+) -> BearingRecord:
+    """Read and check a running-bearing record: ``time_s, voltage_V[, speed_rpm]`` (s, V, rpm).
+
+    Any format of :func:`read_table`. Checks, in order: the file and its
+    columns; every value a finite number; time strictly increasing, in
+    seconds; no gaps (a step over 1.5 median steps); steps uniform within
+    1%; at least 2 kHz and 0.5 s; a tachometer speed positive. Clipping
+    (runs of samples at the record's extreme value) is reported in
+    ``warnings`` and ``clipped``, not refused.
+    """
+    path = Path(path)
+    table = read_table(
+        path, BEARING_COLUMNS, BEARING_OPTIONAL, channels, key, wav_full_scale_V, "with values in s, V, rpm"
+    )
+    raw, place = table.raw, table.place
+    if len(raw) < 3:
+        raise MeasurementError(
+            f"{path}: only {len(raw)} data rows; a running-bearing record needs a time series, one row per sample"
+        )
+    data = {c: _finite_column(raw, c, path, place) for c in raw.columns}
+    t = data["time_s"]
+    _check_increasing(t, path, place)
+    dt = np.diff(t)
+    step = float(np.median(dt))
+    if step > 1.0 / MIN_BEARING_RATE_HZ:
+        hint = "; is time in milliseconds? time_s must be in seconds" if 1e3 / step >= MIN_BEARING_RATE_HZ else ""
+        raise MeasurementError(
+            f"{path}: column time_s: sampling at {1 / step:.6g} Hz; a running-bearing record needs at least "
+            f"{MIN_BEARING_RATE_HZ:g} Hz (the roller passages' harmonics must lie below Nyquist){hint}; "
+            "record at a higher rate"
+        )
+    gaps = np.flatnonzero(dt > GAP_FACTOR * step)
+    if gaps.size:
+        i = int(gaps[0]) + 1
+        lost = int(round(dt[i - 1] / step)) - 1
+        raise MeasurementError(
+            f"{path}: {place(i)}, column time_s: gap of {dt[i - 1]:g} s (about {lost} samples lost) at "
+            f"t = {t[i - 1]:g} s ({gaps.size} gap(s) in the record); the model needs one uninterrupted record: "
+            "diagnose the longest piece without a gap"
+        )
+    off = np.flatnonzero(np.abs(dt - step) > UNIFORM_RTOL * step)
+    if off.size:
+        i = int(off[0]) + 1
+        raise MeasurementError(
+            f"{path}: {place(i)}, column time_s: uneven time step ({dt[i - 1]:g} s against the median "
+            f"{step:g} s, {off.size} such steps); export the record on the DAQ's sample clock"
+        )
+    duration = float(t[-1] - t[0] + step)
+    if duration < MIN_BEARING_DURATION_S:
+        raise MeasurementError(
+            f"{path}: column time_s: {duration:.3g} s recorded; a running-bearing record needs at least "
+            f"{MIN_BEARING_DURATION_S:g} s (about 35 roller passages at 1000 rpm); record longer"
+        )
+    speed = data.get("speed_rpm")
+    if speed is not None:
+        neg = np.flatnonzero(speed <= 0)
+        if neg.size:
+            i = int(neg[0])
+            raise MeasurementError(
+                f"{path}: {place(i)}, column speed_rpm: {speed[i]:g} rpm; the tachometer speed must be "
+                "positive (in revolutions per minute); fix the column or leave it out"
+            )
+    v = data["voltage_V"]
+    runs = clipping_runs(v)
+    warnings: list[str] = []
+    clipped = np.zeros(v.size, dtype=bool)
+    for a, b in runs:
+        clipped[a:b] = True
+    if runs:
+        a, b = runs[0]
+        warnings.append(
+            f"{path}: {place(a)}, column voltage_V: clipped at {v[a]:g} V for {b - a} samples "
+            f"({clipped.sum()} samples in {len(runs)} runs, {100 * clipped.mean():.2g}% of the record); "
+            "the model cannot follow them there (expect residual at those samples); lower the DAQ gain or widen its range"
+        )
+    return BearingRecord(t, v, speed, str(path), tuple(warnings), clipped)
+
+
+def write_bearing_record(rec: BearingRecord, path: str | Path) -> None:
+    """Write a running-bearing record as CSV (the synthetic record under results/)."""
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    rec.to_frame().to_csv(path, index=False, float_format="%.10g")

@@ -36,7 +36,12 @@ def load_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]
     under compression (an inverted polarity is reported, never fitted).
     """
     c = config["calibration"]
-    m = read_measurement(path, resample_to_uniform=c["resample_to_uniform"])
+    m = read_measurement(
+        path,
+        resample_to_uniform=c["resample_to_uniform"],
+        channels=c.get("channels"),
+        wav_full_scale_V=c.get("wav_full_scale_V"),
+    )
     imps = cal.detect_impulses(
         m.force_N, m.voltage_V, m.dt_s, c["min_prominence_fraction"], c["min_separation_s"]
     )

@@ -1,0 +1,442 @@
+r"""The fast forward model of the running bearing: quasi-static load distribution times influence line.
+
+Where the housing is quasi-static (its first mode well above the band the
+record holds, see the README), the sensor force is
+
+.. math::  F_s(t) = \sum_{j=1}^{Z} Q_j(t)\, g(\psi_j(t)),
+
+the roller loads Q_j times the housing's influence line g (sensor force per
+newton of outward radial roller load at the angle psi; one solve of the
+housing FEM by reciprocity, :meth:`piezobearing.bearing.housing_fem.HousingModel.influence_line`).
+The roller loads come from the quasi-static equilibrium of the rings,
+
+.. math::  \sum_j Q_j(e)\, n(\psi_j) = (0, -F_r),\qquad
+           Q_j = K \langle e \cdot n(\psi_j) - P_d/2 - d_j \rangle^{10/9},
+
+solved for the shaft offset e by Newton's method, vectorised over all time
+samples at once; d_j is the defect's drop of roller j (0 when healthy). The
+LPM's inertia and damping are left out: its shaft-on-rollers mode (~2 kHz)
+is what this model cannot carry (checked against the full LPM + housing
+chain in ``benchmarks/bench_surrogate.py``, numbers in the README).
+
+Healthy, and with an outer-race defect (stationary, like the sensor), the
+whole configuration repeats every roller pitch of cage angle, so F_s is a
+periodic function of the cage phase phi alone: it is tabulated once over one
+pitch, and a record at any speed, slip, start phase or tachometer profile is
+a table look-up. A DAQ sample is the mean of F_s over its interval (a box
+filter, as the workflow averages the LPM's loads), computed exactly from the
+table's running integral. Defects that move with the shaft or a roller
+(inner race, rolling element) are solved on a fine time grid where they
+touch a roller, the healthy table elsewhere.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from .lpm import BearingGeometry, contact_law, kinematic_frequencies, line_contact_stiffness
+
+#: Points of the cage-phase table over one roller pitch.
+TABLE_POINTS = 4096
+
+
+@dataclass(frozen=True)
+class InfluenceLine:
+    """Sensor force per newton of outward radial roller load against the roller's angle.
+
+    Parameters
+    ----------
+    angle_rad : ndarray
+        Angles from the load direction (the sensor is at 0) [rad], any order, within one turn.
+    sensor_per_radial_load : ndarray
+        g(psi) [N/N].
+    """
+
+    angle_rad: np.ndarray
+    sensor_per_radial_load: np.ndarray
+    _sorted: tuple = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self):
+        a = np.mod(np.asarray(self.angle_rad, dtype=float), 2 * np.pi)
+        order = np.argsort(a)
+        a, g = a[order], np.asarray(self.sensor_per_radial_load, dtype=float)[order]
+        # periodic closure for np.interp
+        a = np.concatenate([a[-1:] - 2 * np.pi, a, a[:1] + 2 * np.pi])
+        g = np.concatenate([g[-1:], g, g[:1]])
+        object.__setattr__(self, "_sorted", (a, g))
+
+    def __call__(self, psi_rad: np.ndarray) -> np.ndarray:
+        """g(psi) [N/N], periodic in psi."""
+        a, g = self._sorted
+        return np.interp(np.mod(psi_rad, 2 * np.pi), a, g)
+
+
+@dataclass(frozen=True)
+class Operating:
+    """The operating point the surrogate runs at.
+
+    Parameters
+    ----------
+    radial_load_N : float
+        Radial load F_r on the shaft, along -z [N].
+    radial_clearance_m : float
+        Radial internal clearance P_d (total play) [m].
+    """
+
+    radial_load_N: float
+    radial_clearance_m: float
+
+
+def _normals(psi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return np.sin(psi), -np.cos(psi)
+
+
+def quasi_static_loads(
+    psi_rad: np.ndarray,
+    drop_m: np.ndarray,
+    radial_load_N: float,
+    gap_m: float,
+    k_contact: float,
+    tol_N: float = 1e-9,
+    e0_m: np.ndarray | None = None,
+    return_offset: bool = False,
+) -> np.ndarray:
+    """Roller loads Q (n, Z) [N] of the quasi-static equilibrium at every row of roller angles.
+
+    The equilibrium sum_j Q_j(e) n_j = (0, -F_r) is the minimum of the
+    convex potential
+
+    .. math::  \\Pi(e) = \\sum_j \\tfrac{9}{19} K \\langle\\delta_j(e)\\rangle^{19/9} - L \\cdot e,
+
+    whose gradient is the force residual and whose Hessian sum_j dQ_j n_j n_j^T
+    is the contact stiffness. Newton's method with an Armijo line search on
+    Pi converges from any start (accepting a step that lowers Pi or the residual; the LPM's :func:`~piezobearing.bearing.lpm.static_offset`,
+    which backtracks on the residual's norm, can stall where a roller stands
+    in a deep groove at the bottom); it runs vectorised over the rows.
+
+    Parameters
+    ----------
+    psi_rad, drop_m : ndarray (n, Z)
+        Roller angles from the load direction [rad] and extra gaps (defect drops, smaller rollers) [m].
+    radial_load_N : float
+        F_r [N].
+    gap_m : float
+        P_d / 2 [m].
+    k_contact : float
+        K [N / m^(10/9)].
+    tol_N : float
+        Relative force tolerance of the equilibrium [-].
+    e0_m : ndarray (n, 2), optional
+        Start offsets (e.g. the healthy equilibrium next to a defect's) [m].
+    return_offset : bool
+        Also return the shaft offsets e (n, 2) [m].
+    """
+    psi = np.atleast_2d(psi_rad)
+    drop = np.broadcast_to(drop_m, psi.shape)
+    s, c = _normals(psi)
+    load = np.array([0.0, -radial_load_N])
+    n = psi.shape[0]
+    e = np.zeros((n, 2))
+    e[:, 1] = -(gap_m + drop.max(axis=1) + (radial_load_N / k_contact) ** 0.9)
+    if e0_m is not None:
+        e = np.array(e0_m, dtype=float).reshape(n, 2)
+    idx = np.arange(n)
+    f, q, dq, pot = _state(e, idx, s, c, drop, gap_m, k_contact, load)
+    for _ in range(200):
+        norm = np.hypot(f[:, 0], f[:, 1])
+        active = norm > tol_N * radial_load_N
+        if not active.any():
+            return (q, e) if return_offset else q
+        idx = np.flatnonzero(active)
+        si, ci = s[idx], c[idx]
+        a = np.sum(dq[idx] * si * si, 1)
+        b = np.sum(dq[idx] * si * ci, 1)
+        d = np.sum(dq[idx] * ci * ci, 1)
+        reg = 1e-9 * (a + d) + 1e-3 * k_contact * 1e-6 ** (1 / 9)
+        a, d = a + reg, d + reg
+        det = a * d - b * b
+        fy, fz = f[idx, 0], f[idx, 1]
+        step = -np.stack([(d * fy - b * fz) / det, (-b * fy + a * fz) / det], 1)
+        slope = np.sum(f[idx] * step, 1)  # directional derivative of Pi, < 0
+        lam = np.ones(idx.size)
+        for _ in range(60):
+            trial = e[idx] + lam[:, None] * step
+            ft, qt, dqt, pt = _state(trial, idx, s, c, drop, gap_m, k_contact, load)
+            # Armijo on Pi; near the solution Pi's rounding hides the decrease, and a smaller residual counts
+            bad = (pt > pot[idx] + 1e-4 * lam * slope) & (np.hypot(ft[:, 0], ft[:, 1]) >= norm[idx])
+            if not bad.any():
+                break
+            lam = np.where(bad, 0.5 * lam, lam)
+        e[idx] = trial
+        f[idx], q[idx], dq[idx], pot[idx] = ft, qt, dqt, pt
+    raise RuntimeError(
+        f"quasi_static_loads: no equilibrium for {int(active.sum())} of {n} roller configurations "
+        f"at F_r = {radial_load_N} N"
+    )
+
+
+def _state(e, idx, s, c, drop, gap_m, k_contact, load):
+    """Force residual, loads, slopes and potential of the rows ``idx`` at offsets e (n_idx, 2)."""
+    si, ci = s[idx], c[idx]
+    delta = e[:, :1] * si + e[:, 1:] * ci - gap_m - drop[idx]
+    q, dq = contact_law(delta, k_contact)
+    pot = np.sum(q * np.maximum(delta, 0.0), 1) * (9 / 19) - e @ load
+    return np.stack([np.sum(q * si, 1), np.sum(q * ci, 1)], 1) - load, q, dq, pot
+
+
+@dataclass(frozen=True)
+class Surrogate:
+    """The quasi-static model of one bearing in one housing.
+
+    Parameters
+    ----------
+    geometry : BearingGeometry
+    influence : InfluenceLine
+    table_points : int
+        Points of the cage-phase table over one roller pitch.
+    """
+
+    geometry: BearingGeometry
+    influence: InfluenceLine
+    table_points: int = TABLE_POINTS
+    _cache: dict = field(default_factory=dict, compare=False, repr=False, hash=False)
+
+    @property
+    def k_contact(self) -> float:
+        return line_contact_stiffness(self.geometry.roller_length_m)
+
+    def roller_angles(self, cage_phase_rad: np.ndarray) -> np.ndarray:
+        """psi_j = phi + j 2 pi / Z for cage phases phi (n,) -> (n, Z) [rad]."""
+        z = self.geometry.n_rollers
+        return np.asarray(cage_phase_rad, dtype=float)[:, None] + self.geometry.roller_pitch_rad * np.arange(z)
+
+    def sensor_force_at(
+        self, cage_phase_rad: np.ndarray, op: Operating, drop_m: np.ndarray | float = 0.0, e0_m=None, tol_N=1e-9
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Sensor force [N] and roller loads (n, Z) [N] at cage phases phi (roller 0 at phi)."""
+        psi = self.roller_angles(cage_phase_rad)
+        q = quasi_static_loads(
+            psi, drop_m, op.radial_load_N, 0.5 * op.radial_clearance_m, self.k_contact, tol_N, e0_m=e0_m
+        )
+        return np.sum(q * self.influence(psi), axis=1), q
+
+    def table(
+        self,
+        op: Operating,
+        outer_drop: Callable[[np.ndarray], np.ndarray] | None = None,
+        key=None,
+        offsets_m: tuple[float, ...] | None = None,
+    ) -> tuple[np.ndarray, np.ndarray, float]:
+        """F_s over one period of cage phase, its running integral, and the period.
+
+        ``outer_drop(psi)`` is the drop [m] of a stationary (outer-race)
+        defect at roller angles psi; ``key`` identifies it for the cache.
+        ``offsets_m`` (Z,) are per-roller reductions of the roller diameter
+        (roller scatter, [m]; an oversize roller is negative): they add to
+        each roller's gap, and the period becomes a whole cage turn instead
+        of one roller pitch. Returns F on phi_k = k period / m, k = 0..m
+        (closed: the last equals the first), G(phi) = integral of F from 0
+        [N rad], and the period [rad].
+        """
+        offsets = None if offsets_m is None or not np.any(offsets_m) else tuple(float(o) for o in offsets_m)
+        offsets_m = offsets
+        ck = ("table", op, key, offsets)
+        hit = self._cache.get(ck)
+        if hit is not None:
+            return hit
+        if offsets is None:
+            period, m = self.geometry.roller_pitch_rad, self.table_points
+        else:
+            period, m = 2 * np.pi, self.table_points * self.geometry.n_rollers
+        phi = np.linspace(0.0, period, m + 1)
+        base = 0.0 if offsets is None else np.asarray(offsets)[None, :]
+        if outer_drop is None:
+            base = np.broadcast_to(base, (m + 1, self.geometry.n_rollers))
+            f, _ = self.sensor_force_at(phi, op, base)
+        else:
+            # only the phases at which a roller stands in the defect differ from the table without it
+            f = self.table(op, None, None, offsets)[0].copy()
+            drop = outer_drop(self.roller_angles(phi))
+            rows = np.flatnonzero(drop.max(axis=1) > 0)
+            if rows.size:
+                f[rows] = self.sensor_force_at(phi[rows], op, drop[rows] + base)[0]
+        f[-1] = f[0]
+        g = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(phi))])
+        out = (f, g, period)
+        if outer_drop is None:  # which rollers carry load at each phase (for moving defects)
+            psi = self.roller_angles(phi)
+            q, e = quasi_static_loads(
+                psi, base, op.radial_load_N, 0.5 * op.radial_clearance_m, self.k_contact, return_offset=True
+            )
+            out = (f, g, period, q > 0, e)
+        self._cache[ck] = out
+        while len(self._cache) > 16:
+            self._cache.pop(next(iter(self._cache)))
+        return out
+
+    def box_average(
+        self, phase_edges_rad: np.ndarray, op: Operating, outer_drop=None, key=None, offsets_m=None
+    ) -> np.ndarray:
+        """Mean of F_s over each interval of cage phase [phi_k, phi_k+1] (the DAQ's sample windows) [N].
+
+        Exact for the table (linear between its points): the periodic running
+        integral G(phi) = (phi // P) G(P) + G(phi mod P) is differenced at the
+        window edges. A zero-length window gives F_s there.
+        """
+        f, g, period = self.table(op, outer_drop, key, offsets_m)[:3]
+        grid = np.linspace(0.0, period, f.size)
+
+        def big_g(p):
+            k = np.floor(p / period)
+            return k * g[-1] + np.interp(p - k * period, grid, g)
+
+        edges = np.asarray(phase_edges_rad, dtype=float)
+        width = np.diff(edges)
+        out = np.empty(width.size)
+        ok = np.abs(width) > 1e-12 * period
+        ge = big_g(edges)
+        out[ok] = (ge[1:][ok] - ge[:-1][ok]) / width[ok]
+        mid = 0.5 * (edges[1:] + edges[:-1])
+        out[~ok] = np.interp(np.mod(mid[~ok], period), grid, f)
+        return out
+
+    def fine_force(
+        self, phase_rad: np.ndarray, op: Operating, drop_m: np.ndarray, outer_drop=None, key=None, offsets_m=None
+    ) -> np.ndarray:
+        """F_s [N] at cage phases (n,) with extra drops (n, Z) of a moving defect.
+
+        The table (with any outer-race defect and roller scatter) where no
+        roller stands in the moving defect, the equilibrium solved where one does.
+        """
+        f, _, period = self.table(op, outer_drop, key, offsets_m)[:3]
+        loaded, e_tab = self.table(op, None, None, offsets_m)[3:5]
+        grid = np.linspace(0.0, period, f.size)
+        phi = np.asarray(phase_rad, dtype=float)
+        out = np.interp(np.mod(phi, period), grid, f)
+        # a drop under a roller that carries nothing changes nothing: solve only where a loaded roller drops
+        # (loaded at the nearest table phase or either neighbour)
+        k = np.rint(np.mod(phi, period) / period * (f.size - 1)).astype(int)
+        m = f.size - 1
+        near = loaded[k] | loaded[np.mod(k - 1, m)] | loaded[np.mod(k + 1, m)]
+        rows = np.flatnonzero(np.any((drop_m > 0) & near, axis=1))
+        if rows.size:
+            psi = self.roller_angles(phi[rows])
+            d = drop_m[rows]
+            if outer_drop is not None:
+                d = d + outer_drop(psi)
+            if offsets_m is not None:
+                d = d + np.asarray(offsets_m)[None, :]
+            # equilibrium to 1e-7 F_r (50 uN at 500 N, far below any record's noise), from the healthy offset
+            out[rows] = self.sensor_force_at(phi[rows], op, d, e0_m=e_tab[k[rows]], tol_N=1e-7)[0]
+        return out
+
+
+def cage_phase(
+    time_s: np.ndarray,
+    shaft_speed_Hz: float | np.ndarray,
+    geometry: BearingGeometry,
+    start_phase_rad: float = 0.0,
+    cage_slip: float = 0.0,
+) -> np.ndarray:
+    """Cage angle phi(t) = phi_0 + integral of 2 pi FTF (1 - slip) dt from the first sample [rad].
+
+    ``shaft_speed_Hz`` is a constant or one value per time sample (a
+    tachometer); between samples the speed is taken as linear (trapezoidal
+    integration).
+    """
+    t = np.asarray(time_s, dtype=float)
+    fr = np.broadcast_to(np.asarray(shaft_speed_Hz, dtype=float), t.shape)
+    ratio = kinematic_frequencies(geometry, 1.0).ftf_Hz * (1.0 - cage_slip)
+    w = 2 * np.pi * ratio * fr
+    if np.ndim(shaft_speed_Hz) == 0:
+        return start_phase_rad + w * (t - t[0])
+    return start_phase_rad + np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * np.diff(t))])
+
+
+def phase_edges(phase_rad: np.ndarray) -> np.ndarray:
+    """Cage phase at the edges of the DAQ's sample windows: midpoints, extended by half a step at the ends [rad]."""
+    p = np.asarray(phase_rad, dtype=float)
+    return np.concatenate([[1.5 * p[0] - 0.5 * p[1]], 0.5 * (p[1:] + p[:-1]), [1.5 * p[-1] - 0.5 * p[-2]]])
+
+
+# ---------------------------------------------------------------------------
+# Defects that move: inner race (with the shaft) and rolling element (with a roller)
+# ---------------------------------------------------------------------------
+
+
+def groove_drop(u_m: np.ndarray, width_m: float, rho_m: float) -> np.ndarray:
+    """Radial drop [m] where a cylinder of relative radius rho bridges a groove of width w.
+
+    ``u_m`` is the arc length from the groove's centre. Resting on the nearer
+    edge, the contact sinks rho - sqrt(rho^2 - m^2), m = w/2 - |u| the
+    distance to that edge; 0 outside the groove. rho is the relative radius
+    of the two surfaces, 1/(1/r - 1/R) on a concave (outer) raceway and
+    1/(1/r + 1/R) on a convex (inner) one (NOTES-ENGINEERING).
+    """
+    half = 0.5 * width_m
+    m = half - np.abs(u_m)
+    inside = m > 0
+    mm = np.minimum(np.where(inside, np.minimum(m, half), 0.0), rho_m)
+    return np.where(inside, rho_m - np.sqrt(rho_m * rho_m - mm * mm), 0.0)
+
+
+def wrap(angle_rad: np.ndarray) -> np.ndarray:
+    """Angle wrapped to [-pi, pi) [rad]."""
+    return np.mod(np.asarray(angle_rad) + np.pi, 2 * np.pi) - np.pi
+
+
+def outer_race_drop(psi_rad: np.ndarray, angle_rad: float, width_m: float, geometry: BearingGeometry) -> np.ndarray:
+    """Drop [m] of rollers at angles psi over a groove on the outer raceway centred at ``angle_rad``.
+
+    The roller bridges the groove on the concave raceway (radius (D_p + D_r)/2)
+    with the relative radius 1/(1/r - 1/R_o).
+    """
+    r, ro = 0.5 * geometry.roller_diameter_m, geometry.outer_raceway_radius_m
+    return groove_drop(ro * wrap(np.asarray(psi_rad) - angle_rad), width_m, 1.0 / (1.0 / r - 1.0 / ro))
+
+
+def inner_race_drop(
+    psi_rad: np.ndarray, shaft_angle_rad: np.ndarray, width_m: float, geometry: BearingGeometry
+) -> np.ndarray:
+    """Drop (n, Z) [m] of rollers over a groove on the inner raceway at the shaft angle theta(t) (n,).
+
+    ``psi_rad`` (n, Z) are the roller angles (psi_j = psi_0 + j 2 pi / Z).
+    The groove turns with the shaft; the roller nearest to it, j* =
+    round((theta - psi_0) Z / 2 pi) mod Z, is over it when psi_j* - theta is
+    within the groove's arc on the inner raceway (radius (D_p - D_r)/2); a
+    groove narrower than the roller pitch holds one roller at a time.
+    """
+    r = 0.5 * geometry.roller_diameter_m
+    ri = 0.5 * (geometry.pitch_diameter_m - geometry.roller_diameter_m)
+    z, pitch = geometry.n_rollers, geometry.roller_pitch_rad
+    psi0 = np.asarray(psi_rad)[:, 0]
+    theta = np.asarray(shaft_angle_rad)
+    j = np.mod(np.rint((theta - psi0) / pitch), z).astype(int)
+    u = ri * wrap(psi0 + j * pitch - theta)
+    out = np.zeros((psi0.size, z))
+    out[np.arange(psi0.size), j] = groove_drop(u, width_m, 1.0 / (1.0 / r + 1.0 / ri))
+    return out
+
+
+def rolling_element_drop(
+    n_rollers: int, roller: int, spin_rad: np.ndarray, width_m: float, geometry: BearingGeometry
+) -> np.ndarray:
+    """Drop (n, Z) [m] of a roller with a groove on its surface, at its spin angle beta(t) (n,).
+
+    beta = 0 puts the groove against the outer raceway, beta = pi against
+    the inner raceway: the roller sinks twice per spin turn (2 x BSF), by the
+    relative radius of each contact.
+    """
+    r = 0.5 * geometry.roller_diameter_m
+    ro = geometry.outer_raceway_radius_m
+    ri = 0.5 * (geometry.pitch_diameter_m - geometry.roller_diameter_m)
+    beta = np.asarray(spin_rad)
+    d = groove_drop(r * wrap(beta), width_m, 1.0 / (1.0 / r - 1.0 / ro)) + groove_drop(
+        r * wrap(beta - np.pi), width_m, 1.0 / (1.0 / r + 1.0 / ri)
+    )
+    out = np.zeros((beta.size, n_rollers))
+    out[:, roller] = d
+    return out
