@@ -100,7 +100,7 @@ def sensor_design(df: pd.DataFrame):
     bw, sens = df["band_high_Hz"].to_numpy(float) / 1e3, df["sensitivity_V_per_N"].to_numpy(float)
     margin = df["detection_margin_dB"].to_numpy(float)
     sc = ax.scatter(bw, sens, c=margin, cmap="viridis", s=36, edgecolors="k", linewidths=0.4, zorder=3)
-    fig.colorbar(sc, ax=ax, label="detection margin [dB] (noise density at the limit / configured)")
+    fig.colorbar(sc, ax=ax, label="detection margin [dB]")
     front = pareto_front(bw, sens)
     ax.plot(bw[front], sens[front], "k--", lw=1, zorder=2, label="trade-off front")
     paper = _is_paper(df) & np.isclose(df["resistance_ohm"].to_numpy(float), 50e6)
@@ -118,12 +118,14 @@ def sensor_design(df: pd.DataFrame):
     rr = df["resistance_ohm"].to_numpy(float)
     ax.loglog(rr / 1e6, df["corner_Hz"], "o", label="RC corner f_c")
     ax.loglog(rr / 1e6, df["linear_from_Hz"], "s", mfc="none", label="within 5% of mid-band from")
-    ax.axhline(df["bpfo_Hz"].iloc[0] if "bpfo_Hz" in df else 70.8, color="0.5", lw=0.8, ls=":")
+    f0 = float(df["bpfo_Hz"].iloc[0])
+    ax.axhline(f0, color="0.5", lw=0.8, ls=":")
+    ax.text(rr.min() / 1e6, f0 * 1.08, "BPFO", fontsize=7, color="0.4")
     ax.set_xlabel("DAQ input resistance [MOhm]")
     ax.set_ylabel("frequency [Hz]")
     ax.legend(fontsize=7)
-    fig.suptitle(f"Sensor designs ({len(df)}): sensitivity, bandwidth and fault detection at the DAQ's noise "
-                 f"({df['noise_density_V_per_sqrtHz'].iloc[0]:.3g} V/sqrt(Hz))", fontsize=9)
+    fig.suptitle(f"{len(df)} sensor designs; colour: detection margin = 20 log10(largest noise density still "
+                 f"detected / {df['noise_density_V_per_sqrtHz'].iloc[0]:.3g} V/sqrt(Hz))", fontsize=8)
     fig.tight_layout()
     return fig
 

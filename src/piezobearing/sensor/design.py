@@ -188,7 +188,7 @@ def detection_at_noise(voltages: dict, dt_s: float, f0_Hz: float, noise, n_seeds
     elif detected(hi):
         limit = 10.0**hi
     else:
-        for _ in range(24):  # 12 decades / 2^24: 1e-6 decade
+        for _ in range(16):  # 12 decades / 2^16: 2e-4 decade (0.004 dB)
             mid = 0.5 * (lo + hi)
             lo, hi = (mid, hi) if detected(mid) else (lo, mid)
         limit = 10.0**lo
