@@ -113,7 +113,7 @@ def sensor_design(df: pd.DataFrame):
     ax.set_xlabel("+3 dB band edge [kHz]")
     ax.set_ylabel("mid-band sensitivity [V/N]")
     ax.set_yscale("log")
-    ax.legend(fontsize=7, loc="lower left")
+    ax.legend(fontsize=7, loc="upper right")
     ax = axes[1]
     rr = df["resistance_ohm"].to_numpy(float)
     ax.loglog(rr / 1e6, df["corner_Hz"], "o", label="RC corner f_c")
