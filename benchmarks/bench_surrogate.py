@@ -60,8 +60,8 @@ def main() -> None:
         p = run["params"]
         drop, key = None, None
         if faulty:
-            d = p.defect
-            drop, key = (lambda psi, d=d: d.drop_m(psi, 0.5 * geo.roller_diameter_m, geo.outer_raceway_radius_m)), d
+            (d,) = p.defects  # the LPM's groove on the concave outer raceway
+            drop, key = (lambda psi, d=d: sg.outer_race_drop(psi, d.angle_rad, d.width_m, geo)), d
         t0 = time.perf_counter()
         s = sg.Surrogate(geo, infl)
         ph = sg.cage_phase(run["time_s"], p.shaft_speed_Hz, geo, p.start_angle_rad)

@@ -79,15 +79,32 @@ def test_defect_drop_limited_by_roller_radius():
     d = brg.Defect(0.0, w, 1e-3)
     expect = r - np.sqrt(r**2 - (w / 2) ** 2)
     assert d.max_drop_m(r) == pytest.approx(expect)
-    assert expect == pytest.approx(20.29e-6, rel=1e-3)  # tens of micrometres, not the 1 mm depth
-    race = 27e-3
-    psi = np.linspace(-2 * w / race, 2 * w / race, 4001)
-    drop = d.drop_m(psi, r, race)
+    assert expect == pytest.approx(20.29e-6, rel=1e-3)  # on a flat raceway: tens of um, not the 1 mm depth
+    arc = np.linspace(-2 * w, 2 * w, 4001)
+    drop = brg.chord_drop_m(arc, w, 1e-3, r)
     assert drop.max() == pytest.approx(expect, rel=1e-3)
     np.testing.assert_allclose(drop, drop[::-1], atol=1e-12)  # entry and exit flanks mirror each other
-    assert np.all(drop[np.abs(psi) * race >= w / 2] == 0)
-    shallow = brg.Defect(0.0, w, 5e-6)
-    assert shallow.drop_m(np.array([0.0]), r, race)[0] == pytest.approx(5e-6)
+    assert np.all(drop[np.abs(arc) >= w / 2] == 0)
+    assert brg.chord_drop_m(np.array([0.0]), w, 5e-6, r)[0] == pytest.approx(5e-6)  # a shallow groove: its depth
+
+
+def test_concave_and_convex_raceway_drops(geo):
+    """The raceway's curvature: against the concave outer race (R = 27 mm) the relative radius is
+    1/(1/5 - 1/27) mm = 6.14 mm and the 0.9 mm groove lets the roller sink 16.5 um (not 20.3 um on a
+    flat race), the 0.3 mm groove 1.83 um; against the convex inner race (R = 17 mm) 3.86 mm, 26.3 um."""
+    r_out, r_in = geo.relative_radius_m("outer"), geo.relative_radius_m("inner")
+    assert r_out == pytest.approx(1 / (1 / 5e-3 - 1 / 27e-3), rel=1e-12)
+    assert r_out == pytest.approx(6.136e-3, rel=1e-3)
+    assert r_in == pytest.approx(1 / (1 / 5e-3 + 1 / 17e-3), rel=1e-12)
+    for w, expect in ((0.9e-3, 16.5e-6), (0.3e-3, 1.834e-6)):
+        d = brg.Defect(0.0, w, 1e-3)
+        assert d.max_drop_m(r_out) == pytest.approx(expect, rel=2e-3)
+        assert d.max_drop_m(r_out) == pytest.approx(w * w / (8 * r_out), rel=2e-3)  # sagitta
+    assert brg.Defect(0.0, 0.9e-3, 1e-3).max_drop_m(r_in) == pytest.approx(26.3e-6, rel=2e-3)
+    with pytest.raises(ValueError, match="race"):
+        geo.relative_radius_m("cage")
+    with pytest.raises(ValueError, match="defect type"):
+        brg.Defect(0.0, 1e-3, 1e-3, "cage")
 
 
 # --- quasi-static load distribution against Harris -------------------------------
@@ -200,7 +217,7 @@ def test_trapezoidal_rule_agrees_with_radau(bcfg):
             )
             assert sol.success
             e = sol.y[:2] - sol.y[2:4]
-            delta = brg.roller_deflections(e.T, res.psi_rad, p.gap_m, p.drops(res.psi_rad))
+            delta = brg.roller_deflections(e.T, res.psi_rad, p.gap_m, p.drops(p.motion(res.time_s)))
             q_ref = brg.contact_law(delta, p.k_contact)[0]
             assert res.load_N[:, 0].min() == 0.0  # the roller unloads in the defect
         errors.append(np.abs(res.load_N[::div] - q_ref).max())

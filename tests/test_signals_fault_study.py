@@ -37,7 +37,7 @@ def test_one_case_detects_the_fault_and_gathers(tmp_path, tiny):
     cfg, res = tiny
     rpm, width = 1200.0, 0.9e-3
     out = tmp_path / "fd" / "case" / "summary.json"
-    ov = {"bearing__shaft_speed_rpm": rpm, "bearing__defect_width_m": width}
+    ov = {"bearing__shaft_speed_rpm": rpm, "bearing__defects__0__width_m": width}
     run_case("fault_detection", "case", ov, cfg, str(out), {"resistance": res})
     d = json.loads(out.read_text())
     s = d["summary"]

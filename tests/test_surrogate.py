@@ -34,8 +34,7 @@ def test_loads_equal_harris_and_the_lpm_static_solver(setup):
     rng = np.random.default_rng(3)
     phis = rng.uniform(0, pitch, 7)
     psi = phis[:, None] + pitch * np.arange(geo.n_rollers)
-    d = lpm.Defect(0.02, 0.9e-3, 1e-3)
-    drop = d.drop_m(psi, 5e-3, geo.outer_raceway_radius_m)
+    drop = sg.outer_race_drop(psi, 0.02, 0.9e-3, geo)
     q = sg.quasi_static_loads(psi, drop, 500.0, gap, k)
     for i in range(len(phis)):
         e = lpm.static_offset(np.array([0.0, -500.0]), psi[i], gap, drop[i], k)
@@ -82,8 +81,8 @@ def test_surrogate_against_the_lpm_through_the_same_influence_line(setup, faulty
     op = sg.Operating(b["radial_load_N"], b["radial_clearance_m"])
     drop, key = None, None
     if faulty:
-        d = p.defect
-        drop, key = (lambda psi: d.drop_m(psi, 0.5 * geo.roller_diameter_m, geo.outer_raceway_radius_m)), d
+        (d,) = p.defects  # the LPM's groove on the concave outer raceway
+        drop, key = (lambda psi: sg.outer_race_drop(psi, d.angle_rad, d.width_m, geo)), d
     ph = sg.cage_phase(t_out, p.shaft_speed_Hz, geo, p.start_angle_rad)
     got = s.box_average(sg.phase_edges(ph), op, drop, key)
     err = np.std(got - ref) / np.std(ref)

@@ -2,7 +2,9 @@
 
 A study table (``config/studies/*.tsv``) has one row per case; each column
 names a config key by its path with ``__`` between levels
-(``synthesis__resistance_ohm`` is ``config["synthesis"]["resistance_ohm"]``).
+(``synthesis__resistance_ohm`` is ``config["synthesis"]["resistance_ohm"]``);
+a number indexes a list (``bearing__defects__0__width_m`` is the first
+defect's width).
 A case's config is the workflow's config with the row's values merged in and
 validated against the schema, so a study can vary any key the workflow has.
 """
@@ -20,6 +22,15 @@ from .config import ConfigError, validate
 SEP = "__"
 
 
+def _child(node, key: str):
+    """node[key] for a dict, node[int(key)] for a list; KeyError if there is none."""
+    if isinstance(node, dict) and key in node:
+        return node[key]
+    if isinstance(node, list) and key.isdigit() and int(key) < len(node):
+        return node[int(key)]
+    raise KeyError(key)
+
+
 def read_table(path: str | Path, config: dict) -> pd.DataFrame:
     """Read a study table and check that every column is a config key."""
     path = Path(path)
@@ -31,12 +42,13 @@ def read_table(path: str | Path, config: dict) -> pd.DataFrame:
     for col in df.columns:
         node = config
         for key in col.split(SEP):
-            if not isinstance(node, dict) or key not in node:
+            try:
+                node = _child(node, key)
+            except KeyError:
                 raise ConfigError(
                     f"{path}: column '{col}' is not a config key; name columns by their config path with "
-                    f"'{SEP}' between levels, e.g. synthesis{SEP}resistance_ohm"
-                )
-            node = node[key]
+                    f"'{SEP}' between levels (a number for a list item), e.g. synthesis{SEP}resistance_ohm"
+                ) from None
     return df
 
 
@@ -70,8 +82,9 @@ def case_config(config: dict, overrides: dict, source: str = "study case") -> di
         keys = col.split(SEP)
         node = out
         for key in keys[:-1]:
-            node = node[key]
-        old = node[keys[-1]]
+            node = _child(node, key)
+        last = int(keys[-1]) if isinstance(node, list) else keys[-1]
+        old = node[last]
         value = _plain(value)
         if (
             isinstance(old, int)
@@ -80,5 +93,5 @@ def case_config(config: dict, overrides: dict, source: str = "study case") -> di
             and value.is_integer()
         ):
             value = int(value)
-        node[keys[-1]] = value
+        node[last] = value
     return validate(out, source=source)

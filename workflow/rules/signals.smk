@@ -8,6 +8,7 @@ TARGETS.extend(
     [
         f"{RESULTS}/signals/fault_indicator.json",
         f"{RESULTS}/signals/snr_study.csv",
+        f"{RESULTS}/signals/classification.json",
     ]
 )
 
@@ -64,7 +65,7 @@ rule noisy:
         runtime=2,
     params:
         seed=config["seed"],
-        snr_dB=config["signals"]["snr_dB"],
+        signals=config["signals"],
     script:
         "../scripts/noisy.py"
 
@@ -103,6 +104,8 @@ rule fault_indicator:
         faulty_json=f"{RESULTS}/signals/envelope_faulty.json",
         healthy_noisy=f"{RESULTS}/signals/noisy_healthy.json",
         faulty_noisy=f"{RESULTS}/signals/noisy_faulty.json",
+        healthy_noisy_csv=f"{RESULTS}/signals/noisy_healthy.csv",
+        faulty_noisy_csv=f"{RESULTS}/signals/noisy_faulty.csv",
         kinematics=f"{RESULTS}/bearing/kinematics.json",
     output:
         json=f"{RESULTS}/signals/fault_indicator.json",
@@ -272,3 +275,30 @@ rule scorecard_signals:
         runtime=2,
     script:
         "../scripts/scorecard_signals.py"
+
+
+rule fault_classification:
+    input:
+        healthy=f"{RESULTS}/signals/voltage_healthy.csv",
+        faulty=f"{RESULTS}/signals/voltage_faulty.csv",
+        kinematics=f"{RESULTS}/bearing/kinematics.json",
+    output:
+        json=f"{RESULTS}/signals/classification.json",
+        csv=f"{RESULTS}/signals/classification.csv",
+        roc=f"{RESULTS}/signals/roc.csv",
+    log:
+        f"{RESULTS}/logs/fault_classification.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/fault_classification.tsv"
+    conda:
+        "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=10,
+    params:
+        seed=config["seed"],
+        signals=config["signals"],
+        defects=config["bearing"].get("defects"),
+    script:
+        "../scripts/fault_classification.py"

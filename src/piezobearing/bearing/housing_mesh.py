@@ -72,7 +72,7 @@ class HousingGeometry:
     roller_half_length_m : float
         Half the roller's contact length (the loaded part of the raceway).
     defect_angle_rad, defect_width_m, defect_depth_m : float
-        The outer-race defect.
+        The groove cut into the ring: the first outer-race defect of ``bearing.defects`` (zeros if none).
     """
 
     raceway_radius_m: float
@@ -95,6 +95,8 @@ class HousingGeometry:
     def from_config(cls, bearing: dict, housing: dict, tip_diameter_m: float) -> HousingGeometry:
         """From the config sections ``bearing`` and ``housing`` and the diameter of the sensor's contact disk."""
         h = housing
+        # the ring's groove: the first outer-race defect (the others act through the LPM's loads only)
+        groove = next((d for d in bearing.get("defects", []) if d["type"] == "outer_race"), None)
         geo = cls(
             raceway_radius_m=0.5 * (bearing["pitch_diameter_m"] + bearing["roller_diameter_m"]),
             ring_outer_radius_m=0.5 * bearing["outer_diameter_m"],
@@ -108,9 +110,9 @@ class HousingGeometry:
             hole_diameter_m=h["hole_diameter_m"],
             tip_diameter_m=tip_diameter_m,
             roller_half_length_m=0.5 * bearing["roller_length_m"],
-            defect_angle_rad=np.radians(bearing["defect_angle_deg"]),
-            defect_width_m=bearing["defect_width_m"],
-            defect_depth_m=bearing["defect_depth_m"],
+            defect_angle_rad=np.radians(groove["angle_deg"]) if groove else 0.0,
+            defect_width_m=groove["width_m"] if groove else 0.0,
+            defect_depth_m=groove["depth_m"] if groove else 0.0,
         )
         geo.check()
         return geo
@@ -151,7 +153,7 @@ class HousingGeometry:
             ),
             (
                 self.defect_depth_m < ro - self.raceway_radius_m,
-                "bearing.defect_depth_m must be below the ring thickness",
+                "bearing.defects: an outer_race depth_m must be below the ring thickness",
             ),
             (
                 self.roller_half_length_m <= self.ring_half_width_m,
@@ -361,7 +363,7 @@ def _cross_section(g: HousingGeometry, sz: MeshSizes):
 
     # ring: radial nodes, fine at the raceway, a node at the defect's depth
     r_ring = graded_nodes(
-        np.array([ri, ri + g.defect_depth_m, ro]),
+        np.unique([ri, ri + g.defect_depth_m, ro]),  # no node layer without a groove
         lambda r: _size_near(r, [(ri, ri)], sz.ring_radial_fine_m, sz.ring_radial_m, sz.growth),
     )
     # housing O-grid: parameter rho in [0, 1] from the ring's surface to the outline, graded

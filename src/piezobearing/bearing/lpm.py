@@ -3,6 +3,14 @@
 SKF N 305 ECP cylindrical roller bearing (paper Sec. III-A, IV): 11 rollers,
 outer ring stationary in the housing, inner ring turning with the shaft.
 
+Functional API (what callers need): :class:`LPMParameters` (a frozen
+dataclass: geometry, operating point, defects, slip; ``from_config`` or built
+directly) -> :func:`simulate_lpm` -> :class:`LPMResult` (roller loads and
+displacements on the integration grid); :func:`kinematic_frequencies` for the
+characteristic frequencies with cage slip; :meth:`LPMParameters.motion` for
+the kinematics alone (roller, cage, shaft and roller-spin angles, with slip
+jitter and a speed ramp).
+
 Angles
 ------
 Roller and defect positions are angles psi [rad] in the bearing's plane,
@@ -17,6 +25,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+#: The defect types of ``bearing.defects``.
+DEFECT_TYPES = ("outer_race", "inner_race", "rolling_element")
 
 #: Palmgren's line-contact constant: delta = 3.84e-5 Q^0.9 / l^0.8 with delta,
 #: l in mm and Q in N (Harris & Kotzalas, Rolling Bearing Analysis, Eq. 6.41),
@@ -87,6 +98,32 @@ class BearingGeometry:
         return 0.5 * (self.pitch_diameter_m + self.roller_diameter_m)
 
     @property
+    def inner_raceway_radius_m(self) -> float:
+        """Radius of the inner raceway, (D_p - D_r) / 2 [m]."""
+        return 0.5 * (self.pitch_diameter_m - self.roller_diameter_m)
+
+    def relative_radius_m(self, race: str) -> float:
+        """Relative radius of curvature of a roller against a raceway [m].
+
+        ``outer`` (concave raceway): 1 / (1/r - 1/R_o); ``inner`` (convex):
+        1 / (1/r + 1/R_i), with r = D_r / 2. A chord of width w across a
+        defect lets the roller sink w^2 / (8 R_rel) to first order: for the
+        N 305 (r = 5 mm, R_o = 27 mm, R_i = 17 mm) R_rel is 6.14 mm outside,
+        3.86 mm inside (26.3 um for that groove).
+        """
+        r = 0.5 * self.roller_diameter_m
+        if race == "outer":
+            return 1.0 / (1.0 / r - 1.0 / self.outer_raceway_radius_m)
+        if race == "inner":
+            return 1.0 / (1.0 / r + 1.0 / self.inner_raceway_radius_m)
+        raise ValueError(f"race must be 'outer' or 'inner', got {race!r}")
+
+    @property
+    def spin_per_cage_angle(self) -> float:
+        """Roller spin angle (relative to the cage) per cage angle, BSF / FTF = (D_p / D_r)(1 + D_r cos a / D_p) [-]."""
+        return float(self.pitch_diameter_m / self.roller_diameter_m * (1 + self.diameter_ratio))
+
+    @property
     def roller_pitch_rad(self) -> float:
         """Angle between neighbouring rollers, 2 pi / Z [rad]."""
         return 2 * np.pi / self.n_rollers
@@ -101,13 +138,16 @@ class KinematicFrequencies:
     shaft_Hz : float
         Shaft (inner ring) rotation frequency f_r.
     ftf_Hz : float
-        Fundamental train (cage) frequency, f_r / 2 (1 - D_r cos a / D_p).
+        Fundamental train (cage) frequency, (1 - s) f_r / 2 (1 - D_r cos a / D_p)
+        with the cage slip s.
     bpfo_Hz : float
         Ball (roller) pass frequency on the outer race, Z * FTF.
     bpfi_Hz : float
         Roller pass frequency on the inner race, Z (f_r - FTF).
     bsf_Hz : float
-        Roller spin frequency, D_p / (2 D_r) f_r (1 - (D_r cos a / D_p)^2).
+        Roller spin frequency relative to the cage, (1 - s) D_p / (2 D_r) f_r (1 - (D_r cos a / D_p)^2).
+        A flat on a roller strikes the outer and the inner race once each per
+        spin revolution: at 2 BSF.
     """
 
     shaft_Hz: float
@@ -120,14 +160,23 @@ class KinematicFrequencies:
         return {k: float(getattr(self, k)) for k in ("shaft_Hz", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz")}
 
 
-def kinematic_frequencies(geometry: BearingGeometry, shaft_speed_Hz: float) -> KinematicFrequencies:
-    """Kinematic frequencies for rolling without slip, outer ring fixed.
+def kinematic_frequencies(
+    geometry: BearingGeometry, shaft_speed_Hz: float, cage_slip: float = 0.0
+) -> KinematicFrequencies:
+    """Kinematic frequencies with the outer ring fixed and the cage slipping by the fraction s.
+
+    Slip: the cage and the rollers' spin lag the rolling kinematics by the
+    fraction s (the rollers skid on the raceways), so FTF, BPFO and BSF scale
+    by (1 - s) and BPFI = Z (f_r - FTF) grows; the shaft rate does not slip.
+    Real cages slip 1-2% (s = 0.01-0.02).
 
     Parameters
     ----------
     geometry : BearingGeometry
     shaft_speed_Hz : float
         Rotation frequency of the shaft and inner ring [Hz].
+    cage_slip : float
+        Mean cage slip s [-]; 0 for rolling without slip.
 
     Returns
     -------
@@ -136,14 +185,14 @@ def kinematic_frequencies(geometry: BearingGeometry, shaft_speed_Hz: float) -> K
         1000 rpm (Z = 11, D_r / D_p = 10 / 44) the BPFO is 70.83 Hz.
     """
     g, z = geometry.diameter_ratio, geometry.n_rollers
-    fr = float(shaft_speed_Hz)
-    ftf = 0.5 * fr * (1 - g)
+    fr, lag = float(shaft_speed_Hz), 1.0 - float(cage_slip)
+    ftf = lag * 0.5 * fr * (1 - g)
     return KinematicFrequencies(
         shaft_Hz=fr,
         ftf_Hz=ftf,
         bpfo_Hz=z * ftf,
         bpfi_Hz=z * (fr - ftf),
-        bsf_Hz=0.5 * geometry.pitch_diameter_m / geometry.roller_diameter_m * fr * (1 - g**2),
+        bsf_Hz=lag * 0.5 * geometry.pitch_diameter_m / geometry.roller_diameter_m * fr * (1 - g**2),
     )
 
 
@@ -196,47 +245,111 @@ def contact_law(delta_m: np.ndarray, k_contact: float) -> tuple[np.ndarray, np.n
     return k_contact * d * d19, (10 / 9) * k_contact * d19
 
 
+def chord_drop_m(arc_m: np.ndarray, width_m: float, depth_m: float, relative_radius_m: float) -> np.ndarray:
+    """How far a roller sinks over a sharp-edged gap of width w, at arc position u [m].
+
+    A roller whose contact point is the arc length u past the gap's entry edge
+    (0 <= u <= w) rests on the nearer edge; with the relative radius R of the
+    two surfaces (roller against raceway) its centre sinks
+    ``R - sqrt(R^2 - min(u, w - u)^2)``, capped at the depth; 0 outside.
+
+    Parameters
+    ----------
+    arc_m : ndarray
+        Arc position of the contact from the gap's centre [m].
+    width_m, depth_m : float
+        Gap width w and depth [m].
+    relative_radius_m : float
+        R [m] (:meth:`BearingGeometry.relative_radius_m`).
+    """
+    u = np.asarray(arc_m) + 0.5 * width_m
+    inside = (u > 0) & (u < width_m)
+    m = np.minimum(u, width_m - u)
+    r = relative_radius_m
+    drop = r - np.sqrt(np.maximum(r * r - m * m, 0.0))
+    return np.where(inside, np.minimum(drop, depth_m), 0.0)
+
+
+def _wrap(angle_rad: np.ndarray) -> np.ndarray:
+    """Angles to [-pi, pi) [rad]."""
+    return np.mod(np.asarray(angle_rad) + np.pi, 2 * np.pi) - np.pi
+
+
 @dataclass(frozen=True)
 class Defect:
-    """A local defect of the outer raceway: a transverse groove with sharp edges.
+    """A local defect with sharp edges: a groove across a raceway or a flat on a roller.
 
     Parameters
     ----------
     angle_rad : float
-        Centre of the defect, from the load direction [rad].
+        ``outer_race``: centre from the load direction (the sensor) [rad];
+        ``inner_race``: centre on the inner ring at t = 0, from the load
+        direction, turning with the shaft [rad]; ``rolling_element``: the
+        flat's angle on its roller at t = 0, from the roller's contact with the
+        outer race, in the roller's spin relative to the cage [rad].
     width_m : float
-        Circumferential width w [m].
+        Width w across the rolling direction's arc (groove) or chord (flat) [m].
     depth_m : float
-        Depth of the removed material [m].
+        Depth of the removed material [m] (caps the drop).
+    kind : {"outer_race", "inner_race", "rolling_element"}
+    roller : int
+        ``rolling_element``: index of the roller with the flat.
     """
 
     angle_rad: float
     width_m: float
     depth_m: float
+    kind: str = "outer_race"
+    roller: int = 0
 
-    def max_drop_m(self, roller_radius_m: float) -> float:
-        """Deepest a roller of radius r can sink: min(depth, r - sqrt(r^2 - (w/2)^2)) [m]."""
-        r, hw = roller_radius_m, 0.5 * self.width_m
+    def __post_init__(self):
+        if self.kind not in DEFECT_TYPES:
+            raise ValueError(f"defect type must be one of {', '.join(DEFECT_TYPES)}, got {self.kind!r}")
+
+    def max_drop_m(self, relative_radius_m: float) -> float:
+        """Deepest a roller sinks at the defect's centre: min(depth, R - sqrt(R^2 - (w/2)^2)) [m].
+
+        R is the relative radius of the surfaces in contact
+        (:meth:`BearingGeometry.relative_radius_m`); R = r for a flat raceway.
+        For the 0.9 mm groove on the N 305's outer race (R = 6.14 mm) 16.5 um,
+        against 20.3 um on a flat raceway.
+        """
+        r, hw = relative_radius_m, 0.5 * self.width_m
         if hw >= r:
             return self.depth_m
-        return min(self.depth_m, r - np.sqrt(r * r - hw * hw))
+        return float(min(self.depth_m, r - np.sqrt(r * r - hw * hw)))
 
-    def drop_m(self, psi_rad: np.ndarray, roller_radius_m: float, raceway_radius_m: float) -> np.ndarray:
-        """Radial drop of roller centres at angles psi into the groove [m].
 
-        A roller whose centre is the arc length u past the entry edge (0 <= u
-        <= w) rests on the nearer of the two edges: its centre sinks by
-        ``r - sqrt(r^2 - min(u, w - u)^2)``, capped at the depth. Entry and
-        exit are the two circular flanks of this profile; the drop is 0 outside
-        the groove and greatest, :meth:`max_drop_m`, at the centre.
-        """
-        dpsi = np.angle(np.exp(1j * (np.asarray(psi_rad) - self.angle_rad)))
-        u = raceway_radius_m * dpsi + 0.5 * self.width_m
-        inside = (u > 0) & (u < self.width_m)
-        m = np.minimum(u, self.width_m - u)
-        r = roller_radius_m
-        drop = r - np.sqrt(np.maximum(r * r - m * m, 0.0))
-        return np.where(inside, np.minimum(drop, self.depth_m), 0.0)
+def defects_from_config(bearing: dict) -> tuple[Defect, ...]:
+    """The defects of ``bearing.defects`` (a list of {type, width_m, depth_m, angle_deg})."""
+    out = []
+    for d in bearing.get("defects", []):
+        out.append(Defect(np.radians(d["angle_deg"]), d["width_m"], d["depth_m"], d["type"]))
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class Motion:
+    """Kinematics of the bearing on a time grid (angles in the sense of rotation).
+
+    Attributes
+    ----------
+    time_s : ndarray (n,)
+    shaft_angle_rad : ndarray (n,)
+        Angle the shaft (inner ring) has turned since t = 0 [rad].
+    cage_angle_rad : ndarray (n,)
+        Angle the cage has turned since t = 0, with slip and its jitter [rad].
+    psi_rad : ndarray (n, Z)
+        Roller angles from the load direction, wrapped to [-pi, pi) [rad].
+    spin_rad : ndarray (n,)
+        Roller spin relative to the cage since t = 0 (the same for all rollers) [rad].
+    """
+
+    time_s: np.ndarray
+    shaft_angle_rad: np.ndarray
+    cage_angle_rad: np.ndarray
+    psi_rad: np.ndarray
+    spin_rad: np.ndarray
 
 
 # ---------------------------------------------------------------------------
@@ -254,7 +367,7 @@ class LPMParameters:
     radial_load_N : float
         Radial load F_r on the shaft, along -z [N].
     shaft_speed_Hz : float
-        Shaft speed [Hz].
+        Shaft speed at t = 0 [Hz].
     shaft_mass_kg, pedestal_mass_kg : float
         m_s, m_p [kg].
     pedestal_stiffness_N_per_m : float
@@ -265,8 +378,20 @@ class LPMParameters:
         c_p, pedestal to ground [N s/m].
     start_angle_rad : float
         Angle of roller 0 at t = 0, from the load direction [rad].
-    defect : Defect or None
-        The outer-race defect; None for the healthy bearing.
+    defects : tuple of Defect
+        Local defects (any number, any type); empty for the healthy bearing.
+    cage_slip : float
+        Mean cage slip s [-]: the cage turns at (1 - s) of the rolling kinematics.
+    slip_jitter : float
+        Standard deviation of the slip from one roller passage (one roller
+        pitch of cage travel) to the next [-]; each passage draws its own slip.
+    speed_ramp_Hz_per_s : float
+        Shaft acceleration [Hz/s]: f(t) = shaft_speed_Hz + ramp t (0: constant speed).
+    roller_diameter_deviation_m : tuple of float
+        Each roller's diameter minus the nominal D_r [m] (empty: all nominal).
+        A larger roller closes its gap by the difference.
+    seed : int
+        Seed of the per-passage slip draws.
     """
 
     geometry: BearingGeometry
@@ -278,17 +403,28 @@ class LPMParameters:
     bearing_damping_N_s_per_m: float
     pedestal_damping_N_s_per_m: float
     start_angle_rad: float = 0.0
-    defect: Defect | None = None
+    defects: tuple[Defect, ...] = ()
+    cage_slip: float = 0.0
+    slip_jitter: float = 0.0
+    speed_ramp_Hz_per_s: float = 0.0
+    roller_diameter_deviation_m: tuple[float, ...] = ()
+    seed: int = 0
 
     @classmethod
-    def from_config(cls, bearing: dict, faulty: bool) -> LPMParameters:
-        """From the ``bearing`` section; ``faulty`` adds its defect."""
+    def from_config(cls, bearing: dict, faulty: bool, seed: int = 0) -> LPMParameters:
+        """From the ``bearing`` section; ``faulty`` adds its ``defects``; ``seed``: the config's ``seed``.
+
+        The roller diameters scatter by ``roller_diameter_scatter_m`` (standard
+        deviation, drawn per roller from the seed: the same in both cases).
+        """
         b = bearing
-        defect = None
-        if faulty:
-            defect = Defect(np.radians(b["defect_angle_deg"]), b["defect_width_m"], b["defect_depth_m"])
+        geo = BearingGeometry.from_config(b)
+        scatter = b.get("roller_diameter_scatter_m", 0.0)
+        dev = ()
+        if scatter > 0:
+            dev = tuple(float(x) for x in scatter * np.random.default_rng([seed, 1]).standard_normal(geo.n_rollers))
         return cls(
-            geometry=BearingGeometry.from_config(b),
+            geometry=geo,
             radial_load_N=b["radial_load_N"],
             shaft_speed_Hz=b["shaft_speed_rpm"] / 60.0,
             shaft_mass_kg=b["shaft_mass_kg"],
@@ -297,7 +433,12 @@ class LPMParameters:
             bearing_damping_N_s_per_m=b["bearing_damping_N_s_per_m"],
             pedestal_damping_N_s_per_m=b["pedestal_damping_N_s_per_m"],
             start_angle_rad=np.radians(b["start_angle_deg"]),
-            defect=defect,
+            defects=defects_from_config(b) if faulty else (),
+            cage_slip=b.get("cage_slip", 0.0),
+            slip_jitter=b.get("slip_jitter", 0.0),
+            speed_ramp_Hz_per_s=b.get("speed_ramp_rpm_per_s", 0.0) / 60.0,
+            roller_diameter_deviation_m=dev,
+            seed=int(seed),
         )
 
     @property
@@ -312,25 +453,116 @@ class LPMParameters:
 
     @property
     def cage_speed_rad_per_s(self) -> float:
-        """Angular speed of the cage, 2 pi FTF [rad/s]."""
-        return 2 * np.pi * kinematic_frequencies(self.geometry, self.shaft_speed_Hz).ftf_Hz
+        """Mean angular speed of the cage at t = 0, 2 pi FTF with the mean slip [rad/s]."""
+        return 2 * np.pi * kinematic_frequencies(self.geometry, self.shaft_speed_Hz, self.cage_slip).ftf_Hz
+
+    def shaft_speed_at(self, t_s: np.ndarray) -> np.ndarray:
+        """Shaft speed f(t) = f_0 + ramp t [Hz]."""
+        return self.shaft_speed_Hz + self.speed_ramp_Hz_per_s * np.asarray(t_s, dtype=float)
+
+    def shaft_angle(self, t_s: np.ndarray) -> np.ndarray:
+        """Angle the shaft has turned since t = 0, 2 pi (f_0 t + ramp t^2 / 2) [rad]."""
+        t = np.asarray(t_s, dtype=float)
+        return 2 * np.pi * (self.shaft_speed_Hz * t + 0.5 * self.speed_ramp_Hz_per_s * t * t)
+
+    def _passage_slips(self, n: int, forward: bool) -> np.ndarray:
+        """Slips of the passages 0, 1, ..., n-1 (forward) or -1, -2, ..., -n (backward) [-].
+
+        Each direction is one random stream from the seed, read from passage 0
+        outwards, so a passage's slip does not depend on the time grid.
+        """
+        rng = np.random.default_rng([self.seed, 2 if forward else 3])
+        return self.cage_slip + self.slip_jitter * rng.standard_normal(n)
+
+    def cage_angle(self, t_s: np.ndarray) -> np.ndarray:
+        """Angle the cage has turned since t = 0, with the mean slip and its per-passage jitter [rad].
+
+        Without slip the cage turns by (1 - g)/2 of the shaft's angle. With
+        slip s_k during passage k (the cage's travel from k to k + 1 roller
+        pitches) it turns (1 - s_k) times as far: the cage angle is piecewise
+        linear in the no-slip cage angle, with breaks at whole pitches.
+        """
+        theta0 = 0.5 * (1 - self.geometry.diameter_ratio) * self.shaft_angle(t_s)
+        if self.slip_jitter == 0:
+            return (1 - self.cage_slip) * theta0
+        pitch = self.geometry.roller_pitch_rad
+        lo, hi = float(np.min(theta0, initial=0.0)), float(np.max(theta0, initial=0.0))
+        n_up = int(np.ceil(hi / pitch * 1.2)) + 2
+        n_dn = int(np.ceil(-lo / pitch * 1.2)) + 2
+        while True:
+            up = np.concatenate([[0.0], np.cumsum(pitch / (1 - self._passage_slips(n_up, True)))])
+            dn = -np.cumsum(pitch / (1 - self._passage_slips(n_dn, False)))
+            if up[-1] >= hi and dn[-1] <= lo:
+                break
+            n_up, n_dn = 2 * n_up, 2 * n_dn
+        theta_k = np.concatenate([dn[::-1], up])
+        phi_k = pitch * np.arange(-n_dn, n_up + 1)
+        return np.interp(theta0, theta_k, phi_k)
+
+    def motion(self, t_s: np.ndarray) -> Motion:
+        """Shaft, cage, roller and roller-spin angles at the instants t [s] (:class:`Motion`)."""
+        g = self.geometry
+        t = np.asarray(t_s, dtype=float)
+        phi = self.cage_angle(t)
+        psi = self.start_angle_rad + g.roller_pitch_rad * np.arange(g.n_rollers)[None, :] + phi[:, None]
+        return Motion(t, self.shaft_angle(t), phi, _wrap(psi), g.spin_per_cage_angle * phi)
 
     def roller_angles(self, t_s: np.ndarray) -> np.ndarray:
         """Roller angles psi_j(t) from the load direction, wrapped to [-pi, pi) [rad], shape (n_t, Z)."""
-        g = self.geometry
-        psi = (
-            self.start_angle_rad
-            + g.roller_pitch_rad * np.arange(g.n_rollers)[None, :]
-            + self.cage_speed_rad_per_s * np.asarray(t_s, dtype=float)[:, None]
-        )
-        return np.mod(psi + np.pi, 2 * np.pi) - np.pi
+        return self.motion(t_s).psi_rad
 
-    def drops(self, psi_rad: np.ndarray) -> np.ndarray:
-        """Defect drop of every roller [m] (zeros when healthy)."""
-        if self.defect is None:
-            return np.zeros_like(psi_rad)
+    def drops(self, motion: Motion) -> np.ndarray:
+        """How far each roller sinks into the defects (all of them, both races) [m], shape (n_t, Z).
+
+        Outer race: the groove stands still at its angle; inner race: it turns
+        with the shaft, so it meets the rollers at BPFI and is loaded only
+        while in the load zone; rolling element: the flat on one roller meets
+        the outer race when its spin angle is the defect's angle and the inner
+        race half a spin later (2 BSF), loaded only while that roller is in the
+        load zone (FTF modulation). Each uses the relative radius of its
+        contact (concave outer, convex inner raceway).
+        """
         g = self.geometry
-        return self.defect.drop_m(psi_rad, 0.5 * g.roller_diameter_m, g.outer_raceway_radius_m)
+        out = np.zeros_like(motion.psi_rad)
+        r = 0.5 * g.roller_diameter_m
+        for d in self.defects:
+            if d.kind == "outer_race":
+                arc = g.outer_raceway_radius_m * _wrap(motion.psi_rad - d.angle_rad)
+                out += chord_drop_m(arc, d.width_m, d.depth_m, g.relative_radius_m("outer"))
+            elif d.kind == "inner_race":
+                pos = d.angle_rad + motion.shaft_angle_rad[:, None]
+                arc = g.inner_raceway_radius_m * _wrap(motion.psi_rad - pos)
+                out += chord_drop_m(arc, d.width_m, d.depth_m, g.relative_radius_m("inner"))
+            else:
+                j = d.roller % g.n_rollers
+                chi = motion.spin_rad - d.angle_rad
+                out[:, j] += chord_drop_m(r * _wrap(chi), d.width_m, d.depth_m, g.relative_radius_m("outer"))
+                out[:, j] += chord_drop_m(
+                    r * _wrap(chi - np.pi), d.width_m, d.depth_m, g.relative_radius_m("inner")
+                )
+        return out
+
+    def contact_offsets(self, motion: Motion) -> np.ndarray:
+        """What each roller's overlap loses besides the rings' offset: defect drops minus diameter excess [m]."""
+        off = self.drops(motion)
+        if self.roller_diameter_deviation_m:
+            off = off - np.asarray(self.roller_diameter_deviation_m)[None, :]
+        return off
+
+    def defect_max_drops_m(self) -> list[float]:
+        """Deepest drop of each defect [m] (a flat: the deeper of its two contacts, the convex inner race)."""
+        g = self.geometry
+        race = {"outer_race": "outer", "inner_race": "inner", "rolling_element": "inner"}
+        return [d.max_drop_m(g.relative_radius_m(race[d.kind])) for d in self.defects]
+
+    def tachometer_times(self, t0_s: float, t1_s: float, pulses_per_rev: int) -> np.ndarray:
+        """Instants of a shaft tachometer's pulses in [t0, t1] [s] (pulse k at shaft angle 2 pi k / ppr)."""
+        f0, a = self.shaft_speed_Hz, self.speed_ramp_Hz_per_s
+        rev = self.shaft_angle(np.array([t0_s, t1_s])) / (2 * np.pi) * pulses_per_rev
+        k = np.arange(np.ceil(rev[0]), np.floor(rev[1]) + 1) / pulses_per_rev
+        if a == 0:
+            return k / f0
+        return (-f0 + np.sqrt(f0 * f0 + 2 * a * k)) / a
 
 
 def roller_deflections(e_m: np.ndarray, psi_rad: np.ndarray, gap_m: float, drop_m: np.ndarray) -> np.ndarray:
@@ -496,8 +728,8 @@ def lpm_rhs(p: LPMParameters):
     kc, gap = p.k_contact, p.gap_m
 
     def forces(t, u):
-        psi = p.roller_angles(np.array([t]))[0]
-        f, jac, _ = bearing_force(u[:2] - u[2:], psi, gap, p.drops(psi), kc)
+        mo = p.motion(np.array([t]))
+        f, jac, _ = bearing_force(u[:2] - u[2:], mo.psi_rad[0], gap, p.contact_offsets(mo)[0], kc)
         g = np.r_[f, -f]
         dg = np.block([[jac, -jac], [-jac, jac]])
         return g, dg
@@ -561,8 +793,9 @@ def simulate_lpm(
     fext = np.array([0.0, -p.radial_load_N, 0.0, 0.0])
     kc, gap = p.k_contact, p.gap_m
     t = t_start_s + step_s * np.arange(n_steps + 1)
-    psi = p.roller_angles(t)
-    drop = p.drops(psi)
+    mo = p.motion(t)
+    psi = mo.psi_rad
+    drop = p.contact_offsets(mo)
     sn, cn = np.sin(psi), -np.cos(psi)
 
     # static start: rollers carry F_r, the pedestal spring carries F_r

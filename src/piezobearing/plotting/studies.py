@@ -39,7 +39,7 @@ def fault_detection(df: pd.DataFrame):
     threshold dotted.
     """
     fig, axes = plt.subplots(1, 2, figsize=(10.0, 3.8), gridspec_kw={"width_ratios": [1.6, 1.0]})
-    s_col, w_col = "bearing__shaft_speed_rpm", "bearing__defect_width_m"
+    s_col, w_col = "bearing__shaft_speed_rpm", "bearing__defects__0__width_m"
     groups = df.groupby(w_col) if w_col in df else [(None, df)]
     for i, (width, g) in enumerate(groups):
         g = g.sort_values(s_col)
@@ -130,8 +130,45 @@ def sensor_design(df: pd.DataFrame):
     return fig
 
 
+def detection_map(df: pd.DataFrame, x_col: str, y_col: str, x_label: str, y_label: str, title: str,
+                  log_x: bool = False, log_y: bool = False):
+    """Where the sensor sees the fault: the faulty case classified as its true type (left) and the healthy
+    case called faulty (right), in % of noise seeds, over two varied keys; each cell annotated."""
+    fig, axes = plt.subplots(1, 2, figsize=(10.0, 3.9))
+    xs, ys = sorted(df[x_col].unique()), sorted(df[y_col].unique())
+    for ax, col, name, cmap in ((axes[0], "correct_rate_faulty", "fault classified right [%]", "RdYlGn"),
+                                (axes[1], "false_alarm_rate_healthy", "healthy called faulty [%]", "RdYlGn_r")):
+        grid = np.full((len(ys), len(xs)), np.nan)
+        for _, r in df.iterrows():
+            grid[ys.index(r[y_col]), xs.index(r[x_col])] = 100 * r[col]
+        im = ax.imshow(grid, origin="lower", cmap=cmap, vmin=0, vmax=100, aspect="auto")
+        for i in range(len(ys)):
+            for j in range(len(xs)):
+                if np.isfinite(grid[i, j]):
+                    ax.text(j, i, f"{grid[i, j]:.0f}", ha="center", va="center", fontsize=8)
+        ax.set_xticks(range(len(xs)), [f"{x:g}" for x in xs], fontsize=7)
+        ax.set_yticks(range(len(ys)), [f"{y:g}" for y in ys], fontsize=7)
+        ax.set_xlabel(x_label)
+        ax.set_ylabel(y_label)
+        ax.set_title(name, fontsize=9)
+        fig.colorbar(im, ax=ax, shrink=0.8)
+    r = df.iloc[0]
+    fig.suptitle(f"{title}: {int(r['n_seeds'])} noise seeds, true type {r['true_type']}, noise {r['noise_model']}",
+                 fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def daq_noise(df: pd.DataFrame):
+    """Sampling rate against the DAQ's input noise density."""
+    return detection_map(df, "signals__sample_rate_Hz", "signals__noise__noise_density_V_per_sqrtHz",
+                         "DAQ sampling rate [Hz]", "input noise density [V/sqrt(Hz)]",
+                         "Outer-race fault against DAQ rate and absolute noise")
+
+
 SUMMARY_FIGURES = {
     "calibration_circuit": calibration_circuit,
     "fault_detection": fault_detection,
+    "daq_noise": daq_noise,
     "sensor_design": sensor_design,
 }

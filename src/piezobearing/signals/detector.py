@@ -25,7 +25,7 @@ that the *window's* false-alarm probability is the configured one.
 Indicator of a fault type: I = sum_l R_l over its lines. Its distribution
 under noise alone is computed, not bounded: the density of Z_l is
 M e^{-z}(1 - e^{-z})^{M-1}; the lines of one harmonic share Y_k, so their sum
-S_k = sum Z_l is a convolution and G_k = S_k / Y_k follows by Gauss-Laguerre
+S_k = sum Z_l is a convolution and G_k = S_k / Y_k follows by Gauss-Legendre
 quadrature over Y_k; the harmonics (disjoint floors) are convolved again.
 The threshold is the (1 - alpha) quantile of that distribution
 (:class:`NullDistribution`).
@@ -52,7 +52,8 @@ from functools import lru_cache
 
 import numpy as np
 from scipy.signal import fftconvolve
-from scipy.special import roots_genlaguerre
+from scipy.special import roots_legendre
+from scipy.stats import gamma as gamma_dist
 
 from . import detection as det
 from .fault_bands import FaultLine, fault_bands, fault_lines, window_bins
@@ -60,11 +61,23 @@ from .fault_bands import FaultLine, fault_bands, fault_lines, window_bins
 #: The fault types the classifier chooses among (plus "none").
 CLASSIFIED_TYPES = ("outer_race", "inner_race", "rolling_element")
 CLASSES = CLASSIFIED_TYPES + ("none",)
+#: What fault_indicator.json's detector entries mean.
+DEFINITION = (
+    "fault_types: per fault type the search detector on the noisy record's whole Hann-windowed envelope "
+    "spectrum in the envelope's band: each line (k x carrier + m x sideband spacing) searched over the bins its "
+    "frequency covers for cage slip in [0, signals.detector.slip_max]; ratio = largest A^2 there over the mean "
+    "A^2 of the harmonic's floor (within floor_halfwidth x carrier, all windows and floor_guard_bins around them "
+    "left out); indicator = sum of the ratios; threshold = (1 - pfa/n_types) quantile of its distribution under "
+    "noise alone (max of M exponential bins over a Gamma floor, computed); detected = indicator > threshold; "
+    "margin = indicator / threshold; own_lines: the same test on the lines no other detected type shares; "
+    "fault_type: none if no type is detected, else the detected type whose own lines are significant with the "
+    "largest margin, else the largest margin"
+)
 #: Envelope windows and the variance inflation of a mean of their bins' powers,
 #: 1 + 2 sum_k |rho_k|^2 (Hann: adjacent bins rho = -2/3, next 1/6).
 WINDOWS = {"rectangular": 1.0, "hann": 1.0 + 2.0 * (4.0 / 9.0 + 1.0 / 36.0)}
-#: Gauss-Laguerre nodes for the floor's Gamma distribution.
-_N_QUAD = 48
+#: Quadrature nodes over the floor's Gamma distribution.
+_N_QUAD = 64
 #: Grid points of the null densities.
 _N_GRID = 2**15
 
@@ -135,9 +148,14 @@ def per_bin_probability(window_probability: float, n_bins: int) -> float:
 
 
 def _gamma_nodes(n_floor_bins: float) -> tuple[np.ndarray, np.ndarray]:
-    """Nodes and weights of E[h(Y)] for Y ~ Gamma(M_f, 1/M_f)."""
-    u, w = roots_genlaguerre(_N_QUAD, n_floor_bins - 1.0)
-    return u / n_floor_bins, w / w.sum()
+    """Nodes and weights of E[h(Y)] for Y ~ Gamma(M_f, 1/M_f).
+
+    Gauss-Legendre in probability, Y = F^{-1}(u): stable for any M_f (the
+    generalised Laguerre rule overflows beyond M_f ~ 150), and its nodes
+    crowd towards u = 0, the small floors that make the tail of R.
+    """
+    u, w = roots_legendre(_N_QUAD)
+    return gamma_dist.ppf(0.5 * (u + 1.0), n_floor_bins, scale=1.0 / n_floor_bins), 0.5 * w
 
 
 def window_survival(t: np.ndarray, n_bins: int, n_floor_bins: int) -> np.ndarray:
@@ -241,17 +259,19 @@ def _floors_mask(freq: np.ndarray, df: float, all_lines: list[FaultLine], guard:
     return ok
 
 
-def search_lines(spec: det.EnvelopeSpectrum, lines: list[FaultLine], all_lines: list[FaultLine],
+def search_lines(spec: det.EnvelopeSpectrum, lines: list[FaultLine], excluded: list[FaultLine],
                  carrier_Hz: float, settings: DetectorSettings) -> list[LineResult]:
     """The largest floor ratio in each line's window.
 
     The floor of harmonic k is the mean A^2 of the bins within
     floor_halfwidth x carrier of the harmonic's middle line, outside every
-    window in ``all_lines`` and its guard bins.
+    window in ``excluded`` (the type's own lines) and its guard bins. Lines
+    of another fault type in a floor raise it: that type's fault then
+    weakens this type's test, which helps the classification.
     """
     f, a = spec.frequency_Hz, spec.amplitude_V
     df = spec.resolution_Hz
-    free = _floors_mask(f, df, all_lines, settings.guard_bins)
+    free = _floors_mask(f, df, excluded, settings.guard_bins)
     out = []
     floors: dict[int, tuple[float, int]] = {}
     for ln in lines:
@@ -349,7 +369,7 @@ def detect(spec: det.EnvelopeSpectrum, kinematics: dict, settings: DetectorSetti
     carriers = {"outer_race": kinematics["bpfo_Hz"], "inner_race": kinematics["bpfi_Hz"],
                 "rolling_element": 2.0 * kinematics["bsf_Hz"], "cage": kinematics["ftf_Hz"]}
     alpha = settings.alpha_per_type
-    res = {t: search_lines(spec, bands[t], all_lines, carriers[t], settings) for t in settings.fault_types}
+    res = {t: search_lines(spec, bands[t], bands[t], carriers[t], settings) for t in settings.fault_types}
     per_type = {t: type_test(res[t], alpha, settings.window) for t in settings.fault_types}
     detected = [t for t in settings.fault_types if per_type[t]["detected"]]
     top = max(ln.high_Hz for ln in all_lines)

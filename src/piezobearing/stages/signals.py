@@ -18,7 +18,10 @@ import pandas as pd
 from ..io import read_json, write_json
 from ..scorecard import Row, write_part
 from ..sensor.calibration import SensorCircuit, circuit_voltage, design_resistance_ohm, frequency_response
+from ..signals import classification as sclass
+from ..signals import daq
 from ..signals import detection as sig
+from ..signals import detector as sdet
 
 #: Largest relative deviation of a time step from the mean step of a record.
 UNIFORM_RTOL = 1e-3
@@ -155,23 +158,40 @@ def sensor_voltage(
 
 
 def noisy(voltage_csv: str, case: str, out_csv: str, out_json: str, config: dict) -> None:
-    """White Gaussian noise at signals.snr_dB → noisy_{case}.{csv,json}.
+    """The DAQ: anti-alias filter and sampling at signals.sample_rate_Hz, noise → noisy_{case}.{csv,json}.
 
-    SNR = 10 log10(P_s / sigma^2), P_s the mean square of the whole noiseless record.
+    ``signals.noise.model`` relative: white noise at signals.snr_dB,
+    SNR = 10 log10(P_s / sigma^2), P_s the mean square of the whole sampled
+    noiseless record (the paper). absolute: the DAQ's input noise density,
+    mains and drive lines and its ADC; clipped samples are counted in the JSON
+    and named in the log. The CSV keeps the sampled noiseless record beside
+    the noisy one (column noiseless_V).
     """
     s = config["signals"]
     t, v, dt = read_series(voltage_csv, "voltage_V")
-    y, sigma = sig.add_white_noise(v, s["snr_dB"], sig.noise_rng(config["seed"], case, 0))
-    n = y - v
-    write_csv(pd.DataFrame({"time_s": t, "voltage_V": y}), out_csv)
+    ns = daq.NoiseSettings.from_config(s)
+    smp = daq.sample(v, dt, s["sample_rate_Hz"])
+    vs, dts = smp.voltage_V, smp.dt_s
+    acq = daq.add_noise(vs, dts, ns, sig.noise_rng(config["seed"], case, 0))
+    y = acq.voltage_V
+    if acq.n_clipped:
+        print(f"noisy: warning: {case}: {acq.n_clipped} of {y.size} samples ({100 * acq.clipped_fraction:.2g}%) "
+              f"clipped at +-{ns.range_V} V; raise signals.noise.range_V", file=sys.stderr)
+    n = y - vs
+    write_csv(pd.DataFrame({"time_s": t[0] + np.arange(y.size) * dts, "voltage_V": y, "noiseless_V": vs}), out_csv)
     write_json(
         {
             "case": case,
             "snr_dB": s["snr_dB"],
             "snr_definition": "10 log10(mean(v^2) / sigma^2) over the whole noiseless record",
-            "signal_power_V2": sig.signal_power_V2(v),
-            "noise_std_V": sigma,
-            "realised_snr_dB": float(10 * np.log10(sig.signal_power_V2(v) / np.mean(n**2))),
+            "noise_model": ns.model,
+            "sample_rate_Hz": 1.0 / dts,
+            "model_sample_rate_Hz": 1.0 / dt,
+            "anti_alias": smp.anti_alias,
+            "daq": acq.report(),
+            "signal_power_V2": sig.signal_power_V2(vs),
+            "noise_std_V": acq.noise_std_V,
+            "realised_snr_dB": float(10 * np.log10(sig.signal_power_V2(vs) / np.mean(n**2))),
             "seed": [config["seed"], 6, sig.CASE_CODES[case], 0],
             "config": {"seed": config["seed"], "signals": s},
         },
@@ -194,7 +214,7 @@ def envelope(
     kin = kinematics(kinematics_json)
     f0 = kin["bpfo_Hz"]
     _, y, dt = read_series(noisy_csv, "voltage_V")
-    _, v, _ = read_series(voltage_csv, "voltage_V")
+    _, v, _ = read_series(noisy_csv, "noiseless_V")  # the sampled noiseless record, on the DAQ clock
     es = sig.EnvelopeSettings.from_config(s)
     a = sig.analyse(y, dt, f0, es, sig.IndicatorSettings.from_config(s))
     spec = a.spectrum
@@ -242,22 +262,36 @@ def read_spectrum(csv: str, json_path: str, column: str = "amplitude_V") -> sig.
     )
 
 
-def indicator(envelopes: dict, kinematics_json: str, noisy_jsons: dict, out_json: str, config: dict) -> None:
+def indicator(envelopes: dict, kinematics_json: str, noisy_jsons: dict, out_json: str, config: dict,
+              noisy_csvs: dict | None = None) -> None:
     """Envelope amplitudes at k BPFO over the local floor, indicator, threshold → fault_indicator.json.
 
-    ``envelopes`` maps each case to its (csv, json) pair.
+    ``envelopes`` maps each case to its (csv, json) pair. Per case also the
+    search detector (:mod:`..signals.detector`) on the noisy record
+    (``noisy_csvs``, default beside ``noisy_jsons``) in the envelope's band:
+    ``fault_type`` (the classification) and ``fault_types``, per type its
+    indicator, threshold and ``detected``.
     """
     s = config["signals"]
     kin = kinematics(kinematics_json)
     ins = sig.IndicatorSettings.from_config(s)
+    ds = sdet.DetectorSettings.from_config(s)
     out = {}
     for case, (csv, js) in envelopes.items():
+        ncsv = noisy_csvs[case] if noisy_csvs else str(Path(noisy_jsons[case]).with_suffix(".csv"))
+        _, y, dt = read_series(ncsv, "voltage_V")
+        band = read_json(js)["band_Hz"]
+        es = sig.EnvelopeSettings(band_rule="fixed", band_Hz=tuple(band), filter_order=s["filter_order"])
+        found = sdet.analyse_record(y, dt, kin, es, ds)[1].to_dict()
         r = sig.fault_indicator(read_spectrum(csv, js), kin["bpfo_Hz"], ins)
         r["noiseless"] = sig.fault_indicator(read_spectrum(csv, js, "noiseless_amplitude_V"), kin["bpfo_Hz"], ins)
         r["snr_dB"] = read_json(noisy_jsons[case])["snr_dB"]
         meta = read_json(js)
         r["in_band_snr_dB"] = meta["in_band_snr_dB"]
         r["raw_spectrum_test"] = meta["raw_spectrum_test"]
+        r["daq"] = read_json(noisy_jsons[case]).get("daq")
+        r["fault_type"] = found["fault_type"]
+        r["fault_types"] = {t: dict(v, lines=found["lines"][t]) for t, v in found["per_type"].items()}
         out[case] = r
     out["definition"] = (
         "r_k = A(k BPFO)^2 / mean A^2 of the local floor (bins within floor_halfwidth BPFO of k BPFO, guard bins "
@@ -265,7 +299,8 @@ def indicator(envelopes: dict, kinematics_json: str, noisy_jsons: dict, out_json
         "n_harmonics F_{1-pfa}(2 n_harmonics, 2 M), M = smallest floor count (CFAR under Gaussian noise); "
         "the 'noiseless' entries apply the same test to the noiseless record in the same band (reference only); "
         "in_band_snr_dB: band-passed noiseless power over band-passed noise power; raw_spectrum_test: the same "
-        "test on the voltage's own amplitude spectrum (no band-pass, no envelope), the naive check"
+        "test on the voltage's own amplitude spectrum (no band-pass, no envelope), the naive check; "
+        + sdet.DEFINITION
     )
     out["kinematics"] = kin
     out["config"] = {"seed": config["seed"], "signals": s}
@@ -428,3 +463,69 @@ def scorecard(indicator_json: str, study_json: str, kinematics_json: str, out_cs
             f"{_nan(st['other_band_rule']['healthy']['first_snr_rate_above_dB'])} dB"),
     ]
     write_part(rows, out_csv)
+
+
+# --------------------------------------------------------------------------- fault-type classification
+
+
+def true_fault_type(bearing: dict) -> str:
+    """The faulty case's fault type from the bearing config: ``bearing.defects`` (its single type) or,
+    in the configs before the defect list, the outer-race defect."""
+    defects = bearing.get("defects")
+    if defects is None:
+        return "outer_race"
+    types = sorted({d["type"] for d in defects})
+    if len(types) != 1:
+        raise ValueError(f"bearing.defects: {len(types)} fault types ({', '.join(types) or 'none'}); the "
+                         "classification needs exactly one true type in the faulty case")
+    return types[0]
+
+
+def classification(voltages: dict, kinematics_json: str, out_json: str, out_csv: str, out_roc_csv: str,
+                   config: dict) -> None:
+    """Fault type over noise seeds and ROC across SNR → classification.json, classification.csv, roc.csv.
+
+    ``voltages`` maps healthy and faulty to their voltage CSVs (model clock);
+    each is sampled at signals.sample_rate_Hz, then replicate j adds the
+    configured DAQ noise from noise_rng(seed, case, j) (replicate 0 is the
+    noisy stage's record). Rows of the confusion matrix: true type (healthy:
+    none), columns: classified type.
+    """
+    s = config["signals"]
+    kin = kinematics(kinematics_json)
+    truth = {"healthy": "none", "faulty": true_fault_type(config["bearing"])}
+    records = {}
+    for case, path in voltages.items():
+        _, v, dt = read_series(path, "voltage_V")
+        smp = daq.sample(v, dt, s["sample_rate_Hz"])
+        records[case] = (truth[case], smp.voltage_V, smp.dt_s)
+    es, ds, ns = sig.EnvelopeSettings.from_config(s), sdet.DetectorSettings.from_config(s), daq.NoiseSettings.from_config(s)
+    n = s["study_n_seeds"]
+    rng = lambda case, j: sig.noise_rng(config["seed"], case, j)  # noqa: E731
+    print(f"classification: {len(records)} cases x {n} seeds", file=sys.stderr, flush=True)
+    cm, rows = sclass.classify_seeds(records, kin, es, ds, ns, rng, n)
+    write_csv(pd.DataFrame(rows), out_csv)
+    roc = []
+    if truth["faulty"] != "none":
+        print(f"classification: ROC at {len(s['detector']['roc_snr_dB'])} SNRs", file=sys.stderr, flush=True)
+        roc = sclass.roc_over_snr((truth["faulty"], records["faulty"][1]), records["healthy"][1],
+                                  records["faulty"][2], kin, es, ds, s["detector"]["roc_snr_dB"], rng, n)
+    write_csv(pd.DataFrame([{"snr_dB": r["snr_dB"], "pfa": p, "pd": d} for r in roc
+                            for p, d in zip(r["pfa"], r["pd"], strict=True)]), out_roc_csv)
+    write_json(
+        {
+            **cm,
+            "n_seeds": n,
+            "noise_model": ns.model,
+            "snr_dB": s["snr_dB"] if ns.model == "relative" else None,
+            "sample_rate_Hz": 1.0 / records["faulty"][2],
+            "false_alarm_probability": ds.false_alarm_probability,
+            "true_types": truth,
+            "roc": [{k: r[k] for k in ("snr_dB", "fault_type", "auc", "detection_rate", "false_alarm_rate")}
+                    for r in roc],
+            "roc_definition": "per SNR (relative noise), the true type's score I/threshold, faulty against "
+                              "healthy, over the same seeds; detection_rate/false_alarm_rate at score > 1",
+            "config": {"seed": config["seed"], "signals": s},
+        },
+        out_json,
+    )

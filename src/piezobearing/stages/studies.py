@@ -116,8 +116,8 @@ def fault_detection_case(config: dict, outdir: Path, resistance: str, harmonic: 
     kin = sgs.kinematics(kin_json)
     f0 = kin["bpfo_Hz"]
     b = cfg["bearing"]
-    # time a roller centre takes to cross the groove (it sinks over this arc; Defect.drop_m)
-    crossing_s = b["defect_width_m"] / (
+    # time a roller centre takes to cross the (first) groove (it sinks over this arc; lpm.chord_drop_m)
+    crossing_s = b["defects"][0]["width_m"] / (
         BearingGeometry.from_config(b).outer_raceway_radius_m * 2 * np.pi * kin["ftf_Hz"]
     )
     es, ins = sig.EnvelopeSettings.from_config(s), sig.IndicatorSettings.from_config(s)
@@ -287,11 +287,51 @@ def noise_settings(config: dict):
     return daq.NoiseSettings(model="absolute")
 
 
+def detector_case(config: dict, outdir: Path, resistance: str, harmonic: str | None = None) -> dict:
+    """The fault_detection case, then the search detector over noise seeds at the configured DAQ.
+
+    Runs :func:`fault_detection_case` (bearing to fault_indicator.json; its
+    SNR sweep at the model clock), then the classification stage (sampling
+    at signals.sample_rate_Hz, the configured noise model, every seed; no
+    ROC) into ``outdir``. The row adds: the faulty and healthy
+    classifications, the rate at which the faulty case is classified as its
+    true type and the healthy one as none, each type's detection rate on
+    the faulty case, and the largest clipped fraction.
+    """
+    from . import signals as sgs
+
+    cfg = copy.deepcopy(config)
+    cfg["signals"]["detector"]["roc_snr_dB"] = []
+    row = fault_detection_case(cfg, outdir, resistance, harmonic)
+    d = Path(outdir)
+    sgs.classification({c: str(d / f"voltage_{c}.csv") for c in ("healthy", "faulty")}, str(d / "kinematics.json"),
+                       str(d / "classification.json"), str(d / "classification.csv"), str(d / "roc.csv"), cfg)
+    cm = read_json(d / "classification.json")
+    seeds = pd.read_csv(d / "classification.csv")
+    ind = read_json(d / "fault_indicator.json")
+    faulty = seeds[seeds["case"] == "faulty"]
+    true = cm["true_types"]["faulty"]
+    row.update({
+        "true_type": true,
+        "noise_model": cm["noise_model"],
+        "sample_rate_Hz": cm["sample_rate_Hz"],
+        "fault_type_faulty": ind["faulty"]["fault_type"],
+        "fault_type_healthy": ind["healthy"]["fault_type"],
+        "correct_rate_faulty": float((faulty["fault_type"] == true).mean()),
+        "false_alarm_rate_healthy": float((seeds[seeds["case"] == "healthy"]["fault_type"] != "none").mean()),
+        "clipped_fraction_max": float(seeds["clipped_fraction"].max()),
+        **{f"detection_rate_{t}": float(faulty[f"{t}_detected"].mean())
+           for t in ("outer_race", "inner_race", "rolling_element")},
+    })
+    return row
+
+
 #: Study kinds by name: the function that runs one case and returns its summary row. A kind that reads
 #: workflow results its varied keys do not affect takes them as keyword arguments (studies.smk: STUDY_INPUTS).
 KINDS = {
     "calibration_circuit": calibration_circuit_case,
     "fault_detection": fault_detection_case,
+    "daq_noise": detector_case,
     "sensor_design": sensor_design_case,
 }
 

@@ -1,0 +1,68 @@
+"""The DAQ and the search detector in the signal stages, on files of a stand-in bearing."""
+
+from __future__ import annotations
+
+import copy
+import json
+
+import pandas as pd
+import pytest
+from test_signals_stages import inputs, run_chain  # noqa: F401  (the fixture)
+
+from piezobearing.stages import signals as st
+
+CASES = ("healthy", "faulty")
+
+
+def test_indicator_carries_the_fault_type_and_every_type_test(tmp_path, inputs, paper_config):  # noqa: F811
+    """fault_indicator.json: per case fault_type and per type indicator, threshold, detected; today's keys kept."""
+    out = run_chain(tmp_path, inputs, paper_config)
+    ind = json.loads((out / "fault_indicator.json").read_text())
+    assert ind["faulty"]["fault_type"] == "outer_race" and ind["healthy"]["fault_type"] == "none"
+    for case in CASES:
+        assert {"indicator", "threshold", "detected", "harmonics"} <= set(ind[case])
+        assert set(ind[case]["fault_types"]) == {"outer_race", "inner_race", "rolling_element"}
+        for r in ind[case]["fault_types"].values():
+            assert {"indicator", "threshold", "detected", "lines"} <= set(r)
+    assert ind["faulty"]["fault_types"]["outer_race"]["detected"]
+    assert not any(r["detected"] for r in ind["healthy"]["fault_types"].values())
+    nz = json.loads((out / "noisy_faulty.json").read_text())
+    assert nz["anti_alias"].startswith("none") and nz["daq"]["n_clipped"] == 0  # the paper's rate: as is
+
+
+def test_classification_over_seeds(tmp_path, inputs, paper_config):  # noqa: F811
+    """Confusion matrix rows true type, columns classified; the stand-in outer-race fault at 10 dB; ROC per SNR."""
+    cfg = copy.deepcopy(paper_config)
+    cfg["signals"]["study_n_seeds"] = 10
+    cfg["signals"]["detector"]["roc_snr_dB"] = [-10.0, 10.0]
+    out = run_chain(tmp_path, inputs, cfg, harmonic=False)
+    volt = {c: str(out / f"voltage_{c}.csv") for c in CASES}
+    st.classification(volt, inputs["kinematics"], out / "cls.json", out / "cls.csv", out / "roc.csv", cfg)
+    cm = json.loads((out / "cls.json").read_text())
+    assert cm["classes"] == ["outer_race", "inner_race", "rolling_element", "none"]
+    assert cm["rows"] == "true type" and cm["columns"] == "classified type"
+    assert cm["counts"][0][0] == 10 and cm["counts"][3][3] == 10  # every seed right
+    assert cm["correct_rate"]["outer_race"] == 1.0 and cm["correct_rate"]["inner_race"] is None
+    roc = {r["snr_dB"]: r for r in cm["roc"]}
+    assert roc[10.0]["auc"] == pytest.approx(1.0) and roc[-10.0]["auc"] < roc[10.0]["auc"]
+    assert len(pd.read_csv(out / "cls.csv")) == 20 and set(pd.read_csv(out / "roc.csv")["snr_dB"]) == {-10.0, 10.0}
+    with pytest.raises(ValueError, match="bearing.defects"):
+        st.true_fault_type({"defects": [{"type": "outer_race"}, {"type": "inner_race"}]})
+    assert st.true_fault_type({"defects": [{"type": "inner_race", "width_m": 1e-3, "angle_deg": 0.0}]}) == "inner_race"
+
+
+def test_absolute_noise_reports_clipping(tmp_path, inputs, paper_config):  # noqa: F811
+    """Absolute noise with a +-10 V input: the stand-in's swing clips, and noisy_{case}.json says how much."""
+    cfg = copy.deepcopy(paper_config)
+    cfg["signals"]["noise"].update(model="absolute", range_V=10.0, adc_bits=16)
+    out = tmp_path / "out"
+    st.sensor_voltage(inputs["faulty"], inputs["resistance"], None, out / "v.csv", out / "v.json", cfg)
+    st.noisy(out / "v.csv", "faulty", out / "n.csv", out / "n.json", cfg)
+    nz = json.loads((out / "n.json").read_text())
+    v = json.loads((out / "v.json").read_text())
+    assert v["voltage_peak_to_peak_V"] > 20.0
+    assert nz["daq"]["clipped"] and 0 < nz["daq"]["clipped_fraction"] < 1
+    assert nz["daq"]["quantisation_step_V"] == pytest.approx(20.0 / 2**16)
+    assert nz["noise_std_V"] == pytest.approx(1e-6 * (nz["sample_rate_Hz"] / 2) ** 0.5)
+    n = pd.read_csv(out / "n.csv")
+    assert n["voltage_V"].max() <= 10.0 and list(n.columns) == ["time_s", "voltage_V", "noiseless_V"]
