@@ -208,16 +208,14 @@ def test_one_sensor_design_case_on_workflow_files(tmp_path, ci_config):
     assert sorted(pareto_front(np.array([1.0, 2.0, 3.0]), np.array([3.0, 1.0, 2.0]))) == [0, 2]
 
 
-def test_every_study_case_name_fits_a_file_name():
+def test_every_configured_study_case_name_fits_a_file_name(paper_config, ci_config):
     """Paramspace names a case by every column and value; the rule's benchmark file adds 'study_case_<study>_'.
     A name over 255 characters stops the workflow (OSError: File name too long)."""
-    from pathlib import Path
-
     import pandas as pd
     from snakemake.utils import Paramspace
 
-    for table in sorted(Path(__file__).resolve().parents[1].glob("config/studies/*.tsv")):
-        df = pd.read_csv(table, sep="\t", comment="#")
-        study = table.stem.removesuffix("_ci")
-        longest = max(len(f"study_case_{study}_{c}.tsv") for c in Paramspace(df, "*", "case").instance_patterns)
-        assert longest <= 255, f"{table.name}: case names up to {longest} characters"
+    for s in paper_config["studies"] + ci_config["studies"]:
+        df = pd.read_csv(s["table"], sep="\t", comment="#")
+        cases = Paramspace(df, filename_params="*", single_wildcard="case").instance_patterns
+        longest = max(len(f"study_case_{s['name']}_{c}.tsv") for c in cases)
+        assert longest <= 255, f"{s['table']}: case file names up to {longest} characters"
