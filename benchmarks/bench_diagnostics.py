@@ -24,8 +24,9 @@ from pathlib import Path
 import numpy as np
 
 from piezobearing import config as cfg
-from piezobearing import diagnostics as dg
-from piezobearing.effects import CATALOGUE, Record
+from piezobearing.diagnosis.calibration.effects import CATALOGUE, ForceRecord
+from piezobearing.diagnosis.calibration.subject import diagnose_record
+from piezobearing.diagnosis.settings import DiagnosticsSettings
 from piezobearing.sensor.calibration import detect_impulses
 from piezobearing.stages.calibration import nominal_circuit
 from piezobearing.synthesis import PressProtocol, synthesize
@@ -64,7 +65,7 @@ def main() -> None:
     ap.add_argument("--out", default="results/benchmarks/diagnostics.json")
     args = ap.parse_args()
     config = cfg.load()
-    settings = dg.DiagnosticsSettings.from_config(config["diagnostics"])
+    settings = DiagnosticsSettings.from_config(config["diagnostics"])
     circuit = nominal_circuit(config, config["calibration"]["initial_resistance_ohm"])
     p = PressProtocol.from_config(config["synthesis"])
     cases = {}
@@ -95,10 +96,9 @@ def main() -> None:
         for _ in range(args.repeat):
             calls: list[str] = []
             t0 = time.perf_counter()
-            d = dg.diagnose(Record(t, f), v, circuit, [], settings, imps, progress=calls.append)
+            _, j = diagnose_record(ForceRecord(t, f), v, circuit, [], settings, imps, progress=calls.append)
             times.append(time.perf_counter() - t0)
             fits = len(calls)
-        j = d.to_dict()
         out["cases"][name] = {
             "seconds": min(times),
             "seconds_all": times,

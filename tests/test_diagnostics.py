@@ -15,8 +15,13 @@ import numpy as np
 import pytest
 from scipy.signal import cont2discrete, lfilter
 
-from piezobearing import diagnostics as dg
-from piezobearing.effects import Record
+from piezobearing.diagnosis.calibration.effects import ForceRecord
+from piezobearing.diagnosis.calibration.subject import diagnose_record
+from piezobearing.diagnosis.fit import fd_weighted, whiten
+from piezobearing.diagnosis.noise import estimate_noise_floor
+from piezobearing.diagnosis.residual_tests import residual_tests
+from piezobearing.diagnosis.settings import DiagnosticsSettings
+from piezobearing.diagnosis.verdict import findings
 from piezobearing.sensor.calibration import circuit_voltage, detect_impulses
 from piezobearing.stages.calibration import nominal_circuit
 from piezobearing.synthesis import PressProtocol, press_force, synthesize
@@ -91,15 +96,14 @@ def run(config: dict, hidden: list[dict], effects: tuple = (), seed: int | None 
         else:
             t, f, v = record
         imps = detect_impulses(f, v, t[1] - t[0], 0.2, 0.8)
-        d = dg.diagnose(
-            Record(t, f),
+        _, _CACHE[key] = diagnose_record(
+            ForceRecord(t, f),
             v,
             nominal_circuit(c, c["calibration"]["initial_resistance_ohm"]),
             list(effects),
-            dg.DiagnosticsSettings.from_config(c["diagnostics"]),
+            DiagnosticsSettings.from_config(c["diagnostics"]),
             imps,
         )
-        _CACHE[key] = d.to_dict()
     return _CACHE[key]
 
 
@@ -111,10 +115,10 @@ def test_fd_weighting_is_parseval():
     rng = np.random.default_rng(0)
     for n in (1000, 1001):
         r = rng.normal(0, 0.3, n)
-        z = dg.fd_weighted(r, np.full(n // 2 + 1, 0.09))
+        z = fd_weighted(r, np.full(n // 2 + 1, 0.09))
         assert z.size == n
         assert z @ z == pytest.approx(r @ r / 0.09, rel=1e-12)
-        np.testing.assert_allclose(dg.whiten(r, np.full(n // 2 + 1, 0.09)), r / 0.3, atol=1e-12)
+        np.testing.assert_allclose(whiten(r, np.full(n // 2 + 1, 0.09)), r / 0.3, atol=1e-12)
 
 
 def test_noise_floor_is_measured_in_quiet_stretches(paper_config):
@@ -122,11 +126,11 @@ def test_noise_floor_is_measured_in_quiet_stretches(paper_config):
     c = paper_config
     for hidden in ([], HIDDEN["mains_pickup"][0]):
         m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"], hidden)
-        fl = dg.estimate_noise_floor(
-            Record(m.time_s, m.force_N), m.voltage_V, dg.DiagnosticsSettings(), 0.013
+        fl = estimate_noise_floor(
+            ForceRecord(m.time_s, m.force_N), m.voltage_V, DiagnosticsSettings(), 5 * 0.013
         )
         assert fl.voltage_noise_V == pytest.approx(0.002, rel=0.03)
-        assert fl.force_noise_N == pytest.approx(0.005, rel=0.03)
+        assert fl.input_noise == pytest.approx(0.005, rel=0.03)
         assert fl.quiet_s > 8.0 and fl.n_stretches >= 10
 
 
@@ -134,16 +138,16 @@ def test_residual_tests_pass_white_noise_and_name_a_tone():
     """White noise passes all four tests; a tone 3x the noise amplitude shows as a narrowband peak at its frequency."""
     rng = np.random.default_rng(11)
     dt, n = 1e-3, 25000
-    st = dg.DiagnosticsSettings()
+    st = DiagnosticsSettings()
     passed = [
-        dg.residual_tests(rng.normal(size=n), rng.normal(size=n).cumsum(), dt, st).passed for _ in range(5)
+        residual_tests(rng.normal(size=n), rng.normal(size=n).cumsum(), dt, st).passed for _ in range(5)
     ]
     assert all(passed)
     t = np.arange(n) * dt
     e = rng.normal(size=n) + 0.3 * np.sin(2 * np.pi * 73.2 * t)
-    tests = dg.residual_tests(e, rng.normal(size=n).cumsum(), dt, st)
+    tests = residual_tests(e, rng.normal(size=n).cumsum(), dt, st)
     assert not tests.passed
-    f = dg.findings(tests)
+    f = findings(tests)
     spec = [x for x in f if x["test"] == "spectrum"]
     assert spec and spec[0]["kind"] == "narrowband" and abs(spec[0]["frequency_Hz"] - 73.2) < 0.1
 
@@ -256,3 +260,42 @@ def test_diagnosis_json_interface(paper_config):
         assert {"effects", "nrmse", "bic"} <= set(s)
     assert d["verdict"] in ("explained", "unexplained") and isinstance(d["unexplained"], list)
     assert isinstance(d["selected"], list)
+
+
+# --------------------------------------------------------------------------- the subject interface
+
+
+def test_calibration_is_a_subject_whose_synthesiser_hides_what_the_engine_finds(ci_config):
+    """The calibration subject end to end through its interface: synthesise with a hidden 15 ms
+    channel delay, build the problem, run the engine, and the answer names the delay."""
+    from piezobearing.diagnosis.calibration.subject import SUBJECT
+    from piezobearing.diagnosis.subject import Problem, Subject
+
+    assert isinstance(SUBJECT, Subject)
+    obs = SUBJECT.synthesise(ci_config, ci_config["seed"], HIDDEN["channel_delay"][0])
+    p = SUBJECT.problem(obs, ci_config)
+    assert isinstance(p, Problem) and len(p.segments) == len(obs[1]) >= 2
+    assert [q.name for q in p.baseline.params(p.record)] == ["resistance_ohm"]
+    _, d = SUBJECT.diagnose(obs, ci_config)
+    assert d["winner"]["effect"] == "channel_delay"
+    assert d["winner"]["params"]["delay_s"] == pytest.approx(0.015, abs=5e-4)
+    assert len(d["per_impulse"]["final"]) == len(obs[1])
+    assert "Most likely missing: `channel_delay`" in SUBJECT.report(d, {})
+
+
+def test_residual_tests_without_a_measured_input():
+    """A subject without a measured input (a running bearing): the input-correlation test passes empty,
+    the others still find a tone, and the report's test line leaves the correlation out."""
+    from piezobearing.diagnosis.report.sections import tests_line
+
+    rng = np.random.default_rng(5)
+    dt, n = 1e-3, 20000
+    t = np.arange(n) * dt
+    e = rng.normal(size=n) + 0.3 * np.sin(2 * np.pi * 41.0 * t)
+    tests = residual_tests(e, None, dt, DiagnosticsSettings())
+    assert tests.uncorrelated and tests.xcf.size == 0 and not tests.passed
+    f = findings(tests)
+    assert f[0]["test"] == "spectrum" and abs(f[0]["frequency_Hz"] - 41.0) < 0.1
+    assert "input_correlation" not in {x["test"] for x in f}
+    line = tests_line(tests.summary())
+    assert "correlation" not in line and "1 spectral region(s)" in line

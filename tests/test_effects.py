@@ -5,12 +5,20 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from piezobearing.effects import CATALOGUE, EffectError, Record, register, resolve, unregister
-from piezobearing.effects.base import Effect, force_band_Hz
-from piezobearing.effects.channel_delay import fractional_delay
-from piezobearing.effects.reference_lag import lead
-from piezobearing.model import ForwardModel, model_from_specs, rc_response
-from piezobearing.sensor.calibration import SensorCircuit, circuit_voltage
+from piezobearing.diagnosis.calibration.effects import (
+    CATALOGUE,
+    EffectError,
+    ForceRecord,
+    register,
+    resolve,
+    unregister,
+)
+from piezobearing.diagnosis.calibration.effects.base import Effect, force_band_Hz
+from piezobearing.diagnosis.calibration.effects.channel_delay import fractional_delay
+from piezobearing.diagnosis.calibration.effects.reference_lag import lead
+from piezobearing.diagnosis.calibration.model import ForwardModel, model_from_specs
+from piezobearing.diagnosis.units import SUFFIXES
+from piezobearing.sensor.calibration import SensorCircuit, circuit_voltage, rc_response
 from piezobearing.synthesis import PressProtocol, press_force, synthesize
 
 REQUIRED = {
@@ -22,7 +30,6 @@ REQUIRED = {
     "baseline_drift",
     "extra_capacitance",
 }
-UNITS = ("_s", "_Hz", "_per_N", "_V", "_F", "_ohm")
 #: A non-neutral value of every effect (those of the recovery tests in test_diagnostics.py).
 ON = {
     "channel_delay": {"delay_s": 0.015},
@@ -36,10 +43,10 @@ ON = {
 
 
 @pytest.fixture(scope="module")
-def record(paper_config) -> Record:
+def record(paper_config) -> ForceRecord:
     p = PressProtocol.from_config(paper_config["synthesis"])
     t, f = press_force(p, np.random.default_rng(1))
-    return Record(t, f + np.random.default_rng(2).normal(0, p.force_noise_N, t.size))
+    return ForceRecord(t, f + np.random.default_rng(2).normal(0, p.force_noise_N, t.size))
 
 
 @pytest.fixture(scope="module")
@@ -52,7 +59,7 @@ def test_catalogue_has_the_issue_identifiers_each_documented():
     for name, e in CATALOGUE.items():
         assert e.name == name
         assert e.title and len(e.physics) > 80, name
-        assert type(e).__module__.startswith("piezobearing.effects."), name
+        assert type(e).__module__.startswith("piezobearing.diagnosis.calibration.effects."), name
 
 
 def test_every_parameter_has_a_unit_suffix_bounds_and_a_neutral_default(record):
@@ -60,7 +67,7 @@ def test_every_parameter_has_a_unit_suffix_bounds_and_a_neutral_default(record):
     for e in CATALOGUE.values():
         for p in e.params(record):
             names.append(p.name)
-            assert p.name.endswith(UNITS), p.name
+            assert p.name.endswith(SUFFIXES), p.name
             assert p.lower < p.upper and p.lower <= p.default <= p.upper, p.name
             assert not p.log or p.lower > 0, p.name
             assert p.description, p.name
@@ -90,9 +97,9 @@ def test_adding_an_effect_is_one_registration(record, circuit):
         physics = "test"
 
         def params(self, record):
-            from piezobearing.effects import EffectParam
+            from piezobearing.diagnosis.params import Param
 
-            return [EffectParam("test_gain_factor_V", 1.0, 0.5, 2.0)]
+            return [Param("test_gain_factor_V", 1.0, 0.5, 2.0)]
 
         def voltage(self, v, values, record):
             return v * values["test_gain_factor_V"]
@@ -181,9 +188,9 @@ def test_reference_lag_undoes_a_first_order_lag_within_the_force_band(record):
     dt, a = 1e-3, np.exp(-0.1)
     lagged = lfilter([1 - a], [1, -a], f)  # y_k = a y_k-1 + (1 - a) F_k: a lag of tau = a dt / (1 - a)
     tau = a * dt / (1 - a)  # 9.5 ms
-    rec = Record(t, lagged + np.random.default_rng(4).normal(0, 0.005, t.size))
+    rec = ForceRecord(t, lagged + np.random.default_rng(4).normal(0, 0.005, t.size))
     fs = rec.sample_rate_Hz
-    from piezobearing.effects.base import fd_filter
+    from piezobearing.diagnosis.calibration.effects.base import fd_filter
 
     led = fd_filter(lagged, lambda k: lead(k * fs, tau, force_band_Hz(rec)), 400)
     assert np.sqrt(np.mean((led - f) ** 2)) < 1e-3 * np.sqrt(np.mean(f**2))
@@ -203,7 +210,7 @@ def test_d33_nonlinearity_scales_the_charge_as_f_plus_beta_f2(record, circuit):
     m = ForwardModel.build(circuit, ["d33_nonlinearity"])
     t = np.arange(2000) * 1e-3
     f = 10.0 * 0.5 * (1 - np.cos(np.pi * np.clip(t, 0, 1)))
-    rec = Record(t, f)
+    rec = ForceRecord(t, f)
     v = m.simulate({"resistance_ohm": 1e16, "beta_per_N": 2e-3}, rec)  # tau = 2.6e6 s: open circuit
     g = circuit.open_circuit_gain_V_per_N
     np.testing.assert_allclose(v[-1], g * (10 + 2e-3 * 100), rtol=1e-4)
@@ -212,7 +219,7 @@ def test_d33_nonlinearity_scales_the_charge_as_f_plus_beta_f2(record, circuit):
 def test_additive_effects_closed_forms(record, circuit):
     m = ForwardModel.build(circuit, ["mains_pickup", "baseline_drift"])
     vals = {**m.defaults(record), **ON["mains_pickup"], "drift_p0_V": 0.003, "drift_p1_V": 0.02}
-    zero = Record(record.time_s, np.zeros(record.n))
+    zero = ForceRecord(record.time_s, np.zeros(record.n))
     v = m.simulate(vals, zero)
     t = record.time_s
     x = 2 * t / t[-1] - 1
@@ -221,7 +228,7 @@ def test_additive_effects_closed_forms(record, circuit):
 
 
 def test_mains_harmonics_above_nyquist_are_left_out():
-    slow = Record(np.arange(1000) / 500.0, np.zeros(1000))
+    slow = ForceRecord(np.arange(1000) / 500.0, np.zeros(1000))
     names = [p.name for p in CATALOGUE["mains_pickup"].params(slow)]
     assert "mains_h3_cos_V" in names and "mains_h5_cos_V" not in names
 
@@ -236,7 +243,7 @@ def test_synthesis_puts_the_forward_model_into_the_voltage(paper_config, circuit
     ]
     noiseless = PressProtocol(**{**p.__dict__, "force_noise_N": 0.0, "voltage_noise_V": 0.0})
     m = synthesize(noiseless, circuit, 5, specs)
-    rec = Record(m.time_s, m.force_N)
+    rec = ForceRecord(m.time_s, m.force_N)
     model, vals = model_from_specs(circuit, specs, rec)
     np.testing.assert_allclose(m.voltage_V, model.simulate(vals, rec), atol=1e-12)
     plain = synthesize(noiseless, circuit, 5)
@@ -247,7 +254,22 @@ def test_synthesis_puts_the_forward_model_into_the_voltage(paper_config, circuit
 
 def test_channel_delay_summary_names_the_direction():
     """A negative fitted delay means the voltage comes before the force; the summary must not say 'after'."""
-    from piezobearing.effects.channel_delay import EFFECT
+    from piezobearing.diagnosis.calibration.effects.channel_delay import EFFECT
 
     assert EFFECT.summary({"delay_s": 0.015}) == "delay = 15.00 ms (voltage after force)"
     assert EFFECT.summary({"delay_s": -0.008}) == "delay = -8.00 ms (voltage before force)"
+
+
+def test_a_parameter_needs_a_registered_unit_suffix_and_reports_in_its_unit():
+    from piezobearing.diagnosis.params import Param, ParamError
+    from piezobearing.diagnosis.units import format_value
+
+    with pytest.raises(ParamError, match=r"parameter 'gain'.*unit suffix"):
+        Param("gain", 1.0)
+    with pytest.raises(ParamError, match="lower > 0"):
+        Param("corner_Hz", 1.0, 0.0, 10.0, log=True)
+    p = Param("delay_s", 0.0, -0.1, 0.1, scale=1e-3)
+    assert p.with_value(0.5).value == 0.1  # a start outside the bounds is clipped into them
+    assert format_value("delay_s", 0.015) == "15 ms"
+    assert format_value("resistance_ohm", 5.0e7) == "50 MOhm"
+    assert format_value("beta_per_N", 0.01) == "0.01 1/N"

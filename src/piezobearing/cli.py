@@ -52,7 +52,7 @@ def _diagnose(args) -> int:
     from tqdm import tqdm
 
     from . import config as cfg
-    from .effects import CATALOGUE, EffectError
+    from .diagnosis.calibration.effects import CATALOGUE, EffectError
     from .io import MeasurementError
     from .stages.diagnostics import diagnose
 

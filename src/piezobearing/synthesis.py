@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .diagnosis.calibration.synthesis import hidden_voltage
 from .io import Measurement
 from .sensor.calibration import SensorCircuit, circuit_voltage
 
@@ -98,21 +99,15 @@ def synthesize(
 
     ``hidden_effects`` ([{name, params}], as ``synthesis.hidden_effects``)
     puts catalogue effects into the voltage: it is then the forward model
-    of the diagnosis (:class:`piezobearing.model.ForwardModel`, baseline plus
-    those effects) driven by the noise-free force. Parameters not given take
+    of the diagnosis (:func:`piezobearing.diagnosis.calibration.synthesis.hidden_voltage`,
+    the RC baseline plus those effects) driven by the noise-free force. Parameters not given take
     the effect's neutral default.
     """
     rng = np.random.default_rng(seed)
     t, force = press_force(protocol, rng)
     force_meas = force + rng.normal(0.0, protocol.force_noise_N, t.size)
     if hidden_effects:
-        from .effects import Record
-        from .model import model_from_specs
-
-        # the effects see the record the diagnosis will see (e.g. the force band), driven by the true force
-        record = Record(t, force_meas)
-        model, values = model_from_specs(circuit, list(hidden_effects), record)
-        voltage = model.simulate(values, record, force_N=force)
+        voltage = hidden_voltage(circuit, list(hidden_effects), t, force_meas, force)
     else:
         voltage = circuit_voltage(force, 1.0 / protocol.sample_rate_Hz, circuit)
     voltage_meas = voltage + rng.normal(0.0, protocol.voltage_noise_V, t.size)

@@ -3,8 +3,8 @@
 # ranking, stepwise selection and verdict; report in results/diagnostics/.
 import sys
 
-from piezobearing.effects import EffectError
-from piezobearing.report import FIGURES as DIAGNOSIS_FIGURES
+from piezobearing.diagnosis.calibration.effects import EffectError
+from piezobearing.diagnosis.calibration.report import FIGURES as DIAGNOSIS_FIGURES
 from piezobearing.stages.diagnostics import check_effect_names
 
 try:  # an unknown effect in model.effects or synthesis.hidden_effects stops before any job

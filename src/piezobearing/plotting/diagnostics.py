@@ -239,7 +239,7 @@ def ladder(d: dict) -> Figure:
 
 
 def all_figures(a: dict, d: dict) -> dict[str, Figure]:
-    """Every figure of the report by name (see :data:`piezobearing.report.FIGURES`)."""
+    """Every figure of the report by name (see :data:`piezobearing.diagnosis.calibration.report.FIGURES`)."""
     return {
         "overlay": overlay(a, d),
         "residuals": residuals(a, d),

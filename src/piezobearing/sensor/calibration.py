@@ -21,7 +21,8 @@ import numpy as np
 from scipy.constants import epsilon_0
 from scipy.signal import find_peaks, lfilter
 
-from ..fitting import FitResult, Param, fit
+from ..diagnosis.least_squares import FitResult, fit
+from ..diagnosis.params import Param
 from .materials import pzt_from_config
 
 
@@ -146,6 +147,22 @@ def frequency_response(frequency_Hz: np.ndarray, circuit: SensorCircuit) -> np.n
     return circuit.open_circuit_gain_V_per_N * jwt / (1 + jwt)
 
 
+def rc_response(freq_Hz: np.ndarray, dt_s: float, gain: float, tau_s: float) -> np.ndarray:
+    """Frequency response of :func:`rc_voltage` as a discrete filter.
+
+    The exact discretisation is V_k = a V_{k-1} + b (F_k - F_{k-1}) with
+    a = exp(-dt/tau), b = gain (tau/dt)(1 - a), so
+
+    .. math::  G(z) = b \\frac{1 - z^{-1}}{1 - a z^{-1}},\\quad z = e^{j 2\\pi f\\,dt}.
+
+    It tends to the continuous gain * j w tau / (1 + j w tau) for f dt << 1.
+    """
+    a = np.exp(-dt_s / tau_s)
+    b = gain * (tau_s / dt_s) * (-np.expm1(-dt_s / tau_s))
+    zi = np.exp(-2j * np.pi * np.asarray(freq_Hz, dtype=float) * dt_s)
+    return b * (1 - zi) / (1 - a * zi)
+
+
 # --------------------------------------------------------------------------- impulses
 
 
@@ -262,7 +279,7 @@ def fit_resistance(
 
     The voltage is simulated from the measured force with
     :func:`circuit_voltage` (all other constants fixed at ``circuit``) and R
-    is varied on a log scale. Returns a :class:`piezobearing.fitting.FitResult`.
+    is varied on a log scale. Returns a :class:`piezobearing.diagnosis.least_squares.FitResult`.
     """
     v = np.asarray(voltage_V, dtype=float)
 

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..fitting import nrmse
-from ..io import Measurement, MeasurementError, read_json, read_measurement, write_json, write_measurement
+from ..diagnosis.calibration.record import read_record
+from ..diagnosis.least_squares import nrmse
+from ..io import Measurement, read_json, write_json, write_measurement
 from ..scorecard import Row, write_part
 from ..sensor import calibration as cal
 from ..sensor.lowfreq import asymptote_onset_Hz, lowfreq_sensitivity
@@ -29,35 +30,9 @@ def synthesize_calibration(config: dict, out_csv: str) -> None:
 
 
 def load_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]]:
-    """Read and check a calibration record and detect its impulses.
-
-    Beyond the file checks of :func:`piezobearing.io.read_measurement`, the
-    record needs at least two impulses and the voltage must swing positive
-    under compression (an inverted polarity is reported, never fitted).
-    """
-    c = config["calibration"]
-    m = read_measurement(
-        path,
-        resample_to_uniform=c["resample_to_uniform"],
-        channels=c.get("channels"),
-        wav_full_scale_V=c.get("wav_full_scale_V"),
-    )
-    imps = cal.detect_impulses(
-        m.force_N, m.voltage_V, m.dt_s, c["min_prominence_fraction"], c["min_separation_s"]
-    )
-    if len(imps) < 2:
-        raise MeasurementError(
-            f"{path}: column force_N: {len(imps)} impulse(s) found, at least 2 are needed; record more presses "
-            "or lower calibration.min_prominence_fraction / min_separation_s"
-        )
-    nominal = nominal_circuit(config, c["initial_resistance_ohm"])
-    neg = cal.polarity_votes(m.force_N, m.voltage_V, m.dt_s, imps, nominal)
-    if neg > len(imps) / 2:
-        raise MeasurementError(
-            f"{path}: column voltage_V: polarity inverted (in {neg} of {len(imps)} impulses the voltage "
-            "is anti-correlated with the model's); swap the electrode leads or negate voltage_V in a copy of the file"
-        )
-    return m, imps
+    """Read and check a calibration record and detect its impulses (the calibration subject's reader,
+    :func:`piezobearing.diagnosis.calibration.record.read_record`)."""
+    return read_record(path, config)
 
 
 def extract_sensitivity(measurement_csv: str, out_json: str, config: dict) -> None:

@@ -1,7 +1,8 @@
 """Stage of the model-versus-measurement loop (rule ``diagnose``, CLI ``piezobearing diagnose``).
 
-Reads a calibration record, runs :func:`piezobearing.diagnostics.diagnose`
-with the configured model (``model.effects``) and settings
+Reads a calibration record with the calibration subject
+(:data:`piezobearing.diagnosis.calibration.subject.SUBJECT`), runs the
+diagnosis engine with the configured model (``model.effects``) and settings
 (``diagnostics``), and writes into one folder:
 
 - ``diagnosis.json``: the numbers (baseline, ranking, steps, verdict, ...) and the config used;
@@ -17,11 +18,9 @@ from typing import Callable
 
 import numpy as np
 
-from .. import diagnostics as dg
-from .. import report
-from ..effects import Record, resolve
+from ..diagnosis import engine
+from ..diagnosis.calibration.subject import SUBJECT
 from ..io import write_json
-from .calibration import load_record, nominal_circuit
 
 #: Config sections a diagnosis depends on (copied into diagnosis.json).
 CONFIG_KEYS = ("sensor", "calibration", "model", "diagnostics")
@@ -30,36 +29,23 @@ CONFIG_KEYS = ("sensor", "calibration", "model", "diagnostics")
 def check_effect_names(config: dict) -> None:
     """Raise a one-line EffectError if ``model.effects`` or ``synthesis.hidden_effects`` names an unknown
     effect or parameter (the workflow calls this before any job runs)."""
-    from ..model import model_from_specs
-
-    resolve(config["model"]["effects"])
-    probe = Record(np.arange(1000) / 1000.0, np.zeros(1000))
-    model_from_specs(nominal_circuit(config), config["synthesis"]["hidden_effects"], probe)
+    SUBJECT.check_config(config)
 
 
 def run(
     measurement_csv: str, config: dict, progress: Callable[[str], None] | None = None
 ) -> tuple[dict, dict]:
     """Diagnose one record; returns (JSON-ready dict, arrays)."""
-    resolve(config["model"]["effects"])  # an unknown effect stops before any work
-    m, imps = load_record(measurement_csv, config)
-    c = config["calibration"]
-    d = dg.diagnose(
-        Record(m.time_s, m.force_N),
-        m.voltage_V,
-        nominal_circuit(config, c["initial_resistance_ohm"]),
-        config["model"]["effects"],
-        dg.DiagnosticsSettings.from_config(config.get("diagnostics")),
-        imps,
-        progress=progress,
-    )
-    out = {"source": m.source, **d.to_dict()}
+    SUBJECT.catalogue.resolve(config["model"]["effects"], "model.effects")  # stops before any work
+    obs = SUBJECT.read(measurement_csv, config)
+    d, diag = SUBJECT.diagnose(obs, config, progress)
+    out = {"source": obs[0].source, **diag}
     used = {k: config[k] for k in CONFIG_KEYS if k in config}
-    if not c.get("measurement"):
+    if not config["calibration"].get("measurement"):
         used["synthesis"] = config["synthesis"]
         used["seed"] = config["seed"]
     out["config"] = used
-    return out, dg.arrays(d)
+    return out, engine.arrays(d)
 
 
 def write_figures(arrays: dict, diag: dict, fig_dir: str | Path) -> dict[str, str]:
@@ -87,5 +73,5 @@ def diagnose(
     np.savez_compressed(out_dir / "diagnosis.npz", **arrays)
     figs = write_figures(arrays, diag, out_dir / "figures")
     rel = {k: str(Path(v).relative_to(out_dir)) for k, v in figs.items()}
-    (out_dir / "report.md").write_text(report.render(diag, rel) + "\n")
+    (out_dir / "report.md").write_text(SUBJECT.report(diag, rel) + "\n")
     return diag

@@ -1,9 +1,12 @@
 """Bounded nonlinear least squares with parameter objects and a fit report.
 
-In the spirit of lmfit: each free parameter has a value, bounds, a unit and a
-scale (``log`` for quantities that span decades, such as a resistance). The
-fit runs in the internal coordinates (log10 for ``log`` parameters), and the
-covariance from the Jacobian is carried back to the physical values.
+In the spirit of lmfit: each free parameter (:class:`~piezobearing.diagnosis.params.Param`)
+has a value, bounds, a unit and a scale (``log`` for quantities that span
+decades, such as a resistance). The fit runs in the internal coordinates
+(log10 for ``log`` parameters), and the covariance from the Jacobian is
+carried back to the physical values. The engine's likelihood fit of a
+model (:mod:`piezobearing.diagnosis.fit`) and the calibration's fit of R
+(:func:`piezobearing.sensor.calibration.fit_resistance`) both run on it.
 """
 
 from __future__ import annotations
@@ -15,42 +18,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.stats import t as student_t
 
-
-@dataclass(frozen=True)
-class Param:
-    """A model parameter.
-
-    Parameters
-    ----------
-    name : str
-        Identifier with a unit suffix, e.g. ``resistance_ohm``.
-    value : float
-        Initial (or fixed) value in physical units.
-    lower, upper : float
-        Bounds in physical units.
-    log : bool
-        Fit log10(value) instead of the value (requires lower > 0).
-    vary : bool
-        Whether the fit may change it.
-    scale : float
-        Typical magnitude in physical units (linear parameters only): the fit
-        works on value / scale, so that finite-difference steps suit
-        quantities such as 100 pF or 10 ms.
-    """
-
-    name: str
-    value: float
-    lower: float = -np.inf
-    upper: float = np.inf
-    log: bool = False
-    vary: bool = True
-    scale: float = 1.0
-
-    def to_internal(self, x: float) -> float:
-        return float(np.log10(x)) if self.log else float(x) / self.scale
-
-    def to_physical(self, u: float) -> float:
-        return float(10.0 ** np.clip(u, -300.0, 300.0)) if self.log else float(u) * self.scale
+from .params import Param
 
 
 @dataclass

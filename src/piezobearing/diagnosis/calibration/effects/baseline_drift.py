@@ -27,12 +27,13 @@ from __future__ import annotations
 import numpy as np
 from numpy.polynomial import legendre
 
-from .base import Effect, EffectParam, Record, StartContext
+from ...params import Param
+from .base import Effect, ForceRecord, StartContext
 
 DEGREE = 3
 
 
-def basis(record: Record) -> np.ndarray:
+def basis(record: ForceRecord) -> np.ndarray:
     """Legendre polynomials P_0..P_3 over the record [-]."""
     t = record.time_s
     x = 2 * (t - t[0]) / (t[-1] - t[0]) - 1
@@ -50,9 +51,9 @@ class BaselineDrift(Effect):
         "curve (Legendre polynomials to degree 3 over the record) to the voltage."
     )
 
-    def params(self, record: Record) -> list[EffectParam]:
+    def params(self, record: ForceRecord) -> list[Param]:
         return [
-            EffectParam(
+            Param(
                 f"drift_p{k}_V",
                 0.0,
                 -10.0,

@@ -1,6 +1,6 @@
 """What an effect is: a small, documented change to the forward model.
 
-The forward model (:mod:`piezobearing.model`) maps the recorded reference
+The forward model (:mod:`piezobearing.diagnosis.calibration.model`) maps the recorded reference
 force to the DAQ voltage along one signal chain::
 
     recorded force --force()--> force on the disk --circuit()--> RC voltage
@@ -15,88 +15,18 @@ weighting of the fit) and, optionally, data-driven start values.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
 from scipy import fft as sfft
 from scipy.signal import welch
 
-from ..fitting import Param
+from ... import effect as engine
+from ...effect import EffectError, StartContext
+from ...params import Param
+from ..record import ForceRecord
 
-
-class EffectError(ValueError):
-    """An unknown effect name or parameter in the configuration."""
-
-
-@dataclass(frozen=True)
-class EffectParam:
-    """A parameter of an effect.
-
-    Parameters
-    ----------
-    name : str
-        Identifier with a unit suffix (``delay_s``), unique across the catalogue.
-    default : float
-        Value that switches the effect off (or its neutral start) [unit of name].
-    lower, upper : float
-        Physical bounds [unit of name].
-    log : bool
-        Fit on a log10 scale (for quantities spanning decades; requires lower > 0).
-    scale : float
-        Typical magnitude [unit of name] (linear parameters).
-    description : str
-        One line: what it is, with its unit.
-    """
-
-    name: str
-    default: float
-    lower: float
-    upper: float
-    log: bool = False
-    scale: float = 1.0
-    description: str = ""
-
-    def to_param(self, value: float | None = None) -> Param:
-        v = self.default if value is None else float(value)
-        v = float(np.clip(v, self.lower, self.upper))
-        return Param(self.name, v, self.lower, self.upper, log=self.log, scale=self.scale)
-
-
-@dataclass(frozen=True, eq=False)
-class Record:
-    """The measured record the model runs on (time axis and recorded force).
-
-    Attributes
-    ----------
-    time_s : ndarray
-        Uniform sample times [s].
-    force_N : ndarray
-        Recorded reference force [N].
-    """
-
-    time_s: np.ndarray
-    force_N: np.ndarray
-    _cache: dict = field(default_factory=dict, compare=False, repr=False)
-
-    @property
-    def n(self) -> int:
-        return int(self.time_s.size)
-
-    @property
-    def dt_s(self) -> float:
-        return float((self.time_s[-1] - self.time_s[0]) / (self.n - 1))
-
-    @property
-    def sample_rate_Hz(self) -> float:
-        return 1.0 / self.dt_s
-
-    @property
-    def freq_Hz(self) -> np.ndarray:
-        """Frequencies of the real DFT of a record of this length [Hz]."""
-        if "freq" not in self._cache:
-            self._cache["freq"] = np.fft.rfftfreq(self.n, self.dt_s)
-        return self._cache["freq"]
+__all__ = ["Effect", "EffectError", "Param", "ForceRecord", "StartContext", "denoised_force", "fd_filter"]
 
 
 def fd_filter(x: np.ndarray, response: Callable[[np.ndarray], np.ndarray], margin: int = 0) -> np.ndarray:
@@ -120,7 +50,7 @@ def fd_filter(x: np.ndarray, response: Callable[[np.ndarray], np.ndarray], margi
     return sfft.irfft(spec, total)[:n]
 
 
-def force_band_Hz(record: "Record", factor: float = 10.0) -> float:
+def force_band_Hz(record: "ForceRecord", factor: float = 10.0) -> float:
     """Highest frequency at which the recorded force's spectrum exceeds ``factor`` times its noise level [Hz].
 
     Welch spectrum with segments of about one second; the noise level is
@@ -140,13 +70,13 @@ def force_band_Hz(record: "Record", factor: float = 10.0) -> float:
     return record._cache["band"]
 
 
-def prefilter_response(f_Hz: np.ndarray, record: "Record") -> np.ndarray:
+def prefilter_response(f_Hz: np.ndarray, record: "ForceRecord") -> np.ndarray:
     """W(f) = 1 / (1 + (f / f_c)^8), f_c = twice the force band: zero-phase, flat in the band [-]."""
     cut = 2 * force_band_Hz(record)
     return 1.0 / (1.0 + (np.asarray(f_Hz, dtype=float) / cut) ** 8)
 
 
-def denoised_force(record: "Record") -> np.ndarray:
+def denoised_force(record: "ForceRecord") -> np.ndarray:
     """The recorded force filtered by :func:`prefilter_response` [N].
 
     Keeps the force's content (its band, see :func:`force_band_Hz`) and
@@ -163,64 +93,22 @@ def denoised_force(record: "Record") -> np.ndarray:
     return record._cache["denoised"]
 
 
-@dataclass(frozen=True, eq=False)
-class StartContext:
-    """What an effect may look at to propose start values.
+class Effect(engine.Effect):
+    """Base class of a calibration catalogue effect: the engine's Effect with the signal-chain hooks.
 
-    Attributes
-    ----------
-    record : Record
-    voltage_V : ndarray
-        Measured voltage [V].
-    model_V : ndarray
-        Voltage of the current model (without this effect) [V].
-    values : dict
-        Fitted values of the current model.
-    """
-
-    record: Record
-    voltage_V: np.ndarray
-    model_V: np.ndarray
-    values: dict
-
-    @property
-    def residual_V(self) -> np.ndarray:
-        return self.voltage_V - self.model_V
-
-
-class Effect:
-    """Base class of a catalogue effect (see the module docstring).
-
-    Class attributes
+    Class attributes (besides the engine's ``name``, ``title``, ``physics``)
     ----------------
-    name : str
-        Stable identifier (used in ``model.effects`` and ``synthesis.hidden_effects``).
-    title : str
-        A few words for tables.
     order : int
         Position in the chain among effects using the same hook (lower first).
-    physics : str
-        A paragraph for the report: the mechanism, the model, plausible sizes.
     additive_only : bool
         True when the effect only adds a voltage (its parameters do not touch the force path).
     """
 
-    name: str = ""
-    title: str = ""
     order: int = 0
-    physics: str = ""
     additive_only: bool = False
 
-    # ----------------------------------------------------------------- parameters
-    def params(self, record: Record) -> list[EffectParam]:
-        """The parameters for a record (a few effects depend on its sampling rate)."""
-        return []
-
-    def defaults(self, record: Record) -> dict[str, float]:
-        return {p.name: p.default for p in self.params(record)}
-
     # ----------------------------------------------------------------- signal chain
-    def force(self, force_N: np.ndarray, values: dict, record: Record) -> np.ndarray:
+    def force(self, force_N: np.ndarray, values: dict, record: ForceRecord) -> np.ndarray:
         """Recorded force -> force acting on the disk (in the voltage channel's time) [N]."""
         return force_N
 
@@ -228,15 +116,15 @@ class Effect:
         """Change the :class:`~piezobearing.sensor.calibration.SensorCircuit`."""
         return circuit
 
-    def voltage(self, voltage_V: np.ndarray, values: dict, record: Record) -> np.ndarray:
+    def voltage(self, voltage_V: np.ndarray, values: dict, record: ForceRecord) -> np.ndarray:
         """Voltage across the electrodes -> voltage the DAQ digitises [V]."""
         return voltage_V
 
-    def additive(self, values: dict, record: Record) -> np.ndarray | None:
+    def additive(self, values: dict, record: ForceRecord) -> np.ndarray | None:
         """A voltage added to the recorded voltage, independent of the force [V]."""
         return None
 
-    def response(self, values: dict, record: Record) -> np.ndarray | float:
+    def response(self, values: dict, record: ForceRecord) -> np.ndarray | float:
         """Factor this effect puts on the force-to-voltage response at ``record.freq_Hz`` [-].
 
         The forward model multiplies the circuit's response by it to carry the
@@ -244,12 +132,3 @@ class Effect:
         effects leave it at 1.
         """
         return 1.0
-
-    # ----------------------------------------------------------------- fitting help
-    def starts(self, ctx: StartContext) -> list[dict[str, float]]:
-        """Start values for this effect's parameters (each dict one start; {} = defaults)."""
-        return [{}]
-
-    def summary(self, values: dict) -> str:
-        """One line with the fitted parameters in readable units."""
-        return ", ".join(f"{p} = {values[p]:.4g}" for p in values)

@@ -25,8 +25,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..sensor.calibration import rc_voltage
-from .base import Effect, EffectParam, Record, StartContext
+from ....sensor.calibration import rc_response, rc_voltage
+from ...params import Param
+from .base import Effect, ForceRecord, StartContext
 
 
 def _tau(values) -> float:
@@ -43,9 +44,9 @@ class ACCoupling(Effect):
         "each is followed by a slow undershoot that R alone cannot produce."
     )
 
-    def params(self, record: Record) -> list[EffectParam]:
+    def params(self, record: ForceRecord) -> list[Param]:
         return [
-            EffectParam(
+            Param(
                 "corner_Hz",
                 1e-6,
                 1e-6,
@@ -59,8 +60,6 @@ class ACCoupling(Effect):
         return rc_voltage(voltage_V, record.dt_s, 1.0, _tau(values))
 
     def response(self, values, record):
-        from ..model import rc_response
-
         return rc_response(record.freq_Hz, record.dt_s, 1.0, _tau(values))
 
     def starts(self, ctx: StartContext) -> list[dict[str, float]]:

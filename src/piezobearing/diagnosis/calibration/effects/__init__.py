@@ -1,9 +1,11 @@
 """The effect catalogue: physical effects the RC baseline leaves out.
 
 Each effect is one module defining ``EFFECT``, an instance of a subclass of
-:class:`~piezobearing.effects.base.Effect`, registered below under a stable
+:class:`~piezobearing.diagnosis.calibration.effects.base.Effect`, registered below under a stable
 identifier. Adding an effect is adding one module and one entry in
-``_MODULES`` (or calling :func:`register` at run time).
+``_MODULES`` (or calling :func:`register` at run time). Parameter names carry
+a unit suffix from :data:`piezobearing.diagnosis.units.UNITS` and are unique
+across the catalogue.
 
 =====================  ==========================================================
 identifier             what it models
@@ -20,36 +22,27 @@ identifier             what it models
 
 from __future__ import annotations
 
-from .base import Effect, EffectError, EffectParam, Record, StartContext
+from ...effect import Catalogue
+from ...params import Param
+from .base import Effect, EffectError, ForceRecord, StartContext
 
-CATALOGUE: dict[str, Effect] = {}
+#: The calibration subject's catalogue (an engine :class:`~piezobearing.diagnosis.effect.Catalogue`).
+CATALOGUE = Catalogue("calibration")
 
 
 def register(effect: Effect) -> Effect:
-    """Add an effect to the catalogue under ``effect.name`` (names and parameter names must be new)."""
-    if not effect.name or effect.name in CATALOGUE:
-        raise EffectError(f"effect identifier '{effect.name}' is empty or already registered")
-    CATALOGUE[effect.name] = effect
-    return effect
+    """Add an effect to the catalogue under ``effect.name`` (the name must be new)."""
+    return CATALOGUE.register(effect)
 
 
 def unregister(name: str) -> None:
     """Remove an effect (for tests that register a temporary one)."""
-    CATALOGUE.pop(name, None)
+    CATALOGUE.unregister(name)
 
 
 def resolve(names, key: str = "model.effects") -> list[Effect]:
     """Effects for identifiers; an unknown or repeated name raises a one-line EffectError naming ``key``."""
-    out = []
-    for i, name in enumerate(names):
-        if name not in CATALOGUE:
-            raise EffectError(
-                f"{key}[{i}]: unknown effect '{name}'; the catalogue has: {', '.join(CATALOGUE)}"
-            )
-        if CATALOGUE[name] in out:
-            raise EffectError(f"{key}[{i}]: effect '{name}' is listed twice; list each effect once")
-        out.append(CATALOGUE[name])
-    return out
+    return CATALOGUE.resolve(names, key)
 
 
 from . import (  # noqa: E402  (the modules import .base, registered in this order)
@@ -78,8 +71,8 @@ __all__ = [
     "CATALOGUE",
     "Effect",
     "EffectError",
-    "EffectParam",
-    "Record",
+    "Param",
+    "ForceRecord",
     "StartContext",
     "register",
     "resolve",

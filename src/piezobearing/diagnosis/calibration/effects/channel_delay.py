@@ -30,7 +30,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import correlate
 
-from .base import Effect, EffectParam, Record, StartContext, fd_filter
+from ...params import Param
+from .base import Effect, ForceRecord, StartContext, fd_filter
 
 MAX_DELAY_S = 0.1
 
@@ -64,9 +65,9 @@ class ChannelDelay(Effect):
         "unsynchronised triggers give a few to a few tens of milliseconds."
     )
 
-    def params(self, record: Record) -> list[EffectParam]:
+    def params(self, record: ForceRecord) -> list[Param]:
         return [
-            EffectParam(
+            Param(
                 "delay_s",
                 0.0,
                 -MAX_DELAY_S,

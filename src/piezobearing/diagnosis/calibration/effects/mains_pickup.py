@@ -28,7 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Effect, EffectParam, Record, StartContext
+from ...params import Param
+from .base import Effect, ForceRecord, StartContext
 
 HARMONICS = (1, 3, 5)
 F_LO, F_HI = 49.5, 60.5
@@ -36,7 +37,7 @@ NOMINAL = (50.0, 60.0)
 SEARCH_HALF_WIDTH_HZ = 0.5
 
 
-def harmonics(record: Record) -> tuple[int, ...]:
+def harmonics(record: ForceRecord) -> tuple[int, ...]:
     """The odd harmonics below 0.49 of the sampling rate at the highest mains frequency."""
     return tuple(k for k in HARMONICS if k * F_HI < 0.49 * record.sample_rate_Hz)
 
@@ -61,14 +62,12 @@ class MainsPickup(Effect):
         "harmonics from non-linear loads. It adds to the voltage whatever the force does."
     )
 
-    def params(self, record: Record) -> list[EffectParam]:
-        out = [
-            EffectParam("mains_frequency_Hz", 50.0, F_LO, F_HI, scale=1.0, description="mains frequency [Hz]")
-        ]
+    def params(self, record: ForceRecord) -> list[Param]:
+        out = [Param("mains_frequency_Hz", 50.0, F_LO, F_HI, scale=1.0, description="mains frequency [Hz]")]
         for k in harmonics(record):
             for part in ("cos", "sin"):
                 out.append(
-                    EffectParam(
+                    Param(
                         f"mains_h{k}_{part}_V",
                         0.0,
                         -1.0,

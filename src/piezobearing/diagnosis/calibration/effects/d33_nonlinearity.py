@@ -27,7 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Effect, EffectParam, Record
+from ...params import Param
+from .base import Effect, ForceRecord
 
 
 class D33Nonlinearity(Effect):
@@ -40,9 +41,9 @@ class D33Nonlinearity(Effect):
         "give relatively more voltage, which no R can reproduce."
     )
 
-    def params(self, record: Record) -> list[EffectParam]:
+    def params(self, record: ForceRecord) -> list[Param]:
         return [
-            EffectParam(
+            Param(
                 "beta_per_N",
                 0.0,
                 -0.05,

@@ -19,7 +19,7 @@ Model
 The lag can only be undone where the recorded force has content; above
 that band the recorded force is noise and a lead would only amplify it
 into the residual. The model therefore leads the recorded force within its
-band f_b (:func:`~piezobearing.effects.base.force_band_Hz`, where the force
+band f_b (:func:`~piezobearing.diagnosis.calibration.effects.base.force_band_Hz`, where the force
 spectrum stands 10x above its noise) with the zero-phase response
 
 .. math::  1 + j\\,2\\pi f\\,\\tau_r\\,W(f),\\qquad W(f) = \\frac{1}{1 + (f/f_b)^8},
@@ -35,7 +35,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Effect, EffectParam, Record, StartContext, fd_filter, force_band_Hz
+from ...params import Param
+from .base import Effect, ForceRecord, StartContext, fd_filter, force_band_Hz
 
 ORDER = 8
 
@@ -57,9 +58,9 @@ class ReferenceLag(Effect):
         "at second order in w tau_r (it also rounds the force)."
     )
 
-    def params(self, record: Record) -> list[EffectParam]:
+    def params(self, record: ForceRecord) -> list[Param]:
         return [
-            EffectParam(
+            Param(
                 "lag_tau_s",
                 1e-5,
                 1e-5,

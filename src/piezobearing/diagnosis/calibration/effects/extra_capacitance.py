@@ -24,7 +24,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from .base import Effect, EffectParam, Record
+from ...params import Param
+from .base import Effect, ForceRecord
 
 
 class ExtraCapacitance(Effect):
@@ -37,9 +38,9 @@ class ExtraCapacitance(Effect):
         "the gain, so every impulse comes out too large by the same factor."
     )
 
-    def params(self, record: Record) -> list[EffectParam]:
+    def params(self, record: ForceRecord) -> list[Param]:
         return [
-            EffectParam(
+            Param(
                 "extra_capacitance_F",
                 0.0,
                 -100e-12,

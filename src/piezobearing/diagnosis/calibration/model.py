@@ -5,8 +5,9 @@ The baseline maps the recorded reference force F to the voltage V by
 .. math::  C \\dot V + V / R = d_{33} \\dot F,\\qquad C = C_p + C_{cable},
 
 integrated exactly for a force piecewise linear between samples
-(:func:`piezobearing.sensor.calibration.circuit_voltage`). Its free parameter is R.
-Each effect of the catalogue (:mod:`piezobearing.effects`) changes one link
+(:func:`piezobearing.sensor.calibration.circuit_voltage`, response
+:func:`piezobearing.sensor.calibration.rc_response`). Its free parameter is R.
+Each effect of the catalogue (:mod:`piezobearing.diagnosis.calibration.effects`) changes one link
 of the chain (recorded force -> force on the disk -> circuit -> DAQ input ->
 additive interference) and brings its own parameters.
 
@@ -22,33 +23,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .effects import Effect, EffectError, EffectParam, Record, resolve
-from .fitting import Param
-from .sensor.calibration import SensorCircuit, circuit_voltage, resistance_param
+from ...sensor.calibration import SensorCircuit, circuit_voltage, rc_response, resistance_param
+from ..params import Param
+from .effects import Effect, EffectError, ForceRecord, resolve
+from .effects.base import denoised_force, prefilter_response
 
 #: Samples at the initial force level put before the record (see :meth:`ForwardModel.simulate`).
 PAD = 16
 
 
-def rc_response(freq_Hz: np.ndarray, dt_s: float, gain: float, tau_s: float) -> np.ndarray:
-    """Frequency response of :func:`piezobearing.sensor.calibration.rc_voltage` as a discrete filter.
-
-    The exact discretisation is V_k = a V_{k-1} + b (F_k - F_{k-1}) with
-    a = exp(-dt/tau), b = gain (tau/dt)(1 - a), so
-
-    .. math::  G(z) = b \\frac{1 - z^{-1}}{1 - a z^{-1}},\\quad z = e^{j 2\\pi f\\,dt}.
-
-    It tends to the continuous gain * j w tau / (1 + j w tau) for f dt << 1.
-    """
-    a = np.exp(-dt_s / tau_s)
-    b = gain * (tau_s / dt_s) * (-np.expm1(-dt_s / tau_s))
-    zi = np.exp(-2j * np.pi * np.asarray(freq_Hz, dtype=float) * dt_s)
-    return b * (1 - zi) / (1 - a * zi)
-
-
 @dataclass(frozen=True)
 class ForwardModel:
-    """The RC baseline with a tuple of effects.
+    """The RC baseline with a tuple of effects (a :class:`piezobearing.diagnosis.model.Model`).
 
     Parameters
     ----------
@@ -84,24 +70,24 @@ class ForwardModel:
         return sorted(self.effects, key=lambda e: e.order)
 
     # ----------------------------------------------------------------- parameters
-    def effect_params(self, record: Record) -> list[EffectParam]:
+    def effect_params(self, record: ForceRecord) -> list[Param]:
         return [p for e in self.effects for p in e.params(record)]
 
-    def defaults(self, record: Record) -> dict[str, float]:
+    def defaults(self, record: ForceRecord) -> dict[str, float]:
         """Values that leave every effect neutral, with the nominal R."""
         out = {"resistance_ohm": self.circuit.resistance_ohm}
         for e in self.effects:
             out.update(e.defaults(record))
         return out
 
-    def params(self, record: Record, start: dict[str, float] | None = None) -> list[Param]:
+    def params(self, record: ForceRecord, start: dict[str, float] | None = None) -> list[Param]:
         """The free parameters (R first) with start values from ``start`` (else defaults)."""
         start = {**self.defaults(record), **(start or {})}
         return [resistance_param(start["resistance_ohm"])] + [
-            p.to_param(start.get(p.name)) for p in self.effect_params(record)
+            p.with_value(start.get(p.name)) for p in self.effect_params(record)
         ]
 
-    def complete(self, values: dict, record: Record, key: str = "params") -> dict[str, float]:
+    def complete(self, values: dict, record: ForceRecord, key: str = "params") -> dict[str, float]:
         """Defaults overridden by ``values``; an unknown name raises a one-line EffectError."""
         full = self.defaults(record)
         unknown = sorted(set(values) - set(full))
@@ -117,7 +103,7 @@ class ForwardModel:
             c = e.circuit(c, values)
         return c
 
-    def simulate(self, values: dict, record: Record, force_N: np.ndarray | None = None) -> np.ndarray:
+    def simulate(self, values: dict, record: ForceRecord, force_N: np.ndarray | None = None) -> np.ndarray:
         """Voltage [V] for the recorded force (or ``force_N`` on the record's clock).
 
         The circuit starts at rest at the force's initial level, the median of
@@ -135,7 +121,9 @@ class ForwardModel:
                 v = v + add
         return v
 
-    def _force_path(self, f: np.ndarray, values: dict, record: Record, chain: list[Effect]) -> np.ndarray:
+    def _force_path(
+        self, f: np.ndarray, values: dict, record: ForceRecord, chain: list[Effect]
+    ) -> np.ndarray:
         head = f[: max(int(round(0.01 / record.dt_s)), 1)]
         f = np.concatenate([np.full(PAD, np.median(head)), f])
         for e in chain:
@@ -145,7 +133,7 @@ class ForwardModel:
             v = e.voltage(v, values, record)
         return v[PAD:]
 
-    def _cached(self, what: str, obj, values: dict, record: Record, compute):
+    def _cached(self, what: str, obj, values: dict, record: ForceRecord, compute):
         """Results of the force path (and response) by the values of the non-additive parameters.
 
         A fit's finite differences in an additive parameter (mains, drift) then
@@ -163,11 +151,20 @@ class ForwardModel:
             self._cache.pop(next(iter(self._cache)))
         return out
 
-    def response(self, values: dict, record: Record) -> np.ndarray:
+    def fit_input(self, record: ForceRecord) -> np.ndarray:
+        """The force the likelihood fit drives the model with: its noise removed above twice its band
+        (:func:`~piezobearing.diagnosis.calibration.effects.base.denoised_force`) [N]."""
+        return denoised_force(record)
+
+    def fit_weight(self, record: ForceRecord) -> np.ndarray:
+        """W(f) of :meth:`fit_input` at ``record.freq_Hz`` [-]."""
+        return prefilter_response(record.freq_Hz, record)
+
+    def response(self, values: dict, record: ForceRecord) -> np.ndarray:
         """G(f) from recorded force to voltage at ``record.freq_Hz`` [V/N] (complex)."""
         return self._cached("response", record, values, record, lambda: self._response(values, record))
 
-    def _response(self, values: dict, record: Record) -> np.ndarray:
+    def _response(self, values: dict, record: ForceRecord) -> np.ndarray:
         c = self.fitted_circuit(values)
         g = rc_response(record.freq_Hz, record.dt_s, c.open_circuit_gain_V_per_N, c.tau_s)
         for e in self.effects:
@@ -176,7 +173,7 @@ class ForwardModel:
 
 
 def model_from_specs(
-    circuit: SensorCircuit, specs: list[dict], record: Record, key: str = "synthesis.hidden_effects"
+    circuit: SensorCircuit, specs: list[dict], record: ForceRecord, key: str = "synthesis.hidden_effects"
 ) -> tuple[ForwardModel, dict[str, float]]:
     """A model and its parameter values from ``[{name: id, params: {key_unit: value}}]``.
 

@@ -1,0 +1,1 @@
+"""The calibration record as a diagnosis subject: RC baseline, effect catalogue, synthesiser."""

@@ -1,0 +1,83 @@
+"""The calibration record: reader and validator, and the record the forward model runs on.
+
+A calibration record holds time, the reference force under the press and
+the PZT voltage, in any format :func:`piezobearing.io.read_measurement`
+reads (``calibration.channels`` and ``wav_full_scale_V`` name the channels). Beyond the
+file checks, :func:`read_record` needs at least two impulses and a voltage
+that swings positive under compression (an inverted polarity is reported,
+never fitted). The forward model runs on a :class:`ForceRecord`: the engine's
+:class:`~piezobearing.diagnosis.record.Record` whose input is the recorded force.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...io import Measurement, MeasurementError, read_measurement
+from ...sensor import calibration as cal
+from ..record import Record, Segments
+
+
+@dataclass(frozen=True, eq=False)
+class ForceRecord(Record):
+    """Time axis and recorded reference force: ``ForceRecord(time_s, force_N)``.
+
+    Attributes
+    ----------
+    time_s : ndarray
+        Uniform sample times [s].
+    input : ndarray
+        Recorded reference force [N] (also :attr:`force_N`).
+    """
+
+    input_name: str = "force"
+    input_unit: str = "N"
+
+    @property
+    def force_N(self) -> np.ndarray:
+        """Recorded reference force [N]."""
+        return self.input
+
+
+def read_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]]:
+    """Read and check a calibration record and detect its impulses (one-line MeasurementError otherwise).
+
+    Uses the config sections ``calibration`` (resampling, impulse detection,
+    the initial R of the polarity check) and ``sensor`` (the nominal circuit).
+    """
+    c = config["calibration"]
+    m = read_measurement(
+        path,
+        resample_to_uniform=c["resample_to_uniform"],
+        channels=c.get("channels"),
+        wav_full_scale_V=c.get("wav_full_scale_V"),
+    )
+    imps = cal.detect_impulses(
+        m.force_N, m.voltage_V, m.dt_s, c["min_prominence_fraction"], c["min_separation_s"]
+    )
+    if len(imps) < 2:
+        raise MeasurementError(
+            f"{path}: column force_N: {len(imps)} impulse(s) found, at least 2 are needed; record more presses "
+            "or lower calibration.min_prominence_fraction / min_separation_s"
+        )
+    nominal = cal.SensorCircuit.from_config(config["sensor"], c["initial_resistance_ohm"])
+    neg = cal.polarity_votes(m.force_N, m.voltage_V, m.dt_s, imps, nominal)
+    if neg > len(imps) / 2:
+        raise MeasurementError(
+            f"{path}: column voltage_V: polarity inverted (in {neg} of {len(imps)} impulses the voltage "
+            "is anti-correlated with the model's); swap the electrode leads or negate voltage_V in a copy of the file"
+        )
+    return m, imps
+
+
+def impulse_segments(impulses: list[cal.Impulse]) -> Segments:
+    """The impulses as the engine's segments, anchored at their force peaks."""
+    return Segments(
+        "impulse",
+        "force_peak",
+        np.array([i.start for i in impulses], dtype=int),
+        np.array([i.stop for i in impulses], dtype=int),
+        np.array([i.force_peak_index for i in impulses], dtype=int),
+    )

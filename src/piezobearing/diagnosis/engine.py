@@ -1,0 +1,225 @@
+"""The diagnosis of one record: the engine's run, from the subject's :class:`Problem` to the verdict.
+
+The subject (:mod:`piezobearing.diagnosis.subject`) gives the record, the
+measured voltage, the baseline model, the configured effects, the catalogue,
+the noise floor, the segments and its representations. :func:`diagnose`
+
+1. fits the baseline by maximum likelihood with the measured noise floor
+   (:mod:`~piezobearing.diagnosis.fit`), then the configured effects on top;
+2. tests the residual whitened by the floor
+   (:mod:`~piezobearing.diagnosis.residual_tests`);
+3. ranks the catalogue by evidence and adds effects stepwise, dropping
+   stand-ins when structure remains (:mod:`~piezobearing.diagnosis.selection`);
+4. judges the subject's representations and gives the verdict
+   (:mod:`~piezobearing.diagnosis.verdict`).
+
+:meth:`Diagnosis.to_dict` is the JSON, :func:`arrays` the arrays behind the
+figures. NRMSE = rms(residual) / rms(measured voltage) throughout.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from .fit import ModelFit, fit_model
+from .noise import NoiseFloor
+from .record import Record, Segments
+from .residual_tests import Z99, ResidualTests, residual_tests
+from .selection import Candidate, add_effect, cut_stand_ins, stepwise
+from .settings import DiagnosticsSettings
+from .subject import Judgement, Problem
+from .verdict import findings, verdict
+
+
+@dataclass
+class Diagnosis:
+    """Everything the report and the figures need."""
+
+    problem: Problem
+    settings: DiagnosticsSettings
+    baseline: ModelFit
+    configured: ModelFit
+    ranking: list[Candidate]
+    steps: list[dict]
+    fits: list[ModelFit]
+    selected: list[str]
+    final: ModelFit
+    tests: dict[str, ResidualTests]
+    judgements: dict[str, dict[str, Judgement]]
+    verdict: str
+    unexplained: list[dict]
+    dropped: list[dict] = field(default_factory=list)
+
+    @property
+    def record(self) -> Record:
+        return self.problem.record
+
+    @property
+    def voltage_V(self) -> np.ndarray:
+        return self.problem.voltage_V
+
+    @property
+    def floor(self) -> NoiseFloor:
+        return self.problem.floor
+
+    @property
+    def segments(self) -> Segments:
+        return self.problem.segments
+
+    def to_dict(self, answer: dict | None = None) -> dict:
+        """The JSON-ready diagnosis; ``answer`` (the subject's, :meth:`Subject.answer`) follows the ranking."""
+        rec = self.record
+        out = {
+            "n_samples": rec.n,
+            "sample_rate_Hz": rec.sample_rate_Hz,
+            "duration_s": float(rec.time_s[-1] - rec.time_s[0]),
+            "voltage_rms_V": float(np.sqrt(np.mean(self.voltage_V**2))),
+            f"n_{self.segments.name}s": len(self.segments),
+            "noise_floor": self.floor.report(),
+            "noise_floor_nrmse": self.final.floor_nrmse,
+            "baseline": {**self.baseline.summary(), "tests": self.tests["baseline"].summary()},
+            "configured": {**self.configured.summary(), "tests": self.tests["configured"].summary()},
+            "ranking": [c.summary(self.configured) for c in self.ranking],
+            **(answer or {}),
+            "selected": self.selected,
+            "steps": self.steps,
+            "dropped_steps": self.dropped,
+            "final": {**self.final.summary(), "tests": self.tests["final"].summary()},
+            "verdict": self.verdict,
+            "unexplained": self.unexplained,
+            **{key: {k: j.summary for k, j in js.items()} for key, js in self.judgements.items()},
+            "settings": self.settings.__dict__,
+            "catalogue": self.problem.catalogue.describe(),
+        }
+        return out
+
+
+def diagnose(
+    problem: Problem,
+    settings: DiagnosticsSettings | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> Diagnosis:
+    """The whole diagnosis of one record (see the module docstring)."""
+    settings = settings or DiagnosticsSettings()
+    p = problem
+    record, v, floor = p.record, np.asarray(p.voltage_V, dtype=float), p.floor
+    note = progress or (lambda _msg: None)
+
+    note("baseline")
+    baseline = fit_model(
+        p.baseline,
+        record,
+        v,
+        floor,
+        start=p.baseline_start,
+        starts=p.baseline_starts,
+        max_nfev=settings.max_nfev,
+        ftol=settings.ftol,
+    )
+    baseline_names = tuple(q.name for q in p.baseline.params(record))
+    current = baseline
+    for e in p.configured:
+        note(f"configured: + {e.name}")
+        current = add_effect(current, e, record, v, floor, settings)
+    configured = current
+
+    def tests_of(f: ModelFit) -> ResidualTests:
+        return residual_tests(f.whitened, record.input, record.dt_s, settings, p.segments, record.time_s)
+
+    tests = {"baseline": tests_of(baseline)}
+    tests["configured"] = tests["baseline"] if configured is baseline else tests_of(configured)
+    sel = stepwise(configured, list(p.catalogue.values()), record, v, floor, settings, note, baseline_names)
+    tests["final"] = tests_of(sel.fits[-1])
+    if not tests["final"].passed and cut_stand_ins(sel, settings):
+        tests["final"] = tests_of(sel.fits[-1])
+    final = sel.fits[-1]
+    judgements = {
+        r.key: {"baseline": r.judge(baseline, p, settings), "final": r.judge(final, p, settings)}
+        for r in p.representations
+    }
+    found = findings(tests["final"], record.input_name, p.segments)
+    for js in judgements.values():
+        found += js["final"].findings
+    return Diagnosis(
+        p,
+        settings,
+        baseline,
+        configured,
+        sel.ranking,
+        sel.steps,
+        sel.fits,
+        [c.effect.name for c in sel.added],
+        final,
+        tests,
+        judgements,
+        verdict(found),
+        found,
+        sel.dropped,
+    )
+
+
+# =========================================================================== arrays for figures
+
+
+def residual_psd(x: np.ndarray, dt_s: float, segment_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """One-sided PSD [unit^2/Hz] from non-overlapping Hann segments (the segmentation of the spectrum test)."""
+    n = x.size
+    seg = int(min(round(segment_s / dt_s), n))
+    k = max(n // seg, 1)
+    win = np.hanning(seg)
+    segs = x[: k * seg].reshape(k, seg)
+    segs = segs - segs.mean(axis=1, keepdims=True)
+    p = np.mean(np.abs(np.fft.rfft(segs * win, axis=1)) ** 2, axis=0) / np.sum(win**2)
+    return np.fft.rfftfreq(seg, dt_s), 2 * p * dt_s
+
+
+def arrays(d: Diagnosis) -> dict[str, np.ndarray]:
+    """The arrays the figures need (saved as diagnosis.npz next to diagnosis.json)."""
+    rec, st, seg = d.record, d.settings, d.segments
+    out = {"time_s": rec.time_s}
+    if rec.input is not None:
+        out[rec.input_key] = rec.input
+    out.update(
+        {
+            "voltage_V": d.voltage_V,
+            "quiet_mask": (
+                np.zeros(rec.n, np.int8) if d.floor.quiet_mask is None else d.floor.quiet_mask.astype(np.int8)
+            ),
+            f"{seg.name}_start": np.asarray(seg.start, dtype=int),
+            f"{seg.name}_stop": np.asarray(seg.stop, dtype=int),
+            f"{seg.name}_peak": np.asarray(seg.anchor_index, dtype=int),
+        }
+    )
+    for key, f in (("baseline", d.baseline), ("configured", d.configured), ("final", d.final)):
+        t = d.tests[key]
+        freq, psd = residual_psd(f.residual_V, rec.dt_s, st.spectrum_segment_s)
+        s = d.floor.spectrum(f.response)
+        floor_psd = 2 * np.interp(freq, rec.freq_Hz, np.broadcast_to(s, rec.freq_Hz.shape)) * rec.dt_s
+        out.update(
+            {
+                f"{key}_model_V": f.model_V,
+                f"{key}_residual_V": f.residual_V,
+                f"{key}_whitened": f.whitened,
+                f"{key}_psd_freq_Hz": freq,
+                f"{key}_psd_V2_per_Hz": psd,
+                f"{key}_floor_psd_V2_per_Hz": floor_psd,
+                f"{key}_threshold_psd_V2_per_Hz": floor_psd * t.spec_threshold,
+                f"{key}_acf_lags_s": t.acf_lags_s,
+                f"{key}_acf": t.acf,
+                f"{key}_xcf_lags_s": t.xcf_lags_s,
+                f"{key}_xcf": t.xcf,
+                f"{key}_window_t0_s": t.window_t0_s,
+                f"{key}_window_ratio": t.window_ratio,
+            }
+        )
+        out[f"{key}_acf_threshold"] = np.array(t.acf_threshold)
+        out[f"{key}_xcf_threshold"] = np.array(t.xcf_threshold)
+        out[f"{key}_window_threshold"] = np.array(t.window_threshold)
+    for rkey, js in d.judgements.items():
+        for fkey, j in js.items():
+            out.update({f"{rkey}_{fkey}_{name}": a for name, a in j.arrays.items()})
+    out["band99"] = np.array(Z99 / np.sqrt(rec.n))
+    return out

@@ -1,0 +1,149 @@
+"""Fit a forward model by maximum likelihood with the measured noise floor.
+
+The noise spectrum S(f) of a model (:mod:`piezobearing.diagnosis.noise`) is
+measured, not fitted, so the cost is
+
+    chi2 = sum_k |R_k|^2 / (n S_k / 2)   over the DFT bins of the residual,
+
+with chi2 ~ n for a correct model and BIC = chi2 + k ln n (the noise level
+measured, not fitted). When the model is driven by a measured, noisy input
+(errors in variables), a delay or a lead applied to that input rotates and
+amplifies its noise at every frequency, and a fit could then "explain" part
+of the carried noise (false discoveries) while its Gauss-Newton steps slow
+down. The fit therefore drives the model with the input the model gives
+(:meth:`~piezobearing.diagnosis.model.Model.fit_input`, e.g. the force
+low-passed at twice its band, its content untouched) and weights by the
+floor of that input, S_fit = s_v^2 + s_f^2 |G W|^2. The residual, NRMSE and
+tests reported use the measured input as it is.
+
+NRMSE = rms(residual) / rms(measured voltage) throughout.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .least_squares import FitResult, fit, nrmse
+from .model import Model
+from .noise import NoiseFloor
+from .record import Record
+
+
+def fd_weighted(residual_V: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """The residual as n real numbers of unit variance for a correct model.
+
+    R = rfft(r); interior bins give Re and Im scaled by sqrt(2 / (n S)), the
+    0 and Nyquist bins their real part scaled by sqrt(1 / (n S)). The sum of
+    squares is sum r^2 / sigma^2 for white noise of variance sigma^2 = S.
+    """
+    n = residual_V.size
+    r = np.fft.rfft(residual_V)
+    w = np.sqrt(2.0 / (n * s))
+    w[0] /= np.sqrt(2.0)
+    if n % 2 == 0:
+        w[-1] /= np.sqrt(2.0)
+        return np.concatenate([(r * w).real, (r[1:-1] * w[1:-1]).imag])
+    return np.concatenate([(r * w).real, (r[1:] * w[1:]).imag])
+
+
+def whiten(residual_V: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """The residual filtered by 1/sqrt(S) (zero-phase, circular): unit-variance white noise for a correct model."""
+    return np.fft.irfft(np.fft.rfft(residual_V) / np.sqrt(s), residual_V.size)
+
+
+@dataclass
+class ModelFit:
+    """A fitted model and its residual."""
+
+    model: Model
+    result: FitResult
+    model_V: np.ndarray = field(repr=False)
+    residual_V: np.ndarray = field(repr=False)
+    whitened: np.ndarray = field(repr=False)
+    response: np.ndarray = field(repr=False)
+    nrmse: float
+    floor_nrmse: float
+    floor_rms_V: float
+
+    @property
+    def values(self) -> dict:
+        return self.result.values
+
+    @property
+    def chi2(self) -> float:
+        return self.result.chi2
+
+    @property
+    def bic(self) -> float:
+        return self.result.bic
+
+    @property
+    def n_free(self) -> int:
+        return self.result.n_free
+
+    @property
+    def excess(self) -> float:
+        """chi2 above its expectation n - k for a correct model [-]."""
+        return self.chi2 - (self.result.n_data - self.n_free)
+
+    def summary(self) -> dict:
+        r = self.result
+        return {
+            "effects": self.model.names,
+            "nrmse": self.nrmse,
+            "noise_floor_nrmse": self.floor_nrmse,
+            "residual_rms_V": float(np.sqrt(np.mean(self.residual_V**2))),
+            "noise_floor_rms_V": self.floor_rms_V,
+            "chi2": r.chi2,
+            "chi2_per_sample": r.chi2 / r.n_data,
+            "bic": r.bic,
+            "n_free": r.n_free,
+            "params": r.values,
+            "stderr": r.stderr,
+            "ci95": r.ci95,
+            "converged": r.success,
+        }
+
+
+def fit_model(
+    model: Model,
+    record: Record,
+    voltage_V: np.ndarray,
+    floor: NoiseFloor,
+    start: dict | None = None,
+    starts: list[dict] | None = None,
+    max_nfev: int | None = None,
+    ftol: float = 1e-8,
+) -> ModelFit:
+    """Fit ``model`` by the likelihood of the module docstring (errors in variables when it has an input).
+
+    ``start`` holds start values (others: defaults); each dict in ``starts``
+    overrides some of them for one more start, and the best fit is kept.
+    """
+    v = np.asarray(voltage_V, dtype=float)
+    clean = model.fit_input(record)
+    w = model.fit_weight(record)
+
+    def weighted(values: dict) -> np.ndarray:
+        s = floor.spectrum(model.response(values, record) * w)
+        return fd_weighted(v - model.simulate(values, record, clean), s)
+
+    best = None
+    for extra in starts or [{}]:
+        res = fit(weighted, model.params(record, {**(start or {}), **extra}), max_nfev=max_nfev, ftol=ftol)
+        if best is None or res.chi2 < best.chi2:
+            best = res
+    return finish(model, record, v, floor, best)
+
+
+def finish(model: Model, record: Record, v: np.ndarray, floor: NoiseFloor, res: FitResult) -> ModelFit:
+    """The fit's model voltage, residual and whitened residual, driven by the measured input as it is."""
+    mv = model.simulate(res.values, record)
+    g = model.response(res.values, record)
+    s = floor.spectrum(g)
+    r = v - mv
+    floor_rms = floor.rms_V(g, record.n)
+    vrms = float(np.sqrt(np.mean(v**2)))
+    return ModelFit(model, res, mv, r, whiten(r, s), np.asarray(g), nrmse(r, v), floor_rms / vrms, floor_rms)

@@ -1,0 +1,55 @@
+"""What the engine needs of a subject's forward model (:class:`Model`).
+
+A forward model predicts the recorded voltage from the record (its measured
+input, if any) and a dict of parameter values. It has baseline parameters
+(the calibration's R; a bearing's load) and nuisance parameters (a start
+phase, the speed within its tolerance), all in :meth:`Model.params` and so
+fitted in every model, and a tuple of catalogue effects on top. The engine
+never builds a model itself: the subject gives it the baseline model, and
+the engine grows it with :meth:`Model.with_effect`.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from .effect import Effect
+from .params import Param
+from .record import Record
+
+
+@runtime_checkable
+class Model(Protocol):
+    """A forward model: baseline + nuisance parameters + effects (the engine's view of it)."""
+
+    effects: tuple[Effect, ...]
+
+    @property
+    def names(self) -> list[str]:
+        """Identifiers of the effects switched on, in the order they were added."""
+
+    @property
+    def label(self) -> str:
+        """``baseline + effect + ...`` for progress messages."""
+
+    def with_effect(self, effect: Effect) -> "Model":
+        """The same model with one more effect (a new object; the model is immutable)."""
+
+    def params(self, record: Record, start: dict[str, float] | None = None) -> list[Param]:
+        """Every free parameter (baseline, nuisance, then each effect's), starting at ``start`` or defaults."""
+
+    def simulate(self, values: dict, record: Record, input_: np.ndarray | None = None) -> np.ndarray:
+        """Voltage [V] on the record's clock, driven by the record's input (or ``input_`` in its place)."""
+
+    def response(self, values: dict, record: Record) -> np.ndarray | float:
+        """G(f) from the measured input to the voltage at ``record.freq_Hz`` (complex), which carries the
+        input channel's noise into the residual; 0 for a model without a measured input."""
+
+    def fit_input(self, record: Record) -> np.ndarray | None:
+        """The input the likelihood fit drives the model with (the measured one, or a denoised copy; None:
+        the record's own)."""
+
+    def fit_weight(self, record: Record) -> np.ndarray | float:
+        """W(f): the filter :meth:`fit_input` applied to the input, at ``record.freq_Hz`` (1: none)."""

@@ -1,0 +1,210 @@
+"""The noise floor: what a correct model leaves, measured from the record itself.
+
+A record has the output channel (the sensor voltage, noise level s_v) and,
+when the subject has one, a measured input channel (a reference force, level
+s_f). A correct model driven by the measured input leaves r = n_v - G n_f:
+white noise through the model's response G from input to output, with the
+spectrum S(f) = s_v^2 + s_f^2 |G(f)|^2, the floor of that model
+(:meth:`NoiseFloor.spectrum`). Both levels are measured where the input
+rests (:func:`quiet_mask`), as a line-free trimmed mean of the periodogram
+between 5% and 45% of the sampling rate (:func:`white_level`), so that drift,
+decaying tails and mains lines do not inflate them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .record import Record
+from .settings import DiagnosticsSettings
+
+
+@dataclass(frozen=True)
+class NoiseFloor:
+    """White-noise levels of the output and input channels.
+
+    Attributes
+    ----------
+    voltage_noise_V : float
+        Std of the output (voltage) channel's own noise [V].
+    input_noise : float
+        Std of the measured input channel's noise [unit of the input; 0 without an input].
+    quiet_s : float
+        Total length of the quiet stretches used [s].
+    n_stretches : int
+        Number of quiet stretches [-].
+    method : str
+        How the levels were measured.
+    quiet_mask : ndarray of bool
+        Samples the levels were measured on.
+    input_noise_key : str
+        Key of ``input_noise`` in :meth:`report`, with the input's unit (``force_noise_N``).
+    """
+
+    voltage_noise_V: float
+    input_noise: float
+    quiet_s: float
+    n_stretches: int
+    method: str
+    quiet_mask: np.ndarray = field(repr=False, default=None)
+    input_noise_key: str = "input_noise"
+
+    def spectrum(self, response: np.ndarray) -> np.ndarray:
+        """S(f) = s_v^2 + s_f^2 |G(f)|^2: variance per sample of the residual noise at each bin [V^2]."""
+        s = self.voltage_noise_V**2 + self.input_noise**2 * np.abs(response) ** 2
+        return np.maximum(s, 1e-30)  # noise-free (synthetic) records: finite weights
+
+    def rms_V(self, response: np.ndarray, n: int) -> float:
+        """rms of the residual noise of a model with response G on n samples [V] (Parseval)."""
+        s = np.broadcast_to(self.spectrum(response), (n // 2 + 1,))
+        w = np.full(s.size, 2.0)
+        w[0] = 1.0
+        if n % 2 == 0:
+            w[-1] = 1.0
+        return float(np.sqrt(np.sum(w * s) / n))
+
+    def report(self) -> dict:
+        return {
+            "voltage_noise_V": self.voltage_noise_V,
+            self.input_noise_key: self.input_noise,
+            "quiet_s": self.quiet_s,
+            "n_stretches": self.n_stretches,
+            "method": self.method,
+        }
+
+
+def runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """[start, stop) of the runs of True in a boolean array."""
+    d = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1), strict=True))
+
+
+def dilate(mask: np.ndarray, before: int, after: int) -> np.ndarray:
+    """The mask with each run of True widened by ``before`` and ``after`` samples."""
+    out = mask.copy()
+    for a, b in runs(mask):
+        out[max(a - before, 0) : min(b + after, mask.size)] = True
+    return out
+
+
+def robust_diff_std(x: np.ndarray) -> float:
+    """Std of white noise on a smooth signal from the MAD of its first differences."""
+    d = np.diff(x)
+    return float(1.4826 * np.median(np.abs(d - np.median(d))) / np.sqrt(2))
+
+
+def quiet_mask(input_: np.ndarray, dt_s: float, settle_s: float, min_length_s: float = 0.2) -> np.ndarray:
+    """Samples where the input rests: away from every excursion by ``settle_s`` after and 50 ms before.
+
+    An excursion (a press of a calibration) is where the input, smoothed over
+    20 ms, departs from its resting level (the 10th percentile) by more than
+    1% of its range or 6 noise standard deviations of the smoothed input.
+    Only stretches of at least ``min_length_s`` are kept.
+    """
+    f = np.asarray(input_, dtype=float)
+    w = max(int(round(0.02 / dt_s)), 1)
+    fs = np.convolve(f, np.ones(w) / w, mode="same")
+    sigma = robust_diff_std(f) / np.sqrt(w)
+    rest = np.percentile(fs, 10)
+    active = np.abs(fs - rest) > max(0.01 * np.ptp(fs), 6 * sigma)
+    active = dilate(active, int(round(0.05 / dt_s)), int(round(settle_s / dt_s)))
+    quiet = ~active
+    keep = np.zeros_like(quiet)
+    for a, b in runs(quiet):
+        if (b - a) * dt_s >= min_length_s:
+            keep[a:b] = True
+    return keep
+
+
+def white_level(
+    x: np.ndarray,
+    mask: np.ndarray,
+    dt_s: float,
+    segment: int = 256,
+    line_factor: float = 20.0,
+    trim: float = 6.0,
+) -> tuple[float, int]:
+    """Variance of the white part of x in the masked stretches [unit^2], and the number of ordinates used.
+
+    Each stretch is cut into segments (at most ``segment`` samples, at least
+    64), detrended and Hann-windowed; only periodogram ordinates between 5%
+    and 45% of the sampling rate are used, so slow trends and decaying
+    tails do not count. For white noise each ordinate is sigma^2 times an
+    exponential variable. A first level from the median (over ln 2) marks
+    spectral lines (ordinates above ``line_factor`` times it, with 4 bins
+    either side, e.g. mains); the level is then the mean of the remaining
+    ordinates below ``trim`` times the first level, corrected for that
+    truncation (E[X | X < c] = (1 - (1 + c) e^-c) / (1 - e^-c) for a unit
+    exponential).
+    """
+    spectra = []
+    for a, b in runs(mask):
+        for s0 in range(a, b - 63, segment):
+            seg = x[s0 : min(s0 + segment, b)]
+            if seg.size < 64:
+                continue
+            t = np.arange(seg.size)
+            seg = seg - np.polyval(np.polyfit(t, seg, 1), t)
+            win = np.hanning(seg.size)
+            p = np.abs(np.fft.rfft(seg * win)) ** 2 / np.sum(win**2)
+            fr = np.fft.rfftfreq(seg.size)
+            spectra.append(p[(fr >= 0.05) & (fr <= 0.45)])
+    if not spectra:
+        return float("nan"), 0
+    level0 = float(np.median(np.concatenate(spectra)) / np.log(2))
+    kept = []
+    for p in spectra:
+        line = dilate(p > line_factor * level0, 4, 4)
+        kept.append(p[~line & (p < trim * level0)])
+    k = np.concatenate(kept)
+    c = trim
+    return float(np.mean(k) * (1 - np.exp(-c)) / (1 - (1 + c) * np.exp(-c))), int(k.size)
+
+
+def estimate_noise_floor(
+    record: Record,
+    voltage_V: np.ndarray,
+    settings: DiagnosticsSettings,
+    settle_s: float = 0.0,
+) -> NoiseFloor:
+    """Measure s_v and s_f where the record's input rests (settling ``quiet_settle_s`` + ``settle_s``).
+
+    Falls back on the whole record when the quiet stretches hold fewer than
+    1000 samples: s_f from the input's high band, s_v from the voltage's high
+    band, which then includes the carried input noise (recorded in ``method``).
+    The record must have an input; a subject without one measures its floor
+    with :func:`white_level` on stretches of its own choosing.
+    """
+    dt = record.dt_s
+    key = (
+        f"{record.input_name}_noise_{record.input_unit}"
+        if record.input_unit
+        else f"{record.input_name}_noise"
+    )
+    mask = quiet_mask(record.input, dt, settings.quiet_settle_s + settle_s)
+    if mask.sum() >= 1000:
+        vf, _ = white_level(record.input, mask, dt)
+        vv, _ = white_level(voltage_V, mask, dt)
+        return NoiseFloor(
+            float(np.sqrt(vv)),
+            float(np.sqrt(vf)),
+            float(mask.sum() * dt),
+            len(runs(mask)),
+            "quiet stretches: line-free trimmed mean of the periodogram, 5-45% of fs",
+            mask,
+            key,
+        )
+    whole = np.ones(record.n, dtype=bool)
+    vf, _ = white_level(record.input, whole, dt)
+    vv, _ = white_level(voltage_V, whole, dt)
+    return NoiseFloor(
+        float(np.sqrt(vv)),
+        float(np.sqrt(vf)),
+        0.0,
+        0,
+        f"whole record (no quiet stretches): voltage level includes carried {record.input_name} noise",
+        mask,
+        key,
+    )

@@ -1,0 +1,317 @@
+"""Sections of a diagnosis report: small functions of the diagnosis dict ``d`` that return lines.
+
+Every function reads only ``d`` (the JSON of
+:meth:`piezobearing.diagnosis.engine.Diagnosis.to_dict`, with ``source`` and
+``config``), plus the wording its subject passes in (what the baseline is,
+what the input is called), so that a report can be rebuilt from
+``diagnosis.json`` alone. A subject's report is a list of these sections
+joined by :func:`join`.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+from ..units import format_value
+from ..verdict import peak_where
+
+
+def pct(x: float) -> str:
+    return f"{100 * x:.2f}%"
+
+
+def ci(name: str, ci95) -> str:
+    if not ci95:
+        return ""
+    return f"[{format_value(name, ci95[0])}, {format_value(name, ci95[1])}]"
+
+
+def param_table(params: dict, ci95: dict) -> list[str]:
+    rows = ["| parameter | value | 95% interval |", "|---|---|---|"]
+    for k, v in params.items():
+        rows.append(f"| `{k}` | {format_value(k, v)} | {ci(k, ci95.get(k))} |")
+    return rows
+
+
+def tests_line(t: dict, input_name: str = "input") -> str:
+    """The four residual tests of one fit in one sentence."""
+    w, x, s, tw = t["whiteness"], t["input_correlation"], t["spectrum"], t["time_windows"]
+    parts = [
+        f"whiteness (Ljung-Box over {w['lags']} lags) p = {w['p']:.2g} ({'white' if w['white'] else 'not white'})"
+    ]
+    if x["max_abs"] is not None:
+        parts.append(
+            f"largest correlation with the {input_name} {x['max_abs']:.3f} at {x['lag_of_max_s'] * 1e3:+.0f} ms "
+            f"(threshold {x['threshold']:.3f}; {'uncorrelated' if x['uncorrelated'] else 'correlated'})"
+        )
+    parts += [
+        f"{len(s['peaks'])} spectral region(s) above the floor",
+        f"{len(tw['flagged'])} time window(s) above the floor",
+    ]
+    return "; ".join(parts) + "."
+
+
+def findings_lines(items: list[dict]) -> list[str]:
+    return [f"- **{f['test'].replace('_', ' ')}**: {f['where']}" for f in items] or ["- none"]
+
+
+def summary_findings(tests: dict, input_name: str = "input", segment: str = "segment") -> list[dict]:
+    """A fit's findings rebuilt from its test summary (same wording as the verdict's)."""
+    out = []
+    for pk in tests["spectrum"]["peaks"][:5]:
+        where = peak_where(pk)
+        out.append(
+            {
+                "test": "spectrum",
+                "where": f"residual {pk['kind']} {pk['excess_dB']:.1f} dB above the noise floor at {where}",
+            }
+        )
+    w = tests["whiteness"]
+    if not w["white"]:
+        out.append({"test": "whiteness", "where": f"not white (Ljung-Box p = {w['p']:.2g})"})
+    x = tests["input_correlation"]
+    if not x["uncorrelated"]:
+        out.append(
+            {
+                "test": "input_correlation",
+                "where": f"correlated with the {input_name}: {x['max_abs']:.3f} at lag "
+                f"{x['lag_of_max_s'] * 1e3:+.1f} ms",
+            }
+        )
+    for win in tests["time_windows"]["flagged"][:5]:
+        ts, te = win["time_s"]
+        msg = f"energy {win['max_ratio']:.1f}x the floor at t = {ts:.2f}-{te:.2f} s"
+        if segment in win:
+            msg += f" ({segment} {win[segment]})"
+        out.append({"test": "time_window", "where": msg})
+    return out
+
+
+@dataclass
+class Figures:
+    """The report's figures (name -> path relative to the report) and the lines they are written into."""
+
+    paths: dict[str, str] = field(default_factory=dict)
+
+    def lines(self, name: str, caption: str) -> list[str]:
+        """The figure with its caption, or nothing when it was not drawn."""
+        if name not in self.paths:
+            return []
+        return [f"![{caption}]({self.paths[name]})", "", f"*{caption}*", ""]
+
+
+def join(sections: list[list[str]]) -> str:
+    """The report's text from its sections."""
+    return "\n".join(line for s in sections for line in s)
+
+
+def configured_on(d: dict) -> bool:
+    return bool(d["configured"]["effects"])
+
+
+def headline(d: dict, title: str, baseline: str) -> list[str]:
+    """Title, the verdict with the NRMSE of baseline, configured and final model, and where it fails.
+
+    ``baseline`` names the baseline model in a sentence (``The RC baseline (Eq. 6, R fitted)``).
+    """
+    base, conf, final = d["baseline"], d["configured"], d["final"]
+    sel = ", ".join(f"`{s}`" for s in d["selected"]) or "nothing"
+    out = [f"# {title}", ""]
+    out.append(
+        f"**Verdict: {d['verdict']}.** {baseline} leaves NRMSE {pct(base['nrmse'])} "
+        f"against a noise floor of {pct(base['noise_floor_nrmse'])} "
+        f"({base['nrmse'] / base['noise_floor_nrmse']:.2f}x). "
+        + (
+            f"With `model.effects` = {conf['effects']} the configured model leaves {pct(conf['nrmse'])}. "
+            if configured_on(d)
+            else ""
+        )
+        + f"The stepwise search added {sel}; the final model leaves {pct(final['nrmse'])} against its floor "
+        f"of {pct(final['noise_floor_nrmse'])} ({final['nrmse'] / final['noise_floor_nrmse']:.2f}x)."
+    )
+    out.append("")
+    return out
+
+
+def verdict_paragraph(d: dict, input_name: str = "input") -> list[str]:
+    """What the verdict means: consistent with the noise, or the structure left and where."""
+    if d["verdict"] == "explained":
+        return [
+            "The final residual is consistent with the measured noise: white, uncorrelated with the "
+            f"{input_name}, no frequency and no time window above the floor.",
+            "",
+        ]
+    return [
+        "Structure remains in the final residual that no effect of the catalogue explains. Where:",
+        "",
+        *findings_lines(d["unexplained"]),
+        "",
+    ]
+
+
+def compare(d: dict, figures: Figures, overlay_caption: str) -> list[str]:
+    """Section 1: the baseline and the configured model's fitted parameters, and the overlay."""
+    base, conf = d["baseline"], d["configured"]
+    out = ["## 1. Compare: the model over the measurement", ""]
+    out += [f"Baseline fit (chi2/n = {base['chi2_per_sample']:.3g}, NRMSE {pct(base['nrmse'])}):", ""]
+    out += param_table(base["params"], base["ci95"]) + [""]
+    if configured_on(d):
+        out += [
+            f"Configured model (`model.effects` = {conf['effects']}; NRMSE {pct(conf['nrmse'])}, "
+            f"floor {pct(conf['noise_floor_nrmse'])}):",
+            "",
+        ]
+        out += param_table(conf["params"], conf["ci95"]) + [""]
+    return out + figures.lines("overlay", overlay_caption)
+
+
+def where_it_fails(d: dict, input_name: str = "input", segment: str = "segment") -> list[str]:
+    """Section 2 (start): the baseline's residual tests and its findings."""
+    base = d["baseline"]
+    alpha = base["tests"]["test_significance"]
+    return [
+        "## 2. Where the baseline fails",
+        "",
+        f"Residual tests on the residual whitened by the floor (each at {alpha:.2g}, family-wise {4 * alpha:.2g}): "
+        + tests_line(base["tests"], input_name),
+        "",
+        *findings_lines(summary_findings(base["tests"], input_name, segment)),
+        "",
+    ]
+
+
+def ranking(d: dict, figures: Figures) -> list[str]:
+    """Section 3: every catalogue effect added in turn, by evidence; the most likely missing one."""
+    out = ["## 3. Which effect is missing", ""]
+    out.append(
+        "Each effect of the catalogue was added to the "
+        + ("configured" if configured_on(d) else "baseline")
+        + " model in turn and refitted. Evidence: the drop of the Bayesian information criterion "
+        "(BIC = chi2 + k ln n with the measured noise; > 10 is very strong), the share of the misfit above "
+        "the floor the effect explains, the NRMSE after, and whether the residual becomes white."
+    )
+    out += ["", "| rank | effect | delta BIC | share explained | NRMSE after | white after | fitted |"]
+    out.append("|---|---|---|---|---|---|---|")
+    for i, r in enumerate(d["ranking"]):
+        white = "yes" if r["white"] else "no"
+        out.append(
+            f"| {i + 1} | `{r['effect']}` | {r['delta_bic']:.4g} | {pct(r['excess_explained'])} | "
+            f"{pct(r['nrmse'])} | {white} | {r['summary'].replace('|', '/')} |"
+        )
+    out.append("")
+    out += winner(d) + figures.lines(
+        "ranking", "Evidence for each effect of the catalogue (BIC drop when added)."
+    )
+    return out
+
+
+def winner(d: dict) -> list[str]:
+    """The most likely missing effect with its physics and fitted values, or why none was kept."""
+    w = d.get("winner")
+    if w:
+        return [
+            f"**Most likely missing: `{w['effect']}`** ({w['title']}). {w['physics']}",
+            "",
+            f"Fitted: {w['summary']}.",
+            "",
+            *param_table(w["params"], w["ci95"]),
+            "",
+        ]
+    best = d["ranking"][0] if d["ranking"] else None
+    st = d.get("settings", {})
+    tried = [s["added"] for s in d.get("dropped_steps", [])]
+    if best and best["effect"] in tried:
+        return [
+            f"No effect was kept. The best candidate, `{best['effect']}` (delta BIC {best['delta_bic']:.3g}), "
+            f"explains only {pct(best['excess_explained'])} of the misfit and the residual keeps structure "
+            "after the search: it would stand in for a mechanism outside the catalogue (see the verdict).",
+            "",
+        ]
+    if best:
+        return [
+            f"No effect is supported by the evidence (best: `{best['effect']}`, delta BIC "
+            f"{best['delta_bic']:.3g} against the {st.get('min_delta_bic')} needed, share "
+            f"{pct(best['excess_explained'])} against {st.get('min_share')}).",
+            "",
+        ]
+    return []
+
+
+def ladder(d: dict, figures: Figures) -> list[str]:
+    """Section 4: NRMSE and evidence after each step; the additions tried and dropped."""
+    base = d["baseline"]
+    out = ["## 4. Adding effects: the error ladder", ""]
+    out += [
+        "| step | model | NRMSE | noise floor | delta BIC | share explained |",
+        "|---|---|---|---|---|---|",
+    ]
+    out.append(f"| 0 | baseline | {pct(base['nrmse'])} | {pct(base['noise_floor_nrmse'])} | | |")
+    for i, s in enumerate(d["steps"]):
+        if i == 0 and not configured_on(d):
+            continue
+        name = " + ".join(["baseline", *s["effects"]])
+        db = "" if s["delta_bic"] is None else f"{s['delta_bic']:.4g}"
+        sh = "" if s["excess_explained"] is None else pct(s["excess_explained"])
+        step = "configured" if i == 0 else str(i)
+        out.append(f"| {step} | {name} | {pct(s['nrmse'])} | {pct(s['noise_floor_nrmse'])} | {db} | {sh} |")
+    out.append("")
+    for s in d.get("dropped_steps", []):
+        out.append(f"- Tried and dropped: `{s['added']}` ({s['reason']}).")
+    if d.get("dropped_steps"):
+        out.append("")
+    return out + figures.lines("ladder", "NRMSE after each step, with the noise floor of each model.")
+
+
+def final_model(d: dict, input_name: str = "input", advice: str = "") -> list[str]:
+    """Section 5: the final model, its tests and the verdict; ``advice`` where structure remains."""
+    final = d["final"]
+    out = ["## 5. The final model", ""]
+    out += [
+        f"Effects: {final['effects'] or 'none (baseline)'}; NRMSE {pct(final['nrmse'])}, floor "
+        f"{pct(final['noise_floor_nrmse'])}, chi2/n {final['chi2_per_sample']:.3g}.",
+        "",
+    ]
+    out += param_table(final["params"], final["ci95"]) + [""]
+    out += [
+        "Residual tests: " + tests_line(final["tests"], input_name),
+        "",
+        f"**Verdict: {d['verdict']}.**",
+        "",
+    ]
+    if d["verdict"] == "unexplained":
+        out += findings_lines(d["unexplained"]) + [""]
+        if advice:
+            out += [advice, ""]
+    return out
+
+
+def method(d: dict, fit_line: str, tests_line_: str) -> list[str]:
+    """How this was computed: the fit, the tests (subject wording) and the selection rule (from settings)."""
+    st = d.get("settings", {})
+    return [
+        "## How this was computed",
+        "",
+        fit_line,
+        tests_line_,
+        f"- Selection: an effect is added when its BIC drop exceeds {st.get('min_delta_bic')} and it explains "
+        f"at least {st.get('min_share')} of the misfit above the floor; if structure remains, additions that "
+        f"explained less than {st.get('min_share_if_unexplained')} at their step are dropped.",
+        "",
+    ]
+
+
+def config_used(d: dict) -> list[str]:
+    """The configuration the diagnosis ran with, folded."""
+    if "config" not in d:
+        return []
+    return [
+        "<details><summary>Configuration used</summary>",
+        "",
+        "```json",
+        json.dumps(d["config"], indent=2),
+        "```",
+        "",
+        "</details>",
+        "",
+    ]

@@ -1,0 +1,213 @@
+"""Which effects the record supports: rank the catalogue by evidence, add stepwise, drop stand-ins.
+
+1. Rank: every catalogue effect not yet in the model is added to it in turn
+   and refitted (warm-started from the current values and the effect's own
+   starts); the evidence is the BIC drop (BIC = chi2 + k ln n with the
+   measured noise) and the share of the misfit above the noise floor
+   (chi2 - (n - k)) the effect explains.
+2. Add: the best candidate is kept while its BIC drop exceeds
+   ``min_delta_bic`` and it explains at least ``min_share`` of that misfit
+   (:func:`accepted`, the same rule for every effect), at most ``max_steps`` times.
+3. Drop: when structure remains after the search, an effect added on the
+   way may only stand in for the missing mechanism (a catalogue effect can
+   mimic the low-frequency behaviour of, say, a resonance); the selection is
+   then cut at the first addition that explained less than
+   ``min_share_if_unexplained`` of the misfit left at its step (:func:`cut_stand_ins`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from .effect import Effect, StartContext
+from .fit import ModelFit, fit_model
+from .noise import NoiseFloor
+from .record import Record
+from .residual_tests import ResidualTests, residual_tests
+from .settings import DiagnosticsSettings
+
+
+@dataclass
+class Candidate:
+    """An effect added to the current model and refitted."""
+
+    effect: Effect
+    fit: ModelFit
+    delta_bic: float
+    excess_explained: float
+    tests: ResidualTests | None = None
+    param_names: tuple[str, ...] = ()
+    baseline_names: tuple[str, ...] = ()
+
+    def summary(self, current: ModelFit) -> dict:
+        names = self.param_names
+        v = self.fit.values
+        return {
+            "effect": self.effect.name,
+            "title": self.effect.title,
+            "delta_bic": self.delta_bic,
+            "delta_chi2": current.chi2 - self.fit.chi2,
+            "nrmse": self.fit.nrmse,
+            "nrmse_before": current.nrmse,
+            "noise_floor_nrmse": self.fit.floor_nrmse,
+            "excess_explained": self.excess_explained,
+            "whiteness_p": self.tests.ljung_box_p if self.tests else None,
+            "white": self.tests.white if self.tests else None,
+            "params": {k: v[k] for k in v if k in names},
+            "stderr": {k: self.fit.result.stderr.get(k) for k in names},
+            "ci95": {k: self.fit.result.ci95.get(k) for k in names},
+            **{k: v[k] for k in self.baseline_names},
+            "summary": self.effect.summary({k: v[k] for k in v if k in names}),
+        }
+
+
+def add_effect(
+    current: ModelFit,
+    effect: Effect,
+    record: Record,
+    voltage_V: np.ndarray,
+    floor: NoiseFloor,
+    settings: DiagnosticsSettings,
+) -> ModelFit:
+    """Fit current model + effect, warm-started from the current values and the effect's starts."""
+    model = current.model.with_effect(effect)
+    ctx = StartContext(record, voltage_V, current.model_V, current.values)
+    return fit_model(
+        model,
+        record,
+        voltage_V,
+        floor,
+        start=dict(current.values),
+        starts=effect.starts(ctx),
+        max_nfev=settings.max_nfev,
+        ftol=settings.ftol,
+    )
+
+
+def rank(
+    current: ModelFit,
+    effects: list[Effect],
+    record: Record,
+    voltage_V: np.ndarray,
+    floor: NoiseFloor,
+    settings: DiagnosticsSettings,
+    progress: Callable[[str], None] | None = None,
+    baseline_names: tuple[str, ...] = (),
+) -> list[Candidate]:
+    """Every effect added to the current model in turn, best evidence (largest BIC drop) first.
+
+    ``baseline_names`` are the baseline and nuisance parameters each candidate reports refitted.
+    """
+    out = []
+    for e in effects:
+        if progress:
+            progress(f"{current.model.label} + {e.name}")
+        f = add_effect(current, e, record, voltage_V, floor, settings)
+        drop = current.chi2 - f.chi2
+        explained = float(np.clip(drop / max(current.excess, drop, 1e-12), 0.0, 1.0))
+        tests = residual_tests(f.whitened, record.input, record.dt_s, settings)
+        out.append(
+            Candidate(
+                e,
+                f,
+                current.bic - f.bic,
+                explained,
+                tests,
+                tuple(p.name for p in e.params(record)),
+                baseline_names,
+            )
+        )
+    out.sort(key=lambda c: -c.delta_bic)
+    return out
+
+
+def accepted(c: Candidate, settings: DiagnosticsSettings) -> bool:
+    """The evidence rule, the same for every effect."""
+    return c.delta_bic > settings.min_delta_bic and c.excess_explained >= settings.min_share
+
+
+def step_entry(f: ModelFit, added: str | None, c: Candidate | None) -> dict:
+    """One row of the error ladder: the model after a step and the evidence for the step."""
+    return {
+        "effects": f.model.names,
+        "added": added,
+        "nrmse": f.nrmse,
+        "noise_floor_nrmse": f.floor_nrmse,
+        "bic": f.bic,
+        "chi2": f.chi2,
+        "n_free": f.n_free,
+        "delta_bic": c.delta_bic if c else None,
+        "excess_explained": c.excess_explained if c else None,
+        "params": f.values,
+    }
+
+
+@dataclass
+class Selection:
+    """The stepwise search: the first ranking, each step's candidate and fit, and the ladder rows.
+
+    ``fits[0]`` and ``steps[0]`` are the configured model (before the search).
+    """
+
+    ranking: list[Candidate]
+    added: list[Candidate]
+    steps: list[dict]
+    fits: list[ModelFit]
+    dropped: list[dict]
+
+
+def stepwise(
+    configured: ModelFit,
+    catalogue: list[Effect],
+    record: Record,
+    voltage_V: np.ndarray,
+    floor: NoiseFloor,
+    settings: DiagnosticsSettings,
+    progress: Callable[[str], None] | None = None,
+    baseline_names: tuple[str, ...] = (),
+) -> Selection:
+    """Rank and add effects from ``catalogue`` to the configured model while :func:`accepted` holds."""
+    current = configured
+    steps = [step_entry(configured, None, None)]
+    fits = [configured]
+    added: list[Candidate] = []
+    ranking: list[Candidate] = []
+    for step in range(settings.max_steps):
+        remaining = [e for e in catalogue if e not in current.model.effects]
+        if not remaining:
+            break
+        cands = rank(current, remaining, record, voltage_V, floor, settings, progress, baseline_names)
+        if step == 0:
+            ranking = cands
+        best = cands[0]
+        if not accepted(best, settings):
+            break
+        current = best.fit
+        added.append(best)
+        steps.append(step_entry(current, best.effect.name, best))
+        fits.append(current)
+    return Selection(ranking, added, steps, fits, [])
+
+
+def cut_stand_ins(sel: Selection, settings: DiagnosticsSettings) -> bool:
+    """Cut ``sel`` at the first addition that explained less than ``min_share_if_unexplained`` of the
+    misfit left at its step (call when structure remains); returns whether it cut."""
+    weak = [i for i, c in enumerate(sel.added) if c.excess_explained < settings.min_share_if_unexplained]
+    if not weak:
+        return False
+    cut = weak[0]
+    sel.dropped = [
+        {
+            **sel.steps[i + 1],
+            "reason": f"structure remains and this addition explained "
+            f"{c.excess_explained:.0%} (< {settings.min_share_if_unexplained:.0%}) of the misfit "
+            "left at its step: it may stand in for an effect outside the catalogue",
+        }
+        for i, c in enumerate(sel.added)
+        if i >= cut
+    ]
+    sel.added, sel.steps, sel.fits = sel.added[:cut], sel.steps[: cut + 1], sel.fits[: cut + 1]
+    return True
