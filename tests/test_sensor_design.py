@@ -209,13 +209,14 @@ def test_one_sensor_design_case_on_workflow_files(tmp_path, ci_config):
 
 
 def test_every_configured_study_case_name_fits_a_file_name(paper_config, ci_config):
-    """Paramspace names a case by every column and value; the rule's benchmark file adds 'study_case_<study>_'.
-    A name over 255 characters stops the workflow (OSError: File name too long)."""
+    """Paramspace names a case by every column and value; the case's folder, its log and its benchmark file
+    (rules/study_case_<study>/<case>.tsv) carry that name. One over 251 characters stops the workflow
+    (OSError: File name too long)."""
     import pandas as pd
     from snakemake.utils import Paramspace
 
     for s in paper_config["studies"] + ci_config["studies"]:
         df = pd.read_csv(s["table"], sep="\t", comment="#")
         cases = Paramspace(df, filename_params="*", single_wildcard="case").instance_patterns
-        longest = max(len(f"study_case_{s['name']}_{c}.tsv") for c in cases)
+        longest = max(len(f"{c}.tsv") for c in cases)
         assert longest <= 255, f"{s['table']}: case file names up to {longest} characters"

@@ -66,3 +66,19 @@ def test_absolute_noise_reports_clipping(tmp_path, inputs, paper_config):  # noq
     assert nz["noise_std_V"] == pytest.approx(1e-6 * (nz["sample_rate_Hz"] / 2) ** 0.5)
     n = pd.read_csv(out / "n.csv")
     assert n["voltage_V"].max() <= 10.0 and list(n.columns) == ["time_s", "voltage_V", "noiseless_V"]
+
+
+def test_detector_study_figures_annotate_each_case():
+    """The detection maps of the three detector studies: one cell per case, annotated with its rate in %."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from piezobearing.plotting.studies import SUMMARY_FIGURES
+
+    rows = [{"bearing__defects__0__type": t, "bearing__shaft_speed_rpm": s, "correct_rate_faulty": 0.5 + 0.1 * i,
+             "false_alarm_rate_healthy": 0.0, "n_seeds": 50, "noise_model": "relative"}
+            for i, (t, s) in enumerate([("outer_race", 500.0), ("inner_race", 1000.0), ("rolling_element", 1500.0)])]
+    fig = SUMMARY_FIGURES["fault_type_speed"](pd.DataFrame(rows))
+    texts = [t.get_text() for t in fig.axes[0].texts]
+    assert sorted(texts) == ["50", "60", "70"]
+    assert set(SUMMARY_FIGURES) >= {"daq_noise", "defect_position", "fault_type_speed"}

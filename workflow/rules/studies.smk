@@ -22,15 +22,19 @@ STUDIES = {
 
 # Workflow results a study kind reads that its varied keys do not affect, by kind
 # (keyword arguments of its function in piezobearing.stages.studies.KINDS).
+_SENSOR_INPUTS = {
+    "resistance": f"{RESULTS}/calibration/resistance.json",
+    **(
+        {"harmonic": f"{RESULTS}/sensor/harmonic.csv"}
+        if config["signals"]["sensor_fem_correction"]
+        else {}
+    ),
+}
+# the detector studies (issue 11) run the fault_detection chain and the classification
+DETECTOR_STUDIES = ("daq_noise", "defect_position", "fault_type_speed")
 STUDY_INPUTS = {
-    "fault_detection": {
-        "resistance": f"{RESULTS}/calibration/resistance.json",
-        **(
-            {"harmonic": f"{RESULTS}/sensor/harmonic.csv"}
-            if config["signals"]["sensor_fem_correction"]
-            else {}
-        ),
-    },
+    "fault_detection": _SENSOR_INPUTS,
+    **{name: _SENSOR_INPUTS for name in DETECTOR_STUDIES},
     "sensor_design": {
         "resistance": f"{RESULTS}/calibration/resistance.json",
         "force_healthy": f"{RESULTS}/bearing/sensor_force_healthy.csv",
@@ -44,13 +48,23 @@ STUDY_INPUTS = {
 STUDY_MEM_MB = {
     "calibration_circuit": 500,
     "fault_detection": 1000,
+    **{name: 2000 for name in DETECTOR_STUDIES},
     "sensor_design": 1500,
 }
-STUDY_RUNTIME_MIN = {"calibration_circuit": 2, "fault_detection": 4, "sensor_design": 3}
+STUDY_RUNTIME_MIN = {
+    "calibration_circuit": 2,
+    "fault_detection": 4,
+    **{name: 20 for name in DETECTOR_STUDIES},
+    "sensor_design": 3,
+}
 # Config sections a kind's cases depend on (as params: a changed value reruns the cases).
 STUDY_SECTIONS = {
     "calibration_circuit": "seed sensor synthesis calibration lowfreq".split(),
     "fault_detection": "seed sensor sensor_fem bearing housing signals".split(),
+    **{
+        name: "seed sensor sensor_fem bearing housing signals".split()
+        for name in DETECTOR_STUDIES
+    },
     "sensor_design": "seed sensor sensor_fem lowfreq bearing housing signals".split(),
 }
 
@@ -63,7 +77,7 @@ rule study_case:
     log:
         f"{RESULTS}/logs/studies/{{study}}/{{case}}.log",
     benchmark:
-        f"{RESULTS}/benchmarks/rules/study_case_{{study}}_{{case}}.tsv"
+        f"{RESULTS}/benchmarks/rules/study_case_{{study}}/{{case}}.tsv"
     conda:
         "../envs/piezobearing.yaml"
     threads: 1

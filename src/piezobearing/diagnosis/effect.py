@@ -62,11 +62,18 @@ class Effect:
         A few words for tables.
     physics : str
         A paragraph for the report: the mechanism, the model, plausible sizes.
+    equivalent_to : dict[str, str]
+        Effects this one is exactly equivalent to on any record (identifier ->
+        the statement of the equivalence: which combinations a record
+        determines, which it cannot separate). The declaring effect yields
+        the tie in the ranking to the other, and the diagnosis states the
+        equivalence whenever either of the two is selected or ranked first.
     """
 
     name: str = ""
     title: str = ""
     physics: str = ""
+    equivalent_to: dict[str, str] = {}
 
     def params(self, record: Record) -> list[Param]:
         """The parameters for a record (some depend on its sampling rate); declared values are neutral."""

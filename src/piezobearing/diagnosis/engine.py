@@ -11,7 +11,10 @@ the noise floor, the segments and its representations. :func:`diagnose`
 3. ranks the catalogue by evidence and adds effects stepwise, dropping
    stand-ins when structure remains (:mod:`~piezobearing.diagnosis.selection`);
 4. judges the subject's representations and gives the verdict
-   (:mod:`~piezobearing.diagnosis.verdict`).
+   (:mod:`~piezobearing.diagnosis.verdict`);
+5. says how well the record pins the result down: each step's runner-up and
+   BIC margin in plain words, the final fit's parameter correlations
+   (:mod:`~piezobearing.diagnosis.identifiability`).
 
 :meth:`Diagnosis.to_dict` is the JSON, :func:`arrays` the arrays behind the
 figures. NRMSE = rms(residual) / rms(measured voltage) throughout.
@@ -25,6 +28,7 @@ from typing import Callable
 import numpy as np
 
 from .fit import ModelFit, fit_model
+from .identifiability import equivalences, identifiability
 from .noise import NoiseFloor
 from .record import Record, Segments
 from .residual_tests import Z99, ResidualTests, residual_tests
@@ -52,6 +56,7 @@ class Diagnosis:
     verdict: str
     unexplained: list[dict]
     dropped: list[dict] = field(default_factory=list)
+    identifiability: dict = field(default_factory=dict)
 
     @property
     def record(self) -> Record:
@@ -90,6 +95,7 @@ class Diagnosis:
             "final": {**self.final.summary(), "tests": self.tests["final"].summary()},
             "verdict": self.verdict,
             "unexplained": self.unexplained,
+            "identifiability": self.identifiability,
             **{key: {k: j.summary for k, j in js.items()} for key, js in self.judgements.items()},
             "settings": self.settings.__dict__,
             "catalogue": self.problem.catalogue.describe(),
@@ -133,7 +139,8 @@ def diagnose(
     tests["configured"] = tests["baseline"] if configured is baseline else tests_of(configured)
     sel = stepwise(configured, list(p.catalogue.values()), record, v, floor, settings, note, baseline_names)
     tests["final"] = tests_of(sel.fits[-1])
-    if not tests["final"].passed and cut_stand_ins(sel, settings):
+    cut = not tests["final"].passed and cut_stand_ins(sel, settings)
+    if cut:
         tests["final"] = tests_of(sel.fits[-1])
     final = sel.fits[-1]
     judgements = {
@@ -158,6 +165,17 @@ def diagnose(
         verdict(found),
         found,
         sel.dropped,
+        identifiability(
+            sel.steps,
+            sel.stop,
+            final,
+            cut,
+            equivalences(
+                p.catalogue.values(),
+                {c.effect.name for c in sel.added} | {c.effect.name for c in sel.ranking[:1]},
+                sel.ranking,
+            ),
+        ),
     )
 
 

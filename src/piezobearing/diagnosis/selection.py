@@ -13,6 +13,14 @@
    mimic the low-frequency behaviour of, say, a resonance); the selection is
    then cut at the first addition that explained less than
    ``min_share_if_unexplained`` of the misfit left at its step (:func:`cut_stand_ins`).
+
+Identifiability: every step records its runner-up (the second-best
+candidate of that step's ranking) and the BIC margin between the two, and
+:func:`strength` puts a BIC difference into the words of Kass & Raftery
+(1995, "Bayes factors", J. Am. Stat. Assoc. 90, 773-795, Sec. 3.2): on the
+scale 2 ln B, which the BIC difference approximates, > 10 is "decisive"
+(their "very strong"), 6-10 "strong", 2-6 "positive" and < 2 "weak" (not
+worth more than a bare mention).
 """
 
 from __future__ import annotations
@@ -121,7 +129,28 @@ def rank(
             )
         )
     out.sort(key=lambda c: -c.delta_bic)
+    return yield_ties(out)
+
+
+def yield_ties(cands: list[Candidate]) -> list[Candidate]:
+    """Put an effect after the one it declares itself exactly equivalent to when they tie (margin < 2).
+
+    Exactly equivalent effects fit a record equally well; which comes first is then decided by
+    rounding in the optimiser. The declaring effect yields, so the order is reproducible, and the
+    diagnosis states the equivalence (:mod:`~piezobearing.diagnosis.identifiability`).
+    """
+    out = list(cands)
+    for i in range(len(out) - 1):
+        a, b = out[i], out[i + 1]
+        if b.effect.name in a.effect.equivalent_to and a.delta_bic - b.delta_bic < 2.0:
+            out[i], out[i + 1] = b, a
     return out
+
+
+def equivalent_in(effect: Effect, model_effects) -> bool:
+    """Whether ``effect`` is exactly equivalent to an effect already in the model (adding it adds nothing)."""
+    names = {e.name for e in model_effects}
+    return bool(names & set(effect.equivalent_to)) or any(effect.name in e.equivalent_to for e in model_effects)
 
 
 def accepted(c: Candidate, settings: DiagnosticsSettings) -> bool:
@@ -129,8 +158,39 @@ def accepted(c: Candidate, settings: DiagnosticsSettings) -> bool:
     return c.delta_bic > settings.min_delta_bic and c.excess_explained >= settings.min_share
 
 
-def step_entry(f: ModelFit, added: str | None, c: Candidate | None) -> dict:
-    """One row of the error ladder: the model after a step and the evidence for the step."""
+def strength(delta_bic: float | None) -> str | None:
+    """The plain-words strength of a BIC difference (Kass & Raftery 1995, see the module docstring)."""
+    if delta_bic is None or not np.isfinite(delta_bic):
+        return None
+    if delta_bic > 10:
+        return "decisive"
+    if delta_bic > 6:
+        return "strong"
+    if delta_bic > 2:
+        return "positive"
+    return "weak"
+
+
+def runner_up(cands: list[Candidate]) -> dict:
+    """The second-best candidate of a ranking and the BIC margin of the best over it.
+
+    The margin is BIC(model + runner-up) - BIC(model + best) = the difference of the two
+    candidates' BIC drops: how strongly the record prefers the winner to its closest rival.
+    """
+    if len(cands) < 2:
+        return {"runner_up": None, "runner_up_delta_bic": None, "margin_bic": None, "margin_strength": None}
+    best, second = cands[0], cands[1]
+    margin = float(best.delta_bic - second.delta_bic)
+    return {
+        "runner_up": second.effect.name,
+        "runner_up_delta_bic": float(second.delta_bic),
+        "margin_bic": margin,
+        "margin_strength": strength(margin),
+    }
+
+
+def step_entry(f: ModelFit, added: str | None, c: Candidate | None, rivals: dict | None = None) -> dict:
+    """One row of the error ladder: the model after a step, the evidence for the step and its runner-up."""
     return {
         "effects": f.model.names,
         "added": added,
@@ -141,6 +201,8 @@ def step_entry(f: ModelFit, added: str | None, c: Candidate | None) -> dict:
         "n_free": f.n_free,
         "delta_bic": c.delta_bic if c else None,
         "excess_explained": c.excess_explained if c else None,
+        "strength": strength(c.delta_bic) if c else None,
+        **(rivals or {}),
         "params": f.values,
     }
 
@@ -150,6 +212,9 @@ class Selection:
     """The stepwise search: the first ranking, each step's candidate and fit, and the ladder rows.
 
     ``fits[0]`` and ``steps[0]`` are the configured model (before the search).
+    ``stop`` is the step that added nothing: its best candidate, BIC drop and
+    strength, and its runner-up (None when the catalogue ran out or
+    ``max_steps`` was reached).
     """
 
     ranking: list[Candidate]
@@ -157,6 +222,7 @@ class Selection:
     steps: list[dict]
     fits: list[ModelFit]
     dropped: list[dict]
+    stop: dict | None = None
 
 
 def stepwise(
@@ -175,8 +241,13 @@ def stepwise(
     fits = [configured]
     added: list[Candidate] = []
     ranking: list[Candidate] = []
+    stop = None
     for step in range(settings.max_steps):
-        remaining = [e for e in catalogue if e not in current.model.effects]
+        remaining = [
+            e
+            for e in catalogue
+            if e not in current.model.effects and not equivalent_in(e, current.model.effects)
+        ]
         if not remaining:
             break
         cands = rank(current, remaining, record, voltage_V, floor, settings, progress, baseline_names)
@@ -184,12 +255,19 @@ def stepwise(
             ranking = cands
         best = cands[0]
         if not accepted(best, settings):
+            stop = {
+                "best": best.effect.name,
+                "delta_bic": float(best.delta_bic),
+                "strength": strength(best.delta_bic),
+                "excess_explained": best.excess_explained,
+                **runner_up(cands),
+            }
             break
         current = best.fit
         added.append(best)
-        steps.append(step_entry(current, best.effect.name, best))
+        steps.append(step_entry(current, best.effect.name, best, runner_up(cands)))
         fits.append(current)
-    return Selection(ranking, added, steps, fits, [])
+    return Selection(ranking, added, steps, fits, [], stop)
 
 
 def cut_stand_ins(sel: Selection, settings: DiagnosticsSettings) -> bool:

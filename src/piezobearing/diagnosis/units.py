@@ -44,6 +44,7 @@ UNITS: tuple[Unit, ...] = (
     Unit("_V", "V", 1e-3, "mV"),
     Unit("_Hz", "Hz", 1.0, "Hz"),
     Unit("_per_N", "1/N", 1.0, "1/N"),
+    Unit("_ratio", "1", 1.0, "x"),
 )
 
 #: The suffixes alone (for ``str.endswith``).

@@ -153,8 +153,7 @@ def detection_map(df: pd.DataFrame, x_col: str, y_col: str, x_label: str, y_labe
         ax.set_title(name, fontsize=9)
         fig.colorbar(im, ax=ax, shrink=0.8)
     r = df.iloc[0]
-    fig.suptitle(f"{title}: {int(r['n_seeds'])} noise seeds, true type {r['true_type']}, noise {r['noise_model']}",
-                 fontsize=9)
+    fig.suptitle(f"{title}: {int(r['n_seeds'])} noise seeds, noise {r['noise_model']}", fontsize=9)
     fig.tight_layout()
     return fig
 
@@ -166,9 +165,28 @@ def daq_noise(df: pd.DataFrame):
                          "Outer-race fault against DAQ rate and absolute noise")
 
 
+def defect_position(df: pd.DataFrame):
+    """Defect angle from the sensor against cage slip."""
+    return detection_map(df, "bearing__defects__0__angle_deg", "bearing__cage_slip",
+                         "defect angle from the sensor [deg]", "cage slip [-]",
+                         "Outer-race fault against its place and the cage slip")
+
+
+def fault_type_speed(df: pd.DataFrame):
+    """Fault type against shaft speed (the type as a row index: outer, inner, rolling element)."""
+    order = {"outer_race": 0, "inner_race": 1, "rolling_element": 2}
+    d = df.assign(type_index=df["bearing__defects__0__type"].map(order))
+    fig = detection_map(d, "bearing__shaft_speed_rpm", "type_index", "shaft speed [rpm]",
+                        "fault type (0 outer race, 1 inner race, 2 rolling element)",
+                        "Each fault type against shaft speed")
+    return fig
+
+
 SUMMARY_FIGURES = {
     "calibration_circuit": calibration_circuit,
     "fault_detection": fault_detection,
     "daq_noise": daq_noise,
+    "defect_position": defect_position,
+    "fault_type_speed": fault_type_speed,
     "sensor_design": sensor_design,
 }

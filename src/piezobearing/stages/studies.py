@@ -322,6 +322,9 @@ def detector_case(config: dict, outdir: Path, resistance: str, harmonic: str | N
         "clipped_fraction_max": float(seeds["clipped_fraction"].max()),
         **{f"detection_rate_{t}": float(faulty[f"{t}_detected"].mean())
            for t in ("outer_race", "inner_race", "rolling_element")},
+        # the faulty case's row of the confusion matrix: share of seeds classified as each type
+        **{f"classified_{t}": float((faulty["fault_type"] == t).mean())
+           for t in ("outer_race", "inner_race", "rolling_element", "none")},
     })
     return row
 
@@ -332,6 +335,8 @@ KINDS = {
     "calibration_circuit": calibration_circuit_case,
     "fault_detection": fault_detection_case,
     "daq_noise": detector_case,
+    "defect_position": detector_case,
+    "fault_type_speed": detector_case,
     "sensor_design": sensor_design_case,
 }
 

@@ -100,6 +100,7 @@ def render(d: dict, figures: dict[str, str] | None = None) -> str:
             s.ranking(d, fig),
             s.ladder(d, fig),
             s.final_model(d, "force", ADVICE),
+            s.identifiability(d),
             s.method(d, METHOD_FIT, METHOD_TESTS),
             s.config_used(d),
         ]

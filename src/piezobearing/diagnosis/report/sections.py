@@ -286,6 +286,74 @@ def final_model(d: dict, input_name: str = "input", advice: str = "") -> list[st
     return out
 
 
+def identifiability(d: dict) -> list[str]:
+    """Section 6: how firmly the record decides each step (runner-up, BIC margin) and the correlations."""
+    idf = d.get("identifiability")
+    if not idf:
+        return []
+    out = ["## 6. How firmly the record decides", ""]
+    out.append(
+        "Strength of a BIC difference in the words of Kass & Raftery (1995): > 10 decisive, 6-10 strong, "
+        "2-6 positive, < 2 weak. The margin is how much better the winner of a step fits than its runner-up."
+    )
+    out.append("")
+    if idf["steps"]:
+        out += ["| step | added | delta BIC | strength | runner-up | margin (BIC) | margin strength |"]
+        out.append("|---|---|---|---|---|---|---|")
+        for i, st in enumerate(idf["steps"]):
+            ru = f"`{st['runner_up']}`" if st["runner_up"] else "none"
+            m = "" if st["margin_bic"] is None else f"{st['margin_bic']:.4g}"
+            out.append(
+                f"| {i + 1} | `{st['added']}` | {st['delta_bic']:.4g} | {st['strength']} | {ru} | {m} | "
+                f"{st['margin_strength'] or ''} |"
+            )
+        out.append("")
+        for st in idf["steps"]:
+            if st["margin_strength"] == "weak":
+                out += [
+                    f"- The record barely separates `{st['added']}` from `{st['runner_up']}` "
+                    f"(margin {st['margin_bic']:.2g}): read them as equally likely.",
+                    "",
+                ]
+    stop = idf.get("stop")
+    if stop:
+        out += [
+            f"The search stopped: the best further candidate, `{stop['best']}`, changes the BIC by "
+            f"{stop['delta_bic']:.3g} (evidence for it: {stop['strength']}) and explains "
+            f"{pct(stop['excess_explained'])} of the misfit left.",
+            "",
+        ]
+    for eq in idf.get("equivalences", []):
+        a, b = eq["effects"]
+        fitted = "; ".join(
+            f"`{n}`: {eq[n]['summary']} (delta BIC {eq[n]['delta_bic']:.6g})" for n in (a, b) if n in eq
+        )
+        out += [
+            f"**`{a}` and `{b}` are {eq['statement']}.** "
+            + (f"Fitted each alone: {fitted}." if fitted else ""),
+            "",
+        ]
+    pairs = idf["correlated_pairs"]
+    if pairs:
+        out.append(f"Parameters of the final fit correlated beyond |r| = {idf['correlation_threshold']}:")
+        out.append("")
+        for p in pairs:
+            a, b = p["params"]
+            out.append(
+                f"- `{a}` and `{b}`: r = {p['correlation']:+.3f}; the record determines a combination of the "
+                "two better than either alone."
+            )
+        out.append("")
+    else:
+        n = len(idf["correlation"])
+        out += [
+            f"No pair of the final fit's {n} parameter(s) is correlated beyond |r| = {idf['correlation_threshold']}"
+            " (correlations from the Jacobian at the optimum, in `diagnosis.json`).",
+            "",
+        ]
+    return out
+
+
 def method(d: dict, fit_line: str, tests_line_: str) -> list[str]:
     """How this was computed: the fit, the tests (subject wording) and the selection rule (from settings)."""
     st = d.get("settings", {})

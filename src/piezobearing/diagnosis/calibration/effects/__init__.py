@@ -17,6 +17,7 @@ identifier             what it models
 ``mains_pickup``       50/60 Hz interference and its odd harmonics
 ``baseline_drift``     slow additive drift (pyroelectric, thermal, offset)
 ``extra_capacitance``  capacitance across the electrodes beyond Cp + cable
+``d33_scale``          d33 off the datasheet by a factor (same record as extra C)
 =====================  ==========================================================
 """
 
@@ -50,6 +51,7 @@ from . import (  # noqa: E402  (the modules import .base, registered in this ord
     baseline_drift,
     channel_delay,
     d33_nonlinearity,
+    d33_scale,
     extra_capacitance,
     mains_pickup,
     reference_lag,
@@ -63,6 +65,7 @@ _MODULES = (
     mains_pickup,
     baseline_drift,
     extra_capacitance,
+    d33_scale,
 )
 for _m in _MODULES:
     register(_m.EFFECT)
