@@ -21,9 +21,9 @@ import numpy as np
 
 from piezobearing import config as cfg
 from piezobearing.sensor import fem as fem
+from piezobearing.sensor.analysis import SensorFemParams, harmonic_results, modal_results
 from piezobearing.sensor.calibration import SensorCircuit
 from piezobearing.sensor.mesh import stack_mesh
-from piezobearing.stages.sensor_fem import SensorFemParams, harmonic_results, modal_results
 
 BUDGET_S = 120.0  # the budget for modal + harmonic on the default mesh (2 cores)
 

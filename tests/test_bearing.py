@@ -173,14 +173,14 @@ def test_load_equilibrium_over_a_record(bcfg):
 
 
 def test_defect_impacts_repeat_at_bpfo(bcfg):
-    from piezobearing.stages.bearing import _impact_intervals
+    from piezobearing.bearing.checks import impact_intervals
 
     p = _params(bcfg, faulty=True)
     kin = brg.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
     h = bcfg["time_step_s"] / bcfg["substeps"]
     n = int(round(8 / kin.bpfo_Hz / h))
     res = brg.simulate_lpm(p, 0.0, n, h)
-    iv = _impact_intervals(res.time_s, res.load_N.max(axis=1), kin.bpfo_Hz)
+    iv = impact_intervals(res.time_s, res.load_N.max(axis=1), kin.bpfo_Hz)
     assert len(iv) >= 6
     np.testing.assert_allclose(iv, 1 / kin.bpfo_Hz, rtol=0.01)
     # the healthy bearing has no such impacts: its largest load varies smoothly and far less

@@ -9,6 +9,7 @@ import pytest
 
 from piezobearing.bearing import housing_fem as fem
 from piezobearing.bearing import lpm as brg
+from piezobearing.bearing import transient as st
 from piezobearing.bearing.housing_mesh import (
     GROUP_HOUSING,
     GROUP_RING,
@@ -17,7 +18,6 @@ from piezobearing.bearing.housing_mesh import (
     nested_dissection_order,
 )
 from piezobearing.sensor.materials import ALUMINA, CAST_IRON, STEEL, paper_pzt
-from piezobearing.stages import bearing as st
 
 LEVEL = 0.35  # a coarse mesh: a few thousand DOFs
 

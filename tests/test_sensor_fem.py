@@ -7,10 +7,10 @@ import pytest
 from scipy.constants import epsilon_0
 
 from piezobearing.sensor import fem as fem
+from piezobearing.sensor.analysis import SensorFemParams, convergence_table
 from piezobearing.sensor.calibration import SensorCircuit, frequency_response
 from piezobearing.sensor.materials import ALUMINA, StressChargeForm, paper_pzt, stress_charge_form
 from piezobearing.sensor.mesh import StackGeometry, cross_section, cylinder_mesh, hex_volumes, stack_mesh
-from piezobearing.stages.sensor_fem import SensorFemParams, convergence_table
 
 PZT = paper_pzt()
 MATS = fem.StackMaterials(stress_charge_form(PZT), 7700.0, ALUMINA)

@@ -10,6 +10,7 @@ import pandas as pd
 import pytest
 
 from piezobearing.stages import sensor_fem as st
+from piezobearing.stages.scorecard import scorecard_sensor_fem
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +34,7 @@ def ci_run(tmp_path_factory, ci_config):
         str(d / "band.json"),
         c,
     )
-    st.scorecard_sensor_fem(
+    scorecard_sensor_fem(
         str(d / "modal.json"), str(d / "band.json"), str(d / "convergence.csv"), str(d / "sensor_fem.csv")
     )
     return d

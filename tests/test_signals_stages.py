@@ -13,6 +13,7 @@ from test_signals import BPFO, DT, bearing_force
 from piezobearing.sensor.calibration import SensorCircuit, frequency_response
 from piezobearing.signals import detection as S
 from piezobearing.stages import signals as st
+from piezobearing.stages.scorecard import scorecard_signals
 
 
 @pytest.fixture()
@@ -95,7 +96,7 @@ def test_study_events_and_scorecard(tmp_path, inputs, paper_config):
     assert float(r0["indicator"].iloc[0]) == pytest.approx(ind["faulty"]["indicator"], rel=1e-6)
     st.defect_events(volt["healthy"], volt["faulty"], inputs["kinematics"], out / "events.csv")
     assert len(pd.read_csv(out / "events.csv")) == 65
-    st.scorecard(out / "fault_indicator.json", out / "study.json", inputs["kinematics"], out / "scorecard.csv")
+    scorecard_signals(out / "fault_indicator.json", out / "study.json", inputs["kinematics"], out / "scorecard.csv")
     sc = pd.read_csv(out / "scorecard.csv")
     assert sc.loc[sc["quantity"].str.startswith("BPFO"), "ours"].item() == pytest.approx(BPFO)
     assert sc.loc[sc["quantity"].str.contains("faulty bearing"), "ours"].item() == 1.0

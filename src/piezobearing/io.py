@@ -4,6 +4,11 @@ voltage_V[, speed_rpm]) as DAQs export them: CSV, MATLAB .mat (v5, v7.3), UFF58,
 Every problem a user can make with a file raises :class:`MeasurementError`
 with one line that names the file, the row (as the line number in the file)
 or column, and the fix. Nothing here writes next to the input.
+
+Beyond the records, every other file format of the workflow lives here too (the house rule: file formats in
+io.py): JSON results, NPZ arrays, CSV tables and time series, the housing and sensor meshes. That makes this module
+longer than 600 lines; its sections (records as DAQs export them, result files, arrays and series, meshes,
+running-bearing records) are independent.
 """
 
 from __future__ import annotations
@@ -471,6 +476,161 @@ def read_json(path: str | Path, keys=(), error: type[Exception] = ResultFileErro
             raise error(f"{p}: key '{k}' missing; rerun the rule that writes it")
     return d
 
+
+# --------------------------------------------------------------------------- arrays, tables, series
+
+
+def write_npz(path: str | Path, **arrays) -> None:
+    """Arrays as a compressed NPZ, creating the folder."""
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(path, **arrays)
+
+
+def read_npz(path: str | Path) -> dict:
+    """Every array of an NPZ, by name."""
+    d = np.load(path)
+    return {k: d[k] for k in d.files}
+
+
+def write_csv(df: pd.DataFrame, path: str | Path, float_format: str | None = "%.10g") -> None:
+    """A table as CSV without the index, creating the folder."""
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    df.to_csv(path, index=False, float_format=float_format)
+
+
+class SignalFileError(ValueError):
+    """A time series or result file of the signal stages that cannot be used as it is."""
+
+
+#: Largest relative deviation of a time step from the mean step of a time series.
+SERIES_UNIFORM_RTOL = 1e-3
+
+
+def read_series(path: str | Path, column: str) -> tuple[np.ndarray, np.ndarray, float]:
+    """Read ``time_s`` and ``column`` of a CSV on a uniform clock.
+
+    Returns time [s], the column's values and the step dt = (t_end - t_0)/(n - 1) [s].
+    """
+    path = Path(path)
+    if not path.exists():
+        raise SignalFileError(f"{path}: file not found; run the stage that writes it")
+    df = pd.read_csv(path)
+    for c in ("time_s", column):
+        if c not in df.columns:
+            raise SignalFileError(f"{path}: column '{c}' missing (header: {', '.join(df.columns)}); "
+                                  f"write time_s,{column}")
+    t = df["time_s"].to_numpy(dtype=float)
+    x = df[column].to_numpy(dtype=float)
+    bad = np.flatnonzero(~(np.isfinite(t) & np.isfinite(x)))
+    if bad.size:
+        raise SignalFileError(f"{path}: line {int(bad[0]) + 2}: not a finite number ({bad.size} rows); "
+                              "fix the stage that writes it")
+    if t.size < 8:
+        raise SignalFileError(f"{path}: only {t.size} rows; a signal needs a time series")
+    dt = float((t[-1] - t[0]) / (t.size - 1))
+    off = np.flatnonzero(np.abs(np.diff(t) - dt) > SERIES_UNIFORM_RTOL * dt)
+    if dt <= 0 or off.size:
+        i = int(off[0]) + 1 if off.size else 1
+        raise SignalFileError(f"{path}: line {i + 2}, column time_s: uneven or decreasing time step; "
+                              "the signal stages need a uniform clock")
+    return t, x, dt
+
+
+def read_kinematics(path: str | Path) -> dict:
+    """The bearing's kinematic frequencies [Hz] (shaft, FTF, BPFO, BPFI, BSF) from kinematics.json."""
+    k = read_json(path)
+    need = ("shaft_Hz", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz")
+    miss = [n for n in need if n not in k]
+    if miss:
+        raise SignalFileError(f"{path}: key '{miss[0]}' missing; kinematics.json needs {', '.join(need)}")
+    return {n: float(k[n]) for n in need}
+
+
+def read_harmonic(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """Frequencies [Hz] and |V/F| [V/N] of the sensor FEM's harmonic response (harmonic.csv)."""
+    df = pd.read_csv(path)
+    for c in ("frequency_Hz", "voltage_per_force_V_per_N"):
+        if c not in df.columns:
+            raise SignalFileError(f"{path}: column '{c}' missing; the sensor FEM writes frequency_Hz, "
+                                  "voltage_per_force_V_per_N, phase")
+    return df["frequency_Hz"].to_numpy(dtype=float), np.abs(df["voltage_per_force_V_per_N"].to_numpy(dtype=float))
+
+
+# --------------------------------------------------------------------------- meshes
+
+
+def write_housing_mesh(m, path: str | Path) -> None:
+    """A :class:`~piezobearing.bearing.housing_mesh.HousingMesh` and its node sets as NPZ (with its geometry)."""
+    from dataclasses import asdict
+
+    write_npz(
+        path,
+        coors=m.coors,
+        conn=m.conn,
+        group=m.group,
+        raceway_psi=m.raceway_psi,
+        raceway_x=m.raceway_x,
+        raceway_nodes=m.raceway_nodes,
+        ring_outer_psi=m.ring_outer_psi,
+        ring_outer_nodes=m.ring_outer_nodes,
+        base_nodes=m.base_nodes,
+        faulty=m.faulty,
+        level=m.level,
+        geometry=json.dumps(asdict(m.geometry)),
+    )
+
+
+def read_housing_mesh(path: str | Path):
+    """A housing mesh written by :func:`write_housing_mesh`."""
+    from .bearing.housing_mesh import HousingGeometry, HousingMesh
+
+    d = np.load(path)
+    geo = HousingGeometry(**json.loads(str(d["geometry"])))
+    keys = (
+        "coors conn group raceway_psi raceway_x raceway_nodes ring_outer_psi ring_outer_nodes base_nodes"
+    ).split()
+    return HousingMesh(
+        **{k: d[k] for k in keys}, geometry=geo, faulty=bool(d["faulty"]), level=float(d["level"])
+    )
+
+
+def write_housing_vtk(m, path: str | Path) -> None:
+    """A housing mesh as VTK (hexahedra with the cell array ``group``), to view."""
+    import meshio
+
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    meshio.write(path, meshio.Mesh(m.coors, [("hexahedron", m.conn)], cell_data={"group": [m.group]}))
+
+
+def write_stack_mesh(mesh, path: str | Path) -> None:
+    """The sensor's quarter mesh as binary legacy VTK with the cell groups (1 bottom disk, 2 PZT, 3 top disk)."""
+    import meshio
+
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    m = meshio.Mesh(
+        mesh.coors, [("hexahedron", mesh.cells)], cell_data={"group": [mesh.groups.astype(np.int32)]}
+    )
+    meshio.write(str(path), m, file_format="vtk", binary=True)
+
+
+def read_stack_mesh(path: str | Path, geometry, level: float, error: type[Exception] = ResultFileError):
+    """Read a mesh written by :func:`write_stack_mesh` and check it against ``geometry`` (a StackGeometry)."""
+    import meshio
+
+    from .sensor.mesh import StackMesh
+
+    p = Path(path)
+    if not p.exists():
+        raise error(f"{p}: mesh file not found; run rule sensor_mesh")
+    m = meshio.read(str(p))
+    cells = m.cells_dict.get("hexahedron")
+    if cells is None or "group" not in m.cell_data_dict:
+        raise error(f"{p}: no hexahedra with a 'group' cell array; rerun rule sensor_mesh")
+    groups = np.asarray(m.cell_data_dict["group"]["hexahedron"], dtype=int)
+    z = geometry.z_interfaces_m
+    if not np.isclose(m.points[:, 2].max(), z[-1], rtol=1e-9) or not set(groups) <= {1, 2, 3, 4}:
+        raise error(f"{p}: mesh does not match the configured stack geometry; rerun rule sensor_mesh")
+    return StackMesh(np.asarray(m.points, float), np.asarray(cells, int), groups, geometry, level)
 
 # --------------------------------------------------------------------------- running-bearing records
 

@@ -36,7 +36,7 @@ rule bearing_lpm:
         mem_mb=500,
         runtime=2,
     params:
-        bearing=config["bearing"],
+        **stage_params("bearing_lpm", "workflow/scripts/bearing_lpm.py"),
     script:
         "../scripts/bearing_lpm.py"
 
@@ -59,9 +59,7 @@ rule housing_mesh:
         mem_mb=500,
         runtime=2,
     params:
-        bearing=config["bearing"],
-        housing=config["housing"],
-        sensor_fem=config["sensor_fem"],
+        **stage_params("housing_mesh", "workflow/scripts/housing_mesh.py"),
     script:
         "../scripts/housing_mesh.py"
 
@@ -88,11 +86,7 @@ rule housing_transient:
         mem_mb=2300,
         runtime=2,
     params:
-        seed=config["seed"],
-        sensor=config["sensor"],
-        sensor_fem=config["sensor_fem"],
-        bearing=config["bearing"],
-        housing=config["housing"],
+        **stage_params("housing_transient", "workflow/scripts/housing_transient.py"),
     script:
         "../scripts/housing_transient.py"
 
@@ -114,10 +108,7 @@ rule housing_convergence:
         mem_mb=5900,
         runtime=4,
     params:
-        sensor=config["sensor"],
-        sensor_fem=config["sensor_fem"],
-        bearing=config["bearing"],
-        housing=config["housing"],
+        **stage_params("housing_convergence", "workflow/scripts/housing_convergence.py"),
     script:
         "../scripts/housing_convergence.py"
 
@@ -139,7 +130,7 @@ rule bearing_sampling:
         mem_mb=500,
         runtime=2,
     params:
-        bearing=config["bearing"],
+        **stage_params("bearing_sampling", "workflow/scripts/bearing_sampling.py"),
     script:
         "../scripts/bearing_sampling.py"
 
@@ -166,6 +157,8 @@ rule fig03:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("fig03", "notebooks/fig03_housing_mesh.ipynb"),
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p healthy {input.healthy}"
         " -p faulty {input.faulty} -p figure {output.figure} > {log} 2>&1"
@@ -192,6 +185,6 @@ rule scorecard_bearing:
         mem_mb=500,
         runtime=2,
     params:
-        bearing=config["bearing"],
+        **stage_params("scorecard_bearing", "workflow/scripts/scorecard_bearing.py"),
     script:
         "../scripts/scorecard_bearing.py"

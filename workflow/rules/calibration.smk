@@ -26,9 +26,9 @@ rule synthesize_calibration:
         mem_mb=500,
         runtime=2,
     params:
-        seed=config["seed"],
-        sensor=config["sensor"],
-        synthesis=config["synthesis"],
+        **stage_params(
+            "synthesize_calibration", "workflow/scripts/synthesize_calibration.py"
+        ),
     script:
         "../scripts/synthesize_calibration.py"
 
@@ -49,7 +49,7 @@ rule extract_sensitivity:
         mem_mb=500,
         runtime=2,
     params:
-        calibration=config["calibration"],
+        **stage_params("extract_sensitivity", "workflow/scripts/extract_sensitivity.py"),
     script:
         "../scripts/extract_sensitivity.py"
 
@@ -71,8 +71,7 @@ rule fit_resistance:
         mem_mb=500,
         runtime=2,
     params:
-        sensor=config["sensor"],
-        calibration=config["calibration"],
+        **stage_params("fit_resistance", "workflow/scripts/fit_resistance.py"),
     script:
         "../scripts/fit_resistance.py"
 
@@ -94,8 +93,7 @@ rule lowfreq_sensitivity:
         mem_mb=500,
         runtime=2,
     params:
-        sensor=config["sensor"],
-        lowfreq=config["lowfreq"],
+        **stage_params("lowfreq_sensitivity", "workflow/scripts/lowfreq_sensitivity.py"),
     script:
         "../scripts/lowfreq_sensitivity.py"
 
@@ -117,5 +115,9 @@ rule scorecard_calibration:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params(
+            "scorecard_calibration", "workflow/scripts/scorecard_calibration.py"
+        ),
     script:
         "../scripts/scorecard_calibration.py"

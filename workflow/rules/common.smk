@@ -10,6 +10,7 @@ from snakemake.utils import validate
 
 from piezobearing.config import ConfigError
 from piezobearing.config import validate as validate_config
+from piezobearing.registry import RECORD_RULES, code_hash, rule_params
 
 CONFIG_FILES = [
     "config/config.yaml",
@@ -36,6 +37,14 @@ def measurement_csv():
     """The calibration record every downstream stage reads: the user's file or the synthetic one."""
     user = config["calibration"]["measurement"]
     return user if user else f"{RESULTS}/calibration/measurement.csv"
+
+
+def stage_params(rule, entry):
+    """A rule's params, from piezobearing.registry: the config values its stage reads (``reads``, all the
+    stage receives), the hash of the package code its script or notebook ``entry`` runs (``code``) and, for
+    a rule reading the calibration record, the record's checksum (``record``)."""
+    record = config["calibration"]["measurement"] if rule in RECORD_RULES else None
+    return rule_params(rule, config, f"{workflow.basedir}/{entry}", record)
 
 
 def final_outputs():

@@ -48,10 +48,7 @@ rule diagnose:
         mem_mb=500,
         runtime=2,
     params:
-        sensor=config["sensor"],
-        calibration=config["calibration"],
-        model=config["model"],
-        diagnostics=config["diagnostics"],
+        **stage_params("diagnose", "workflow/scripts/diagnose.py"),
     script:
         "../scripts/diagnose.py"
 
@@ -78,6 +75,8 @@ rule diagnosis_notebook:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("diagnosis_notebook", "notebooks/diagnosis.ipynb"),
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p diagnosis {input.diagnosis}"
         " -p arrays {input.arrays} -p figure {output.figure} > {log} 2>&1"

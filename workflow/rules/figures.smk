@@ -26,6 +26,8 @@ rule fig05:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("fig05", "notebooks/fig05_calibration_impulses.ipynb"),
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p measurement {input.measurement}"
         " -p sensitivity {input.sensitivity} -p figure {output.figure} > {log} 2>&1"
@@ -53,6 +55,8 @@ rule fig06:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("fig06", "notebooks/fig06_resistance_fit.ipynb"),
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p fit {input.fit}"
         " -p resistance {input.resistance} -p figure {output.figure} > {log} 2>&1"
@@ -80,6 +84,8 @@ rule fig08a:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("fig08a", "notebooks/fig08a_lowfreq_sensitivity.ipynb"),
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p curve {input.curve}"
         " -p lowfreq {input.lowfreq} -p figure {output.figure} > {log} 2>&1"

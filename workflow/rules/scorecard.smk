@@ -21,5 +21,7 @@ rule scorecard:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("scorecard", "workflow/scripts/scorecard.py"),
     script:
         "../scripts/scorecard.py"

@@ -36,8 +36,7 @@ rule sensor_mesh:
         mem_mb=500,
         runtime=2,
     params:
-        sensor=config["sensor"],
-        sensor_fem=config["sensor_fem"],
+        **stage_params("sensor_mesh", "workflow/scripts/sensor_mesh.py"),
     script:
         "../scripts/sensor_mesh.py"
 
@@ -60,8 +59,7 @@ rule sensor_convergence:
         mem_mb=3200,
         runtime=2,
     params:
-        sensor=config["sensor"],
-        sensor_fem=config["sensor_fem"],
+        **stage_params("sensor_convergence", "workflow/scripts/sensor_convergence.py"),
     script:
         "../scripts/sensor_convergence.py"
 
@@ -83,8 +81,7 @@ rule sensor_modal:
         mem_mb=3800,
         runtime=3,
     params:
-        sensor=config["sensor"],
-        sensor_fem=config["sensor_fem"],
+        **stage_params("sensor_modal", "workflow/scripts/sensor_modal.py"),
     script:
         "../scripts/sensor_modal.py"
 
@@ -109,8 +106,7 @@ rule sensor_harmonic:
         mem_mb=2600,
         runtime=2,
     params:
-        sensor=config["sensor"],
-        sensor_fem=config["sensor_fem"],
+        **stage_params("sensor_harmonic", "workflow/scripts/sensor_harmonic.py"),
     script:
         "../scripts/sensor_harmonic.py"
 
@@ -132,6 +128,10 @@ rule scorecard_sensor_fem:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params(
+            "scorecard_sensor_fem", "workflow/scripts/scorecard_sensor_fem.py"
+        ),
     script:
         "../scripts/scorecard_sensor_fem.py"
 
@@ -158,6 +158,8 @@ rule fig07:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("fig07", "notebooks/fig07_sensor_mode.ipynb"),
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p modal {input.modal}"
         " -p mode {input.mode} -p figure {output.figure} > {log} 2>&1"
@@ -185,6 +187,8 @@ rule fig08b:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("fig08b", "notebooks/fig08b_sensor_harmonic.ipynb"),
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p harmonic {input.harmonic}"
         " -p band {input.band} -p figure {output.figure} > {log} 2>&1"

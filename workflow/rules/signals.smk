@@ -39,8 +39,7 @@ rule sensor_voltage:
         mem_mb=500,
         runtime=2,
     params:
-        sensor=config["sensor"],
-        signals=config["signals"],
+        **stage_params("sensor_voltage", "workflow/scripts/sensor_voltage.py"),
     script:
         "../scripts/sensor_voltage.py"
 
@@ -64,8 +63,7 @@ rule noisy:
         mem_mb=500,
         runtime=2,
     params:
-        seed=config["seed"],
-        signals=config["signals"],
+        **stage_params("noisy", "workflow/scripts/noisy.py"),
     script:
         "../scripts/noisy.py"
 
@@ -91,7 +89,7 @@ rule envelope:
         mem_mb=500,
         runtime=2,
     params:
-        signals=config["signals"],
+        **stage_params("envelope", "workflow/scripts/envelope.py"),
     script:
         "../scripts/envelope.py"
 
@@ -120,7 +118,7 @@ rule fault_indicator:
         mem_mb=500,
         runtime=2,
     params:
-        signals=config["signals"],
+        **stage_params("fault_indicator", "workflow/scripts/fault_indicator.py"),
     script:
         "../scripts/fault_indicator.py"
 
@@ -145,8 +143,7 @@ rule snr_study:
         mem_mb=500,
         runtime=4,
     params:
-        seed=config["seed"],
-        signals=config["signals"],
+        **stage_params("snr_study", "workflow/scripts/snr_study.py"),
     script:
         "../scripts/snr_study.py"
 
@@ -171,6 +168,8 @@ rule snr_study_figure:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("snr_study_figure", "workflow/scripts/snr_study_figure.py"),
     script:
         "../scripts/snr_study_figure.py"
 
@@ -192,6 +191,8 @@ rule defect_events:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("defect_events", "workflow/scripts/defect_events.py"),
     script:
         "../scripts/defect_events.py"
 
@@ -220,6 +221,8 @@ rule fig09:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("fig09", "notebooks/fig09_voltage.ipynb"),
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p healthy {input.healthy}"
         " -p faulty {input.faulty} -p events {input.events} -p kinematics {input.kinematics}"
@@ -250,6 +253,8 @@ rule fig10:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("fig10", "notebooks/fig10_envelope.ipynb"),
     shell:
         "papermill {input.notebook} {output.notebook} -k python3 -p healthy {input.healthy}"
         " -p faulty {input.faulty} -p indicator {input.indicator} -p kinematics {input.kinematics}"
@@ -273,6 +278,8 @@ rule scorecard_signals:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("scorecard_signals", "workflow/scripts/scorecard_signals.py"),
     script:
         "../scripts/scorecard_signals.py"
 
@@ -297,8 +304,8 @@ rule fault_classification:
         mem_mb=500,
         runtime=10,
     params:
-        seed=config["seed"],
-        signals=config["signals"],
-        defects=config["bearing"].get("defects"),
+        **stage_params(
+            "fault_classification", "workflow/scripts/fault_classification.py"
+        ),
     script:
         "../scripts/fault_classification.py"

@@ -85,6 +85,7 @@ rule study_case:
         mem_mb=lambda wc: STUDY_MEM_MB.get(wc.study, 1000),
         runtime=lambda wc: STUDY_RUNTIME_MIN.get(wc.study, 10),
     params:
+        code=code_hash(f"{workflow.basedir}/workflow/scripts/study_case.py"),
         overrides=lambda wc: dict(STUDIES[wc.study].instance(wc)),
         sections=lambda wc: {k: config[k] for k in STUDY_SECTIONS.get(wc.study, [])},
     script:
@@ -137,6 +138,8 @@ rule study_summary:
     resources:
         mem_mb=500,
         runtime=2,
+    params:
+        **stage_params("study_summary", "workflow/scripts/study_summary.py"),
     script:
         "../scripts/study_summary.py"
 

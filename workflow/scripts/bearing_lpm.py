@@ -2,7 +2,10 @@ import sys
 
 sys.stderr = open(snakemake.log[0], "w")
 
+from piezobearing.registry import declared_config
 from piezobearing.stages.bearing import bearing_lpm
+
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
 
 o = snakemake.output
 bearing_lpm(
@@ -10,5 +13,5 @@ bearing_lpm(
     {"healthy": o.npz_healthy, "faulty": o.npz_faulty},
     {"healthy": o.csv_healthy, "faulty": o.csv_faulty},
     o.json,
-    snakemake.config,
+    config,
 )

@@ -3,11 +3,14 @@ from pathlib import Path
 
 sys.stderr = open(snakemake.log[0], "w")
 
+from piezobearing.registry import declared_config
 from piezobearing.stages.diagnostics import diagnose
+
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
 
 diagnose(
     snakemake.input.measurement,
     Path(snakemake.output.json).parent,
-    snakemake.config,
+    config,
     progress=lambda msg: print(f"fit: {msg}", file=sys.stderr, flush=True),
 )

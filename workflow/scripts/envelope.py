@@ -2,7 +2,10 @@ import sys
 
 sys.stderr = open(snakemake.log[0], "w")
 
+from piezobearing.registry import declared_config
 from piezobearing.stages.signals import envelope
+
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
 
 envelope(
     snakemake.input.noisy,
@@ -10,5 +13,5 @@ envelope(
     snakemake.input.kinematics,
     snakemake.output.csv,
     snakemake.output.json,
-    snakemake.config,
+    config,
 )

@@ -2,6 +2,9 @@ import sys
 
 sys.stderr = open(snakemake.log[0], "w")
 
+from piezobearing.registry import declared_config
 from piezobearing.stages.calibration import extract_sensitivity
 
-extract_sensitivity(snakemake.input.measurement, snakemake.output.json, snakemake.config)
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
+
+extract_sensitivity(snakemake.input.measurement, snakemake.output.json, config)

@@ -2,7 +2,10 @@ import sys
 
 sys.stderr = open(snakemake.log[0], "w")
 
+from piezobearing.registry import declared_config
 from piezobearing.stages.signals import classification
 
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
+
 i, o = snakemake.input, snakemake.output
-classification({"healthy": i.healthy, "faulty": i.faulty}, i.kinematics, o.json, o.csv, o.roc, snakemake.config)
+classification({"healthy": i.healthy, "faulty": i.faulty}, i.kinematics, o.json, o.csv, o.roc, config)

@@ -2,6 +2,9 @@ import sys
 
 sys.stderr = open(snakemake.log[0], "w")
 
+from piezobearing.registry import declared_config
 from piezobearing.stages.bearing import mesh_convergence
 
-mesh_convergence(snakemake.input.contact, snakemake.output.json, snakemake.output.csv, snakemake.config)
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
+
+mesh_convergence(snakemake.input.contact, snakemake.output.json, snakemake.output.csv, config)

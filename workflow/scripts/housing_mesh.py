@@ -2,7 +2,10 @@ import sys
 
 sys.stderr = open(snakemake.log[0], "w")
 
+from piezobearing.registry import declared_config
 from piezobearing.stages.bearing import housing_mesh
 
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
+
 o = snakemake.output
-housing_mesh(snakemake.wildcards.case, o.npz, o.vtk, o.json, snakemake.config)
+housing_mesh(snakemake.wildcards.case, o.npz, o.vtk, o.json, config)

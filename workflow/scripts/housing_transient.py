@@ -2,7 +2,10 @@ import sys
 
 sys.stderr = open(snakemake.log[0], "w")
 
+from piezobearing.registry import declared_config
 from piezobearing.stages.bearing import housing_transient
 
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
+
 i, o = snakemake.input, snakemake.output
-housing_transient(snakemake.wildcards.case, i.mesh, i.contact, o.csv, o.modes, o.json, o.influence, snakemake.config)
+housing_transient(snakemake.wildcards.case, i.mesh, i.contact, o.csv, o.modes, o.json, o.influence, config)

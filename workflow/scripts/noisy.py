@@ -2,6 +2,9 @@ import sys
 
 sys.stderr = open(snakemake.log[0], "w")
 
+from piezobearing.registry import declared_config
 from piezobearing.stages.signals import noisy
 
-noisy(snakemake.input.voltage, snakemake.wildcards.case, snakemake.output.csv, snakemake.output.json, snakemake.config)
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
+
+noisy(snakemake.input.voltage, snakemake.wildcards.case, snakemake.output.csv, snakemake.output.json, config)

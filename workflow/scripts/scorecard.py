@@ -2,6 +2,6 @@ import sys
 
 sys.stderr = open(snakemake.log[0], "w")
 
-from piezobearing.scorecard import assemble
+from piezobearing.stages.scorecard import assemble
 
 assemble(snakemake.input.parts, snakemake.output.csv, snakemake.output.md)

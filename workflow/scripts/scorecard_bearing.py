@@ -2,7 +2,10 @@ import sys
 
 sys.stderr = open(snakemake.log[0], "w")
 
-from piezobearing.stages.bearing import scorecard
+from piezobearing.registry import declared_config
+from piezobearing.stages.scorecard import scorecard_bearing as scorecard
+
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
 
 i = snakemake.input
 scorecard(
@@ -12,5 +15,5 @@ scorecard(
     i.convergence,
     i.sampling,
     snakemake.output.csv,
-    snakemake.config,
+    config,
 )

@@ -2,12 +2,15 @@ import sys
 
 sys.stderr = open(snakemake.log[0], "w")
 
-from piezobearing.stages.calibration import scorecard
+from piezobearing.registry import declared_config
+from piezobearing.stages.scorecard import scorecard_calibration as scorecard
+
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
 
 scorecard(
     snakemake.input.sensitivity,
     snakemake.input.resistance,
     snakemake.input.lowfreq,
     snakemake.output.csv,
-    snakemake.config,
+    config,
 )

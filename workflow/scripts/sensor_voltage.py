@@ -2,7 +2,10 @@ import sys
 
 sys.stderr = open(snakemake.log[0], "w")
 
+from piezobearing.registry import declared_config
 from piezobearing.stages.signals import sensor_voltage
+
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
 
 sensor_voltage(
     snakemake.input.force,
@@ -10,5 +13,5 @@ sensor_voltage(
     snakemake.input.harmonic[0] if snakemake.input.harmonic else None,
     snakemake.output.csv,
     snakemake.output.json,
-    snakemake.config,
+    config,
 )

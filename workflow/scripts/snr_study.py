@@ -2,7 +2,10 @@ import sys
 
 sys.stderr = open(snakemake.log[0], "w")
 
+from piezobearing.registry import declared_config
 from piezobearing.stages.signals import snr_study
 
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
+
 i, o = snakemake.input, snakemake.output
-snr_study({"healthy": i.healthy, "faulty": i.faulty}, i.kinematics, o.csv, o.summary, o.json, snakemake.config)
+snr_study({"healthy": i.healthy, "faulty": i.faulty}, i.kinematics, o.csv, o.summary, o.json, config)

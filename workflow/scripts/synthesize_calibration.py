@@ -2,6 +2,9 @@ import sys
 
 sys.stderr = open(snakemake.log[0], "w")
 
+from piezobearing.registry import declared_config
 from piezobearing.stages.calibration import synthesize_calibration
 
-synthesize_calibration(snakemake.config, snakemake.output.csv)
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
+
+synthesize_calibration(config, snakemake.output.csv)

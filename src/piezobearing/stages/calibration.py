@@ -8,7 +8,6 @@ import pandas as pd
 from ..diagnosis.calibration.record import read_record
 from ..diagnosis.least_squares import nrmse
 from ..io import Measurement, read_json, write_json, write_measurement
-from ..scorecard import Row, write_part
 from ..sensor import calibration as cal
 from ..sensor.lowfreq import asymptote_onset_Hz, lowfreq_sensitivity
 from ..synthesis import PressProtocol, synthesize
@@ -110,97 +109,3 @@ def lowfreq(resistance_json: str, out_json: str, out_csv: str, config: dict) -> 
             "deviation_asymptote": lf.deviation_asymptote,
         }
     ).to_csv(out_csv, index=False, float_format="%.9g")
-
-
-#: The paper's numbers of Sec. II-III C (Fig. 5, 6, 8a).
-PAPER = {
-    "sensitivity_V_per_N": 74.4e-3,
-    "resistance_ohm": 50e6,
-    "cable_capacitance_F_per_m": 90e-12,
-    "linear_from_Hz": 30.0,
-    "deviation_threshold": 0.05,
-    "reference_sensitivity_V_per_N": 0.36,
-}
-
-
-def scorecard(
-    sensitivity_json: str, resistance_json: str, lowfreq_json: str, out_csv: str, config: dict
-) -> None:
-    """The calibration rows of the scorecard, with the arithmetic where the paper cannot hold."""
-    sens, res, lf = read_json(sensitivity_json), read_json(resistance_json), read_json(lowfreq_json)
-    synthetic = config["calibration"]["measurement"] is None
-    c = nominal_circuit(config, res["resistance_ohm"])
-    f_ref = PAPER["linear_from_Hz"]
-    x = abs(cal.frequency_response([f_ref], c)[0]) / c.open_circuit_gain_V_per_N
-    c_needed = c.d33_C_per_N * x / PAPER["reference_sensitivity_V_per_N"]
-    y = PAPER["reference_sensitivity_V_per_N"] / c.open_circuit_gain_V_per_N
-    r_needed = y / np.sqrt(1 - y * y) / (2 * np.pi * f_ref) / c.capacitance_F
-    lo, hi = res["resistance_ci95_ohm"]
-    rows = [
-        Row(
-            "III-B",
-            "impulse-peak sensitivity at ~0.5 Hz",
-            PAPER["sensitivity_V_per_N"],
-            sens["sensitivity_V_per_N"],
-            "V/N",
-            "synthetic presses with rise times chosen so that (d33/C) tau pi/(2 T_r) is near 74 mV/N: "
-            "agreement by construction, not a prediction"
-            if synthetic
-            else f"measured: {sens['source']}",
-        ),
-        Row(
-            "III-B",
-            "circuit resistance R (fitted)",
-            PAPER["resistance_ohm"],
-            res["resistance_ohm"],
-            "Ohm",
-            f"least squares, 95% CI [{lo:.4g}, {hi:.4g}] Ohm, NRMSE {res['nrmse']:.3f}"
-            + ("; the synthetic truth is 50 MOhm, so this checks recovery" if synthetic else ""),
-        ),
-        Row(
-            "III-B",
-            "cable capacitance",
-            PAPER["cable_capacitance_F_per_m"],
-            config["sensor"]["cable_capacitance_F_per_m"],
-            "F/m",
-            "input (PCB-003 datasheet, as in the paper)",
-        ),
-        Row(
-            "II",
-            "PZT capacitance Cp = eps33^T A / h",
-            None,
-            c.pzt_capacitance_F,
-            "F",
-            f"not stated in the paper; with the 2 m cable C = {c.capacitance_F * 1e12:.1f} pF, "
-            f"tau = RC = {c.tau_s * 1e3:.2f} ms, d33/C = {c.open_circuit_gain_V_per_N:.3f} V/N",
-        ),
-        Row(
-            "III-C",
-            "onset of linearity (deviation < 5%)",
-            PAPER["linear_from_Hz"],
-            lf["linear_from_Hz"],
-            "Hz",
-            "deviation = relative change to the next sweep frequency; within 5% of the asymptote d33/C only "
-            f"from {lf['asymptote_within_threshold_from_Hz']:.1f} Hz",
-        ),
-        Row(
-            "III-C",
-            "deviation threshold",
-            PAPER["deviation_threshold"],
-            lf["deviation_threshold"],
-            "-",
-            "input",
-        ),
-        Row(
-            "III-C",
-            "reference sensitivity at the onset",
-            PAPER["reference_sensitivity_V_per_N"],
-            lf["reference_sensitivity_V_per_N"],
-            "V/N",
-            f"S(30 Hz) = d33/C x omega tau/sqrt(1+(omega tau)^2) = {c.open_circuit_gain_V_per_N:.3f} x {x:.3f}; "
-            f"0.36 V/N would need C = {c_needed * 1e12:.0f} pF at the same tau, or R = {r_needed / 1e6:.1f} MOhm "
-            "(and then the response would not be linear at 30 Hz): the paper's 0.36 V/N, 50 MOhm and "
-            "C = Cp + 180 pF cannot all hold",
-        ),
-    ]
-    write_part(rows, out_csv)

@@ -1,134 +1,31 @@
 """Stage functions of the sensor finite-element model (Sec. III-C; Fig. 7, 8b).
 
-sensor_mesh -> sensor_convergence, sensor_modal -> sensor_harmonic -> scorecard_sensor_fem.
+sensor_mesh -> sensor_convergence, sensor_modal -> sensor_harmonic -> scorecard_sensor_fem. The result tables
+are computed in :mod:`piezobearing.sensor.analysis`; the mesh files are read and written by :mod:`piezobearing.io`.
 """
 
 from __future__ import annotations
 
-import logging
-import time
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from .. import io
-from ..io import write_json
-from ..scorecard import Row, write_part
-from ..sensor import fem as fem
-from ..sensor.calibration import SensorCircuit, design_resistance_ohm, frequency_response
-from ..sensor.materials import (
-    adhesive_from_config,
-    alumina_from_config,
-    paper_pzt,
-    pzt_from_config,
-    stress_charge_form,
-    transverse_isotropy_report,
+from ..io import read_stack_mesh, write_csv, write_json, write_npz, write_stack_mesh
+from ..sensor.analysis import (
+    SensorFemError,
+    SensorFemParams,
+    convergence_table,
+    first_axial_mode_fields,
+    harmonic_results,
+    mesh_inputs,
+    modal_results,
+    placement_check,
 )
-from ..sensor.mesh import MeshDensity, StackGeometry, StackMesh, stack_mesh
+from ..sensor.calibration import SensorCircuit, design_resistance_ohm
+from ..sensor.mesh import StackMesh, stack_mesh
 from . import log_progress
-
-log = logging.getLogger(__name__)
-
-#: The paper's numbers this stage is held against (Sec. III-C).
-PAPER_FIRST_RESONANCE_HZ = 1.21e5
-PAPER_BAND_LOW_HZ = 30.0
-PAPER_BAND_HIGH_HZ = 45e3
-PAPER_REFERENCE_SENSITIVITY_V_PER_N = 0.36
-
-
-class SensorFemError(ValueError):
-    """A bad input file or config value of the sensor FEM stages."""
-
-
-# --------------------------------------------------------------------------- parameters
-
-
-@dataclass(frozen=True)
-class SensorFemParams:
-    """Everything the sensor FEM stages take from the validated config."""
-
-    geometry: StackGeometry
-    density: MeshDensity
-    multipliers: tuple
-    mesh_level: int
-    order: int
-    materials: fem.StackMaterials
-    c66_rule: str
-    modal_max_frequency_Hz: float
-    damping_ratio: float
-    n_ritz_modes: int
-    sweep_min_Hz: float
-    sweep_max_Hz: float
-    sweep_points: int
-    reference_frequency_Hz: float
-    band_ratio_dB: float
-    band_ratio_percent: float
-    cable_capacitance_F: float
-
-    @property
-    def multiplier(self) -> float:
-        return self.multipliers[self.mesh_level - 1]
-
-    @classmethod
-    def from_config(cls, config: dict) -> "SensorFemParams":
-        s, f = config["sensor"], config["sensor_fem"]
-        mult = tuple(float(m) for m in f["refinement_multipliers"])
-        if list(mult) != sorted(set(mult)):
-            raise SensorFemError("config key sensor_fem.refinement_multipliers: must increase strictly")
-        if not 1 <= f["mesh_level"] <= len(mult):
-            raise SensorFemError(
-                f"config key sensor_fem.mesh_level = {f['mesh_level']}: must be 1..{len(mult)} "
-                "(an index into sensor_fem.refinement_multipliers)"
-            )
-        if f["sweep_min_frequency_Hz"] >= f["reference_frequency_Hz"] or (
-            f["reference_frequency_Hz"] >= f["sweep_max_frequency_Hz"]
-        ):
-            raise SensorFemError(
-                "config keys sensor_fem.sweep_min_frequency_Hz < reference_frequency_Hz < sweep_max_frequency_Hz "
-                "must hold"
-            )
-        geo = StackGeometry(
-            bottom_disk_diameter_m=f["bottom_disk_diameter_m"],
-            bottom_disk_height_m=f["bottom_disk_height_m"],
-            pzt_diameter_m=s["pzt_diameter_m"],
-            pzt_height_m=s["pzt_height_m"],
-            top_disk_diameter_m=f["top_disk_diameter_m"],
-            top_disk_height_m=f["top_disk_height_m"],
-            adhesive_height_m=f["adhesive_height_m"],
-        )
-        pzt = pzt_from_config(s)
-        alu = alumina_from_config(f)
-        mats = fem.StackMaterials(
-            stress_charge_form(pzt), pzt.density_kg_per_m3, alu, adhesive_from_config(f)
-        )
-        dens = MeshDensity(
-            n_core=f["mesh_n_core"],
-            n_rings=tuple(f["mesh_n_rings"]),
-            n_layers=tuple(f["mesh_n_layers"]),
-            grading=f["mesh_grading_ratio"],
-        )
-        q = f["mechanical_quality_factor"]
-        return cls(
-            geometry=geo,
-            density=dens,
-            multipliers=mult,
-            mesh_level=int(f["mesh_level"]),
-            order=int(f["element_order"]),
-            materials=mats,
-            c66_rule=s["c66_rule"],
-            modal_max_frequency_Hz=f["modal_max_frequency_Hz"],
-            damping_ratio=0.0 if q is None else 1.0 / (2.0 * q),
-            n_ritz_modes=int(f["n_ritz_modes"]),
-            sweep_min_Hz=f["sweep_min_frequency_Hz"],
-            sweep_max_Hz=f["sweep_max_frequency_Hz"],
-            sweep_points=int(f["sweep_points"]),
-            reference_frequency_Hz=f["reference_frequency_Hz"],
-            band_ratio_dB=f["band_ratio_dB"],
-            band_ratio_percent=f["band_ratio_percent"],
-            cable_capacitance_F=s["cable_length_m"] * s["cable_capacitance_F_per_m"] + s["daq_capacitance_F"],
-        )
 
 
 def read_json(path: str | Path, keys=()) -> dict:
@@ -140,49 +37,20 @@ def _config_record(config: dict) -> dict:
     return {"sensor": config["sensor"], "sensor_fem": config["sensor_fem"]}
 
 
-# --------------------------------------------------------------------------- mesh I/O
-
-
-def write_mesh(mesh: StackMesh, path: str | Path) -> None:
-    """Write the quarter mesh as legacy VTK with the cell groups (1 bottom disk, 2 PZT, 3 top disk)."""
-    import meshio
-
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    m = meshio.Mesh(
-        mesh.coors, [("hexahedron", mesh.cells)], cell_data={"group": [mesh.groups.astype(np.int32)]}
-    )
-    meshio.write(str(path), m, file_format="vtk", binary=True)
-
-
 def read_mesh(path: str | Path, params: SensorFemParams, level: float) -> StackMesh:
-    """Read a mesh written by :func:`write_mesh` and check it against the configured geometry."""
-    import meshio
-
-    p = Path(path)
-    if not p.exists():
-        raise SensorFemError(f"{p}: mesh file not found; run rule sensor_mesh")
-    m = meshio.read(str(p))
-    cells = m.cells_dict.get("hexahedron")
-    if cells is None or "group" not in m.cell_data_dict:
-        raise SensorFemError(f"{p}: no hexahedra with a 'group' cell array; rerun rule sensor_mesh")
-    groups = np.asarray(m.cell_data_dict["group"]["hexahedron"], dtype=int)
-    z = params.geometry.z_interfaces_m
-    if not np.isclose(m.points[:, 2].max(), z[-1], rtol=1e-9) or not set(groups) <= {1, 2, 3, 4}:
-        raise SensorFemError(
-            f"{p}: mesh does not match the configured stack geometry; rerun rule sensor_mesh"
-        )
-    return StackMesh(np.asarray(m.points, float), np.asarray(cells, int), groups, params.geometry, level)
+    """Read a sensor mesh and check it against the configured geometry (:class:`SensorFemError` if not)."""
+    return read_stack_mesh(path, params.geometry, level, error=SensorFemError)
 
 
 def sensor_mesh(out_meshes: list[str], out_json: str, config: dict) -> None:
     """Write the quarter mesh at every refinement multiplier, and a summary with their sizes."""
-    p = SensorFemParams.from_config(config)
-    if len(out_meshes) != len(p.multipliers):
+    geo, dens, multipliers = mesh_inputs(config)
+    if len(out_meshes) != len(multipliers):
         raise SensorFemError("one mesh output per sensor_fem.refinement_multipliers entry is expected")
     levels = []
-    for k, (mult, path) in enumerate(zip(p.multipliers, out_meshes, strict=True), start=1):
-        mesh = stack_mesh(p.geometry, p.density, mult)
-        write_mesh(mesh, path)
+    for k, (mult, path) in enumerate(zip(multipliers, out_meshes, strict=True), start=1):
+        mesh = stack_mesh(geo, dens, mult)
+        write_stack_mesh(mesh, path)
         levels.append(
             {
                 "level": k,
@@ -194,8 +62,8 @@ def sensor_mesh(out_meshes: list[str], out_json: str, config: dict) -> None:
         )
     write_json(
         {
-            "geometry": asdict(p.geometry),
-            "z_interfaces_m": p.geometry.z_interfaces_m.tolist(),
+            "geometry": asdict(geo),
+            "z_interfaces_m": geo.z_interfaces_m.tolist(),
             "sector": "quarter (x >= 0, y >= 0), mirror planes x = 0 and y = 0",
             "levels": levels,
             "config": _config_record(config),
@@ -204,160 +72,13 @@ def sensor_mesh(out_meshes: list[str], out_json: str, config: dict) -> None:
     )
 
 
-# --------------------------------------------------------------------------- modal
-
-
-def _assemble(mesh: StackMesh, p: SensorFemParams) -> fem.Assembled:
-    return fem.assemble(mesh, p.materials, order=p.order, load_face="bottom")
-
-
-def convergence_table(meshes: list[StackMesh], p: SensorFemParams) -> pd.DataFrame:
-    """First axial frequency (short and open circuit) on every mesh, with the change from the previous one."""
-    rows = []
-    for k, mesh in enumerate(meshes, start=1):
-        t0 = time.perf_counter()
-        asm = _assemble(mesh, p)
-        rs = fem.reduce(asm, fem.stack_conditions(p.geometry.z_interfaces_m, "SS"))
-        short = fem.modes(rs, 3, "short")
-        labels = [fem.label_mode(rs, short.shapes[:, i])[0] for i in range(3)]
-        i_ax = labels.index("axial")
-        f_open = fem.modes(rs, 3, "open").frequency_Hz[i_ax]
-        rows.append(
-            {
-                "level": k,
-                "multiplier": mesh.level,
-                "n_cells": mesh.n_cells,
-                "n_dof": int(asm.n_u + asm.p_coors.shape[0]),
-                "first_axial_short_Hz": float(short.frequency_Hz[i_ax]),
-                "first_axial_open_Hz": float(f_open),
-            }
-        )
-        # Wall-clock time goes to the log only: result files must be identical from run to run.
-        log.info("convergence level %d (%.2f s): %s", k, time.perf_counter() - t0, rows[-1])
-    df = pd.DataFrame(rows)
-    df["change_short_percent"] = 100 * df["first_axial_short_Hz"].pct_change()
-    df["change_open_percent"] = 100 * df["first_axial_open_Hz"].pct_change()
-    return df
-
-
 def sensor_convergence(mesh_paths: list[str], out_csv: str, config: dict) -> None:
     """Mesh convergence of the first axial frequency over all refinement levels (SS quarter)."""
     log_progress()
     p = SensorFemParams.from_config(config)
     meshes = [read_mesh(path, p, m) for path, m in zip(mesh_paths, p.multipliers, strict=True)]
     df = convergence_table(meshes, p)
-    Path(out_csv).parent.mkdir(parents=True, exist_ok=True)
-    df.to_csv(out_csv, index=False)
-
-
-def _mode_npz(survey: fem.ModalSurvey, mesh: StackMesh, path: str | Path) -> None:
-    """Vertices, cells, groups and the first axial mode's displacement and potential at the vertices."""
-    rs = survey.ss_system
-    u = fem.first_axial_shape(survey)
-    nv = len(mesh.coors)
-    disp = rs.full_u(u)[:nv]
-    pot_free = rs.potential_of(u)
-    # Potential on every potential node (interior from the solve, electrodes zero: short circuit).
-    asm = rs.asm
-    interior = np.setdiff1d(
-        np.arange(asm.p_coors.shape[0]),
-        np.flatnonzero(
-            (np.abs(asm.p_coors[:, 2] - rs.bc.hot_z_m) < 1e-12)
-            | (np.abs(asm.p_coors[:, 2] - rs.bc.ground_z_m) < 1e-12)
-        ),
-    )
-    phi = np.zeros(asm.p_coors.shape[0])
-    if len(interior) == len(pot_free):
-        phi[interior] = pot_free
-    key = {tuple(np.round(c, 12)): i for i, c in enumerate(asm.p_coors)}
-    phi_v = np.array(
-        [phi[key[tuple(np.round(c, 12))]] if tuple(np.round(c, 12)) in key else np.nan for c in mesh.coors]
-    )
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    np.savez_compressed(
-        path,
-        coors_m=mesh.coors,
-        cells=mesh.cells,
-        groups=mesh.groups,
-        displacement=disp,
-        potential=phi_v,
-        frequency_Hz=survey.first_axial.frequency_short_Hz,
-    )
-
-
-def _placement_check(p: SensorFemParams) -> dict:
-    """First axial frequency with the two alumina disks swapped, on the coarsest mesh."""
-    g = p.geometry
-    swapped = replace(
-        g, bottom_disk_diameter_m=g.top_disk_diameter_m, top_disk_diameter_m=g.bottom_disk_diameter_m
-    )
-    mesh = stack_mesh(swapped, p.density, p.multipliers[0])
-    asm = _assemble(mesh, p)
-    rs = fem.reduce(asm, fem.stack_conditions(swapped.z_interfaces_m, "SS"))
-    short = fem.modes(rs, 3, "short")
-    i_ax = [fem.label_mode(rs, short.shapes[:, i])[0] for i in range(3)].index("axial")
-    return {
-        "bottom_disk_diameter_m": swapped.bottom_disk_diameter_m,
-        "top_disk_diameter_m": swapped.top_disk_diameter_m,
-        "mesh_multiplier": p.multipliers[0],
-        "first_axial_short_Hz": float(short.frequency_Hz[i_ax]),
-        "first_axial_open_Hz": float(fem.modes(rs, 3, "open").frequency_Hz[i_ax]),
-    }
-
-
-def modal_results(mesh: StackMesh, p: SensorFemParams) -> tuple[dict, fem.ModalSurvey]:
-    """The modal analysis as a JSON-ready dict, and the survey (for the mode shape)."""
-    t0 = time.perf_counter()
-    asm = _assemble(mesh, p)
-    survey = fem.modal_survey(asm, p.geometry.z_interfaces_m, p.modal_max_frequency_Hz)
-    ax = survey.first_axial
-    rs = survey.ss_system
-    modes = [
-        {
-            "index": k,
-            "label": r.label,
-            "family": r.family,
-            "multiplicity": r.multiplicity,
-            "frequency_short_Hz": r.frequency_short_Hz,
-            "frequency_open_Hz": r.frequency_open_Hz,
-            "coupling_factor": r.coupling_factor,
-            "kinetic_energy_fraction": r.kinetic,
-        }
-        for k, r in enumerate(survey.records, start=1)
-    ]
-    log.info("modal analysis: %.2f s", time.perf_counter() - t0)
-    out = {
-        "first_resonance_short_Hz": ax.frequency_short_Hz,
-        "first_resonance_open_Hz": ax.frequency_open_Hz,
-        "first_resonance_label": "axial",
-        "first_resonance_coupling_factor": ax.coupling_factor,
-        "paper_first_resonance_Hz": PAPER_FIRST_RESONANCE_HZ,
-        "lowest_mode_Hz": survey.records[0].frequency_short_Hz,
-        "lowest_mode_label": survey.records[0].label,
-        "modal_max_frequency_Hz": p.modal_max_frequency_Hz,
-        "modes": modes,
-        "blocked_capacitance_F": rs.c0 / fem.SECTOR_FRACTION,
-        "static_capacitance_F": rs.static_capacitance_F / fem.SECTOR_FRACTION,
-        "effective_d33_C_per_N": float(rs.b @ rs.ks_inv_f) / fem.SECTOR_FRACTION,
-        "static_open_circuit_V_per_N": rs.static_open_voltage_V(),
-        "mesh": {
-            "level": p.mesh_level,
-            "multiplier": p.multiplier,
-            "n_cells": mesh.n_cells,
-            "n_dof_displacement": int(asm.n_u),
-            "n_dof_potential": int(asm.p_coors.shape[0]),
-            "element_order": p.order,
-            "sector": "quarter; families SS, SA (= AS mirrored, multiplicity 2), AA",
-        },
-        "boundary_conditions": {
-            "mechanical": "top face of the top disk clamped (u = 0); everything else free",
-            "electrical_short": "both PZT faces at 0 V",
-            "electrical_open": "PZT top face 0 V, bottom face one floating potential with zero net charge",
-        },
-        "material_symmetry": transverse_isotropy_report(paper_pzt(c66_rule="paper").c_E_Pa),
-        "pzt_density_kg_per_m3": p.materials.pzt_density_kg_per_m3,
-    }
-    return out, survey
+    write_csv(df, out_csv, None)
 
 
 def sensor_modal(mesh_vtk: str, out_json: str, out_mode_npz: str, config: dict) -> None:
@@ -366,100 +87,10 @@ def sensor_modal(mesh_vtk: str, out_json: str, out_mode_npz: str, config: dict) 
     p = SensorFemParams.from_config(config)
     mesh = read_mesh(mesh_vtk, p, p.multiplier)
     out, survey = modal_results(mesh, p)
-    out["placement_check"] = _placement_check(p)
+    out["placement_check"] = placement_check(p)
     out["config"] = _config_record(config)
     write_json(out, out_json)
-    _mode_npz(survey, mesh, out_mode_npz)
-
-
-# --------------------------------------------------------------------------- harmonic
-
-
-def sweep_frequencies(p: SensorFemParams, f_res_Hz: float) -> np.ndarray:
-    """Log-spaced sweep plus a dense linear run around the first resonance (if inside the sweep)."""
-    f = np.geomspace(p.sweep_min_Hz, p.sweep_max_Hz, p.sweep_points)
-    lo, hi = 0.9 * f_res_Hz, min(1.1 * f_res_Hz, p.sweep_max_Hz)
-    if lo < p.sweep_max_Hz:
-        f = np.concatenate([f, np.linspace(lo, hi, p.sweep_points // 2)])
-    return np.unique(f)
-
-
-def harmonic_results(mesh: StackMesh, p: SensorFemParams, rc_paper: SensorCircuit, band_low_Hz: float):
-    """Harmonic response with the circuit, the band edges, the RC comparison.
-
-    ``rc_paper`` is the calibration stage's RC model (fitted R, cable, the
-    paper's d33 and Cp); its R and cable capacitance are the FEM's circuit.
-    Returns (the sweep DataFrame, the band dict).
-    """
-    resistance_ohm = rc_paper.resistance_ohm  # the design's R (sensor.daq_resistance_ohm or the fitted one)
-    t0 = time.perf_counter()
-    asm = _assemble(mesh, p)
-    rs = fem.reduce(asm, fem.stack_conditions(p.geometry.z_interfaces_m, "SS"))
-    short = fem.modes(rs, p.n_ritz_modes, "short")
-    model = fem.reduced_model(rs, short, p.damping_ratio)
-    circuit = fem.MeasuringCircuit(resistance_ohm, p.cable_capacitance_F)
-    labels = [fem.label_mode(rs, short.shapes[:, i])[0] for i in range(len(short.frequency_Hz))]
-    f_short = float(short.frequency_Hz[labels.index("axial")])
-    f_open = float(fem.modes(rs, labels.index("axial") + 2, "open").frequency_Hz[labels.index("axial")])
-    f_peak = fem.loaded_resonance_Hz(model, circuit, 0.97 * f_short, 1.03 * f_open)
-    ref = abs(model.voltage_per_force(p.reference_frequency_Hz, circuit)[0])
-    r_db = 10 ** (p.band_ratio_dB / 20)
-    r_pc = 1 + p.band_ratio_percent / 100
-    edge_db = fem.band_edge_Hz(model, circuit, r_db, ref, p.reference_frequency_Hz, f_peak)
-    edge_pc = fem.band_edge_Hz(model, circuit, r_pc, ref, p.reference_frequency_Hz, f_peak)
-    s_low = abs(model.voltage_per_force(band_low_Hz, circuit)[0])
-    edge_db_low = fem.band_edge_Hz(model, circuit, r_db, s_low, band_low_Hz, f_peak)
-    edge_pc_low = fem.band_edge_Hz(model, circuit, r_pc, s_low, band_low_Hz, f_peak)
-
-    freqs = sweep_frequencies(p, f_peak)
-    h = model.voltage_per_force(freqs, circuit)
-    d_eff, c_fe = model.charge_per_force_C_per_N, model.static_capacitance_F
-    h_rc = frequency_response(freqs, rc_paper)
-    df = pd.DataFrame(
-        {
-            "frequency_Hz": freqs,
-            "voltage_per_force_V_per_N": np.abs(h),
-            "phase_deg": np.degrees(np.angle(h)),
-            "rc_model_V_per_N": np.abs(h_rc),
-            "open_circuit_V_per_N": np.abs(model.voltage_per_force(freqs, None)),
-        }
-    )
-    tau_fe = resistance_ohm * (c_fe + p.cable_capacitance_F)
-    band = {
-        "band_low_Hz": float(band_low_Hz),
-        "band_high_Hz": edge_db,
-        "band_high_27_percent_Hz": edge_pc,
-        "band_ratio_dB": p.band_ratio_dB,
-        "band_ratio_percent": p.band_ratio_percent,
-        "reference": "mid-band: |V/F| at reference_frequency_Hz (the flat plateau between the RC corner and the "
-        "resonance)",
-        "reference_frequency_Hz": p.reference_frequency_Hz,
-        "reference_sensitivity_V_per_N": ref,
-        "mid_band_sensitivity_V_per_N": ref,
-        "sensitivity_at_band_low_V_per_N": s_low,
-        "band_high_rel_band_low_Hz": edge_db_low,
-        "band_high_27_percent_rel_band_low_Hz": edge_pc_low,
-        "loaded_resonance_Hz": f_peak,
-        "first_axial_short_Hz": f_short,
-        "first_axial_open_Hz": f_open,
-        "effective_d33_C_per_N": d_eff,
-        "fem_capacitance_F": c_fe,
-        "cable_capacitance_F": p.cable_capacitance_F,
-        "resistance_ohm": resistance_ohm,
-        "fem_corner_Hz": 1.0 / (2 * np.pi * tau_fe),
-        "rc_model_corner_Hz": 1.0 / (2 * np.pi * rc_paper.tau_s),
-        "rc_model_mid_band_V_per_N": rc_paper.open_circuit_gain_V_per_N,
-        "damping_ratio": p.damping_ratio,
-        "n_ritz_modes": p.n_ritz_modes,
-        "paper": {
-            "band_low_Hz": PAPER_BAND_LOW_HZ,
-            "band_high_Hz": PAPER_BAND_HIGH_HZ,
-            "reference_sensitivity_V_per_N": PAPER_REFERENCE_SENSITIVITY_V_PER_N,
-        },
-        "mesh": {"level": p.mesh_level, "multiplier": p.multiplier, "n_dof_displacement": int(asm.n_u)},
-    }
-    log.info("harmonic analysis: %.2f s", time.perf_counter() - t0)
-    return df, band
+    write_npz(out_mode_npz, **first_axial_mode_fields(survey, mesh))
 
 
 def sensor_harmonic(
@@ -482,9 +113,8 @@ def sensor_harmonic(
         raise SensorFemError(
             f"{resistance_json}: resistance_ohm = {r} is not a positive number; rerun fit_resistance"
         )
-    r = design_resistance_ohm(config["sensor"], r)
     mesh = read_mesh(mesh_vtk, p, p.multiplier)
-    rc = SensorCircuit.from_config(config["sensor"], r)
+    rc = SensorCircuit.from_config(config["sensor"], design_resistance_ohm(config["sensor"], r))
     df, band = harmonic_results(mesh, p, rc, float(low["linear_from_Hz"]))
     if not np.isclose(band["first_axial_short_Hz"], modal["first_resonance_short_Hz"], rtol=1e-6):
         raise SensorFemError(
@@ -492,116 +122,5 @@ def sensor_harmonic(
         )
     band["band_low_source"] = f"{lowfreq_json}: linear_from_Hz"
     band["config"] = _config_record(config)
-    Path(out_csv).parent.mkdir(parents=True, exist_ok=True)
-    df.to_csv(out_csv, index=False)
+    write_csv(df, out_csv, None)
     write_json(band, out_json)
-
-
-# --------------------------------------------------------------------------- scorecard
-
-
-def scorecard_rows(modal: dict, band: dict, convergence: pd.DataFrame) -> list[Row]:
-    """The paper's numbers of Sec. III-C beside ours, with the reasons where they differ."""
-    sec = "III-C sensor FEM"
-    pc = modal["placement_check"]
-    lower = [m for m in modal["modes"] if m["frequency_short_Hz"] < modal["first_resonance_short_Hz"]]
-    lower_txt = ", ".join(f"{m['label']} {m['frequency_short_Hz'] / 1e3:.1f} kHz" for m in lower)
-    fr = PAPER_FIRST_RESONANCE_HZ
-    x3 = 10 ** (band["band_ratio_dB"] / 20)
-    sdof_3db = fr * np.sqrt(1 - 1 / x3)
-    sdof_27 = fr * np.sqrt(1 - 1 / (1 + band["band_ratio_percent"] / 100))
-    rise_45 = 1 / (1 - (PAPER_BAND_HIGH_HZ / fr) ** 2)
-    last = convergence.iloc[-1]
-    x_low = band["band_low_Hz"] / band["rc_model_corner_Hz"]
-    hp_low = x_low / np.sqrt(1 + x_low**2)
-    return [
-        Row(
-            sec,
-            "first resonance (first axial mode, electrodes shorted)",
-            fr,
-            modal["first_resonance_short_Hz"],
-            "Hz",
-            f"the mode a centred axial force excites; open circuit {modal['first_resonance_open_Hz'] / 1e3:.1f} kHz, "
-            f"with R and the cable {band['loaded_resonance_Hz'] / 1e3:.1f} kHz; below it only modes an axial force "
-            f"cannot excite ({lower_txt}). Depends on which disk is clamped: with the 5 mm disk on the housing "
-            f"{pc['first_axial_short_Hz'] / 1e3:.0f} kHz",
-        ),
-        Row(
-            sec,
-            "first resonance, open circuit (floating electrode)",
-            None,
-            modal["first_resonance_open_Hz"],
-            "Hz",
-            f"coupling factor k_eff = {modal['first_resonance_coupling_factor']:.3f}",
-        ),
-        Row(
-            sec,
-            "band low edge",
-            PAPER_BAND_LOW_HZ,
-            band["band_low_Hz"],
-            "Hz",
-            "from the low-frequency analysis (lowfreq.json, linear_from_Hz)",
-        ),
-        Row(
-            sec,
-            f"band high edge (+{band['band_ratio_dB']:g} dB over mid-band)",
-            PAPER_BAND_HIGH_HZ,
-            band["band_high_Hz"],
-            "Hz",
-            f"reference |V/F| at {band['reference_frequency_Hz']:g} Hz. A single-mode response "
-            f"1/(1-(f/fr)^2) with the paper's own fr = 121 kHz is +{band['band_ratio_dB']:g} dB (x{x3:.3f}) at "
-            f"fr sqrt(1-1/{x3:.3f}) = {sdof_3db / 1e3:.1f} kHz and only x{rise_45:.3f} "
-            f"({20 * np.log10(rise_45):.1f} dB) at 45 kHz, so 45 kHz cannot be a +3 dB edge of a 121 kHz resonance; "
-            f"relative to the 30 Hz sensitivity (the paper's reference) ours is "
-            f"{band['band_high_rel_band_low_Hz'] / 1e3:.1f} kHz",
-        ),
-        Row(
-            sec,
-            f"band high edge (+{band['band_ratio_percent']:g}%)",
-            PAPER_BAND_HIGH_HZ,
-            band["band_high_27_percent_Hz"],
-            "Hz",
-            f"the paper equates +3 dB with 'about 27%' (+3 dB is +41% in amplitude, +27% is "
-            f"{20 * np.log10(1.27):.2f} dB); single-mode estimate with fr = 121 kHz: {sdof_27 / 1e3:.1f} kHz; "
-            f"relative to the 30 Hz sensitivity ours is {band['band_high_27_percent_rel_band_low_Hz'] / 1e3:.1f} kHz",
-        ),
-        Row(
-            sec,
-            "mid-band sensitivity",
-            None,
-            band["reference_sensitivity_V_per_N"],
-            "V/N",
-            f"at {band['reference_frequency_Hz']:g} Hz: effective d33 {band['effective_d33_C_per_N'] * 1e12:.0f} pC/N "
-            f"over (C_FEM {band['fem_capacitance_F'] * 1e12:.1f} pF + cable "
-            f"{band['cable_capacitance_F'] * 1e12:.0f} pF); the RC model with the paper's d33 and Cp gives "
-            f"{band['rc_model_mid_band_V_per_N']:.3f} V/N",
-        ),
-        Row(
-            sec,
-            "sensitivity at the band low edge (reference of the paper)",
-            PAPER_REFERENCE_SENSITIVITY_V_PER_N,
-            band["sensitivity_at_band_low_V_per_N"],
-            "V/N",
-            f"the paper's 0.36 V/N cannot hold with its own constants: d33/(Cp + Ccable) = "
-            f"{band['rc_model_mid_band_V_per_N']:.3f} V/N times the RC high-pass at {band['band_low_Hz']:g} Hz "
-            f"({hp_low:.3f}) = {band['rc_model_mid_band_V_per_N'] * hp_low:.3f} V/N (see the calibration rows); "
-            "the FEM differs from that RC model only by its effective d33 and capacitance",
-        ),
-        Row(
-            sec,
-            "mesh convergence: change of the first axial frequency between the two finest meshes",
-            None,
-            float(last["change_short_percent"]),
-            "%",
-            f"levels {', '.join(f'{m:g}' for m in convergence['multiplier'])}; "
-            f"{int(last['n_dof'])} DOF on the finest",
-        ),
-    ]
-
-
-def scorecard_sensor_fem(modal_json: str, band_json: str, convergence_csv: str, out_csv: str) -> None:
-    """Write results/scorecard/sensor_fem.csv."""
-    modal = read_json(modal_json, ["first_resonance_short_Hz", "modes", "placement_check"])
-    band = read_json(band_json, ["band_high_Hz", "band_low_Hz"])
-    conv = pd.read_csv(convergence_csv)
-    write_part(scorecard_rows(modal, band, conv), out_csv)

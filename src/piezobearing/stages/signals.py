@@ -15,89 +15,45 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..io import read_json, write_json
-from ..scorecard import Row, write_part
+from ..io import (
+    SERIES_UNIFORM_RTOL,
+    SignalFileError,
+    read_harmonic,
+    read_json,
+    read_kinematics,
+    read_series,
+    write_csv,
+    write_json,
+)
 from ..sensor.calibration import SensorCircuit, circuit_voltage, design_resistance_ohm, frequency_response
 from ..signals import classification as sclass
 from ..signals import daq
 from ..signals import detection as sig
 from ..signals import detector as sdet
+from ..signals.analysis import (
+    INDICATOR_DEFINITION,
+    band_rules,
+    envelope_analysis,
+    snr_grid,
+    snr_study_record,
+    snr_summary,
+)
 
 #: Largest relative deviation of a time step from the mean step of a record.
-UNIFORM_RTOL = 1e-3
-#: The paper's numbers of Sec. IV.
-PAPER = {"bpfo_Hz": 70.8, "snr": 10.0}
-
-
-class SignalFileError(ValueError):
-    """A time series or result file that cannot be used as it is."""
-
-
-def write_csv(df: pd.DataFrame, path: str | Path) -> None:
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    df.to_csv(path, index=False, float_format="%.10g")
-
-
-def read_series(path: str | Path, column: str) -> tuple[np.ndarray, np.ndarray, float]:
-    """Read ``time_s`` and ``column`` of a CSV on a uniform clock.
-
-    Returns time [s], the column's values and the step dt = (t_end - t_0)/(n - 1) [s].
-    """
-    path = Path(path)
-    if not path.exists():
-        raise SignalFileError(f"{path}: file not found; run the stage that writes it")
-    df = pd.read_csv(path)
-    for c in ("time_s", column):
-        if c not in df.columns:
-            raise SignalFileError(f"{path}: column '{c}' missing (header: {', '.join(df.columns)}); "
-                                  f"write time_s,{column}")
-    t = df["time_s"].to_numpy(dtype=float)
-    x = df[column].to_numpy(dtype=float)
-    bad = np.flatnonzero(~(np.isfinite(t) & np.isfinite(x)))
-    if bad.size:
-        raise SignalFileError(f"{path}: line {int(bad[0]) + 2}: not a finite number ({bad.size} rows); "
-                              "fix the stage that writes it")
-    if t.size < 8:
-        raise SignalFileError(f"{path}: only {t.size} rows; a signal needs a time series")
-    dt = float((t[-1] - t[0]) / (t.size - 1))
-    off = np.flatnonzero(np.abs(np.diff(t) - dt) > UNIFORM_RTOL * dt)
-    if dt <= 0 or off.size:
-        i = int(off[0]) + 1 if off.size else 1
-        raise SignalFileError(f"{path}: line {i + 2}, column time_s: uneven or decreasing time step; "
-                              "the signal stages need a uniform clock")
-    return t, x, dt
-
-
-def kinematics(path: str | Path) -> dict:
-    """The bearing's kinematic frequencies [Hz] (shaft, FTF, BPFO, BPFI, BSF)."""
-    k = read_json(path)
-    need = ("shaft_Hz", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz")
-    miss = [n for n in need if n not in k]
-    if miss:
-        raise SignalFileError(f"{path}: key '{miss[0]}' missing; kinematics.json needs {', '.join(need)}")
-    return {n: float(k[n]) for n in need}
+UNIFORM_RTOL = SERIES_UNIFORM_RTOL
+kinematics = read_kinematics
 
 
 # --------------------------------------------------------------------------- sensor voltage
 
 
 def sensor_circuit(config: dict, resistance_json: str) -> tuple[SensorCircuit, dict]:
-    """The sensor circuit (R: sensor.daq_resistance_ohm, or the fitted one where it is null) and the resistance record."""
+    """The calibrated sensor circuit (R from the fit) and the resistance record."""
     res = read_json(resistance_json)
     if "resistance_ohm" not in res:
         raise SignalFileError(f"{resistance_json}: key 'resistance_ohm' missing; rerun rule fit_resistance")
-    r = design_resistance_ohm(config["sensor"], res["resistance_ohm"])
+    r = design_resistance_ohm(config["sensor"], res["resistance_ohm"])  # sensor.daq_resistance_ohm, or the fitted R
     return SensorCircuit.from_config(config["sensor"], r), res
-
-
-def read_harmonic(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
-    """Frequencies [Hz] and |V/F| [V/N] of the sensor FEM's harmonic response."""
-    df = pd.read_csv(path)
-    for c in ("frequency_Hz", "voltage_per_force_V_per_N"):
-        if c not in df.columns:
-            raise SignalFileError(f"{path}: column '{c}' missing; the sensor FEM writes frequency_Hz, "
-                                  "voltage_per_force_V_per_N, phase")
-    return df["frequency_Hz"].to_numpy(dtype=float), np.abs(df["voltage_per_force_V_per_N"].to_numpy(dtype=float))
 
 
 def sensor_voltage(
@@ -211,47 +167,12 @@ def envelope(
     reference, of the noiseless one in the same band.
     """
     s = config["signals"]
-    kin = kinematics(kinematics_json)
-    f0 = kin["bpfo_Hz"]
+    f0 = kinematics(kinematics_json)["bpfo_Hz"]
     _, y, dt = read_series(noisy_csv, "voltage_V")
     _, v, _ = read_series(noisy_csv, "noiseless_V")  # the sampled noiseless record, on the DAQ clock
-    es = sig.EnvelopeSettings.from_config(s)
-    a = sig.analyse(y, dt, f0, es, sig.IndicatorSettings.from_config(s))
-    spec = a.spectrum
-    n = spec.n_samples
-    clean = sig.envelope_spectrum(v[:n], dt, spec.band_Hz, es.filter_order)
-    p_clean = sig.band_power_V2(v[:n], dt, spec.band_Hz, es.filter_order)
-    p_noise = sig.band_power_V2(y[:n] - v[:n], dt, spec.band_Hz, es.filter_order)
-    naive = sig.fault_indicator(sig.amplitude_spectrum(y[:n], dt), f0, sig.IndicatorSettings.from_config(s))
-    write_csv(
-        pd.DataFrame(
-            {"frequency_Hz": spec.frequency_Hz, "amplitude_V": spec.amplitude_V,
-             "noiseless_amplitude_V": clean.amplitude_V}
-        ),
-        out_csv,
-    )
-    kg = a.kurtogram
-    write_json(
-        {
-            "band_Hz": list(spec.band_Hz),
-            "band_rule": s["band_rule"],
-            "n_samples": spec.n_samples,
-            "n_periods": int(round(spec.n_samples * dt * f0)),
-            "duration_s": spec.n_samples * dt,
-            "resolution_Hz": spec.resolution_Hz,
-            "bpfo_Hz": f0,
-            "bpfo_bin_offset": float(f0 / spec.resolution_Hz - round(f0 / spec.resolution_Hz)),
-            "noiseless_in_band_power_V2": p_clean,
-            "noise_in_band_power_V2": p_noise,
-            "in_band_snr_dB": float(10 * np.log10(p_clean / p_noise)),
-            "raw_spectrum_test": {k: naive[k] for k in ("indicator", "threshold", "detected")},
-            "kurtogram": None if kg is None else {
-                "low_Hz": kg.low_Hz.tolist(), "high_Hz": kg.high_Hz.tolist(), "kurtosis": kg.kurtosis.tolist()
-            },
-            "config": {"signals": s},
-        },
-        out_json,
-    )
+    table, record = envelope_analysis(y, v, dt, f0, s)
+    write_csv(table, out_csv)
+    write_json({**record, "config": {"signals": s}}, out_json)
 
 
 def read_spectrum(csv: str, json_path: str, column: str = "amplitude_V") -> sig.EnvelopeSpectrum:
@@ -293,31 +214,13 @@ def indicator(envelopes: dict, kinematics_json: str, noisy_jsons: dict, out_json
         r["fault_type"] = found["fault_type"]
         r["fault_types"] = {t: dict(v, lines=found["lines"][t]) for t, v in found["per_type"].items()}
         out[case] = r
-    out["definition"] = (
-        "r_k = A(k BPFO)^2 / mean A^2 of the local floor (bins within floor_halfwidth BPFO of k BPFO, guard bins "
-        "around every BPFO harmonic left out); indicator = sum_k r_k, k = 1..n_harmonics; threshold = "
-        "n_harmonics F_{1-pfa}(2 n_harmonics, 2 M), M = smallest floor count (CFAR under Gaussian noise); "
-        "the 'noiseless' entries apply the same test to the noiseless record in the same band (reference only); "
-        "in_band_snr_dB: band-passed noiseless power over band-passed noise power; raw_spectrum_test: the same "
-        "test on the voltage's own amplitude spectrum (no band-pass, no envelope), the naive check; "
-        + sdet.DEFINITION
-    )
+    out["definition"] = INDICATOR_DEFINITION + "; " + sdet.DEFINITION
     out["kinematics"] = kin
     out["config"] = {"seed": config["seed"], "signals": s}
     write_json(out, out_json)
 
 
 # --------------------------------------------------------------------------- SNR study
-
-
-def snr_grid(s: dict) -> list[float]:
-    lo, hi, step = s["study_snr_min_dB"], s["study_snr_max_dB"], s["study_snr_step_dB"]
-    if hi < lo:
-        raise ValueError("signals.study_snr_max_dB must not be below signals.study_snr_min_dB")
-    grid = list(np.round(np.arange(lo, hi + step / 2, step), 9))
-    if not any(abs(g - s["snr_dB"]) < 1e-9 for g in grid):
-        grid = sorted(grid + [float(s["snr_dB"])])  # the configured SNR is always on the grid
-    return [float(g) for g in grid]
 
 
 def snr_study(voltages: dict, kinematics_json: str, out_csv: str, out_summary: str, out_json: str, config: dict):
@@ -330,9 +233,8 @@ def snr_study(voltages: dict, kinematics_json: str, out_csv: str, out_summary: s
     f0 = kinematics(kinematics_json)["bpfo_Hz"]
     ins = sig.IndicatorSettings.from_config(s)
     grid = snr_grid(s)
-    rules = [s["band_rule"]] + [r for r in ("fixed", "kurtogram") if r != s["band_rule"]]
     rows = []
-    for rule in rules:
+    for rule in band_rules(s):
         es = sig.EnvelopeSettings.from_config(dict(s, band_rule=rule))
         for case, path in voltages.items():
             _, v, dt = read_series(path, "voltage_V")
@@ -342,64 +244,11 @@ def snr_study(voltages: dict, kinematics_json: str, out_csv: str, out_summary: s
                      for r in sig.snr_sweep(v, dt, f0, case, grid, s["study_n_seeds"], config["seed"], es, ins)]
     df = pd.DataFrame(rows)
     write_csv(df, out_csv)
-    summ = (
-        df.groupby(["band_rule", "case", "snr_dB"], sort=False)
-        .agg(detection_rate=("detected", "mean"), n_seeds=("detected", "size"),
-             indicator_median=("indicator", "median"), indicator_min=("indicator", "min"),
-             indicator_max=("indicator", "max"), threshold=("threshold", "min"))
-        .reset_index()
-    )
+    summ = snr_summary(df)
     write_csv(summ, out_summary)
-    need = s["study_required_detection_rate"]
-    out = {"snr_grid_dB": grid, "n_seeds": s["study_n_seeds"], "required_detection_rate": need,
-           "snr_dB": s["snr_dB"], "band_rule": s["band_rule"]}
-    for rule in rules:
-        res = {}
-        for case in voltages:
-            sel = (df["band_rule"] == rule) & (df["case"] == case)
-            at = sel & np.isclose(df["snr_dB"], s["snr_dB"])
-            c = summ[(summ["band_rule"] == rule) & (summ["case"] == case)]
-            snr, rate = c["snr_dB"].to_numpy(), c["detection_rate"].to_numpy()
-            res[case] = {
-                "detection_rate_at_snr": float(df[at]["detected"].mean()),
-                "detected_all_seeds_at_snr": bool(df[at]["detected"].all()),
-                "detected_no_seed_at_snr": bool(not df[at]["detected"].any()),
-                "detection_limit_dB": sig.detection_limit_dB(snr, rate, need),
-                "snr_50pct_dB": _crossing(snr, rate, 0.5),
-                "first_snr_rate_above_dB": _first_above(snr, rate, 1 - need),
-                "max_rate": float(rate.max()),
-            }
-        if rule == s["band_rule"]:
-            out.update(res)
-        else:
-            out["other_band_rule"] = {"band_rule": rule, **res}
-    out["definition"] = (
-        "detection_limit_dB: lowest grid SNR from which upward the detection rate stays >= required_detection_rate; "
-        "snr_50pct_dB: SNR where the rate last rises through 0.5 (linear interpolation); "
-        "first_snr_rate_above_dB: lowest grid SNR with a rate above 1 - required_detection_rate (for the healthy "
-        "bearing: where false alarms begin); top level: the configured band rule, other_band_rule: the other one "
-        "on the same noise records"
-    )
+    out = snr_study_record(df, summ, list(voltages), grid, s)
     out["config"] = {"seed": config["seed"], "signals": s}
     write_json(out, out_json)
-
-
-def _first_above(x: np.ndarray, y: np.ndarray, level: float) -> float:
-    """Lowest x with y > level (NaN if none)."""
-    hit = np.asarray(x)[np.asarray(y) > level]
-    return float(hit.min()) if hit.size else float("nan")
-
-
-def _crossing(x: np.ndarray, y: np.ndarray, level: float) -> float:
-    """Last upward crossing of ``level`` by y(x), linearly interpolated (NaN if none)."""
-    o = np.argsort(x)
-    x, y = x[o], y[o]
-    if y[-1] < level:
-        return float("nan")
-    if y[0] >= level:
-        return float(x[0])
-    i = int(np.flatnonzero(y < level)[-1])
-    return float(x[i] + (level - y[i]) * (x[i + 1] - x[i]) / (y[i + 1] - y[i]))
 
 
 def snr_study_figure(summary_csv: str, study_json: str, out_png: str) -> None:
@@ -424,45 +273,6 @@ def defect_events(healthy_csv: str, faulty_csv: str, kinematics_json: str, out_c
     times = sig.defect_event_times(vf, vh, dt, f0, th[0])
     idx = np.round((times - th[0]) / dt).astype(int)
     write_csv(pd.DataFrame({"time_s": times, "voltage_V": vf[idx], "difference_V": vf[idx] - vh[idx]}), out_csv)
-
-
-def _nan(x) -> float:
-    return float("nan") if x is None else float(x)
-
-
-def scorecard(indicator_json: str, study_json: str, kinematics_json: str, out_csv: str) -> None:
-    """The Sec. IV rows of the scorecard → results/scorecard/signals.csv."""
-    ind, st, kin = read_json(indicator_json), read_json(study_json), kinematics(kinematics_json)
-    snr = st["snr_dB"]
-    h, f = ind["healthy"], ind["faulty"]
-    n = st["n_seeds"]
-    rows = [
-        Row("IV", "BPFO (11 rollers, 1000 rpm)", PAPER["bpfo_Hz"], kin["bpfo_Hz"], "Hz",
-            "from the bearing's kinematics (results/bearing/kinematics.json)"),
-        Row("IV", "SNR of the added white noise", PAPER["snr"], snr, "dB",
-            "the paper's 'SNR of 10' read as a power ratio of 10 = 10 dB (as an amplitude ratio it would be "
-            "20 dB: also detected, see the study); SNR = mean square of the whole noiseless voltage record over "
-            "the noise variance"),
-        Row("IV", "outer-ring fault detected, faulty bearing (1 = yes)", 1.0, float(f["detected"]), "-",
-            f"envelope-spectrum indicator {f['indicator']:.1f} against threshold {f['threshold']:.1f} "
-            f"(pfa {f['false_alarm_probability']:g}), band {f['band_Hz'][0]:.0f}-{f['band_Hz'][1]:.0f} Hz"),
-        Row("IV", "outer-ring fault detected, healthy bearing (1 = yes)", 0.0, float(h["detected"]), "-",
-            f"indicator {h['indicator']:.1f} against threshold {h['threshold']:.1f}"),
-        Row("IV", f"detection rate, faulty, {n} noise seeds at the SNR", None,
-            st["faulty"]["detection_rate_at_snr"], "-", "the paper shows one noise realisation"),
-        Row("IV", f"false-alarm rate, healthy, {n} noise seeds at the SNR", None,
-            st["healthy"]["detection_rate_at_snr"], "-", ""),
-        Row("IV", "lowest SNR with reliable detection (faulty)", None, _nan(st["faulty"]["detection_limit_dB"]), "dB",
-            f"detection rate >= {st['required_detection_rate']:g} at this and every higher grid SNR; "
-            f"50% detection at {st['faulty']['snr_50pct_dB']:.1f} dB; not studied in the paper"),
-        Row("IV", "lowest SNR with healthy false alarms above 5%", None,
-            _nan(st["healthy"]["first_snr_rate_above_dB"]), "dB",
-            f"band rule {st['band_rule']}; the healthy voltage is BPFO-periodic and keeps a weak in-band part "
-            f"({h['in_band_snr_dB']:.0f} dB re the noise at {snr:g} dB), which shows once the noise is low enough; "
-            f"with the {st['other_band_rule']['band_rule']} rule false alarms begin at "
-            f"{_nan(st['other_band_rule']['healthy']['first_snr_rate_above_dB'])} dB"),
-    ]
-    write_part(rows, out_csv)
 
 
 # --------------------------------------------------------------------------- fault-type classification

@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from ..bearing.lpm import BearingGeometry
-from ..io import read_json, write_json
+from ..io import read_json, read_kinematics, read_series, write_json
 from ..studies import case_config
 from .calibration import extract_sensitivity, fit_resistance, lowfreq, synthesize_calibration
 
@@ -56,8 +56,8 @@ def fault_detection_case(config: dict, outdir: Path, resistance: str, harmonic: 
     The large binary intermediates (contact-force NPZ, mesh NPZ and VTK) are
     deleted once used.
     """
+    from ..bearing import transient as brs
     from ..signals import detection as sig
-    from . import bearing as brs
     from . import signals as sgs
 
     cfg = copy.deepcopy(config)
@@ -158,8 +158,8 @@ def sensor_design_housing(out_json: str, config: dict) -> None:
     """The housing seen by the sensor, once for the sensor_design study: the workflow's path (healthy mesh at
     ``housing.mesh_level``, model with the configured sensor spring), its influence line's peak (the configured
     design's load share) and the housing's flexibility at the sensor (the port compliance)."""
+    from ..bearing import transient as brs
     from ..bearing.housing_mesh import build_housing_mesh
-    from . import bearing as brs
 
     model = brs.make_model(build_housing_mesh(brs.housing_geometry(config), False, config["housing"]["mesh_level"]),
                            config)
@@ -178,9 +178,9 @@ def sensor_design_housing(out_json: str, config: dict) -> None:
 
 def _load_share(config: dict, housing: dict, spring_N_per_m: float) -> float:
     """This design's load share: from the housing's port compliance (exact, same contact disk), else its own model."""
+    from ..bearing import transient as brs
     from ..bearing.housing_fem import spring_share_factor
     from ..bearing.housing_mesh import build_housing_mesh
-    from . import bearing as brs
 
     if config["sensor_fem"]["bottom_disk_diameter_m"] == housing["bottom_disk_diameter_m"]:
         k_ref, a0 = housing["sensor_spring_N_per_m"], housing["port_compliance_m_per_N"]
@@ -214,14 +214,13 @@ def sensor_design_case(
        force), the first ``signals.skip_s`` dropped; the DAQ's absolute noise and ADC
        (:func:`noise_settings`); the envelope indicator over ``signals.study_n_seeds`` replicates.
     """
+    from ..bearing import transient as brs
     from ..sensor import design as sd
     from ..sensor import fem
+    from ..sensor.analysis import SensorFemParams
     from ..sensor.calibration import design_resistance_ohm, rc_voltage
     from ..sensor.mesh import stack_mesh
     from ..signals import detection as sig
-    from . import bearing as brs
-    from . import signals as sgs
-    from .sensor_fem import SensorFemParams
 
     s, f = config["sensor"], config["sensor_fem"]
     p = SensorFemParams.from_config(config)
@@ -241,11 +240,11 @@ def sensor_design_case(
     port = read_json(housing)
     spring = brs.sensor_spring(config)
     share = _load_share(config, port, spring)
-    kin = sgs.kinematics(kinematics)
+    kin = read_kinematics(kinematics)
     sg = config["signals"]
     voltages, p2p = {}, {}
     for case, path in (("healthy", force_healthy), ("faulty", force_faulty)):
-        _, force, dt = sgs.read_series(path, "force_N")
+        _, force, dt = read_series(path, "force_N")
         v = rc_voltage(force * (share / port["load_share"]), dt, figs["open_circuit_gain_V_per_N"], figs["tau_s"])
         voltages[case] = v[int(round(sg["skip_s"] / dt)):]
         p2p[case] = float(np.ptp(voltages[case]))

@@ -1,0 +1,310 @@
+"""What every rule's stage reads from the config, and the package code it runs: one registry for both.
+
+:data:`READS` maps each rule to the config keys (dotted paths; a section name means the whole section) its stage
+reads. The rules take their ``params`` from :func:`rule_params`, so the values Snakemake records (and compares
+to decide a rerun) are exactly the values the stage receives: the stage gets :func:`declared_config`, a sub-config
+of the declared keys only, in which reading any other key raises :class:`UndeclaredKeyError` naming the rule and
+the fix. A rule missing here reads nothing from the config.
+
+:func:`code_hash` is the hash of every module of this package a stage's script (or a figure's notebook) imports,
+directly or through other modules (the import graph read with ``ast``, lazy imports inside functions included),
+computed once per workflow start: a change to the physics reruns exactly the rules whose code it is.
+
+:func:`record_checksum` tracks a user's calibration record by content (SHA-256), so a replaced record with an older
+modification time (``cp -p``, unzip, ``rsync -a``) still reruns what reads it.
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import json
+from functools import lru_cache
+from pathlib import Path
+
+PACKAGE_DIR = Path(__file__).resolve().parent
+
+#: The sensor circuit of Eq. 6 (SensorCircuit.from_config) without R.
+_CIRCUIT = [
+    "sensor.pzt_diameter_m",
+    "sensor.pzt_height_m",
+    "sensor.d33_C_per_N",
+    "sensor.eps33_T_rel",
+    "sensor.cable_length_m",
+    "sensor.cable_capacitance_F_per_m",
+]
+#: The PZT disk as a material and a spring (materials.pzt_from_config and the disk's size); no cable.
+_PZT = [
+    "sensor.pzt_diameter_m",
+    "sensor.pzt_height_m",
+    "sensor.d33_C_per_N",
+    "sensor.eps33_T_rel",
+    "sensor.pzt_density_kg_per_m3",
+    "sensor.c66_rule",
+]
+#: The alumina disk on the outer ring (materials.alumina_from_config and its size).
+_ALUMINA_DISK = [
+    "sensor_fem.bottom_disk_diameter_m",
+    "sensor_fem.bottom_disk_height_m",
+    "sensor_fem.alumina_young_Pa",
+    "sensor_fem.alumina_poisson",
+    "sensor_fem.alumina_density_kg_per_m3",
+]
+#: The sensor stack's geometry and mesh density (sensor.analysis.mesh_inputs).
+_STACK_MESH = [
+    "sensor.pzt_diameter_m",
+    "sensor.pzt_height_m",
+    "sensor_fem.bottom_disk_diameter_m",
+    "sensor_fem.bottom_disk_height_m",
+    "sensor_fem.top_disk_diameter_m",
+    "sensor_fem.top_disk_height_m",
+    "sensor_fem.mesh_n_core",
+    "sensor_fem.mesh_n_rings",
+    "sensor_fem.mesh_n_layers",
+    "sensor_fem.mesh_grading_ratio",
+    "sensor_fem.refinement_multipliers",
+    "sensor_fem.mesh_level",
+]
+#: The bearing's and housing's geometry (HousingGeometry.from_config). The healthy mesh reads the defect too:
+#: both meshes share one node layout, graded towards the defect, so that they differ by the groove alone.
+_HOUSING_GEOMETRY = [
+    "bearing.pitch_diameter_m",
+    "bearing.roller_diameter_m",
+    "bearing.roller_length_m",
+    "bearing.outer_diameter_m",
+    "bearing.width_m",
+    "bearing.defects",
+    "housing.centre_height_m",
+    "housing.body_half_width_m",
+    "housing.body_top_m",
+    "housing.body_bottom_m",
+    "housing.foot_length_m",
+    "housing.axial_width_m",
+    "housing.hole_diameter_m",
+    "sensor_fem.bottom_disk_diameter_m",
+]
+
+#: The bearing model (geometry, operation, LPM and its record), without the running-bearing record's keys
+#: (bearing.measurement, channels, wav_full_scale_V: the diagnosis reads those).
+_BEARING = [
+    "bearing.n_rollers",
+    "bearing.roller_diameter_m",
+    "bearing.pitch_diameter_m",
+    "bearing.roller_length_m",
+    "bearing.radial_clearance_m",
+    "bearing.outer_diameter_m",
+    "bearing.width_m",
+    "bearing.contact_angle_deg",
+    "bearing.shaft_speed_rpm",
+    "bearing.radial_load_N",
+    "bearing.shaft_mass_kg",
+    "bearing.pedestal_mass_kg",
+    "bearing.pedestal_stiffness_N_per_m",
+    "bearing.bearing_damping_N_s_per_m",
+    "bearing.pedestal_damping_N_s_per_m",
+    "bearing.defects",
+    "bearing.cage_slip",
+    "bearing.slip_jitter",
+    "bearing.speed_ramp_rpm_per_s",
+    "bearing.tachometer_pulses_per_rev",
+    "bearing.roller_diameter_scatter_m",
+    "bearing.start_angle_deg",
+    "bearing.time_step_s",
+    "bearing.duration_s",
+    "bearing.settle_s",
+    "bearing.substeps",
+    "bearing.resample",
+]
+
+#: Config keys each rule's stage reads, by rule.
+READS: dict[str, list[str]] = {
+    # calibration.smk
+    "synthesize_calibration": ["seed", "synthesis", *_CIRCUIT],
+    "extract_sensitivity": ["calibration", *_CIRCUIT],
+    "fit_resistance": ["sensor", "calibration", "synthesis.resistance_ohm"],
+    "lowfreq_sensitivity": ["sensor", "lowfreq"],
+    "scorecard_calibration": ["calibration.measurement", *_CIRCUIT],
+    # sensor_fem.smk
+    "sensor_mesh": _STACK_MESH,
+    "sensor_convergence": ["sensor", "sensor_fem"],
+    "sensor_modal": ["sensor", "sensor_fem"],
+    "sensor_harmonic": ["sensor", "sensor_fem"],
+    # bearing.smk
+    "bearing_lpm": ["seed", *_BEARING],
+    "housing_mesh": [*_HOUSING_GEOMETRY, "housing.mesh_level"],
+    "housing_transient": [
+        "seed", "bearing.time_step_s", "housing", *_PZT, *_ALUMINA_DISK,
+    ],
+    "housing_convergence": [
+        *_BEARING, *_HOUSING_GEOMETRY, "housing", *_PZT, *_ALUMINA_DISK,
+    ],
+    "bearing_sampling": ["seed", *_BEARING],
+    "scorecard_bearing": _BEARING,
+    # signals.smk
+    "sensor_voltage": ["signals.skip_s", "signals.sensor_fem_correction", *_CIRCUIT],
+    "noisy": ["seed", "signals"],  # the DAQ model: sampling, noise (relative at snr_dB, or absolute), ADC
+    "envelope": ["signals"],
+    "fault_indicator": ["seed", "signals"],
+    "snr_study": ["seed", "signals"],
+    "fault_classification": ["seed", "signals", "bearing.defects"],
+    # diagnostics.smk
+    "diagnose": ["seed", "sensor", "synthesis", "calibration", "model", "diagnostics"],
+}
+
+
+class UndeclaredKeyError(KeyError):
+    """A stage read a config key its rule does not declare (a programming error, named with its fix)."""
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
+class DeclaredConfig(dict):
+    """A (nested) sub-config: reading a key that is not there raises :class:`UndeclaredKeyError`."""
+
+    def __init__(self, data: dict, rule: str, prefix: str = ""):
+        super().__init__(
+            (k, DeclaredConfig(v, rule, f"{prefix}{k}.") if isinstance(v, dict) else v) for k, v in data.items()
+        )
+        self._rule, self._prefix = rule, prefix
+
+    def get(self, key, default=None):
+        """As dict.get for a declared key; an undeclared key raises (a default would hide the missing declaration)."""
+        return self[key]
+
+    def __missing__(self, key):
+        raise UndeclaredKeyError(
+            f"the stage of rule {self._rule} read config key {self._prefix}{key}, which the rule does not "
+            f"declare; add it to piezobearing.registry.READS['{self._rule}']"
+        )
+
+
+def _get(config: dict, path: str):
+    node = config
+    for k in path.split("."):
+        node = node[k]
+    return node
+
+
+def declared(config: dict, rule: str) -> dict:
+    """The declared keys of ``rule`` with their values from ``config``, as a nested plain dict (JSON-ready)."""
+    out: dict = {}
+    for path in READS.get(rule, []):
+        keys = path.split(".")
+        node = out
+        for k in keys[:-1]:
+            node = node.setdefault(k, {})
+        node[keys[-1]] = json.loads(json.dumps(_get(config, path)))
+    return out
+
+
+def declared_config(reads: dict, rule: str) -> DeclaredConfig:
+    """What the stage of ``rule`` receives: its rule's ``params.reads``, strict on undeclared keys."""
+    return DeclaredConfig(reads, rule)
+
+
+# --------------------------------------------------------------------------- code
+
+
+def _module_file(name: str) -> Path | None:
+    """The file of module ``piezobearing.x.y`` in this package (None outside the package or not found)."""
+    parts = name.split(".")
+    if parts[0] != "piezobearing":
+        return None
+    base = PACKAGE_DIR.joinpath(*parts[1:])
+    for p in (base.with_suffix(".py"), base / "__init__.py"):
+        if p.is_file():
+            return p
+    return None
+
+
+def _module_name(path: Path) -> str:
+    rel = path.relative_to(PACKAGE_DIR.parent).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+def _imports(source: str, module: str | None, is_package: bool) -> set[str]:
+    """Absolute names of the modules ``source`` imports (relative imports resolved against ``module``)."""
+    out = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            out.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                if module is None:
+                    continue
+                pkg = module.split(".") if is_package else module.split(".")[:-1]
+                pkg = pkg[: len(pkg) - (node.level - 1)]
+                base = ".".join(pkg + ([node.module] if node.module else []))
+            else:
+                base = node.module or ""
+            out.add(base)
+            out.update(f"{base}.{a.name}" for a in node.names)  # `from pkg import module`
+    # a module's import also runs its parent packages' __init__
+    for name in list(out):
+        parts = name.split(".")
+        out.update(".".join(parts[:i]) for i in range(1, len(parts)))
+    return out
+
+
+def _source_text(path: Path) -> str:
+    """Python source of a script, or the code cells of a notebook."""
+    text = path.read_text()
+    if path.suffix == ".ipynb":
+        cells = json.loads(text)["cells"]
+        return "\n".join(
+            "".join(c["source"]) if isinstance(c["source"], list) else c["source"]
+            for c in cells
+            if c["cell_type"] == "code"
+        )
+    return text
+
+
+@lru_cache(maxsize=None)
+def package_modules(entry: str) -> tuple[Path, ...]:
+    """Every file of this package that ``entry`` (a script or notebook path) imports, transitively, sorted."""
+    seen: set[Path] = set()
+    todo = [(_source_text(Path(entry)), None, False)]
+    while todo:
+        src, mod, is_pkg = todo.pop()
+        for name in sorted(_imports(src, mod, is_pkg)):
+            f = _module_file(name)
+            if f is not None and f not in seen:
+                seen.add(f)
+                todo.append((f.read_text(), _module_name(f), f.name == "__init__.py"))
+    return tuple(sorted(seen))
+
+
+@lru_cache(maxsize=None)
+def code_hash(entry: str) -> str:
+    """SHA-256 over the package modules ``entry`` imports (their paths in the package and their bytes)."""
+    h = hashlib.sha256()
+    for f in package_modules(entry):
+        if f == Path(__file__).resolve():
+            continue  # the registry acts on a rule through its params (``reads``), not as code the stage runs
+        h.update(str(f.relative_to(PACKAGE_DIR)).encode() + b"\0" + f.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+@lru_cache(maxsize=None)
+def record_checksum(path: str | None) -> str | None:
+    """SHA-256 of a user's record (None for the synthetic one, a workflow output tracked by Snakemake itself)."""
+    if not path:
+        return None
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def rule_params(rule: str, config: dict, entry: str, record: str | None = None) -> dict:
+    """The ``params`` of ``rule``: ``reads`` (its declared config values), ``code`` (the hash of the package code
+    its ``entry`` script or notebook runs) and, for a rule reading a user's record, ``record`` (its checksum)."""
+    out = {"reads": declared(config, rule), "code": code_hash(entry)}
+    if record is not None or rule in RECORD_RULES:
+        out["record"] = record_checksum(record)
+    return out
+
+
+#: Rules that read the calibration record (a user's file when calibration.measurement is set).
+RECORD_RULES = frozenset({"extract_sensitivity", "fit_resistance", "diagnose", "fig05"})

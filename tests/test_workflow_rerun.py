@@ -1,0 +1,261 @@
+"""Nothing stale: every rule reruns when a config key its stage reads changes, when the package code it runs
+changes, and when the user's record changes content (even with an older modification time); no other rule does.
+
+A scratch copy of the workflow is built once with stand-in scripts that only create their outputs (keeping the
+real scripts' imports, unexecuted, for the code hash) and a stand-in papermill; then ``snakemake -n`` is asked,
+for each rule, after a change to the config keys its stage reads (piezobearing.registry.READS), after an edit of
+a package module in the scratch copy, and after the record is replaced. The rules it lists must be exactly the
+changed rules and the rules downstream of them in the rule graph (``snakemake --rulegraph``).
+"""
+
+from __future__ import annotations
+
+import ast
+import os
+import re
+import shutil
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+import yaml
+
+from piezobearing import config as cfg
+from piezobearing.registry import READS, RECORD_RULES
+
+pytestmark = pytest.mark.slow
+
+ROOT = Path(__file__).resolve().parents[1]
+SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
+
+STUB = """from pathlib import Path
+
+for p in [*snakemake.output, *snakemake.log]:
+    Path(p).parent.mkdir(parents=True, exist_ok=True)
+    Path(p).write_text("stand-in")
+if False:  # the real script's imports: read (never run) for the rule's code hash
+{imports}
+"""
+
+PAPERMILL = """#!{python}
+import sys
+from pathlib import Path
+
+a = sys.argv[1:]
+for p in [a[1]] + [a[i + 2] for i, x in enumerate(a[:-2]) if x == "-p" and a[i + 1] == "figure"]:
+    Path(p).parent.mkdir(parents=True, exist_ok=True)
+    Path(p).write_text("stand-in")
+"""
+
+#: Keys left out of the perturbation: a path (the record has its own test) and a list of effect names.
+SKIP = {"calibration.measurement", "synthesis.hidden_effects"}
+#: String choices: another valid value.
+OTHER = {"type": "inner_race", "band_rule": "kurtogram", "method": "direct", "sensor_electrical": "short", "resample": "sample",
+         "c66_rule": "paper"}
+
+
+def _stub(script: Path) -> str:
+    imports = [
+        "    " + ast.unparse(n)
+        for n in ast.walk(ast.parse(script.read_text()))
+        if isinstance(n, (ast.Import, ast.ImportFrom))
+        and (n.module if isinstance(n, ast.ImportFrom) else n.names[0].name or "").startswith("piezobearing")
+    ]
+    return STUB.format(imports="\n".join(imports) or "    pass")
+
+
+def _run(args: list[str], cwd: Path, env: dict) -> subprocess.CompletedProcess:
+    return subprocess.run([SNAKEMAKE, *args], cwd=cwd, env=env, capture_output=True, text=True, timeout=900)
+
+
+def _jobs(out: str) -> set[str]:
+    """Rules of the 'Job stats' table of a dry run (without the target rule all)."""
+    if "Job stats:" not in out:
+        return set()
+    table = out.split("Job stats:")[1].split("total")[0]
+    return {m.group(1) for m in re.finditer(r"^(\w+)\s+\d+\s*$", table, re.M)} - {"all", "job"}
+
+
+def build_scratch(d: Path) -> tuple[Path, dict, dict[str, set[str]]]:
+    """Build a scratch copy of the workflow in ``d`` (stand-in stages); its environment and its rule graph."""
+    for name in ("Snakefile", "workflow", "config", "notebooks", "src"):
+        src = ROOT / name
+        (shutil.copytree if src.is_dir() else shutil.copy)(src, d / name)
+    (d / "data").mkdir()
+    for s in (d / "workflow/scripts").glob("*.py"):
+        s.write_text(_stub(s))
+    (d / "bin").mkdir()
+    pm = d / "bin/papermill"
+    pm.write_text(PAPERMILL.format(python=sys.executable))
+    pm.chmod(0o755)
+    env = {**os.environ, "PATH": f"{d / 'bin'}:{os.environ['PATH']}", "PYTHONPATH": str(d / "src")}
+    out = _run(["--cores", "2", "--configfile", "config/ci.yaml"], d, env)
+    assert out.returncode == 0, out.stderr[-3000:]
+    graph = _run(["--rulegraph", "--configfile", "config/ci.yaml"], d, env)
+    assert graph.returncode == 0, graph.stderr[-3000:]
+    names = dict(re.findall(r'^\s*(\d+)\[label = "(\w+)"', graph.stdout, re.M))
+    children: dict[str, set[str]] = {n: set() for n in names.values()}
+    for a, b in re.findall(r"^\s*(\d+) -> (\d+)", graph.stdout, re.M):
+        children[names[a]].add(names[b])
+    return d, env, children
+
+
+@pytest.fixture(scope="module")
+def scratch(tmp_path_factory):
+    """A built scratch copy of the workflow (stand-in stages), its environment and its rule graph."""
+    return build_scratch(tmp_path_factory.mktemp("rerun"))
+
+
+def _downstream(rules: set[str], children: dict[str, set[str]]) -> set[str]:
+    out, todo = set(rules), list(rules)
+    while todo:
+        for c in children.get(todo.pop(), ()):
+            if c not in out:
+                out.add(c)
+                todo.append(c)
+    return out - {"all"}
+
+
+def _value(config: dict, path: str):
+    for k in path.split("."):
+        config = config[k]
+    return config
+
+
+def _leaves(config: dict, path: str) -> list[str]:
+    node = config
+    for k in path.split("."):
+        node = node[k]
+    if isinstance(node, dict):
+        return [leaf for k in node for leaf in _leaves(config, f"{path}.{k}")]
+    return [path]
+
+
+def _changed(value, key: str, up: bool = False):
+    """Another value of a config key: numbers 1% down (or up), integers by one, flags flipped, choices swapped."""
+    if isinstance(value, bool):
+        return not value
+    if isinstance(value, int):
+        return value + 1 if up or value <= 1 else value - 1
+    if isinstance(value, float):
+        return value * (1.01 if up else 0.99) if value else (1e-6 if up else 1e-3)
+    if isinstance(value, list):
+        return [_changed(v, key, up) for v in value]
+    if isinstance(value, dict):  # an entry of a list of tables (bearing.defects)
+        return {k: _changed(v, f"{key}.{k}", up) for k, v in value.items()}
+    if isinstance(value, str):
+        return OTHER[key.rsplit(".", 1)[-1]]
+    raise AssertionError(f"no change rule for {key} = {value!r}")
+
+
+def _override(config: dict, keys: list[str]) -> dict:
+    """The changed values of ``keys`` as a config override; each change is one the schema accepts."""
+    out: dict = {}
+    for path in keys:
+        node, src = out, config
+        *parents, last = path.split(".")
+        for k in parents:
+            node, src = node.setdefault(k, {}), src[k]
+        for up in (False, True):
+            node[last] = _changed(src[last], path, up)
+            try:
+                cfg.validate(cfg.deep_merge(config, out))
+                break
+            except cfg.ConfigError:
+                continue
+        else:
+            raise AssertionError(f"no valid change of {path}")
+    return out
+
+
+def _readers(key: str) -> set[str]:
+    """Rules whose declared reads cover the leaf key ``key``."""
+    return {r for r, paths in READS.items() if any(key == p or key.startswith(p + ".") for p in paths)}
+
+
+def test_every_rule_reruns_on_the_keys_its_stage_reads_and_no_other_rule_does(scratch):
+    d, env, children = scratch
+    config = cfg.load(d / "config/ci.yaml")
+
+    with ThreadPoolExecutor(2) as pool:
+        results = list(pool.map(lambda rule: check_rule(d, env, children, config, rule), sorted(READS)))
+    for rule, keys, expected, listed in results:
+        assert rule in listed, f"{rule} does not rerun after a change of {keys}"
+        assert listed == expected, f"after a change of {rule}'s keys: extra {listed - expected}, missing {expected - listed}"
+
+
+def check_rule(d: Path, env: dict, children: dict, config: dict, rule: str):
+    """Change every key ``rule`` reads; (rule, keys, the rules expected to rerun, the rules snakemake -n lists)."""
+    keys = sorted(k for k in {leaf for p in READS[rule] for leaf in _leaves(config, p)} - SKIP
+                  if _value(config, k) is not None)  # an unset optional key (a path, a WAV scale) stays unset
+    extra = d / f"change_{rule}.yaml"
+    extra.write_text(yaml.safe_dump(_override(config, keys)))
+    out = _run(["-n", "--configfile", "config/ci.yaml", extra.name], d, env)
+    assert out.returncode == 0, f"{rule}: {out.stderr[-2000:]}"
+    expected = _downstream(set().union(*(_readers(k) for k in keys)), children)
+    return rule, keys, expected, _jobs(out.stdout + out.stderr)
+
+
+def test_an_undeclared_key_read_raises_naming_the_rule_and_the_fix():
+    from piezobearing.registry import UndeclaredKeyError, declared, declared_config
+
+    config = cfg.load(ROOT / "config/ci.yaml")
+    sub = declared_config(declared(config, "noisy"), "noisy")
+    assert sub["signals"]["snr_dB"] == config["signals"]["snr_dB"]
+    with pytest.raises(UndeclaredKeyError, match=r"signals\.band_rule.*READS\['noisy'\]"):
+        sub["signals"]["band_rule"]
+
+
+@pytest.mark.parametrize(
+    "module, rules",
+    [
+        # a leaf of the plotting package: only the figure that draws with it
+        ("plotting/bearing.py", {"fig03"}),
+        # the envelope analysis and SNR statistics: every rule of the signals stage module, not the bearing's
+        (
+            "signals/analysis.py",
+            {"sensor_voltage", "noisy", "envelope", "fault_indicator", "snr_study", "snr_study_figure",
+             "defect_events"},
+        ),
+    ],
+)
+def test_a_changed_package_module_reruns_exactly_the_rules_whose_code_imports_it(scratch, module, rules):
+    d, env, children = scratch
+    f = d / "src/piezobearing" / module
+    original = f.read_text()
+    try:
+        f.write_text(original + "\n# an edit\n")
+        out = _run(["-n", "--configfile", "config/ci.yaml"], d, env)
+    finally:
+        f.write_text(original)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert _jobs(out.stdout + out.stderr) == _downstream(rules, children)
+
+
+def test_a_replaced_record_with_an_older_time_reruns_what_reads_it(scratch):
+    from piezobearing.io import write_measurement
+    from piezobearing.stages.calibration import nominal_circuit
+    from piezobearing.synthesis import PressProtocol, synthesize
+
+    d, env, children = scratch
+    config = cfg.load(d / "config/ci.yaml")
+    record = d / "data/record.csv"
+
+    def write(seed: int) -> None:
+        syn = config["synthesis"]
+        write_measurement(synthesize(PressProtocol.from_config(syn), nominal_circuit(config), seed, []), record)
+
+    write(1)
+    (d / "record.yaml").write_text(yaml.safe_dump({"calibration": {"measurement": "data/record.csv"}}))
+    args = ["--configfile", "config/ci.yaml", "record.yaml"]
+    out = _run(["--cores", "2", *args], d, env)
+    assert out.returncode == 0, out.stderr[-3000:]
+    before = record.stat().st_mtime
+    write(2)  # another record, then dated a day back (as cp -p, unzip or rsync -a leave it)
+    os.utime(record, (before - 86400, before - 86400))
+    out = _run(["-n", *args], d, env)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert _jobs(out.stdout + out.stderr) == _downstream(set(RECORD_RULES), children)
+    assert RECORD_RULES == {"diagnose", "extract_sensitivity", "fig05", "fit_resistance"}
