@@ -56,8 +56,8 @@ def fault_detection_case(config: dict, outdir: Path, resistance: str, harmonic: 
     The large binary intermediates (contact-force NPZ, mesh NPZ and VTK) are
     deleted once used.
     """
-    from ..bearing import transient as brs
     from ..signals import detection as sig
+    from . import bearing as brs
     from . import signals as sgs
 
     cfg = copy.deepcopy(config)
