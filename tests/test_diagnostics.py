@@ -371,3 +371,14 @@ def test_d33_scale_is_found_as_the_same_record_as_extra_capacitance(paper_config
     eq = d["identifiability"]["equivalences"]
     assert eq and set(eq[0]["effects"]) == {"d33_scale", "extra_capacitance"}
     assert "R d33 and d33/C" in eq[0]["statement"] and "R d33 and d33/C" in render(d)
+
+
+def test_clock_drift_is_found_first_with_the_hidden_rate(paper_config):
+    """Two DAQ quartz clocks 100 ppm apart (+-50 ppm each): the offset grows to 2.5 ms over 25 s."""
+    d = run(paper_config, [{"name": "clock_drift", "params": {"clock_drift_ppm": 100.0}}])
+    assert d["ranking"][0]["effect"] == "clock_drift" and d["selected"][0] == "clock_drift"
+    assert d["verdict"] == "explained"
+    est = d["final"]["params"]["clock_drift_ppm"]
+    lo, hi = d["final"]["ci95"]["clock_drift_ppm"]
+    assert est == pytest.approx(100.0, rel=0.05) and lo - 5 <= 100.0 <= hi + 5
+    assert d["identifiability"]["steps"][0]["runner_up"] is not None

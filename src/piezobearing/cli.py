@@ -11,19 +11,96 @@
     polarity); prints ``OK`` and a summary, or the one-line problem (exit
     status 1).
 
-A user error (bad file, bad config, unknown effect) prints one line and
-exits with status 1, without a traceback.
+Exit status: 0 done; 1 a user error (bad file, bad config, unknown effect,
+unusable --out), one line naming the file or key and the fix, never a
+traceback; 2 a usage error (unknown option, missing argument); 3 an internal
+error (a bug: one line asking to report it; PIEZOBEARING_DEBUG=1 shows the
+traceback). Run inside a checkout, the defaults come from its
+config/config.yaml; elsewhere from the checkout the package was installed from.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+from pathlib import Path
+
+#: Exit statuses (see the module docstring).
+EXIT_USER, EXIT_USAGE, EXIT_INTERNAL = 1, 2, 3
+
+
+class UserError(Exception):
+    """A problem with what the user asked for (one line, exit status 1)."""
 
 
 def _fail(msg: str) -> int:
     print(f"piezobearing: {msg}", file=sys.stderr)
-    return 1
+    return EXIT_USER
+
+
+def _load_config(args) -> tuple[dict, str]:
+    """The config the command uses and a line saying where it came from."""
+    from . import config as cfg
+
+    d = cfg.default_config_dir()
+    overrides = [args.config] if args.config is not None else []
+    config = cfg.load(*overrides, config_dir=d)
+    return config, " + ".join([str(d / "config.yaml"), *map(str, overrides)])
+
+
+def _data_dirs() -> list[Path]:
+    """The data/ folders that hold users' measurements and are never written."""
+    from . import config as cfg
+
+    roots = {cfg.CONFIG_DIR.parent.resolve()}
+    here = cfg.find_checkout()
+    if here is not None:
+        roots.add(here.resolve())
+    return [r / "data" for r in sorted(roots)]
+
+
+def _prepare_out(out: str) -> list[Path]:
+    """Check ``--out`` before any work; create it and return the folders created (to remove on failure)."""
+    if not out.strip():
+        raise UserError("--out is empty; give the folder for the report, e.g. --out results/diagnosis")
+    p = Path(out)
+    if p.exists() and not p.is_dir():
+        raise UserError(f"--out {out}: is a file, not a folder; give a new or existing folder")
+    full = p.resolve()
+    for data in _data_dirs():
+        if full == data or data in full.parents:
+            raise UserError(
+                f"--out {out}: inside {data}, which holds measurements and is never written; "
+                "give a folder outside it, e.g. --out results/diagnosis"
+            )
+    missing = [d for d in (full, *full.parents) if not d.exists()][::-1]
+    parent = missing[0].parent if missing else full
+    if not parent.is_dir():
+        raise UserError(
+            f"--out {out}: {parent} is a file, so no folder can be made under it; give another folder"
+        )
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise UserError(f"--out {out}: no permission to write in {parent}; give a folder you can write to")
+    try:
+        for d in missing:
+            d.mkdir()
+    except OSError as e:
+        _remove_empty(missing)
+        raise UserError(
+            f"--out {out}: cannot create {e.filename or full} ({e.strerror or type(e).__name__}); "
+            "give a folder you can write to"
+        ) from None
+    return missing
+
+
+def _remove_empty(created: list[Path]) -> None:
+    """Remove the folders this run created, deepest first, where they are still empty."""
+    for d in reversed(created):
+        try:
+            d.rmdir()
+        except OSError:
+            pass
 
 
 def _validate(args) -> int:
@@ -32,8 +109,8 @@ def _validate(args) -> int:
     from .stages.calibration import load_record
 
     try:
-        config = cfg.load(args.config) if args.config else cfg.load()
-    except (cfg.ConfigError, OSError) as e:
+        config, used = _load_config(args)
+    except cfg.ConfigError as e:
         return _fail(str(e))
     if args.resample_to_uniform:
         config["calibration"]["resample_to_uniform"] = True
@@ -45,6 +122,7 @@ def _validate(args) -> int:
         f"OK: {args.file}: {m.time_s.size} rows, {m.sample_rate_Hz:.6g} Hz, "
         f"{m.time_s[-1] - m.time_s[0]:.6g} s, {len(imps)} impulses"
     )
+    print(f"config: {used}")
     return 0
 
 
@@ -57,8 +135,12 @@ def _diagnose(args) -> int:
     from .stages.diagnostics import diagnose
 
     try:
-        config = cfg.load(args.config) if args.config else cfg.load()
-    except (cfg.ConfigError, OSError) as e:
+        config, used = _load_config(args)
+    except cfg.ConfigError as e:
+        return _fail(str(e))
+    try:
+        created = _prepare_out(args.out)
+    except UserError as e:
         return _fail(str(e))
     config["calibration"]["measurement"] = args.measurement
     n = (
@@ -79,9 +161,21 @@ def _diagnose(args) -> int:
         d = diagnose(args.measurement, args.out, config, progress)
     except (MeasurementError, EffectError) as e:
         bar.close()
+        _remove_empty(created)
         return _fail(str(e))
+    except OSError as e:
+        bar.close()
+        return _fail(
+            f"--out {args.out}: writing {e.filename or 'the report'} failed ({e.strerror or type(e).__name__}); "
+            "free space or give another folder"
+        )
+    except BaseException:
+        bar.close()
+        _remove_empty(created)
+        raise
     bar.update(bar.total - bar.n)
     bar.close()
+    print(f"config: {used}")
     base, final = d["baseline"], d["final"]
     print(f"baseline NRMSE {100 * base['nrmse']:.2f}% (noise floor {100 * base['noise_floor_nrmse']:.2f}%)")
     conf = d["configured"]
@@ -103,24 +197,85 @@ def _diagnose(args) -> int:
     return 0
 
 
-def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="piezobearing", description=__doc__.split("\n\n")[0])
-    sub = p.add_subparsers(dest="command", required=True)
-    d = sub.add_parser("diagnose", help="hold the model against a calibration record and write a report")
-    d.add_argument("measurement", help="calibration CSV with time_s, force_N, voltage_V (s, N, V)")
-    d.add_argument("--out", required=True, help="output folder (diagnosis.json, report.md, figures/)")
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("piezobearing")
+    except PackageNotFoundError:
+        return "unknown (not installed)"
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="piezobearing",
+        description=__doc__.split("\n\n")[0].splitlines()[0].strip('"'),
+        epilog="Exit status: 0 done, 1 user error (one line with the fix), 2 usage error, 3 internal error (a bug).",
+    )
+    p.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    d = sub.add_parser(
+        "diagnose",
+        help="hold the model against a calibration record and write a report",
+        description="Fit the configured model to a calibration record, rank the missing effects, write a report.",
+    )
     d.add_argument(
-        "--config", help="config file merged over config/config.yaml (model.effects, diagnostics, ...)"
+        "measurement", help="calibration CSV with columns time_s, force_N, voltage_V (s, N, V), UTF-8"
+    )
+    d.add_argument(
+        "--out",
+        required=True,
+        metavar="DIR",
+        help="output folder, created if needed (diagnosis.json, diagnosis.npz, report.md, figures/); not inside data/",
+    )
+    d.add_argument(
+        "--config",
+        metavar="FILE",
+        help="YAML file merged over the checkout's config/config.yaml (model.effects, diagnostics, ...)",
     )
     d.add_argument("--quiet", action="store_true", help="no progress bar")
     d.set_defaults(func=_diagnose)
-    v = sub.add_parser("validate", help="check a calibration CSV")
-    v.add_argument("file")
-    v.add_argument("--resample-to-uniform", action="store_true", help="accept an uneven clock (resampled)")
-    v.add_argument("--config", help="config file merged over config/config.yaml (calibration.* settings)")
+    v = sub.add_parser(
+        "validate",
+        help="check a calibration CSV as the workflow does",
+        description="Check a calibration CSV with the workflow's checks; print OK and a summary or the problem.",
+    )
+    v.add_argument("file", help="calibration CSV with columns time_s, force_N, voltage_V (s, N, V), UTF-8")
+    v.add_argument(
+        "--resample-to-uniform",
+        action="store_true",
+        help="accept an uneven clock and resample it onto the median step (calibration.resample_to_uniform)",
+    )
+    v.add_argument(
+        "--config",
+        metavar="FILE",
+        help="YAML file merged over the checkout's config/config.yaml (calibration.* settings)",
+    )
     v.set_defaults(func=_validate)
-    args = p.parse_args(argv)
-    return args.func(args)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)  # usage errors exit with status 2 (argparse)
+    try:
+        return args.func(args)
+    except KeyboardInterrupt:
+        print("piezobearing: interrupted", file=sys.stderr)
+        return 130
+    except Exception as e:  # a bug, not a user error: say so, one line
+        if os.environ.get("PIEZOBEARING_DEBUG"):
+            raise
+        where = e.__traceback__
+        while where is not None and where.tb_next is not None:
+            where = where.tb_next
+        loc = f" at {Path(where.tb_frame.f_code.co_filename).name}:{where.tb_lineno}" if where else ""
+        print(
+            f"piezobearing: internal error ({type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''}{loc}); "
+            "this is a bug: please report it with the command line and this message "
+            "(PIEZOBEARING_DEBUG=1 shows the traceback)",
+            file=sys.stderr,
+        )
+        return EXIT_INTERNAL
 
 
 if __name__ == "__main__":

@@ -9,14 +9,38 @@ from __future__ import annotations
 import copy
 import difflib
 import functools
+import math
 from pathlib import Path
 
 import yaml
 
-#: The repository's config folder (the package is installed editable from it).
+#: The config folder of the checkout the package was installed from (editable install).
 CONFIG_DIR = Path(__file__).resolve().parents[2] / "config"
 SCHEMA_PATH = CONFIG_DIR / "schema.yaml"
 DEFAULT_CONFIG = CONFIG_DIR / "config.yaml"
+
+
+def find_checkout(start: str | Path | None = None) -> Path | None:
+    """The piezobearing checkout containing ``start`` (default: the current folder), or None.
+
+    A checkout is a folder with a ``Snakefile`` and ``config/config.yaml``
+    and ``config/schema.yaml``; the nearest one upwards wins.
+    """
+    here = Path.cwd() if start is None else Path(start)
+    for d in (here.resolve(), *here.resolve().parents):
+        if (
+            (d / "Snakefile").is_file()
+            and (d / "config" / "config.yaml").is_file()
+            and (d / "config" / "schema.yaml").is_file()
+        ):
+            return d
+    return None
+
+
+def default_config_dir() -> Path:
+    """The config folder the CLI uses: the current checkout's when run inside one, else the installed one."""
+    root = find_checkout()
+    return root / "config" if root is not None else CONFIG_DIR
 
 
 class ConfigError(ValueError):
@@ -67,20 +91,144 @@ def _message(e) -> str:
     return f"key '{key}': {e.message}; {see}"
 
 
+def _non_finite(obj, path=()) -> tuple[str, float] | None:
+    """The dotted key and value of the first NaN or infinite number in ``obj``, else None."""
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return ".".join(path) or "(top level)", obj
+    items = obj.items() if isinstance(obj, dict) else enumerate(obj) if isinstance(obj, list) else ()
+    for k, v in items:
+        found = _non_finite(v, (*path, f"[{k}]") if isinstance(k, int) else (*path, str(k)))
+        if found:
+            return found
+    return None
+
+
+#: [low, high] pairs that must increase.
+_PAIRS = (
+    ("synthesis", "peak_force_N"),
+    ("synthesis", "rise_time_s"),
+    ("synthesis", "fall_time_s"),
+    ("signals", "band_Hz"),
+    ("housing", "damping_band_Hz"),
+)
+
+
+def _bearing_defects(b: dict) -> list[tuple[str, float]]:
+    """(key, width [m]) of every configured outer-race defect: the list ``bearing.defects`` where
+    the config has one, else the single ``bearing.defect_width_m``."""
+    if isinstance(b.get("defects"), list):
+        return [
+            (f"bearing.defects[{i}].width_m", d["width_m"])
+            for i, d in enumerate(b["defects"])
+            if "width_m" in d
+        ]
+    return [("bearing.defect_width_m", b["defect_width_m"])] if "defect_width_m" in b else []
+
+
+def physical_problems(config: dict) -> list[str]:
+    """Cross-field checks the schema cannot express: each problem as 'key ...: what; fix'."""
+    out = []
+    b = config.get("bearing", {})
+    dr, dp, do = b.get("roller_diameter_m"), b.get("pitch_diameter_m"), b.get("outer_diameter_m")
+    if dr is not None and dp is not None:
+        if dp <= dr:
+            out.append(
+                f"key 'bearing.pitch_diameter_m': {dp:g} m is not larger than bearing.roller_diameter_m ({dr:g} m); "
+                "the pitch circle runs through the roller centres, so it must exceed the roller diameter "
+                "(the paper's bearing: 44.0e-3 with 10.0e-3)"
+            )
+        elif "n_rollers" in b and b["n_rollers"] * dr >= math.pi * dp:
+            out.append(
+                f"key 'bearing.n_rollers': {b['n_rollers']} rollers of {dr:g} m do not fit on a pitch circle of "
+                f"{dp:g} m (need n D_r < pi D_p); fewer rollers or a larger bearing.pitch_diameter_m"
+            )
+        elif do is not None and do <= dp + dr:
+            out.append(
+                f"key 'bearing.outer_diameter_m': {do:g} m leaves no outer ring around rollers of {dr:g} m on a "
+                f"{dp:g} m pitch circle (need D > D_p + D_r = {dp + dr:g} m)"
+            )
+        for key, w in _bearing_defects(b):
+            if w >= dr:
+                out.append(
+                    f"key '{key}': a defect {w:g} m wide is not narrower than the roller ({dr:g} m); a roller would "
+                    "drop into it completely, outside what the model describes; use a width below "
+                    "bearing.roller_diameter_m"
+                )
+    f = config.get("sensor_fem", {})
+    if "mesh_level" in f and "refinement_multipliers" in f:
+        n = len(f["refinement_multipliers"])
+        if not 1 <= f["mesh_level"] <= n:
+            out.append(
+                f"key 'sensor_fem.mesh_level': {f['mesh_level']} is not one of the {n} listed levels; use 1 to {n} "
+                "(an index into sensor_fem.refinement_multipliers)"
+            )
+    for sec, key in _PAIRS:
+        v = config.get(sec, {}).get(key)
+        if isinstance(v, list) and len(v) == 2 and v[0] > v[1]:
+            out.append(f"key '{sec}.{key}': [{v[0]:g}, {v[1]:g}] decreases; write [low, high]")
+    return out
+
+
 def validate(config: dict, source: str = "config", schema_path: str | Path = SCHEMA_PATH) -> dict:
-    """Validate against the schema; raise :class:`ConfigError` with one line naming the key and the fix."""
+    """Validate against the schema and the cross-field checks; raise :class:`ConfigError` with one
+    line naming the key and the fix."""
+    if not isinstance(config, dict):
+        raise ConfigError(
+            f"{source}: the top level is a {type(config).__name__}, not a mapping of keys; write 'key: value' "
+            "lines as in config/config.yaml"
+        )
+    bad = _non_finite(config)
+    if bad:
+        written = ".nan" if math.isnan(bad[1]) else f"{'-' if bad[1] < 0 else ''}.inf"
+        raise ConfigError(f"{source}: key '{bad[0]}': {written} is not a finite number; write a finite value")
     errors = sorted(_validator(str(schema_path)).iter_errors(config), key=lambda e: list(map(str, e.path)))
     if errors:
         raise ConfigError(f"{source}: {_message(errors[0])}")
+    problems = physical_problems(config)
+    if problems:
+        raise ConfigError(f"{source}: {problems[0]}")
     return config
 
 
-def load(*override_paths: str | Path) -> dict:
-    """The default config, merged with each override file in turn, validated."""
-    config = yaml.safe_load(DEFAULT_CONFIG.read_text())
+def read_yaml(path: str | Path) -> dict:
+    """A config file as a dict; one-line :class:`ConfigError` for a missing, unreadable or invalid file."""
+    p = Path(path)
+    if not p.exists():
+        raise ConfigError(f"{p}: config file not found")
+    if not p.is_file():
+        raise ConfigError(f"{p}: is a folder, not a config file; give the path of a .yaml file")
+    try:
+        data = yaml.safe_load(p.read_text(encoding="utf-8"))
+    except OSError as e:
+        raise ConfigError(f"{p}: cannot be read ({e.strerror}); give yourself read permission") from None
+    except UnicodeDecodeError:
+        raise ConfigError(f"{p}: not UTF-8 text; save it as UTF-8") from None
+    except yaml.YAMLError as e:
+        mark = getattr(e, "problem_mark", None)
+        where = f"line {mark.line + 1}, column {mark.column + 1}" if mark else "somewhere"
+        what = getattr(e, "problem", None) or type(e).__name__
+        raise ConfigError(
+            f"{p}: YAML syntax error at {where} ({what}); fix the brackets, quotes or indentation there"
+        ) from None
+    if data is None:
+        return {}
+    if not isinstance(data, dict):
+        raise ConfigError(
+            f"{p}: the top level is a {type(data).__name__}, not a mapping of keys; write 'key: value' lines "
+            "as in config/config.yaml"
+        )
+    return data
+
+
+def load(*override_paths: str | Path, config_dir: str | Path | None = None) -> dict:
+    """The default config (``config_dir``/config.yaml, default: the installed checkout's), merged with
+    each override file in turn, validated against ``config_dir``/schema.yaml."""
+    d = Path(config_dir) if config_dir is not None else CONFIG_DIR
+    config = read_yaml(d / "config.yaml")
     for p in override_paths:
-        p = Path(p)
-        if not p.exists():
-            raise ConfigError(f"{p}: config file not found")
-        config = deep_merge(config, yaml.safe_load(p.read_text()) or {})
-    return validate(config, source=", ".join(map(str, override_paths)) or str(DEFAULT_CONFIG))
+        config = deep_merge(config, read_yaml(p))
+    return validate(
+        config,
+        source=", ".join(map(str, override_paths)) or str(d / "config.yaml"),
+        schema_path=d / "schema.yaml",
+    )

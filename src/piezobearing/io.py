@@ -13,8 +13,12 @@ running-bearing records) are independent.
 
 from __future__ import annotations
 
+import codecs
+import functools
+import hashlib
 import json
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -61,6 +65,87 @@ class Measurement:
 
     def to_frame(self) -> pd.DataFrame:
         return pd.DataFrame({"time_s": self.time_s, "force_N": self.force_N, "voltage_V": self.voltage_V})
+
+
+#: A number written with a decimal comma ("0,25", "-1,5e-3").
+_DECIMAL_COMMA = re.compile(r"^[-+]?\d+,\d+([eE][-+]?\d+)?$")
+#: Bytes read to check a file's encoding and first lines before parsing it.
+_HEAD_BYTES = 1 << 16
+
+
+def _not_utf8(path: Path, e: UnicodeDecodeError) -> str:
+    byte = e.object[e.start : e.start + 1].hex() if isinstance(e.object, bytes) else "?"
+    return (
+        f"{path}: not UTF-8 text (byte 0x{byte} at offset {e.start}; Latin-1 or Windows-1252?); "
+        "save it as UTF-8 (spreadsheet: 'CSV UTF-8'; shell: iconv -f latin1 -t utf-8 IN > OUT)"
+    )
+
+
+def check_readable(path: Path, key: str = "calibration", text: bool = True) -> None:
+    """A regular, readable, non-empty file (and with ``text``, UTF-8), or one line saying what it is
+    and the fix."""
+    if not path.exists():
+        raise MeasurementError(f"{path}: file not found; set {key}.measurement to an existing record file")
+    if path.is_dir():
+        raise MeasurementError(
+            f"{path}: is a folder, not a file; set {key}.measurement to the record file inside it"
+        )
+    if not path.is_file():
+        raise MeasurementError(f"{path}: not a regular file; save the record as a file and give its path")
+    try:
+        with open(path, "rb") as f:
+            head = f.read(_HEAD_BYTES)
+    except OSError as e:
+        raise MeasurementError(
+            f"{path}: cannot be read ({e.strerror or type(e).__name__}); give yourself read permission "
+            "(chmod u+r) or copy the file somewhere readable"
+        ) from None
+    if not head.strip():
+        raise MeasurementError(f"{path}: the file is empty; export the record again")
+    if not text:
+        return
+    try:
+        codecs.getincrementaldecoder("utf-8")().decode(head, final=len(head) < _HEAD_BYTES)
+    except UnicodeDecodeError as e:
+        raise MeasurementError(_not_utf8(path, e)) from None
+
+
+def _decimal_comma_hint(path: Path) -> str | None:
+    """The fix for a comma-separated file whose numbers also use decimal commas, else None."""
+    with open(path, encoding="utf-8-sig", errors="replace") as f:
+        lines = [f.readline() for _ in range(3)]
+    header, row = lines[0].strip(), lines[1].strip()
+    if "," in header and row.count(",") > header.count(",") and re.search(r"\d,\d", row):
+        return (
+            f"the numbers use a decimal comma (line 2: {row[:40]}); use a dot as the decimal mark "
+            "(export with '.' as decimal separator) and commas between columns"
+        )
+    return None
+
+
+def _read_numeric(path: Path, wanted: tuple[str, ...]) -> pd.DataFrame | None:
+    """The ``wanted`` columns that the file has, as floats, when every cell parses as a finite number,
+    else None.
+
+    The fast path: the C reader straight into float64 (about 8 bytes a cell),
+    where reading every cell as a string first needs several times the file
+    size. Anything unusual returns None and the per-cell checks find it.
+    """
+    try:
+        df = pd.read_csv(
+            path,
+            usecols=lambda c: str(c).strip() in wanted,
+            dtype=float,
+            skipinitialspace=True,
+            encoding="utf-8-sig",
+            engine="c",
+        )
+    except (ValueError, pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError):
+        return None
+    df.columns = [str(c).strip() for c in df.columns]
+    if len(df) < 3 or not all(np.isfinite(df[c].to_numpy()).all() for c in df.columns):
+        return None
+    return df
 
 
 def _line(i: int) -> int:
@@ -148,6 +233,7 @@ def read_table(
     if not path.exists():
         raise MeasurementError(f"{path}: file not found; set {key}.measurement to an existing record file")
     ext = path.suffix.lower()
+    check_readable(path, key, text=ext == ".csv")
     if ext not in RECORD_FORMATS:
         kinds = ", ".join(f"{e} ({d})" for e, d in RECORD_FORMATS.items())
         raise MeasurementError(
@@ -169,13 +255,22 @@ def read_table(
 
 
 def _read_csv_table(path: Path, columns, optional, unit_hint: str) -> RawTable:
+    hint = _decimal_comma_hint(path)
+    if hint:
+        raise MeasurementError(f"{path}: {hint}")
+    fast = _read_numeric(path, (*columns, *optional))
+    if fast is not None and all(c in fast.columns for c in columns):  # every cell a finite number
+        return RawTable(fast[[*columns, *(c for c in optional if c in fast.columns)]], _csv_place)
+    del fast
     try:
         # keep_default_na=False: a cell reading 'nan' or 'NA' is reported as written, not as empty
-        raw = pd.read_csv(path, dtype=str, skipinitialspace=True, keep_default_na=False)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as e:
+        raw = pd.read_csv(path, dtype=str, skipinitialspace=True, keep_default_na=False, encoding="utf-8-sig")
+    except UnicodeDecodeError as e:
+        raise MeasurementError(_not_utf8(path, e)) from None
+    except (pd.errors.ParserError, pd.errors.EmptyDataError) as e:
         first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
         raise MeasurementError(
-            f"{path}: not a readable CSV ({first}); save it as comma-separated text"
+            f"{path}: not a readable CSV ({first}); save it as comma-separated text, header {','.join(columns)}"
         ) from None
     raw.columns = [str(c).strip() for c in raw.columns]
     missing = [c for c in columns if c not in raw.columns]
@@ -363,9 +458,13 @@ def _finite_column(raw: pd.DataFrame, col: str, path: Path, place) -> np.ndarray
         i = int(bad[0])
         cell = raw[col].iloc[i]
         what = "empty" if pd.isna(cell) or str(cell).strip() == "" else f"'{cell}'"
+        fix = (
+            "use a dot as the decimal mark (or export the file with '.' as decimal separator)"
+            if _DECIMAL_COMMA.match(str(cell).strip())
+            else "fix or remove those rows"
+        )
         raise MeasurementError(
-            f"{path}: {place(i)}, column {col}: {what} is not a finite number "
-            f"({bad.size} such cells); fix or remove those rows"
+            f"{path}: {place(i)}, column {col}: {what} is not a finite number ({bad.size} such cells); {fix}"
         )
     return num
 
@@ -428,6 +527,57 @@ def read_measurement(
         tu = t[0] + step * np.arange(n)
         data = {"time_s": tu, **{c: np.interp(tu, t, data[c]) for c in COLUMNS[1:]}}
     return Measurement(data["time_s"], data["force_N"], data["voltage_V"], str(path))
+
+
+#: Samples at exactly the channel's extreme value beyond which the channel counts as clipped
+#: (at least this many, and at least CLIPPED_FRACTION of the record).
+CLIPPED_MIN_SAMPLES = 5
+CLIPPED_FRACTION = 1.0e-3
+
+
+def check_channels(m: Measurement) -> None:
+    """Refuse a dead, constant or clipped channel (one line naming the column and the fix).
+
+    A dead voltage channel (every sample 0 V) or a constant one would be
+    fitted as a sensitivity of 0 V/N with a confident interval; a clipped one
+    (many samples at exactly its largest or smallest value: the DAQ's range)
+    cuts the impulse peaks and biases the sensitivity low.
+    """
+    for col, v in (("voltage_V", m.voltage_V), ("force_N", m.force_N)):
+        lo, hi = float(v.min()), float(v.max())
+        if hi == 0.0 and lo == 0.0:
+            raise MeasurementError(
+                f"{m.source}: column {col}: every sample is 0 (a dead channel); check the sensor cable and the "
+                "DAQ channel, and record again"
+            )
+        if hi == lo:
+            raise MeasurementError(
+                f"{m.source}: column {col}: constant at {hi:g} in every sample (no signal); check the sensor "
+                "cable and the DAQ channel, and record again"
+            )
+        limit = max(CLIPPED_MIN_SAMPLES, CLIPPED_FRACTION * v.size)
+        for side, value in (("largest", hi), ("smallest", lo)):
+            n = int(np.count_nonzero(v == value))
+            if n >= limit:
+                raise MeasurementError(
+                    f"{m.source}: column {col}: clipped ({n} samples sit at exactly the {side} value {value:g}, "
+                    "the DAQ's range); widen the input range or lower the gain and record again"
+                )
+
+
+@functools.lru_cache(maxsize=16)
+def _digest(path: str, size: int, mtime_ns: int, inode: int) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def file_digest(path: str | Path) -> str:
+    """SHA-256 of a file's content (hex); computed once per process for an unchanged file."""
+    st = Path(path).stat()
+    return _digest(str(Path(path).resolve()), st.st_size, st.st_mtime_ns, st.st_ino)
 
 
 def write_measurement(m: Measurement, path: str | Path) -> None:

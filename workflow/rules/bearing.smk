@@ -160,8 +160,8 @@ rule fig03:
     params:
         **stage_params("fig03", "notebooks/fig03_housing_mesh.ipynb"),
     shell:
-        "papermill {input.notebook} {output.notebook} -k python3 -p healthy {input.healthy}"
-        " -p faulty {input.faulty} -p figure {output.figure} > {log} 2>&1"
+        "papermill {input.notebook:q} {output.notebook:q} -k python3 -r healthy {input.healthy:q}"
+        " -r faulty {input.faulty:q} -r figure {output.figure:q} > {log:q} 2>&1"
 
 
 rule scorecard_bearing:

@@ -46,8 +46,8 @@ rule extract_sensitivity:
         "../envs/piezobearing.yaml"
     threads: 1
     resources:
-        mem_mb=500,
-        runtime=2,
+        mem_mb=lambda wc, input: 500 + int(3 * input.size_mb),
+        runtime=lambda wc, input: 2 + int(0.03 * input.size_mb),
     params:
         **stage_params("extract_sensitivity", "workflow/scripts/extract_sensitivity.py"),
     script:
@@ -68,8 +68,8 @@ rule fit_resistance:
         "../envs/piezobearing.yaml"
     threads: 1
     resources:
-        mem_mb=500,
-        runtime=2,
+        mem_mb=lambda wc, input: 500 + int(5 * input.size_mb),
+        runtime=lambda wc, input: 2 + int(0.06 * input.size_mb),
     params:
         **stage_params("fit_resistance", "workflow/scripts/fit_resistance.py"),
     script:

@@ -56,13 +56,37 @@ def check_measurement():
     if not config["calibration"]["measurement"]:
         return
     from piezobearing.io import MeasurementError
-    from piezobearing.stages.calibration import load_record
+    from piezobearing.stages.calibration import check_record_once
 
-    try:
-        load_record(config["calibration"]["measurement"], config)
+    try:  # once per record content and settings (results/.checked/), not at every start
+        check_record_once(
+            config["calibration"]["measurement"], config, f"{RESULTS}/.checked"
+        )
     except MeasurementError as e:
         print(f"piezobearing: {e}", file=sys.stderr)
         sys.exit(1)
 
 
 check_measurement()
+
+
+def check_single_run():
+    """Stop a second run while another snakemake works in this folder (Snakemake would advise
+    --unlock or --rerun-incomplete, which break the live run); claim the folder for this run.
+    """
+    from piezobearing import runlock
+
+    if not workflow.is_main_process:
+        return
+    other = runlock.active_run()
+    if other is None:
+        if not runlock.inspecting(sys.argv):
+            runlock.claim()
+    elif runlock.inspecting(sys.argv):
+        print(f"piezobearing: note: {runlock.message(other)}", file=sys.stderr)
+    else:
+        print(f"piezobearing: {runlock.message(other)}", file=sys.stderr)
+        sys.exit(1)
+
+
+check_single_run()

@@ -45,8 +45,8 @@ rule diagnose:
         "../envs/piezobearing.yaml"
     threads: 1
     resources:
-        mem_mb=500,
-        runtime=2,
+        mem_mb=lambda wc, input: 500 + int(45 * input.size_mb),
+        runtime=lambda wc, input: 2 + int(0.6 * input.size_mb),
     params:
         **stage_params("diagnose", "workflow/scripts/diagnose.py"),
     script:
@@ -78,5 +78,5 @@ rule diagnosis_notebook:
     params:
         **stage_params("diagnosis_notebook", "notebooks/diagnosis.ipynb"),
     shell:
-        "papermill {input.notebook} {output.notebook} -k python3 -p diagnosis {input.diagnosis}"
-        " -p arrays {input.arrays} -p figure {output.figure} > {log} 2>&1"
+        "papermill {input.notebook:q} {output.notebook:q} -k python3 -r diagnosis {input.diagnosis:q}"
+        " -r arrays {input.arrays:q} -r figure {output.figure:q} > {log:q} 2>&1"

@@ -24,13 +24,13 @@ rule fig05:
         "../envs/piezobearing.yaml"
     threads: 1
     resources:
-        mem_mb=500,
-        runtime=2,
+        mem_mb=lambda wc, input: 500 + int(5 * input.size_mb),
+        runtime=lambda wc, input: 2 + int(0.03 * input.size_mb),
     params:
         **stage_params("fig05", "notebooks/fig05_calibration_impulses.ipynb"),
     shell:
-        "papermill {input.notebook} {output.notebook} -k python3 -p measurement {input.measurement}"
-        " -p sensitivity {input.sensitivity} -p figure {output.figure} > {log} 2>&1"
+        "papermill {input.notebook:q} {output.notebook:q} -k python3 -r measurement {input.measurement:q}"
+        " -r sensitivity {input.sensitivity:q} -r figure {output.figure:q} > {log:q} 2>&1"
 
 
 rule fig06:
@@ -53,13 +53,13 @@ rule fig06:
         "../envs/piezobearing.yaml"
     threads: 1
     resources:
-        mem_mb=500,
-        runtime=2,
+        mem_mb=lambda wc, input: 500 + int(5 * input.size_mb),
+        runtime=lambda wc, input: 2 + int(0.03 * input.size_mb),
     params:
         **stage_params("fig06", "notebooks/fig06_resistance_fit.ipynb"),
     shell:
-        "papermill {input.notebook} {output.notebook} -k python3 -p fit {input.fit}"
-        " -p resistance {input.resistance} -p figure {output.figure} > {log} 2>&1"
+        "papermill {input.notebook:q} {output.notebook:q} -k python3 -r fit {input.fit:q}"
+        " -r resistance {input.resistance:q} -r figure {output.figure:q} > {log:q} 2>&1"
 
 
 rule fig08a:
@@ -87,5 +87,5 @@ rule fig08a:
     params:
         **stage_params("fig08a", "notebooks/fig08a_lowfreq_sensitivity.ipynb"),
     shell:
-        "papermill {input.notebook} {output.notebook} -k python3 -p curve {input.curve}"
-        " -p lowfreq {input.lowfreq} -p figure {output.figure} > {log} 2>&1"
+        "papermill {input.notebook:q} {output.notebook:q} -k python3 -r curve {input.curve:q}"
+        " -r lowfreq {input.lowfreq:q} -r figure {output.figure:q} > {log:q} 2>&1"

@@ -161,8 +161,8 @@ rule fig07:
     params:
         **stage_params("fig07", "notebooks/fig07_sensor_mode.ipynb"),
     shell:
-        "papermill {input.notebook} {output.notebook} -k python3 -p modal {input.modal}"
-        " -p mode {input.mode} -p figure {output.figure} > {log} 2>&1"
+        "papermill {input.notebook:q} {output.notebook:q} -k python3 -r modal {input.modal:q}"
+        " -r mode {input.mode:q} -r figure {output.figure:q} > {log:q} 2>&1"
 
 
 rule fig08b:
@@ -190,5 +190,5 @@ rule fig08b:
     params:
         **stage_params("fig08b", "notebooks/fig08b_sensor_harmonic.ipynb"),
     shell:
-        "papermill {input.notebook} {output.notebook} -k python3 -p harmonic {input.harmonic}"
-        " -p band {input.band} -p figure {output.figure} > {log} 2>&1"
+        "papermill {input.notebook:q} {output.notebook:q} -k python3 -r harmonic {input.harmonic:q}"
+        " -r band {input.band:q} -r figure {output.figure:q} > {log:q} 2>&1"

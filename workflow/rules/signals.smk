@@ -224,9 +224,9 @@ rule fig09:
     params:
         **stage_params("fig09", "notebooks/fig09_voltage.ipynb"),
     shell:
-        "papermill {input.notebook} {output.notebook} -k python3 -p healthy {input.healthy}"
-        " -p faulty {input.faulty} -p events {input.events} -p kinematics {input.kinematics}"
-        " -p figure {output.figure} > {log} 2>&1"
+        "papermill {input.notebook:q} {output.notebook:q} -k python3 -r healthy {input.healthy:q}"
+        " -r faulty {input.faulty:q} -r events {input.events:q} -r kinematics {input.kinematics:q}"
+        " -r figure {output.figure:q} > {log:q} 2>&1"
 
 
 rule fig10:
@@ -256,9 +256,9 @@ rule fig10:
     params:
         **stage_params("fig10", "notebooks/fig10_envelope.ipynb"),
     shell:
-        "papermill {input.notebook} {output.notebook} -k python3 -p healthy {input.healthy}"
-        " -p faulty {input.faulty} -p indicator {input.indicator} -p kinematics {input.kinematics}"
-        " -p figure {output.figure} > {log} 2>&1"
+        "papermill {input.notebook:q} {output.notebook:q} -k python3 -r healthy {input.healthy:q}"
+        " -r faulty {input.faulty:q} -r indicator {input.indicator:q} -r kinematics {input.kinematics:q}"
+        " -r figure {output.figure:q} > {log:q} 2>&1"
 
 
 rule scorecard_signals:

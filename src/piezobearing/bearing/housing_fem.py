@@ -44,6 +44,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .. import sparse_solve
 from ..sensor.materials import IsotropicMaterial, PiezoMaterial
 from .housing_mesh import GROUP_HOUSING, GROUP_RING, HousingMesh, nested_dissection_order
 
@@ -255,6 +256,10 @@ class HousingModel:
         the roller's half-length (half the load: the half model carries half).
     sensor_stiffness_N_per_m : float
     patch_width_m : float
+    solver : str or None
+        Sparse direct solver of K and of the direct method's effective matrix
+        (:func:`piezobearing.sparse_solve.factorize`): None (PARDISO where
+        installed), ``pardiso`` or ``superlu`` (the previous method).
     """
 
     mesh: HousingMesh
@@ -267,6 +272,7 @@ class HousingModel:
     sensor_stiffness_N_per_m: float
     patch_width_m: float
     mass_kg: float
+    solver: str | None = None
     _lu: object = field(default=None, repr=False)
 
     @property
@@ -274,9 +280,9 @@ class HousingModel:
         return len(self.free)
 
     def factor(self):
-        """SuperLU factors of K (cached)."""
+        """Factors of K (cached): PARDISO's Cholesky or SuperLU in the model's nested-dissection order."""
         if self._lu is None:
-            self._lu = splu_symmetric(self.K)
+            self._lu = factorize_spd(self.K, self.solver)
         return self._lu
 
     def patch_weights(self, psi_rad: np.ndarray) -> np.ndarray:
@@ -348,6 +354,17 @@ def spring_share_factor(k_new_N_per_m: float, k_ref_N_per_m: float, port_complia
     """
     a0 = port_compliance_m_per_N
     return k_new_N_per_m * (1 + 0.5 * k_ref_N_per_m * a0) / (k_ref_N_per_m * (1 + 0.5 * k_new_N_per_m * a0))
+
+
+def factorize_spd(a: sp.spmatrix, solver: str | None = None):
+    """Factors of a symmetric positive definite matrix of the model (``solve(b)``).
+
+    PARDISO orders with METIS; SuperLU (``solver="superlu"``) keeps the
+    model's nested-dissection numbering (:func:`splu_symmetric`).
+    """
+    if sparse_solve.resolve(solver) == "superlu":
+        return splu_symmetric(a)
+    return sparse_solve.factorize(a, definite=True, solver="pardiso")
 
 
 def splu_symmetric(a: sp.spmatrix, ordering: str = "NATURAL"):
@@ -642,11 +659,11 @@ def sensor_force_direct(
         return blocks
 
     class _LS(ScipyDirect):
-        """sfepy's direct solver, factorising with a symmetric ordering (much less fill-in)."""
+        """sfepy's direct solver, factorising the (symmetric positive definite) effective matrix once."""
 
         def presolve(self, mtx, use_mtx_digest=True):
             if self.solve is None:
-                self.solve = splu_symmetric(mtx).solve
+                self.solve = factorize_spd(mtx, model.solver).solve
 
     ls = _LS({"use_presolve": True, "use_mtx_digest": False})
     nls = Newton(

@@ -45,6 +45,7 @@ UNITS: tuple[Unit, ...] = (
     Unit("_Hz", "Hz", 1.0, "Hz"),
     Unit("_per_N", "1/N", 1.0, "1/N"),
     Unit("_ratio", "1", 1.0, "x"),
+    Unit("_ppm", "1e-6", 1.0, "ppm"),
 )
 
 #: The suffixes alone (for ``str.endswith``).

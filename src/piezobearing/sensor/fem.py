@@ -69,6 +69,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from piezobearing import sparse_solve
 from piezobearing.sensor.materials import IsotropicMaterial, StressChargeForm
 from piezobearing.sensor.mesh import GROUP_ADHESIVE, GROUP_BOTTOM_DISK, GROUP_PZT, GROUP_TOP_DISK, StackMesh
 
@@ -356,15 +357,15 @@ class ReducedSystem:
     f: np.ndarray = field(repr=False)
     scale: float
     electrode_active: bool
+    solver: str | None = None
 
     @cached_property
     def _saddle_lu(self):
+        """Factors of the symmetric indefinite saddle matrix: PARDISO's LDL^T, or SuperLU (``solver``)."""
         s = self.scale
         a = sp.bmat([[self.K, s * self.G_I], [s * self.G_I.T, -(s * s) * self.Kpp_II]], format="csc")
         log.info("factorizing saddle matrix n=%d nnz=%d", a.shape[0], a.nnz)
-        return spla.splu(
-            a, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True}
-        )
+        return sparse_solve.factorize(a, definite=False, solver=self.solver, ordering="MMD_AT_PLUS_A")
 
     @cached_property
     def _kpp_lu(self):
@@ -438,8 +439,12 @@ class ReducedSystem:
         return out.reshape(-1, 3)
 
 
-def reduce(asm: Assembled, bc: BoundaryConditions) -> ReducedSystem:
-    """Apply the conditions of ``bc`` and split the potential into interior and electrodes."""
+def reduce(asm: Assembled, bc: BoundaryConditions, solver: str | None = None) -> ReducedSystem:
+    """Apply the conditions of ``bc`` and split the potential into interior and electrodes.
+
+    ``solver`` factorises the saddle matrix (:func:`piezobearing.sparse_solve.factorize`):
+    None (PARDISO where installed), ``pardiso`` or ``superlu`` (the previous method).
+    """
     if len(bc.symmetry) != 2 or set(bc.symmetry) - {"S", "A"}:
         raise ValueError(f"symmetry must be two letters S/A, got {bc.symmetry!r}")
     span = np.ptp(asm.u_coors, axis=0).max()
@@ -494,6 +499,7 @@ def reduce(asm: Assembled, bc: BoundaryConditions) -> ReducedSystem:
         f=asm.load[free_u],
         scale=scale,
         electrode_active=electrode_active,
+        solver=solver,
     )
 
 

@@ -458,19 +458,33 @@ def snr_sweep(
     master_seed: int,
     envelope_settings: EnvelopeSettings,
     indicator_settings: IndicatorSettings,
+    method: str = "batch",
 ) -> list[dict]:
     """Detection of one noiseless record over SNRs and noise seeds.
 
     Replicate j uses the generator :func:`noise_rng` (master_seed, case, j)
     at every SNR (common random numbers: the same noise shape, scaled), so
     replicate 0 at the configured SNR is the record of the ``noisy`` stage.
+
+    ``method="batch"`` (default) analyses all SNRs of a seed at once as array
+    operations (:func:`_sweep_seed_batch`), with the filter gains, bins and
+    threshold computed once; ``method="loop"`` calls :func:`analyse` record
+    by record (the previous method). Both give the same rows (same operations
+    per record; benchmarks/bench_signals.py compares them).
     """
+    if method not in ("batch", "loop"):
+        raise ValueError(f"method must be 'batch' or 'loop', got {method!r}")
+    v = np.asarray(voltage_V, dtype=float)
+    sigmas = np.array([noise_std_for_snr(v, s) for s in snr_dB])
+    plan = _SweepPlan(len(v), dt_s, f0_Hz, envelope_settings, indicator_settings) if method == "batch" else None
     rows = []
     for j in range(n_seeds):
-        shape = noise_rng(master_seed, case, j).standard_normal(len(voltage_V))
-        for s in snr_dB:
-            y = voltage_V + noise_std_for_snr(voltage_V, s) * shape
-            r = analyse(y, dt_s, f0_Hz, envelope_settings, indicator_settings).result
+        shape = noise_rng(master_seed, case, j).standard_normal(len(v))
+        if method == "batch":
+            res = _sweep_seed_batch(v[None, :] + sigmas[:, None] * shape[None, :], plan)
+        else:
+            res = [analyse(v + sg * shape, dt_s, f0_Hz, envelope_settings, indicator_settings).result for sg in sigmas]
+        for s, r in zip(snr_dB, res, strict=True):
             rows.append(
                 {
                     "case": case,
@@ -485,6 +499,93 @@ def snr_sweep(
                 }
             )
     return rows
+
+
+class _SweepPlan:
+    """What every record of a sweep shares: length, band gains, floor windows, threshold."""
+
+    def __init__(self, n_samples: int, dt_s: float, f0_Hz: float, es: EnvelopeSettings, ins: IndicatorSettings):
+        self.n = whole_period_samples(n_samples, dt_s, f0_Hz)
+        self.dt_s, self.f0_Hz, self.es, self.ins = dt_s, f0_Hz, es, ins
+        self.f = np.fft.rfftfreq(self.n, dt_s)
+        if es.band_rule == "fixed":
+            self.bands = [(float(es.band_Hz[0]), float(es.band_Hz[1]))]
+        elif es.band_rule == "kurtogram":
+            self.bands = kurtogram_bands(1.0 / dt_s, es.min_bandwidth_Hz)
+        else:
+            raise ValueError(f"signals.band_rule: unknown rule '{es.band_rule}'; use 'kurtogram' or 'fixed'")
+        self.gains = [band_gain(self.f, 1.0 / dt_s, b, es.filter_order) for b in self.bands]
+        # the indicator's bins and floor windows, as harmonic_ratios finds them
+        fe = np.fft.rfftfreq(self.n, dt_s)
+        probe = EnvelopeSpectrum(fe, np.ones(fe.size), self.bands[0], self.n)
+        harm = harmonic_ratios(probe, f0_Hz, ins)
+        df = probe.resolution_Hz
+        g = ins.guard_bins
+        near = np.zeros(fe.size, dtype=bool)
+        for j in range(1, int(fe[-1] / f0_Hz) + 2):
+            near |= np.abs(fe - j * f0_Hz) <= (g + 0.5) * df
+        self.harm = harm
+        self.bins = [int(round(h["k"] * f0_Hz / df)) for h in harm]
+        self.windows = [
+            np.flatnonzero((np.abs(fe - h["k"] * f0_Hz) <= ins.floor_halfwidth * f0_Hz) & ~near & (fe > 0))
+            for h in harm
+        ]
+        m = min(h["n_floor_bins"] for h in harm)
+        self.threshold = indicator_threshold(ins.false_alarm_probability, ins.n_harmonics, m)
+
+    def analytic(self, spectra: np.ndarray, gain: np.ndarray) -> np.ndarray:
+        """Analytic band signals of rows with rfft ``spectra`` (as :func:`analytic_band_signal`)."""
+        n = self.n
+        y = spectra * gain
+        z = np.zeros((spectra.shape[0], n), dtype=complex)
+        z[:, : y.shape[1]] = y
+        z[:, 1 : (n + 1) // 2] *= 2.0
+        return np.fft.ifft(z, axis=1)
+
+
+def _sweep_seed_batch(records: np.ndarray, plan: _SweepPlan) -> list[dict]:
+    """:func:`analyse`'s result (band, indicator, harmonics) for each row of ``records`` (r, n_samples)."""
+    n = plan.n
+    x = np.ascontiguousarray(records[:, :n], dtype=float)
+    spectra = np.fft.rfft(x, axis=1)
+    if plan.es.band_rule == "kurtogram":
+        sk = np.empty((x.shape[0], len(plan.bands)))
+        for b, gain in enumerate(plan.gains):
+            p = np.abs(plan.analytic(spectra, gain)) ** 2
+            sk[:, b] = np.mean(p * p, axis=1) / np.mean(p, axis=1) ** 2 - 2.0
+        choice = np.argmax(sk, axis=1)
+    else:
+        choice = np.zeros(x.shape[0], dtype=int)
+    amp = np.empty((x.shape[0], n // 2 + 1))
+    for b in np.unique(choice):
+        rows = np.flatnonzero(choice == b)
+        e = np.abs(plan.analytic(spectra[rows], plan.gains[b]))
+        a = 2.0 * np.abs(np.fft.rfft(e - e.mean(axis=1, keepdims=True), axis=1)) / n
+        if n % 2 == 0:
+            a[:, -1] /= 2.0
+        amp[rows] = a
+    out = []
+    for r in range(x.shape[0]):
+        a = amp[r]
+        harm = []
+        for h, i, win in zip(plan.harm, plan.bins, plan.windows, strict=True):
+            floor = float(np.sqrt(np.mean(a[win] ** 2)))
+            ratio = float(a[i] ** 2 / floor**2) if floor > 0 else float("inf")
+            harm.append(
+                {"k": h["k"], "ratio": ratio, "ratio_dB": float(10 * np.log10(ratio)) if ratio > 0 else float("-inf")}
+            )
+        value = float(sum(h["ratio"] for h in harm))
+        band = plan.bands[choice[r]]
+        out.append(
+            {
+                "band_Hz": [float(band[0]), float(band[1])],
+                "indicator": value,
+                "threshold": plan.threshold,
+                "detected": bool(value > plan.threshold),
+                "harmonics": harm,
+            }
+        )
+    return out
 
 
 def detection_limit_dB(snr_dB: np.ndarray, rate: np.ndarray, required_rate: float) -> float:

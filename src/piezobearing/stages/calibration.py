@@ -34,6 +34,62 @@ def load_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]
     return read_record(path, config)
 
 
+def _checks_digest(path: str, config: dict) -> str:
+    """What a record's check depends on: its content, the settings the checks read, the checking code."""
+    import hashlib
+    import json
+    from pathlib import Path
+
+    from .. import io
+    from ..diagnosis.calibration import record
+    from ..sensor import calibration as sensor_cal
+
+    h = hashlib.sha256(io.file_digest(path).encode())
+    h.update(
+        json.dumps({k: config[k] for k in ("calibration", "sensor")}, sort_keys=True, default=str).encode()
+    )
+    for mod in (io, record, sensor_cal):
+        h.update(Path(mod.__file__).read_bytes())
+    h.update(Path(__file__).read_bytes())
+    return h.hexdigest()
+
+
+def check_record_once(path: str, config: dict, cache_dir: str) -> dict:
+    """:func:`load_record`'s checks, done once per record content and settings.
+
+    The workflow checks the user's record at every start (even ``-n``); a
+    record that passed is remembered in ``cache_dir``/<digest>.json, keyed by
+    the SHA-256 of the file's content, the calibration and sensor settings
+    and the checking code, so an unchanged 200 MB record costs one hash per
+    start, not a parse. Failures are not cached. Returns the summary.
+    """
+    import json
+    from pathlib import Path
+
+    from ..io import check_readable
+
+    check_readable(Path(path), text=False)  # a folder or unreadable file: one line before hashing
+    key = _checks_digest(path, config)
+    memo = Path(cache_dir) / f"{key}.json"
+    if memo.is_file():
+        try:
+            return json.loads(memo.read_text())
+        except (OSError, json.JSONDecodeError):
+            pass
+    m, imps = load_record(path, config)
+    summary = {
+        "measurement": str(path),
+        "rows": int(m.time_s.size),
+        "sample_rate_Hz": m.sample_rate_Hz,
+        "impulses": len(imps),
+    }
+    try:
+        write_json(summary, memo)
+    except OSError:
+        pass  # a read-only results/ only costs the next start another check
+    return summary
+
+
 def extract_sensitivity(measurement_csv: str, out_json: str, config: dict) -> None:
     """Peak voltage over peak force per impulse → results/calibration/sensitivity.json."""
     m, imps = load_record(measurement_csv, config)

@@ -15,9 +15,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...io import Measurement, MeasurementError, read_measurement
+from ...io import Measurement, MeasurementError, check_channels, read_measurement
 from ...sensor import calibration as cal
 from ..record import Record, Segments
+
+#: A voltage that correlates less than this with the model's prediction from the measured force, for
+#: every resistance of FLAT_RESISTANCE_FACTORS x calibration.initial_resistance_ohm, carries no sensor
+#: signal (a disconnected channel: noise only). A good synthetic record reaches 0.99, a record whose
+#: signal is 1/1000 of its 2 mV noise 0.17 (measured on the CI record).
+FLAT_CORRELATION = 0.3
+FLAT_RESISTANCE_FACTORS = np.array([0.1, 1.0, 10.0, 100.0])
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,6 +61,7 @@ def read_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]
         channels=c.get("channels"),
         wav_full_scale_V=c.get("wav_full_scale_V"),
     )
+    check_channels(m)  # dead, constant or clipped
     imps = cal.detect_impulses(
         m.force_N, m.voltage_V, m.dt_s, c["min_prominence_fraction"], c["min_separation_s"]
     )
@@ -63,6 +71,23 @@ def read_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]
             "or lower calibration.min_prominence_fraction / min_separation_s"
         )
     nominal = cal.SensorCircuit.from_config(config["sensor"], c["initial_resistance_ohm"])
+    corr = max(
+        abs(
+            float(
+                np.corrcoef(
+                    cal.circuit_voltage(m.force_N - m.force_N[0], m.dt_s, nominal.with_resistance(r)),
+                    m.voltage_V,
+                )[0, 1]
+            )
+        )
+        for r in c["initial_resistance_ohm"] * FLAT_RESISTANCE_FACTORS
+    )
+    if not corr >= FLAT_CORRELATION:
+        raise MeasurementError(
+            f"{path}: column voltage_V: flat, no sensor signal (correlation {corr:.2f} at best with the "
+            "voltage the sensor model predicts from force_N, for any resistance from 0.1 to 100 times "
+            "calibration.initial_resistance_ohm); check the sensor cable, the DAQ channel and its gain"
+        )
     neg = cal.polarity_votes(m.force_N, m.voltage_V, m.dt_s, imps, nominal)
     if neg > len(imps) / 2:
         raise MeasurementError(

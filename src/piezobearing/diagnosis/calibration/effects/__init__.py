@@ -18,6 +18,7 @@ identifier             what it models
 ``baseline_drift``     slow additive drift (pyroelectric, thermal, offset)
 ``extra_capacitance``  capacitance across the electrodes beyond Cp + cable
 ``d33_scale``          d33 off the datasheet by a factor (same record as extra C)
+``clock_drift``        sample-clock rate difference force/voltage (ppm)
 =====================  ==========================================================
 """
 
@@ -50,6 +51,7 @@ from . import (  # noqa: E402  (the modules import .base, registered in this ord
     ac_coupling,
     baseline_drift,
     channel_delay,
+    clock_drift,
     d33_nonlinearity,
     d33_scale,
     extra_capacitance,
@@ -66,6 +68,7 @@ _MODULES = (
     baseline_drift,
     extra_capacitance,
     d33_scale,
+    clock_drift,
 )
 for _m in _MODULES:
     register(_m.EFFECT)

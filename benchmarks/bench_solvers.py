@@ -1,0 +1,163 @@
+"""Old against new methods of issue 14, in one run each, as ratios (timings on a shared machine are noisy).
+
+* housing: factorisation of K and the influence line (one solve) at each mesh level of the
+  convergence study, and the shift-invert modes, with SuperLU in the model's nested-dissection
+  numbering (the previous method) and with PARDISO (MKL); the relative difference of the influence
+  line and of the natural frequencies between the two;
+* sensor: the SS family's saddle factorisation and its short-circuit modes on the default mesh;
+* snr_study: the sweep of one record (the paper's healthy stand-in) over the study's SNR grid and
+  seeds, record by record (method='loop', the previous method) against batched over SNRs.
+
+Writes results/benchmarks/solvers.json. Usage: python benchmarks/bench_solvers.py [--ci] [--only housing,sensor,snr] [--max-level 1.0]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from piezobearing import config as cfg
+from piezobearing import sparse_solve
+
+
+def _timed(fn):
+    t0 = time.perf_counter()
+    out = fn()
+    return out, time.perf_counter() - t0
+
+
+def bench_housing(config: dict, max_level: float) -> dict:
+    from piezobearing.bearing import housing_fem as fem
+    from piezobearing.bearing import transient as st
+    from piezobearing.bearing.housing_mesh import build_housing_mesh
+
+    h = config["housing"]
+    out = {}
+    for level in [lv for lv in h["convergence_levels"] if lv <= max_level]:
+        mesh = build_housing_mesh(st.housing_geometry(config), False, level)
+        model = st.make_model(mesh, config)
+        row = {"n_dofs": model.n_dofs}
+        lines = {}
+        for solver in ("superlu", "pardiso"):
+            model.solver, model._lu = solver, None
+            lu, secs = _timed(model.factor)
+            (gy, gz, radial), solve_s = _timed(model.influence_line)
+            row[solver] = {"factor_s": secs, "influence_line_s": solve_s, "factor_nnz": int(lu.factor_nnz)}
+            if level == h["mesh_level"]:
+                modes, row[solver]["modes_s"] = _timed(
+                    lambda mdl=model: fem.compute_modes(mdl, h["n_modes"], config["seed"])
+                )
+                lines[solver + "_freq"] = modes.frequencies_Hz
+            lines[solver] = radial
+            model._lu = lu = None
+        row["speedup_factor_and_line"] = (row["superlu"]["factor_s"] + row["superlu"]["influence_line_s"]) / (
+            row["pardiso"]["factor_s"] + row["pardiso"]["influence_line_s"]
+        )
+        row["influence_line_max_rel_diff"] = float(
+            np.abs(lines["pardiso"] - lines["superlu"]).max() / np.abs(lines["superlu"]).max()
+        )
+        if "pardiso_freq" in lines:
+            row["speedup_modes"] = row["superlu"]["modes_s"] / row["pardiso"]["modes_s"]
+            row["natural_frequency_max_rel_diff"] = float(
+                np.max(np.abs(lines["pardiso_freq"] / lines["superlu_freq"] - 1))
+            )
+        out[f"level_{level}"] = row
+        print(json.dumps({f"level_{level}": row}), flush=True)
+        del model
+    return out
+
+
+def bench_sensor(config: dict) -> dict:
+    from piezobearing.sensor import analysis as st
+    from piezobearing.sensor import fem
+    from piezobearing.sensor.mesh import stack_mesh
+
+    p = st.SensorFemParams.from_config(config)
+    asm = st._assemble(stack_mesh(p.geometry, p.density, p.multiplier), p)
+    out = {"n_dof_displacement": int(asm.n_u)}
+    freqs = {}
+    for solver in ("superlu", "pardiso"):
+        rs = fem.reduce(asm, fem.stack_conditions(p.geometry.z_interfaces_m, "SS"), solver=solver)
+        lu, fs = _timed(lambda rs=rs: rs._saddle_lu)
+        m, ms = _timed(lambda rs=rs: fem.modes(rs, p.n_ritz_modes, "short"))
+        out[solver] = {"factor_s": fs, "modes_s": ms, "factor_nnz": int(lu.factor_nnz)}
+        freqs[solver] = m.frequency_Hz
+        del rs, lu
+    out["speedup"] = (out["superlu"]["factor_s"] + out["superlu"]["modes_s"]) / (
+        out["pardiso"]["factor_s"] + out["pardiso"]["modes_s"]
+    )
+    out["frequency_max_rel_diff"] = float(np.max(np.abs(freqs["pardiso"] / freqs["superlu"] - 1)))
+    print(json.dumps({"sensor": out}), flush=True)
+    return out
+
+
+def bench_snr(config: dict) -> dict:
+    from piezobearing.signals import detection as S
+    from piezobearing.signals.analysis import snr_grid
+
+    s = config["signals"]
+    fs = 2550.0
+    dt, f0 = 1 / fs, fs / 36
+    n = int(round(config["bearing"]["duration_s"] * fs))
+    t = dt * np.arange(n)
+    # a roller-passage stand-in: a smooth bump per passage plus a two-sample impulse (the faulty case)
+    ph = (t * f0) % 1.0
+    v = 0.2 * np.exp(-0.5 * ((ph - 0.4) / 0.1) ** 2)
+    v[np.flatnonzero(np.diff(np.floor(t * f0 - 0.3)) > 0) + 1] -= 0.05
+    grid = snr_grid(s)
+    out = {"n_samples": n, "n_snr": len(grid), "n_seeds": s["study_n_seeds"]}
+    ins = S.IndicatorSettings.from_config(s)
+    for rule in ("fixed", "kurtogram"):
+        es = S.EnvelopeSettings.from_config(dict(s, band_rule=rule))
+        res = {}
+        for method in ("loop", "batch"):
+            rows, res[method] = _timed(
+                lambda m=method, e=es: S.snr_sweep(v, dt, f0, "faulty", grid, s["study_n_seeds"], 7, e, ins, method=m)
+            )
+            res[method + "_rows"] = rows
+        out[rule] = {
+            "loop_s": res["loop"],
+            "batch_s": res["batch"],
+            "speedup": res["loop"] / res["batch"],
+            "rows_identical": res["loop_rows"] == res["batch_rows"],
+        }
+        print(json.dumps({rule: out[rule]}), flush=True)
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--ci", action="store_true", help="use config/ci.yaml")
+    ap.add_argument("--only", default="housing,sensor,snr")
+    ap.add_argument("--out", default="results/benchmarks/solvers.json")
+    ap.add_argument(
+        "--max-level", type=float, default=10.0, help="skip housing levels above this (SuperLU needs 7.4 GB at 2.0)"
+    )
+    args = ap.parse_args()
+    config = cfg.load(cfg.CONFIG_DIR / "ci.yaml") if args.ci else cfg.load()
+    out = {
+        "cpu_count": os.cpu_count(),
+        "load_average_at_start": os.getloadavg()[0],
+        "config": "ci" if args.ci else "paper",
+        "pardiso_available": sparse_solve.pardiso_available(),
+    }
+    parts = args.only.split(",")
+    if "snr" in parts:
+        out["snr_study"] = bench_snr(config)
+    if "sensor" in parts:
+        out["sensor"] = bench_sensor(config)
+    if "housing" in parts:
+        out["housing"] = bench_housing(config, args.max_level)
+    out["load_average_at_end"] = os.getloadavg()[0]
+    path = Path(args.out)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(out, indent=2) + "\n")
+
+
+if __name__ == "__main__":
+    main()
