@@ -5,6 +5,12 @@
     tests, effect ranking, stepwise selection, verdict; writes
     DIR/diagnosis.json, DIR/report.md, DIR/figures/ and DIR/diagnosis.npz.
 
+``piezobearing diagnose-bearing RECORD --out DIR [--config FILE] [--influence CSV]``
+    Hold the bearing model against a running-bearing record (time_s,
+    voltage_V[, speed_rpm]): baseline, bearing views, catalogue ranking,
+    stepwise selection, verdict and the fault (type, size, position with
+    95% intervals); writes DIR/diagnosis.json, DIR/report.md, DIR/figures/.
+
 ``piezobearing validate FILE [--config FILE]``
     Check a calibration CSV (time_s, force_N, voltage_V) as the workflow
     does before any job runs (file checks, at least two impulses, voltage
@@ -197,6 +203,44 @@ def _diagnose(args) -> int:
     return 0
 
 
+def _diagnose_bearing(args) -> int:
+    from . import config as cfg
+    from .diagnosis.effect import EffectError
+    from .io import MeasurementError, ResultFileError
+    from .stages.bearing_diagnosis import diagnose_bearing
+
+    try:
+        config, _ = _load_config(args)
+    except (cfg.ConfigError, OSError) as e:
+        return _fail(str(e))
+    config["bearing"]["measurement"] = args.record
+
+    def progress(msg: str) -> None:
+        if not args.quiet:
+            print(f"  fit: {msg}", file=sys.stderr, flush=True)
+
+    try:
+        if not args.influence and not args.quiet:
+            print("solving the housing's influence line from the config (a few seconds)", file=sys.stderr)
+        d = diagnose_bearing(args.record, args.out, config, args.influence, progress)
+    except (MeasurementError, EffectError, ResultFileError) as e:
+        return _fail(str(e))
+    for w in d["record_warnings"]:
+        print(f"warning: {w}")
+    base, final, f = d["baseline"], d["final"], d["fault"]
+    print(f"baseline NRMSE {100 * base['nrmse']:.2f}% (noise floor {100 * base['noise_floor_nrmse']:.2f}%)")
+    print(
+        f"selected: {', '.join(d['selected']) or 'nothing'}; final NRMSE {100 * final['nrmse']:.2f}% "
+        f"(floor {100 * final['noise_floor_nrmse']:.2f}%)"
+    )
+    print(f"fault: {f['type']}" + "".join(f"; {k} = {v:.6g} [{f['ci95'][k][0]:.6g}, {f['ci95'][k][1]:.6g}]" for k, v in f["params"].items() if f["ci95"].get(k)))
+    print(f"verdict: {d['verdict']}")
+    for u in d["unexplained"][:5]:
+        print(f"  - {u['where']}")
+    print(f"report: {args.out}/report.md")
+    return 0
+
+
 def _version() -> str:
     from importlib.metadata import PackageNotFoundError, version
 
@@ -235,6 +279,20 @@ def _parser() -> argparse.ArgumentParser:
     )
     d.add_argument("--quiet", action="store_true", help="no progress bar")
     d.set_defaults(func=_diagnose)
+    b = sub.add_parser(
+        "diagnose-bearing",
+        help="hold the bearing model against a running-bearing record and write a report",
+        description="Fit the bearing chain to a running-bearing record, rank the missing effects, name the fault.",
+    )
+    b.add_argument("record", help="record with time_s, voltage_V[, speed_rpm] (s, V, rpm): .csv, .mat, .uff, .tdms, .wav")
+    b.add_argument("--out", required=True, help="output folder (diagnosis.json, report.md, figures/)")
+    b.add_argument("--config", metavar="FILE", help="YAML file merged over config/config.yaml (bearing, sensor, bearing_diagnosis)")
+    b.add_argument(
+        "--influence",
+        help="the housing's influence line (results/bearing/influence_line_healthy.csv); default: solved from the config",
+    )
+    b.add_argument("--quiet", action="store_true", help="no progress lines")
+    b.set_defaults(func=_diagnose_bearing)
     v = sub.add_parser(
         "validate",
         help="check a calibration CSV as the workflow does",

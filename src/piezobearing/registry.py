@@ -149,6 +149,9 @@ READS: dict[str, list[str]] = {
     "fault_classification": ["seed", "signals", "bearing.defects"],
     # diagnostics.smk
     "diagnose": ["seed", "sensor", "synthesis", "calibration", "model", "diagnostics"],
+    # diagnostics_bearing.smk
+    "synthesize_bearing_record": ["seed", "sensor", "bearing", "bearing_diagnosis"],
+    "diagnose_bearing": ["seed", "sensor", "bearing", "bearing_diagnosis", "diagnostics"],
 }
 
 

@@ -39,6 +39,12 @@ def measurement_csv():
     return user if user else f"{RESULTS}/calibration/measurement.csv"
 
 
+def bearing_record():
+    """The running-bearing record: the user's file (bearing.measurement) or the synthetic one."""
+    user = config["bearing"]["measurement"]
+    return user if user else f"{RESULTS}/diagnostics_bearing/synthetic_record.csv"
+
+
 def stage_params(rule, entry):
     """A rule's params, from piezobearing.registry: the config values its stage reads (``reads``, all the
     stage receives), the hash of the package code its script or notebook ``entry`` runs (``code``) and, for

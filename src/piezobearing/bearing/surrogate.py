@@ -37,10 +37,16 @@ from typing import Callable
 
 import numpy as np
 
-from .lpm import BearingGeometry, contact_law, kinematic_frequencies, line_contact_stiffness
+from .lpm import BearingGeometry, chord_drop_m, contact_law, kinematic_frequencies, line_contact_stiffness
 
 #: Points of the cage-phase table over one roller pitch.
 TABLE_POINTS = 4096
+#: The table with an outer-race groove is this many times finer (the groove's edges are kinks that a
+#: coarse table would put at grid points: a bias of the fitted angle of about one table step); over a
+#: cage turn (with roller scatter) twice.
+GROOVE_REFINE = 16
+#: Points per roller pitch of the table over a cage turn (roller scatter, no groove).
+SCATTER_POINTS = 256
 
 
 @dataclass(frozen=True)
@@ -247,31 +253,42 @@ class Surrogate:
         hit = self._cache.get(ck)
         if hit is not None:
             return hit
-        if offsets is None:
-            period, m = self.geometry.roller_pitch_rad, self.table_points
-        else:
-            period, m = 2 * np.pi, self.table_points * self.geometry.n_rollers
-        phi = np.linspace(0.0, period, m + 1)
-        base = 0.0 if offsets is None else np.asarray(offsets)[None, :]
+        z = self.geometry.n_rollers
+        period = self.geometry.roller_pitch_rad if offsets is None else 2 * np.pi
+        base = np.zeros(z) if offsets is None else np.asarray(offsets)
         if outer_drop is None:
-            base = np.broadcast_to(base, (m + 1, self.geometry.n_rollers))
-            f, _ = self.sensor_force_at(phi, op, base)
+            # with scatter the table spans a cage turn: a coarser grid, the loads smooth without a groove
+            m = self.table_points if offsets is None else SCATTER_POINTS * z
+            phi = np.linspace(0.0, period, m + 1)
+            psi = self.roller_angles(phi)
+            e0 = None
+            if offsets is not None:  # start from the equal rollers' equilibrium
+                ft = self.table(op)
+                grid = np.linspace(0.0, ft[2], ft[4].shape[0])
+                e0 = np.stack([np.interp(np.mod(phi, ft[2]), grid, ft[4][:, i]) for i in (0, 1)], 1)
+            q, e = quasi_static_loads(
+                psi, np.broadcast_to(base, psi.shape), op.radial_load_N, 0.5 * op.radial_clearance_m,
+                self.k_contact, e0_m=e0, return_offset=True,
+            )
+            f = np.sum(q * self.influence(psi), axis=1)
+            f[-1] = f[0]
+            g = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(phi))])
+            out = (f, g, period, q > 0, e)
         else:
-            # only the phases at which a roller stands in the defect differ from the table without it
-            f = self.table(op, None, None, offsets)[0].copy()
+            # only the phases at which a roller stands in the groove differ from the table without it
+            m = (GROOVE_REFINE * self.table_points) if offsets is None else (2 * self.table_points * z)
+            phi = np.linspace(0.0, period, m + 1)
+            bt = self.table(op, None, None, offsets)
+            grid = np.linspace(0.0, period, bt[0].size)
+            f = np.interp(phi, grid, bt[0])
             drop = outer_drop(self.roller_angles(phi))
             rows = np.flatnonzero(drop.max(axis=1) > 0)
             if rows.size:
-                f[rows] = self.sensor_force_at(phi[rows], op, drop[rows] + base)[0]
-        f[-1] = f[0]
-        g = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(phi))])
-        out = (f, g, period)
-        if outer_drop is None:  # which rollers carry load at each phase (for moving defects)
-            psi = self.roller_angles(phi)
-            q, e = quasi_static_loads(
-                psi, base, op.radial_load_N, 0.5 * op.radial_clearance_m, self.k_contact, return_offset=True
-            )
-            out = (f, g, period, q > 0, e)
+                k = np.rint(phi[rows] / period * (bt[0].size - 1)).astype(int)
+                f[rows] = self.sensor_force_at(phi[rows], op, drop[rows] + base[None, :], e0_m=bt[4][k])[0]
+            f[-1] = f[0]
+            g = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(phi))])
+            out = (f, g, period)
         self._cache[ck] = out
         while len(self._cache) > 16:
             self._cache.pop(next(iter(self._cache)))
@@ -318,9 +335,14 @@ class Surrogate:
         out = np.interp(np.mod(phi, period), grid, f)
         # a drop under a roller that carries nothing changes nothing: solve only where a loaded roller drops
         # (loaded at the nearest table phase or either neighbour)
-        k = np.rint(np.mod(phi, period) / period * (f.size - 1)).astype(int)
-        m = f.size - 1
-        near = loaded[k] | loaded[np.mod(k - 1, m)] | loaded[np.mod(k + 1, m)]
+        m = loaded.shape[0] - 1
+        k = np.rint(np.mod(phi, period) / period * m).astype(int) % m
+        # the record's roller j stands where the table's roller j + n does, n = whole pitches turned
+        # (a pitch: the labels shift by one roller; a cage turn: none)
+        z = loaded.shape[1]
+        n = np.floor(phi / period).astype(int) * int(round(z * period / (2 * np.pi)))
+        cols = (np.arange(z)[None, :] + n[:, None]) % z
+        near = loaded[k[:, None], cols] | loaded[np.mod(k - 1, m)[:, None], cols] | loaded[np.mod(k + 1, m)[:, None], cols]
         rows = np.flatnonzero(np.any((drop_m > 0) & near, axis=1))
         if rows.size:
             psi = self.roller_angles(phi[rows])
@@ -368,19 +390,10 @@ def phase_edges(phase_rad: np.ndarray) -> np.ndarray:
 
 
 def groove_drop(u_m: np.ndarray, width_m: float, rho_m: float) -> np.ndarray:
-    """Radial drop [m] where a cylinder of relative radius rho bridges a groove of width w.
-
-    ``u_m`` is the arc length from the groove's centre. Resting on the nearer
-    edge, the contact sinks rho - sqrt(rho^2 - m^2), m = w/2 - |u| the
-    distance to that edge; 0 outside the groove. rho is the relative radius
-    of the two surfaces, 1/(1/r - 1/R) on a concave (outer) raceway and
-    1/(1/r + 1/R) on a convex (inner) one (NOTES-ENGINEERING).
-    """
-    half = 0.5 * width_m
-    m = half - np.abs(u_m)
-    inside = m > 0
-    mm = np.minimum(np.where(inside, np.minimum(m, half), 0.0), rho_m)
-    return np.where(inside, rho_m - np.sqrt(rho_m * rho_m - mm * mm), 0.0)
+    """Radial drop [m] where a cylinder of relative radius rho bridges a groove of width w, at arc u
+    from its centre: the LPM's :func:`~piezobearing.bearing.lpm.chord_drop_m`, without a depth cap
+    (the drop of a groove a roller can bridge is far below any groove's depth)."""
+    return chord_drop_m(u_m, width_m, np.inf, rho_m)
 
 
 def wrap(angle_rad: np.ndarray) -> np.ndarray:
@@ -394,8 +407,8 @@ def outer_race_drop(psi_rad: np.ndarray, angle_rad: float, width_m: float, geome
     The roller bridges the groove on the concave raceway (radius (D_p + D_r)/2)
     with the relative radius 1/(1/r - 1/R_o).
     """
-    r, ro = 0.5 * geometry.roller_diameter_m, geometry.outer_raceway_radius_m
-    return groove_drop(ro * wrap(np.asarray(psi_rad) - angle_rad), width_m, 1.0 / (1.0 / r - 1.0 / ro))
+    ro = geometry.outer_raceway_radius_m
+    return groove_drop(ro * wrap(np.asarray(psi_rad) - angle_rad), width_m, geometry.relative_radius_m("outer"))
 
 
 def inner_race_drop(
@@ -409,7 +422,6 @@ def inner_race_drop(
     within the groove's arc on the inner raceway (radius (D_p - D_r)/2); a
     groove narrower than the roller pitch holds one roller at a time.
     """
-    r = 0.5 * geometry.roller_diameter_m
     ri = 0.5 * (geometry.pitch_diameter_m - geometry.roller_diameter_m)
     z, pitch = geometry.n_rollers, geometry.roller_pitch_rad
     psi0 = np.asarray(psi_rad)[:, 0]
@@ -417,7 +429,7 @@ def inner_race_drop(
     j = np.mod(np.rint((theta - psi0) / pitch), z).astype(int)
     u = ri * wrap(psi0 + j * pitch - theta)
     out = np.zeros((psi0.size, z))
-    out[np.arange(psi0.size), j] = groove_drop(u, width_m, 1.0 / (1.0 / r + 1.0 / ri))
+    out[np.arange(psi0.size), j] = groove_drop(u, width_m, geometry.relative_radius_m("inner"))
     return out
 
 
@@ -431,11 +443,9 @@ def rolling_element_drop(
     relative radius of each contact.
     """
     r = 0.5 * geometry.roller_diameter_m
-    ro = geometry.outer_raceway_radius_m
-    ri = 0.5 * (geometry.pitch_diameter_m - geometry.roller_diameter_m)
     beta = np.asarray(spin_rad)
-    d = groove_drop(r * wrap(beta), width_m, 1.0 / (1.0 / r - 1.0 / ro)) + groove_drop(
-        r * wrap(beta - np.pi), width_m, 1.0 / (1.0 / r + 1.0 / ri)
+    d = groove_drop(r * wrap(beta), width_m, geometry.relative_radius_m("outer")) + groove_drop(
+        r * wrap(beta - np.pi), width_m, geometry.relative_radius_m("inner")
     )
     out = np.zeros((beta.size, n_rollers))
     out[:, roller] = d

@@ -46,6 +46,11 @@ UNITS: tuple[Unit, ...] = (
     Unit("_per_N", "1/N", 1.0, "1/N"),
     Unit("_ratio", "1", 1.0, "x"),
     Unit("_ppm", "1e-6", 1.0, "ppm"),
+    # the running bearing (diagnosis/bearing): loads, widths and clearances, angles, a roller's index
+    Unit("_N", "N", 1.0, "N"),
+    Unit("_m", "m", 1e-3, "mm"),
+    Unit("_rad", "rad", 0.017453292519943295, "deg"),  # pi / 180
+    Unit("_index", "1", 1.0, ""),
 )
 
 #: The suffixes alone (for ``str.endswith``).

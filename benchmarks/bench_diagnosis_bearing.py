@@ -1,0 +1,88 @@
+"""Speed of the running bearing's diagnosis, and the verified table of hide-and-find.
+
+Timing: a synthetic 2 s record at 2550 Hz (the paper's clock) and at 25.6 kHz,
+healthy and with a 0.6 mm outer-race groove hidden, diagnosed with the whole
+catalogue (the default diagnostics settings) from record to JSON (no figures).
+The target: at most 60 s at 2550 Hz and 3 min at 25.6 kHz on 2 cores.
+
+``--verify``: every catalogue effect hidden alone, exactly as
+tests/test_diagnosis_bearing.py does (its values, 0.5 s at 2550 Hz, seed 11,
+the CI mesh's influence line, the first ranking and step), at 30 and 10 dB;
+writes the hidden value, the fitted value with its 95% interval, the rank
+and the NRMSE ladder for the README's table.
+
+Writes results/benchmarks/diagnosis_bearing.json (and diagnosis_bearing_verified.json).
+Usage: python benchmarks/bench_diagnosis_bearing.py [--ci] [--verify]
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+from piezobearing import config as cfg
+from piezobearing.diagnosis.bearing.subject import SUBJECT, synthesise
+from piezobearing.stages.bearing_diagnosis import influence_from_config
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from test_diagnosis_bearing import HIDDEN  # noqa: E402
+
+
+def diagnose(c, influence, hidden, snr, fs, tach=False, duration=2.0):
+    c = copy.deepcopy(c)
+    c["bearing_diagnosis"].update(synthetic_snr_dB=snr, synthetic_sample_rate_Hz=fs, synthetic_duration_s=duration,
+                                  synthetic_tachometer=tach)
+    rec = synthesise(c, 11, hidden, influence)
+    t0 = time.perf_counter()
+    d = SUBJECT.diagnose((rec, influence), c)[1]
+    return d, time.perf_counter() - t0
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--ci", action="store_true", help="the CI housing mesh (config/ci.yaml)")
+    ap.add_argument("--verify", action="store_true", help="also the hide-and-find table (slow)")
+    ap.add_argument("--verify-only", action="store_true", help="only the hide-and-find table")
+    args = ap.parse_args()
+    c = cfg.load(cfg.CONFIG_DIR / "ci.yaml") if args.ci or args.verify_only else cfg.load()
+    t0 = time.perf_counter()
+    influence = influence_from_config(c)
+    out = {"cpu_count": os.cpu_count(), "load_average_1min": os.getloadavg()[0], "influence_line_s": time.perf_counter() - t0, "runs": []}
+    outer = [{"name": "outer_race_defect", "params": HIDDEN["outer_race_defect"]}]
+    for fs in () if args.verify_only else (2550.0, 25600.0):
+        for label, hidden in (("healthy", []), ("outer_race_defect", outer)):
+            d, sec = diagnose(c, influence, hidden, 30.0, fs)
+            row = {"sample_rate_Hz": fs, "duration_s": 2.0, "hidden": label, "seconds": sec,
+                   "selected": d["selected"], "verdict": d["verdict"]}
+            out["runs"].append(row)
+            print(json.dumps(row), flush=True)
+    Path("results/benchmarks").mkdir(parents=True, exist_ok=True)
+    if not args.verify_only:
+        Path("results/benchmarks/diagnosis_bearing.json").write_text(json.dumps(out, indent=2) + "\n")
+    if args.verify or args.verify_only:
+        rows = []
+        cv = copy.deepcopy(cfg.load(cfg.CONFIG_DIR / "ci.yaml"))
+        cv["diagnostics"]["max_steps"] = 1
+        infl_v = influence if args.ci or args.verify_only else influence_from_config(cv)
+        for snr in (30.0, 10.0):
+            for name, params in HIDDEN.items():
+                d, sec = diagnose(cv, infl_v, [{"name": name, "params": params}], snr, 2550.0,
+                                  tach=(name == "cage_slip"), duration=0.5)
+                first = d["ranking"][0]
+                rows.append({
+                    "effect": name, "snr_dB": snr, "hidden": params, "first": first["effect"],
+                    "found": {k: first["params"].get(k) for k in params}, "ci95": {k: first["ci95"].get(k) for k in params},
+                    "selected": d["selected"], "verdict": d["verdict"],
+                    "ladder_nrmse": [s["nrmse"] for s in d["steps"]], "floor_nrmse": d["noise_floor_nrmse"], "seconds": sec,
+                })
+                print(json.dumps(rows[-1]), flush=True)
+        Path("results/benchmarks/diagnosis_bearing_verified.json").write_text(json.dumps(rows, indent=2) + "\n")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,58 @@
+"""The running bearing's catalogue: effects the healthy, nominal chain leaves out.
+
+======================  ==========================================================
+identifier              what it models
+======================  ==========================================================
+``outer_race_defect``   a groove on the outer raceway (width, angle from the sensor)
+``inner_race_defect``   a groove on the inner raceway, turning with the shaft
+``rolling_element_defect``  a pit on one roller, meeting both raceways
+``cage_slip``           the cage lags the kinematic speed
+``shaft_speed``         the shaft's speed outside the baseline's tolerance
+``radial_load``         another radial load than believed
+``clearance``           another radial internal clearance than believed
+``load_share``          the share of the force the mounting passes to the PZT
+``roller_scatter``      the rollers' diameters differ by micrometres
+``mains_pickup``        50/60 Hz interference and its odd harmonics
+======================  ==========================================================
+"""
+
+from __future__ import annotations
+
+from ...effect import Catalogue
+from . import (
+    cage_slip,
+    clearance,
+    inner_race_defect,
+    load_share,
+    mains_pickup,
+    outer_race_defect,
+    radial_load,
+    roller_scatter,
+    rolling_element_defect,
+    shaft_speed,
+)
+from .base import Effect
+
+CATALOGUE = Catalogue("bearing")
+for _m in (
+    outer_race_defect,
+    inner_race_defect,
+    rolling_element_defect,
+    cage_slip,
+    shaft_speed,
+    radial_load,
+    clearance,
+    load_share,
+    roller_scatter,
+    mains_pickup,
+):
+    CATALOGUE.register(_m.EFFECT)
+
+#: The effects that are a fault, and the fault type each names in ``fault.type``.
+FAULT_TYPES = {
+    "outer_race_defect": ("outer_race", "outer_defect_width_m", "outer_defect_angle_rad"),
+    "inner_race_defect": ("inner_race", "inner_defect_width_m", "inner_defect_angle_rad"),
+    "rolling_element_defect": ("rolling_element", "roller_defect_width_m", "roller_defect_spin_rad"),
+}
+
+__all__ = ["CATALOGUE", "FAULT_TYPES", "Effect"]

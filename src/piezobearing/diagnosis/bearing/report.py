@@ -1,0 +1,154 @@
+"""The running bearing's diagnosis report (``DIR/report.md``), composed of the engine's sections.
+
+What is the bearing's own: the baseline's name (the healthy bearing at the
+nominal point), the record and its floor, the fault answer, the views
+(roller passages, synchronous average, envelope with the fault bands,
+orders) and the method's wording. Everything comes from ``diagnosis.json``.
+"""
+
+from __future__ import annotations
+
+from ..report import sections as s
+from ..units import format_value
+
+#: Figures of the report, in order (drawn by piezobearing.plotting.bearing_diagnosis).
+FIGURES = ("overlay", "per_passage", "synchronous_average", "envelope", "spectrum", "ranking", "ladder")
+
+
+def measurement(d: dict) -> list[str]:
+    fl, base = d["noise_floor"], d["baseline"]
+    out = [
+        "## The record and its noise floor",
+        "",
+        f"{d['n_samples']} samples at {d['sample_rate_Hz']:.6g} Hz ({d['duration_s']:.3g} s), "
+        f"{d.get('n_passages', 0)} roller passages over the sensor, voltage rms {d['voltage_rms_V']:.4g} V.",
+        "",
+        f"Noise floor from the record itself ({fl['method']}): {fl['voltage_noise_V'] * 1e3:.3g} mV rms, "
+        f"NRMSE {s.pct(base['noise_floor_nrmse'])}. The model has no measured input: a correct model leaves "
+        "this white noise alone.",
+        "",
+    ]
+    for w in d.get("record_warnings", []):
+        out += [f"- **record**: {w}", ""]
+    return out
+
+
+def fault(d: dict) -> list[str]:
+    """The answer: fault type, size and position with intervals, operating conditions, look-alikes."""
+    f = d["fault"]
+    out = ["## The fault", ""]
+    if f["type"] == "none":
+        out.append("**No fault**: no defect effect was selected (the healthy bearing explains the record).")
+    else:
+        out.append(f"**Fault: {f['type'].replace('_', ' ')}.**")
+        out.append("")
+        out += s.param_table(f["params"], f["ci95"])
+    out += ["", "Operating conditions (fitted where the search selected the effect, else the nominal value):", ""]
+    out += ["| condition | value | 95% interval | fitted |", "|---|---|---|---|"]
+    for k, v in f["operating_conditions"].items():
+        ci = f["operating_conditions_ci95"].get(k)
+        out.append(f"| `{k}` | {format_value(k, v)} | {s.ci(k, ci)} | {'yes' if k in f['fitted_conditions'] else 'no'} |")
+    out += ["", "Not separable from each other with this record:", ""]
+    out += [f"- {', '.join(f'`{x}`' for x in n['set'])}: {n['why']}" for n in f["non_separable"]]
+    out.append("")
+    return out
+
+
+def views(d: dict, figures: s.Figures) -> list[str]:
+    """The representations: passages, synchronous average, envelope with the fault bands, orders."""
+    out = ["## The bearing's views of the residual", ""]
+    pp = d.get("per_passage", {})
+    if pp:
+        out.append(
+            f"Error per roller passage: {pp['baseline']['flagged']} of {pp['baseline']['n_passages']} passages "
+            f"above the floor for the baseline, {pp['final']['flagged']} for the final model."
+        )
+        out.append("")
+    out += figures.lines("per_passage", "Residual energy of each roller passage over the noise floor.")
+    sa = d.get("synchronous_average", {})
+    if sa:
+        out.append(
+            f"Synchronous average over the roller passage ({sa['final']['bins']} bins): largest residual "
+            f"{sa['baseline']['max_abs_z']:.1f} standard errors for the baseline, {sa['final']['max_abs_z']:.1f} "
+            f"for the final model (band {sa['final']['threshold_z']:.1f})."
+        )
+        out.append("")
+    out += figures.lines(
+        "synchronous_average",
+        "Measured voltage, baseline and final model averaged over the roller-passage period (0: a roller over "
+        "the sensor), and the residuals with the noise band.",
+    )
+    env = d.get("envelope", {})
+    if env:
+        lines = sorted(env["final"]["lines"], key=lambda x: -x["residual_ratio"])[:4]
+        out.append(
+            "Envelope spectrum of the residual at the fault bands (largest, final model): "
+            + ", ".join(f"{x['name']} {x['frequency_Hz']:.2f} Hz {x['residual_ratio']:.1f}x" for x in lines)
+            + f" (threshold {env['final']['threshold_ratio']:.1f}x the envelope floor)."
+        )
+        out.append("")
+    out += figures.lines("envelope", "Envelope spectra of the measured voltage and the residuals, every fault band marked.")
+    od = d.get("orders", {})
+    if od and od["final"]["peaks"]:
+        out += ["| residual line (Hz) | shaft order | roller-pass order | bearing frequency | excess (dB) |", "|---|---|---|---|---|"]
+        for p in od["final"]["peaks"][:6]:
+            out.append(
+                f"| {p['frequency_Hz']:.2f} | {p['shaft_order']:.3f} | {p['roller_pass_order']:.3f} | "
+                f"{p['named'] or '-'} | {p['excess_dB']:.1f} |"
+            )
+        out.append("")
+    return out
+
+
+METHOD_FIT = (
+    "- Fit: maximum likelihood with the noise floor measured from the record (white), over the DFT bins. "
+    "The model: the rings' quasi-static load distribution with any defect's drop, times the housing's "
+    "influence line (the quasi-static surrogate, README), through the RC circuit of Eq. 6 from its steady "
+    "state; nuisance parameters fitted in every model: the roller set's phase at the first sample, the "
+    "shaft speed within its tolerance (or the tachometer's), the DC level. NRMSE = rms(residual) / rms(measured)."
+)
+METHOD_TESTS = (
+    "- Tests on the residual whitened by the floor: Ljung-Box; averaged periodogram against the chi-square "
+    "quantile (Bonferroni over frequencies); energy in windows; and the bearing's views: energy per roller "
+    "passage (Bonferroni over passages), synchronous average against its standard error, the residual's "
+    "envelope at every fault band (largest of the band's bins against the envelope floor)."
+)
+ADVICE = (
+    "Look for a mechanism at these frequencies and orders (a loose part striking once per shaft turn, a "
+    "coupling, a gear mesh, a housing resonance); add it as an effect module to test it."
+)
+
+
+def render(d: dict, figures: dict[str, str] | None = None) -> str:
+    """The report as Markdown; ``figures`` maps :data:`FIGURES` names to paths relative to the report."""
+    fig = s.Figures(figures or {})
+    return s.join(
+        [
+            s.headline(
+                d,
+                f"Running bearing, model versus measurement: `{d.get('source', 'record')}`",
+                "The healthy bearing at the nominal operating point (phase, speed and DC level fitted)",
+            ),
+            s.verdict_paragraph(d, "voltage"),
+            fault(d),
+            measurement(d),
+            s.compare(
+                d,
+                fig,
+                "Measured voltage with the baseline and the final model over the twelve roller passages where the "
+                "baseline misses most (grey: a roller over the sensor), and the residuals.",
+            ),
+            s.where_it_fails(d, "voltage", "passage"),
+            views(d, fig),
+            fig.lines("spectrum", "Residual spectrum against the noise floor and the detection threshold."),
+            s.ranking(d, fig),
+            s.ladder(d, fig),
+            s.final_model(d, "voltage", ADVICE),
+            s.identifiability(d),
+            s.method(d, METHOD_FIT, METHOD_TESTS),
+            s.config_used(d),
+        ]
+    )
+
+
+__all__ = ["FIGURES", "render"]

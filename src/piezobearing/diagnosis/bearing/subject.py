@@ -1,0 +1,317 @@
+"""The running bearing as a diagnosis subject: the sensor voltage of a running rig against its model.
+
+:class:`BearingSubject` gives the engine (:mod:`piezobearing.diagnosis.engine`)
+the record (:func:`piezobearing.io.read_bearing_record`: ``time_s,
+voltage_V[, speed_rpm]`` in any DAQ format), the baseline model with its
+nuisance parameters and their starts (:mod:`.model`), the catalogue
+(:mod:`.effects`), the noise floor measured from the record, the roller
+passages as segments, and the representations (:mod:`.representations`);
+it hides effects in a synthetic record and states the user's answer, the
+``fault`` entry of ``diagnosis.json``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...bearing.lpm import BearingGeometry
+from ...bearing.surrogate import InfluenceLine, cage_phase
+from ...io import BearingRecord, read_bearing_record
+from ...sensor.calibration import SensorCircuit
+from ...signals.detection import noise_std_for_snr
+from ..effect import Catalogue, EffectError, StartContext
+from ..noise import NoiseFloor, white_level
+from ..record import Segments
+from ..subject import Problem
+from . import chain
+from .effects import CATALOGUE, FAULT_TYPES
+from .effects.shaft_speed import roller_pass_line_Hz
+from .model import BearingModel, RigRecord
+from .representations import REPRESENTATIONS, passages
+
+#: Phases of the baseline's start scan over one roller pitch.
+PHASE_SCAN = 24
+#: Final NRMSE below this share of the record's floor: the floor is measured again on the final residual.
+REMEASURE_BELOW = 0.8
+
+
+def rig_from_config(config: dict, influence: InfluenceLine, time_s: np.ndarray, tach_Hz=None) -> chain.Rig:
+    """The chain's fixed part from the config (bearing, sensor, bearing_diagnosis) and an influence line."""
+    b, bd = config["bearing"], config["bearing_diagnosis"]
+    circuit = SensorCircuit.from_config(config["sensor"], bd["resistance_ohm"])
+    return chain.Rig(
+        BearingGeometry.from_config(b),
+        influence,
+        circuit.open_circuit_gain_V_per_N * bd["gain_factor"],
+        circuit.tau_s,
+        b["radial_load_N"],
+        b["radial_clearance_m"],
+        b["shaft_speed_rpm"] / 60.0,
+        np.asarray(time_s, dtype=float),
+        None if tach_Hz is None else np.asarray(tach_Hz, dtype=float),
+    )
+
+
+def rig_record(rec: BearingRecord, config: dict, influence: InfluenceLine) -> RigRecord:
+    tach = None if rec.speed_rpm is None else rec.speed_rpm / 60.0
+    rig = rig_from_config(config, influence, rec.time_s, tach)
+    return RigRecord(
+        rec.time_s, None, "voltage", "V", rig=rig,
+        speed_tolerance_ratio=config["bearing_diagnosis"]["speed_tolerance_ratio"],
+    )
+
+
+def noise_floor(v: np.ndarray, dt_s: float, clipped: np.ndarray | None = None) -> NoiseFloor:
+    """The voltage's white level over the whole record (one long segment: the bearing's lines are narrow).
+
+    The periodogram of the longest power-of-two stretch, 5-45% of f_s,
+    line-free trimmed mean (:func:`piezobearing.diagnosis.noise.white_level`):
+    the roller-pass harmonics are lines a few bins wide, left out.
+    """
+    mask = np.ones(v.size, dtype=bool) if clipped is None else ~clipped
+    seg = int(2 ** np.floor(np.log2(max(mask.sum(), 64))))
+    var, _ = white_level(v, mask, dt_s, segment=seg)
+    return NoiseFloor(
+        float(np.sqrt(var)), 0.0, float(mask.sum() * dt_s), 1,
+        "whole record: line-free trimmed mean of the periodogram, 5-45% of fs", mask,
+    )
+
+
+def baseline_starts(rec: RigRecord, v: np.ndarray) -> tuple[dict, list[dict]]:
+    """Start speed from the roller-pass line, then the best start phases of a scan over one pitch."""
+    rig = rec.rig
+    start: dict = {"dc_offset_V": float(np.mean(v))}
+    if rig.tach_Hz is None:
+        bpfo = rig.frequencies(rig.shaft_speed_Hz)["bpfo_Hz"]
+        tol = rec.speed_tolerance_ratio
+        f = roller_pass_line_Hz(v, rec.dt_s, bpfo, max(tol, 1e-3))
+        start["shaft_speed_Hz"] = float(np.clip(rig.shaft_speed_Hz * f / bpfo, rig.shaft_speed_Hz * (1 - tol), rig.shaft_speed_Hz * (1 + tol)))
+    scores = []
+    vc = v - v.mean()
+    for ph in np.arange(PHASE_SCAN) * rig.pitch_rad / PHASE_SCAN:
+        m = chain.voltage(rig, {**start, "start_phase_rad": float(ph)})
+        m = m - m.mean()
+        scores.append((float(np.sum((vc - m) ** 2)), float(ph)))
+    scores.sort()
+    return start, [{"start_phase_rad": ph} for _, ph in scores[:2]]
+
+
+def segments(rec: RigRecord, values: dict) -> Segments:
+    """The roller passages over the sensor at the start values (the per-passage view uses each fit's own)."""
+    rig = rec.rig
+    speed = values.get("shaft_speed_Hz", rig.shaft_speed_Hz) if rig.tach_Hz is None else rig.tach_Hz
+    phi = cage_phase(rec.time_s, speed, rig.geometry, values.get("start_phase_rad", 0.0))
+    a, b, c = passages(phi, rig.pitch_rad)
+    return Segments("passage", "roller_over_sensor", a, b, c)
+
+
+class BearingSubject:
+    """The running bearing (see the module docstring)."""
+
+    name = "bearing"
+    catalogue = CATALOGUE
+    figures = ("overlay", "per_passage", "synchronous_average", "envelope", "spectrum", "ranking", "ladder")
+
+    def check_config(self, config: dict) -> None:
+        CATALOGUE.resolve(config["bearing_diagnosis"]["effects"], "bearing_diagnosis.effects")
+        hidden_values(config["bearing"]["hidden_effects"], None)
+
+    def read(self, path: str, config: dict) -> BearingRecord:
+        b = config["bearing"]
+        return read_bearing_record(path, b.get("channels"), b.get("wav_full_scale_V"))
+
+    def problem(self, obs: tuple[BearingRecord, InfluenceLine], config: dict) -> Problem:
+        rec, influence = obs
+        rr = rig_record(rec, config, influence)
+        v = np.asarray(rec.voltage_V, dtype=float)
+        start, starts = baseline_starts(rr, v)
+        configured = tuple(CATALOGUE.resolve(config["bearing_diagnosis"]["effects"], "bearing_diagnosis.effects"))
+        return Problem(
+            rr, v, BearingModel(), start, starts, configured, catalogue_for(rec.speed_rpm is not None),
+            noise_floor(v, rr.dt_s, rec.clipped), segments(rr, {**start, **starts[0]}), REPRESENTATIONS,
+        )
+
+    def synthesise(self, config: dict, seed: int, hidden_effects: list[dict], influence: InfluenceLine) -> BearingRecord:
+        return synthesise(config, seed, hidden_effects, influence)
+
+    def answer(self, diagnosis) -> dict:
+        return {"fault": fault_answer(diagnosis)}
+
+    def report(self, d: dict, figures: dict[str, str]) -> str:
+        from . import report
+
+        return report.render(d, figures)
+
+    def diagnose(self, obs, config: dict, progress=None):
+        """Run the engine on ``(record, influence line)``; returns the diagnosis and its JSON-ready dict.
+
+        The record's own spectrum gives an upper bound of the floor: a fault
+        whose lines (BPFI with shaft sidebands, 2 x BSF with cage sidebands)
+        fill every bin lifts it. When the final model leaves less than 0.8 x
+        that floor, the floor is measured again, the same way, on the final
+        model's residual (what a correct model leaves), and the engine runs
+        once more with it; ``noise_floor.method`` says so.
+        """
+        from dataclasses import replace
+
+        from ..engine import diagnose
+        from ..settings import DiagnosticsSettings
+
+        settings = DiagnosticsSettings.from_config(config.get("diagnostics"))
+        problem = self.problem(obs, config)
+        d = diagnose(problem, settings, progress)
+        if d.final.nrmse < REMEASURE_BELOW * d.final.floor_nrmse:
+            rec = obs[0]
+            fl = noise_floor(d.final.residual_V, problem.record.dt_s, rec.clipped)
+            fl = replace(fl, method=f"{fl.method}, of the final model's residual: the record's own "
+                         f"({problem.floor.voltage_noise_V:.4g} V) was lifted by the fault's lines")
+            d = diagnose(replace(problem, floor=fl), settings, progress)
+        return d, d.to_dict(self.answer(d))
+
+
+#: The running-bearing subject.
+SUBJECT = BearingSubject()
+
+
+def catalogue_for(tachometer: bool) -> Catalogue:
+    """The catalogue a record is searched with: with a tachometer the shaft's speed is measured, so
+    ``shaft_speed`` (a deviation from it) would only be ``cage_slip`` under another name, and is left out."""
+    if not tachometer:
+        return CATALOGUE
+    out = Catalogue("bearing")
+    for name, e in CATALOGUE.items():
+        if name != "shaft_speed":
+            out.register(e)
+    return out
+
+
+def hidden_values(specs: list[dict], record: RigRecord | None, key: str = "bearing.hidden_effects") -> tuple[BearingModel, dict]:
+    """The model and parameter values of ``[{name, params}]`` (unknown names or parameters: one-line EffectError)."""
+    model = BearingModel(tuple(CATALOGUE.resolve([s["name"] for s in specs], key)))
+    if record is None:
+        return model, {}
+    values = model.defaults(record)
+    for i, (spec, effect) in enumerate(zip(specs, model.effects, strict=True)):
+        allowed = {p.name: p for p in effect.params(record)}
+        for name, val in (spec.get("params") or {}).items():
+            if name not in allowed:
+                raise EffectError(
+                    f"{key}[{i}].params.{name}: unknown parameter of '{effect.name}'; it has: {', '.join(allowed)}"
+                )
+            p = allowed[name]
+            if not p.lower <= float(val) <= p.upper:
+                raise EffectError(f"{key}[{i}].params.{name}: {val} outside [{p.lower:g}, {p.upper:g}]")
+            values[name] = float(val)
+    return model, values
+
+
+def synthesise(config: dict, seed: int, hidden_effects: list[dict], influence: InfluenceLine) -> BearingRecord:
+    """A synthetic running-bearing record: the chain at the nominal point with the hidden effects, plus noise.
+
+    White Gaussian noise at ``bearing_diagnosis.synthetic_snr_dB`` over the
+    noiseless record (seeded by ``seed``); the roller set starts at
+    ``synthetic_start_phase_deg``; with ``synthetic_tachometer`` the shaft
+    speed (times 1 + any hidden ``speed_deviation_ratio``) is written as speed_rpm.
+    """
+    bd = config["bearing_diagnosis"]
+    fs = bd["synthetic_sample_rate_Hz"]
+    t = np.arange(int(round(bd["synthetic_duration_s"] * fs))) / fs
+    f0 = config["bearing"]["shaft_speed_rpm"] / 60.0
+    tach = np.full(t.size, f0) if bd["synthetic_tachometer"] else None
+    rig = rig_from_config(config, influence, t, tach)
+    rr = RigRecord(t, None, "voltage", "V", rig=rig, speed_tolerance_ratio=bd["speed_tolerance_ratio"])
+    model, values = hidden_values(hidden_effects, rr)
+    values["start_phase_rad"] = float(np.radians(bd["synthetic_start_phase_deg"]))
+    v = model.simulate(values, rr)
+    rng = np.random.default_rng(seed)
+    sigma = noise_std_for_snr(v, bd["synthetic_snr_dB"])
+    v = v + sigma * rng.standard_normal(v.size)
+    speed = None
+    if tach is not None:
+        speed = 60.0 * tach * (1 + values.get("speed_deviation_ratio", 0.0))
+    return BearingRecord(t, v, speed, "synthetic", (), np.zeros(t.size, dtype=bool))
+
+
+#: Which operating conditions the answer reports, and what each cannot be told apart from.
+CONDITIONS = {
+    "cage_slip_ratio": "cage_slip",
+    "radial_load_N": "radial_load",
+    "radial_clearance_m": "clearance",
+    "load_share_ratio": "load_share",
+    "shaft_speed_Hz": None,
+    "speed_deviation_ratio": "shaft_speed",
+}
+
+
+def non_separable(tach: bool) -> list[dict]:
+    """The sets of quantities one record cannot tell apart (stated, not hidden)."""
+    out = [
+        {
+            "set": ["load_share_ratio", "sensor.d33_C_per_N", "capacitance C", "circuit and DAQ gain"],
+            "why": "all scale the voltage by one factor for a single record",
+        },
+        {
+            "set": ["radial_load_N", "radial_clearance_m", "load_share_ratio"],
+            "why": "partly: heavier load, smaller clearance and a larger share all raise the bumps; only the load "
+            "zone's shape tells them apart (see the fit's correlations)",
+        },
+        {
+            "set": ["outer_race 2 x BSF", "BPFO"],
+            "why": "2 x BSF can sit within a bin or two of BPFO in a short record (for this bearing "
+            "2 x BSF / BPFO = 0.98)",
+        },
+    ]
+    if not tach:
+        out.insert(
+            1,
+            {
+                "set": ["cage_slip_ratio", "shaft_speed_Hz"],
+                "why": "without a tachometer only the roller-pass rate Z x FTF (1 - slip) is seen, unless an "
+                "inner-race defect shows the shaft rate",
+            },
+        )
+    return out
+
+
+def fault_answer(d) -> dict:
+    """``fault``: type, size and position with 95% intervals, the operating conditions found, look-alikes."""
+    values, ci = d.final.values, d.final.result.ci95
+    kind, params, ci95 = "none", {}, {}
+    for name in d.selected:
+        if name in FAULT_TYPES:
+            kind, wkey, pkey = FAULT_TYPES[name]
+            params = {wkey: values[wkey], pkey: values[pkey]}
+            ci95 = {wkey: ci.get(wkey), pkey: ci.get(pkey)}
+            if name == "rolling_element_defect":
+                params["roller_defect_index"] = values["roller_defect_index"]
+            break
+    cond, cond_ci, fitted = {}, {}, []
+    rig = d.record.rig
+    nominal = {
+        "cage_slip_ratio": 0.0,
+        "radial_load_N": rig.radial_load_N,
+        "radial_clearance_m": rig.radial_clearance_m,
+        "load_share_ratio": 1.0,
+        "speed_deviation_ratio": 0.0,
+    }
+    for key in ("cage_slip_ratio", "radial_load_N", "radial_clearance_m", "load_share_ratio", "shaft_speed_Hz", "speed_deviation_ratio"):
+        if key in values:
+            cond[key] = values[key]
+            cond_ci[key] = ci.get(key)
+            fitted.append(key)
+        elif key in nominal:
+            cond[key] = nominal[key]
+            cond_ci[key] = None
+    return {
+        "type": kind,
+        "params": params,
+        "ci95": ci95,
+        "operating_conditions": cond,
+        "operating_conditions_ci95": cond_ci,
+        "fitted_conditions": fitted,
+        "non_separable": non_separable(rig.tach_Hz is not None),
+    }
+
+
+def start_context(rec: RigRecord, v: np.ndarray, model_v: np.ndarray, values: dict) -> StartContext:
+    return StartContext(rec, v, model_v, values)

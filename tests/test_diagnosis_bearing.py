@@ -1,0 +1,132 @@
+"""The running bearing as the diagnosis engine's second subject: hide each catalogue effect in a
+synthetic running-bearing record and find it first, its value inside the 95% interval; a healthy
+record selects nothing; a loose part striking once per shaft turn stays unexplained, its frequency named.
+
+Records of 0.5 s at 2550 Hz (the paper's clock), default geometry, the housing's influence line of the
+CI mesh; the first ranking is what "found first" needs (diagnostics.max_steps = 1).
+"""
+
+import copy
+import os
+
+import numpy as np
+import pytest
+
+from piezobearing.diagnosis.bearing.subject import SUBJECT, synthesise
+from piezobearing.io import BearingRecord, MeasurementError
+from piezobearing.stages.bearing_diagnosis import influence_from_config
+
+HIDDEN = {
+    "outer_race_defect": {"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.15},
+    "inner_race_defect": {"inner_defect_width_m": 0.8e-3, "inner_defect_angle_rad": 0.7},
+    "rolling_element_defect": {"roller_defect_width_m": 0.8e-3, "roller_defect_spin_rad": 1.0, "roller_defect_index": 3.0},
+    "cage_slip": {"cage_slip_ratio": 0.015},
+    "shaft_speed": {"speed_deviation_ratio": 0.05},
+    "radial_load": {"radial_load_N": 800.0},
+    "clearance": {"radial_clearance_m": 35e-6},
+    "load_share": {"load_share_ratio": 0.5},
+    "roller_scatter": {"roller_4_offset_m": 2e-6},
+    "mains_pickup": {"mains_frequency_Hz": 50.02, "mains_h1_cos_V": 3.0, "mains_h1_sin_V": 3.0},
+}
+
+
+#: The 95% interval's half-width to the 99.9% one (normal quantiles 3.29 / 1.96).
+WIDEN = 3.2905 / 1.9600
+
+
+@pytest.fixture(scope="module")
+def setup(ci_config):
+    c = copy.deepcopy(ci_config)
+    c["bearing_diagnosis"].update(synthetic_duration_s=0.5, synthetic_sample_rate_Hz=2550.0)
+    c["diagnostics"]["max_steps"] = 1
+    return c, influence_from_config(c)
+
+
+def run(c, influence, hidden, snr_dB, seed=11, tach=False, extra=None):
+    c = copy.deepcopy(c)
+    c["bearing_diagnosis"].update(synthetic_snr_dB=snr_dB, synthetic_tachometer=tach)
+    rec = synthesise(c, seed, hidden, influence)
+    if extra is not None:
+        rec = BearingRecord(rec.time_s, rec.voltage_V + extra(rec.time_s), rec.speed_rpm, "synthetic", (), rec.clipped)
+    return SUBJECT.diagnose((rec, influence), c)[1]
+
+
+#: The 10 dB half was not run to the end before this was committed (a shared, overloaded machine): it runs
+#: when PIEZOBEARING_TEST_10DB=1 is set, and joins CI once it has passed (README, verified table).
+TEN_DB = pytest.param(
+    10.0,
+    marks=pytest.mark.skipif(not os.environ.get("PIEZOBEARING_TEST_10DB"), reason="10 dB set not verified yet: set PIEZOBEARING_TEST_10DB=1"),
+)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("snr_dB", [30.0, TEN_DB])
+@pytest.mark.parametrize("name", list(HIDDEN))
+def test_hidden_effect_is_found_first_with_its_value_in_the_interval(setup, name, snr_dB):
+    c, influence = setup
+    d = run(c, influence, [{"name": name, "params": HIDDEN[name]}], snr_dB, tach=(name == "cage_slip"))
+    first = d["ranking"][0]
+    assert first["effect"] == name, [(r["effect"], r["delta_bic"]) for r in d["ranking"][:3]]
+    assert d["selected"] == [name]
+    for k, v in HIDDEN[name].items():
+        if k == "roller_defect_index":
+            assert first["params"][k] == v
+            continue
+        lo, hi = first["ci95"][k]
+        # 20 such checks at 95% would miss about one by chance: the 95% interval widened to 99.9% (x 3.29/1.96);
+        # the README's verified table gives each 95% interval as it is
+        mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo) * WIDEN
+        assert mid - half <= v <= mid + half, (k, v, first["params"][k], lo, hi)
+    if name in ("outer_race_defect", "inner_race_defect", "rolling_element_defect"):
+        assert d["fault"]["type"] == name.replace("_defect", "")
+
+
+def test_healthy_record_selects_nothing(setup):
+    c, influence = setup
+    d = run(c, influence, [], 30.0)
+    assert d["selected"] == []
+    assert d["verdict"] == "explained"
+    assert d["fault"]["type"] == "none"
+    assert d["baseline"]["nrmse"] < 1.2 * d["baseline"]["noise_floor_nrmse"]
+
+
+def loose_part(t, f_shaft=1000 / 60, amp=25.0, f_ring=600.0, decay_s=4e-3, t0=0.011):
+    """A loose part struck once per shaft turn: a decaying 600 Hz ring at every revolution [V]."""
+    out = np.zeros_like(t)
+    for tk in np.arange(t0, t[-1], 1 / f_shaft):
+        dt = t - tk
+        on = dt >= 0
+        out[on] += amp * np.exp(-dt[on] / decay_s) * np.sin(2 * np.pi * f_ring * dt[on])
+    return out
+
+
+def test_loose_part_is_unexplained_with_its_frequency_named(setup):
+    c, influence = setup
+    c = copy.deepcopy(c)
+    c["diagnostics"]["max_steps"] = 2
+    d = run(c, influence, [], 30.0, extra=loose_part)
+    assert d["verdict"] == "unexplained"
+    shaft = [u for u in d["unexplained"] if "x shaft" in u["where"] or "shaft)" in u["where"]]
+    assert shaft, [u["where"] for u in d["unexplained"]]
+    orders = d["orders"]["final"]["peaks"]
+    assert any(abs(p["shaft_order"] - round(p["shaft_order"])) < 0.02 and "shaft" in p["named"] for p in orders)
+
+
+def test_unknown_hidden_effect_is_one_line(setup):
+    c, influence = setup
+    c = copy.deepcopy(c)
+    c["bearing"]["hidden_effects"] = [{"name": "outer_race_defekt"}]
+    with pytest.raises(Exception) as e:
+        SUBJECT.check_config(c)
+    assert "outer_race_defekt" in str(e.value) and "\n" not in str(e.value)
+
+
+def test_cli_bad_record_is_one_line(tmp_path, capsys):
+    from piezobearing.cli import main
+
+    p = tmp_path / "rig.csv"
+    p.write_text("time_s,volts\n0,1\n")
+    assert main(["diagnose-bearing", str(p), "--out", str(tmp_path / "out"), "--quiet"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "column 'voltage_V' missing" in err[0]
+    assert not isinstance(MeasurementError, type(None))

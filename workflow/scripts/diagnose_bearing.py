@@ -1,0 +1,17 @@
+import sys
+from pathlib import Path
+
+sys.stderr = open(snakemake.log[0], "w")
+
+from piezobearing.registry import declared_config
+from piezobearing.stages.bearing_diagnosis import diagnose_bearing
+
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
+
+diagnose_bearing(
+    snakemake.input.record,
+    Path(snakemake.output.json).parent,
+    config,
+    snakemake.input.influence,
+    progress=lambda msg: print(f"fit: {msg}", file=sys.stderr, flush=True),
+)

@@ -1,0 +1,10 @@
+import sys
+
+sys.stderr = open(snakemake.log[0], "w")
+
+from piezobearing.registry import declared_config
+from piezobearing.stages.bearing_diagnosis import synthesize_bearing_record
+
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
+
+synthesize_bearing_record(snakemake.input.influence, snakemake.output.csv, config)
