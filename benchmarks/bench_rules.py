@@ -51,7 +51,8 @@ def main() -> None:
     args = ap.parse_args()
     exe = str(Path(sys.executable).with_name("snakemake"))
     bench_dir = REPO / "results/benchmarks/rules"
-    for f in bench_dir.glob("*.tsv"):
+    # study cases: rules/study_case_<study>/<case>.tsv (a case name alone can take most of a file name's 255)
+    for f in [*bench_dir.glob("*.tsv"), *bench_dir.glob("*/*.tsv")]:
         f.unlink()
     base = ["--cores", "2", *args.targets, "--configfile", args.configfile]
     subprocess.run([exe, "--forceall", *base], cwd=REPO, check=True)
@@ -63,9 +64,10 @@ def main() -> None:
         )
     )
     rows: dict[str, dict] = {}
-    for f in sorted(bench_dir.glob("*.tsv")):
+    for f in sorted([*bench_dir.glob("*.tsv"), *bench_dir.glob("*/*.tsv")]):
         b = pd.read_csv(f, sep="\t")
-        r = rows.setdefault(rule_of(f.stem, rules), {"seconds": 0.0, "max_rss_mb": 0.0, "jobs": 0})
+        stem = f.stem if f.parent == bench_dir else f.parent.name
+        r = rows.setdefault(rule_of(stem, rules), {"seconds": 0.0, "max_rss_mb": 0.0, "jobs": 0})
         r["seconds"] = max(r["seconds"], float(b["s"].max()))
         r["max_rss_mb"] = max(r["max_rss_mb"], float(b["max_rss"].max()))
         r["jobs"] += 1

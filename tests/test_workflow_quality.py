@@ -1,5 +1,6 @@
 """Quality gates and workflow behaviour: lint, formatting, incremental rebuilds, report."""
 
+import json
 import re
 import subprocess
 import sys
@@ -66,6 +67,15 @@ def test_study_runs_and_gathers_its_summary(ci_run: Path):
     # each case recovers its own resistance
     assert (abs(df["resistance_fitted_ohm"] / df["synthesis__resistance_ohm"] - 1) < 0.05).all()
     assert (ci_run / "results/studies/calibration_circuit/summary.png").stat().st_size > 0
+    sd = pd.read_csv(ci_run / "results/studies/sensor_design/summary.csv")
+    contract = ["material", "pzt_diameter_m", "pzt_thickness_m", "sensitivity_V_per_N", "first_resonance_short_Hz",
+                "band_high_Hz", "linear_from_Hz", "load_share", "indicator_faulty"]
+    assert len(sd) == 2 and not sd[contract].isna().any().any()
+    # the paper's stack on the study mesh: within 1% of the sensor FEM stages' first resonance (CI mesh: the same)
+    band = json.loads((ci_run / "results/sensor/band.json").read_text())
+    paper = sd[sd["material"] == "apc850_paper"].iloc[0]
+    assert paper["first_resonance_short_Hz"] == pytest.approx(band["first_axial_short_Hz"], rel=0.01)
+    assert (ci_run / "results/studies/sensor_design/summary.png").stat().st_size > 0
 
 
 @pytest.mark.slow

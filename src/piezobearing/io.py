@@ -778,7 +778,7 @@ def read_stack_mesh(path: str | Path, geometry, level: float, error: type[Except
         raise error(f"{p}: no hexahedra with a 'group' cell array; rerun rule sensor_mesh")
     groups = np.asarray(m.cell_data_dict["group"]["hexahedron"], dtype=int)
     z = geometry.z_interfaces_m
-    if not np.isclose(m.points[:, 2].max(), z[-1], rtol=1e-9) or not set(groups) <= {1, 2, 3}:
+    if not np.isclose(m.points[:, 2].max(), z[-1], rtol=1e-9) or not set(groups) <= {1, 2, 3, 4}:
         raise error(f"{p}: mesh does not match the configured stack geometry; rerun rule sensor_mesh")
     return StackMesh(np.asarray(m.points, float), np.asarray(cells, int), groups, geometry, level)
 

@@ -35,6 +35,13 @@ DETECTOR_STUDIES = ("daq_noise", "defect_position", "fault_type_speed")
 STUDY_INPUTS = {
     "fault_detection": _SENSOR_INPUTS,
     **{name: _SENSOR_INPUTS for name in DETECTOR_STUDIES},
+    "sensor_design": {
+        "resistance": f"{RESULTS}/calibration/resistance.json",
+        "force_healthy": f"{RESULTS}/bearing/sensor_force_healthy.csv",
+        "force_faulty": f"{RESULTS}/bearing/sensor_force_faulty.csv",
+        "kinematics": f"{RESULTS}/bearing/kinematics.json",
+        "housing": f"{RESULTS}/studies/sensor_design/housing.json",
+    },
 }
 # Measured per case (benchmarks/bench_rules.py, results/benchmarks/rules_config.json): calibration
 # 2 s and 0.2 GB, fault_detection 30-35 s (75 s on a loaded machine) and 0.2 GB peak.
@@ -42,11 +49,13 @@ STUDY_MEM_MB = {
     "calibration_circuit": 500,
     "fault_detection": 1000,
     **{name: 2000 for name in DETECTOR_STUDIES},
+    "sensor_design": 1500,
 }
 STUDY_RUNTIME_MIN = {
     "calibration_circuit": 2,
     "fault_detection": 4,
     **{name: 20 for name in DETECTOR_STUDIES},
+    "sensor_design": 3,
 }
 # Config sections a kind's cases depend on (as params: a changed value reruns the cases).
 STUDY_SECTIONS = {
@@ -56,6 +65,7 @@ STUDY_SECTIONS = {
         name: "seed sensor sensor_fem bearing housing signals".split()
         for name in DETECTOR_STUDIES
     },
+    "sensor_design": "seed sensor sensor_fem lowfreq bearing housing signals".split(),
 }
 
 
@@ -67,7 +77,7 @@ rule study_case:
     log:
         f"{RESULTS}/logs/studies/{{study}}/{{case}}.log",
     benchmark:
-        f"{RESULTS}/benchmarks/rules/study_case_{{study}}_{{case}}.tsv"
+        f"{RESULTS}/benchmarks/rules/study_case_{{study}}/{{case}}.tsv"
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -80,6 +90,28 @@ rule study_case:
         sections=lambda wc: {k: config[k] for k in STUDY_SECTIONS.get(wc.study, [])},
     script:
         "../scripts/study_case.py"
+
+
+rule sensor_design_housing:
+    output:
+        json=f"{RESULTS}/studies/sensor_design/housing.json",
+    log:
+        f"{RESULTS}/logs/studies/sensor_design_housing.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/sensor_design_housing.tsv"
+    conda:
+        "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=2500,
+        runtime=5,
+    params:
+        sensor=config["sensor"],
+        sensor_fem=config["sensor_fem"],
+        bearing=config["bearing"],
+        housing=config["housing"],
+    script:
+        "../scripts/sensor_design_housing.py"
 
 
 rule study_summary:

@@ -77,18 +77,26 @@ def sensor_stiffness(
     tip_diameter_m: float,
     tip_height_m: float,
     electrical: str = "open",
+    adhesive: IsotropicMaterial | None = None,
+    adhesive_height_m: float = 0.0,
 ) -> float:
-    """Axial stiffness of the sensor stack: the alumina tip and the PZT disk in series [N/m].
+    """Axial stiffness of the sensor stack: the alumina tip, its bond layer and the PZT disk in series [N/m].
 
-    k_s = 1 / (t / (E_tip A_tip) + h / (E_3 A_pzt)). The far alumina disk is
-    left out, as the paper holds the PZT's far face (U_z = 0). The stack's
-    first resonance (1.2e5 Hz) lies far above the FEM's band, so its mass is
-    negligible and a spring represents it.
+    k_s = 1 / (t / (E_tip A_tip) + t_a / (E_a A_a) + h / (E_3 A_pzt)), the bond
+    layer (if any, ``adhesive_height_m`` > 0) over the smaller of the tip's and
+    the PZT's areas. The far alumina disk is left out, as the paper holds the
+    PZT's far face (U_z = 0). The stack's first resonance (1.2e5 Hz) lies far
+    above the FEM's band, so its mass is negligible and a spring represents it.
     """
     a_tip = np.pi * tip_diameter_m**2 / 4
     a_pzt = np.pi * pzt_diameter_m**2 / 4
     e3 = pzt_axial_modulus(pzt, electrical)
-    return float(1 / (tip_height_m / (tip.young_Pa * a_tip) + pzt_height_m / (e3 * a_pzt)))
+    compliance = tip_height_m / (tip.young_Pa * a_tip) + pzt_height_m / (e3 * a_pzt)
+    if adhesive_height_m > 0.0:
+        if adhesive is None:
+            raise ValueError("an adhesive layer needs its material")
+        compliance += adhesive_height_m / (adhesive.young_Pa * min(a_tip, a_pzt))
+    return float(1 / compliance)
 
 
 # ---------------------------------------------------------------------------
@@ -324,6 +332,28 @@ class HousingModel:
         gz = self.load_z @ zvec
         psi = self.mesh.raceway_psi
         return gy, gz, gy * np.sin(psi) - gz * np.cos(psi)
+
+
+    def sensor_port_compliance_m_per_N(self) -> float:
+        """Flexibility of the housing at the sensor without the sensor, a0 = w . K0^-1 w [m/N] (half model).
+
+        The sensor is the rank-one spring K = K0 + (k_s/2) w w^T, so with z = K^-1 c (c = -k_s w, the
+        influence solve) a = w . K^-1 w = (c . z) / k_s^2, and a0 = a / (1 - (k_s/2) a).
+        """
+        k = self.sensor_stiffness_N_per_m
+        a = float(self.sensor @ self.factor().solve(self.sensor)) / k**2
+        return a / (1.0 - 0.5 * k * a)
+
+
+def spring_share_factor(k_new_N_per_m: float, k_ref_N_per_m: float, port_compliance_m_per_N: float) -> float:
+    """Sensor force with spring k_new over that with k_ref, for any load on the housing [-].
+
+    With the housing's flexibility a0 at the sensor (half model, :meth:`HousingModel.sensor_port_compliance_m_per_N`)
+    the sensor force is F = k g0 / (1 + k a0 / 2) for every load (g0: the displacement there without the sensor),
+    so one factor scales the whole influence line: k_new (1 + k_ref a0/2) / (k_ref (1 + k_new a0/2)).
+    """
+    a0 = port_compliance_m_per_N
+    return k_new_N_per_m * (1 + 0.5 * k_ref_N_per_m * a0) / (k_ref_N_per_m * (1 + 0.5 * k_new_N_per_m * a0))
 
 
 def factorize_spd(a: sp.spmatrix, solver: str | None = None):

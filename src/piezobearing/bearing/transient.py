@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-from ..sensor.materials import CAST_IRON, STEEL, alumina_from_config, pzt_from_config
+from ..sensor.materials import CAST_IRON, STEEL, adhesive_from_config, alumina_from_config, pzt_from_config
 from . import housing_fem as fem
 from . import lpm as brg
 from .housing_mesh import HousingGeometry, HousingMesh
@@ -78,7 +78,7 @@ def housing_geometry(config: dict) -> HousingGeometry:
 
 
 def sensor_spring(config: dict) -> float:
-    """Axial stiffness of the sensor stack from the config [N/m]."""
+    """Axial stiffness of the sensor stack from the config [N/m] (tip disk, its bond layer, PZT)."""
     s, h, sf = config["sensor"], config["housing"], config["sensor_fem"]
     return fem.sensor_stiffness(
         pzt_from_config(s),
@@ -88,6 +88,8 @@ def sensor_spring(config: dict) -> float:
         sf["bottom_disk_diameter_m"],
         sf["bottom_disk_height_m"],
         h["sensor_electrical"],
+        adhesive_from_config(sf),
+        sf["adhesive_height_m"],
     )
 
 

@@ -69,6 +69,67 @@ def fault_detection(df: pd.DataFrame):
     return fig
 
 
+#: The paper's stack (Sec. III-A, Fig. 2c) as the sensor_design table names it.
+PAPER_DESIGN = {"material": "apc850_paper", "pzt_diameter_m": 4.7e-3, "pzt_thickness_m": 3.4e-3,
+                "top_disk_diameter_m": 3.0e-3, "adhesive_thickness_m": 0.0, "cable_length_m": 2.0}
+
+
+def pareto_front(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Indices of the points no other point beats in both x and y (larger is better), by increasing x."""
+    order = np.argsort(-np.asarray(x), kind="stable")
+    front, best = [], -np.inf
+    for i in order:
+        if y[i] > best:
+            front.append(i)
+            best = y[i]
+    return np.array(front[::-1], dtype=int)
+
+
+def _is_paper(df: pd.DataFrame) -> np.ndarray:
+    ok = np.ones(len(df), bool)
+    for k, v in PAPER_DESIGN.items():
+        ok &= (df[k] == v).to_numpy() if isinstance(v, str) else np.isclose(df[k].to_numpy(float), v)
+    return ok
+
+
+def sensor_design(df: pd.DataFrame):
+    """Mid-band sensitivity against the +3 dB band edge, colour the detection margin; the paper's stack
+    marked, the trade-off front drawn. Right: where the DAQ resistance puts the low-frequency corner."""
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.4), gridspec_kw={"width_ratios": [1.7, 1.0]})
+    ax = axes[0]
+    bw, sens = df["band_high_Hz"].to_numpy(float) / 1e3, df["sensitivity_V_per_N"].to_numpy(float)
+    margin = df["detection_margin_dB"].to_numpy(float)
+    sc = ax.scatter(bw, sens, c=margin, cmap="viridis", s=36, edgecolors="k", linewidths=0.4, zorder=3)
+    fig.colorbar(sc, ax=ax, label="detection margin [dB]")
+    front = pareto_front(bw, sens)
+    ax.plot(bw[front], sens[front], "k--", lw=1, zorder=2, label="trade-off front")
+    paper = _is_paper(df) & np.isclose(df["resistance_ohm"].to_numpy(float), 50e6)
+    ax.scatter(bw[paper], sens[paper], s=160, facecolors="none", edgecolors="r", linewidths=1.5, zorder=4,
+               label="the paper's stack")
+    for i in range(len(df)):
+        r = df.iloc[i]
+        ax.annotate(f"{r['material']} {1e3 * r['pzt_diameter_m']:g}x{1e3 * r['pzt_thickness_m']:g}",
+                    (bw[i], sens[i]), fontsize=5, xytext=(3, 2), textcoords="offset points")
+    ax.set_xlabel("+3 dB band edge [kHz]")
+    ax.set_ylabel("mid-band sensitivity [V/N]")
+    ax.set_yscale("log")
+    ax.legend(fontsize=7, loc="upper right")
+    ax = axes[1]
+    rr = df["resistance_ohm"].to_numpy(float)
+    ax.loglog(rr / 1e6, df["corner_Hz"], "o", label="RC corner f_c")
+    ax.loglog(rr / 1e6, df["linear_from_Hz"], "s", mfc="none", label="within 5% of mid-band from")
+    f0 = float(df["bpfo_Hz"].iloc[0])
+    ax.axhline(f0, color="0.5", lw=0.8, ls=":")
+    ax.text(rr.min() / 1e6, f0 * 1.08, "BPFO", fontsize=7, color="0.4")
+    ax.set_xlabel("DAQ input resistance [MOhm]")
+    ax.set_ylabel("frequency [Hz]")
+    ax.legend(fontsize=7)
+    fig.suptitle(f"{len(df)} sensor designs; colour: detection margin = 20 log10(largest noise density still "
+                 f"detected / {df['noise_density_V_per_sqrtHz'].iloc[0]:.3g} V/sqrt(Hz))", fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
 def detection_map(df: pd.DataFrame, x_col: str, y_col: str, x_label: str, y_label: str, title: str,
                   log_x: bool = False, log_y: bool = False):
     """Where the sensor sees the fault: the faulty case classified as its true type (left) and the healthy
@@ -121,6 +182,11 @@ def fault_type_speed(df: pd.DataFrame):
     return fig
 
 
-SUMMARY_FIGURES = {"calibration_circuit": calibration_circuit, "fault_detection": fault_detection,
-                   "daq_noise": daq_noise, "defect_position": defect_position,
-                   "fault_type_speed": fault_type_speed}
+SUMMARY_FIGURES = {
+    "calibration_circuit": calibration_circuit,
+    "fault_detection": fault_detection,
+    "daq_noise": daq_noise,
+    "defect_position": defect_position,
+    "fault_type_speed": fault_type_speed,
+    "sensor_design": sensor_design,
+}

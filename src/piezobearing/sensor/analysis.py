@@ -18,6 +18,7 @@ from .. import paper
 from . import fem as fem
 from .calibration import SensorCircuit, frequency_response
 from .materials import (
+    adhesive_from_config,
     alumina_from_config,
     paper_pzt,
     pzt_from_config,
@@ -61,6 +62,7 @@ def mesh_inputs(config: dict) -> tuple[StackGeometry, MeshDensity, tuple]:
         pzt_height_m=s["pzt_height_m"],
         top_disk_diameter_m=f["top_disk_diameter_m"],
         top_disk_height_m=f["top_disk_height_m"],
+        adhesive_height_m=f["adhesive_height_m"],
     )
     dens = MeshDensity(
         n_core=f["mesh_n_core"],
@@ -110,7 +112,7 @@ class SensorFemParams:
             )
         pzt = pzt_from_config(s)
         alu = alumina_from_config(f)
-        mats = fem.StackMaterials(stress_charge_form(pzt), s["pzt_density_kg_per_m3"], alu)
+        mats = fem.StackMaterials(stress_charge_form(pzt), pzt.density_kg_per_m3, alu, adhesive_from_config(f))
         q = f["mechanical_quality_factor"]
         return cls(
             geometry=geo,
@@ -129,7 +131,7 @@ class SensorFemParams:
             reference_frequency_Hz=f["reference_frequency_Hz"],
             band_ratio_dB=f["band_ratio_dB"],
             band_ratio_percent=f["band_ratio_percent"],
-            cable_capacitance_F=s["cable_length_m"] * s["cable_capacitance_F_per_m"],
+            cable_capacitance_F=s["cable_length_m"] * s["cable_capacitance_F_per_m"] + s["daq_capacitance_F"],
         )
 
 

@@ -23,6 +23,7 @@ from scipy.signal import find_peaks, lfilter
 
 from ..diagnosis.least_squares import FitResult, fit
 from ..diagnosis.params import Param
+from .materials import pzt_from_config
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,8 @@ class SensorCircuit:
         DAQ input resistance R [Ohm].
     extra_capacitance_F : float
         Capacitance across the electrodes beyond Cp and the cable [F].
+    daq_capacitance_F : float
+        Input capacitance of the DAQ [F].
     """
 
     pzt_diameter_m: float = 4.7e-3
@@ -55,6 +58,7 @@ class SensorCircuit:
     cable_capacitance_F_per_m: float = 90e-12
     resistance_ohm: float = 50e6
     extra_capacitance_F: float = 0.0
+    daq_capacitance_F: float = 0.0
 
     @property
     def area_m2(self) -> float:
@@ -71,8 +75,8 @@ class SensorCircuit:
 
     @property
     def capacitance_F(self) -> float:
-        """Total C = Cp + Ccable + extra [F]."""
-        return self.pzt_capacitance_F + self.cable_capacitance_F + self.extra_capacitance_F
+        """Total C = Cp + Ccable + extra + C_DAQ [F]."""
+        return self.pzt_capacitance_F + self.cable_capacitance_F + self.extra_capacitance_F + self.daq_capacitance_F
 
     @property
     def tau_s(self) -> float:
@@ -94,16 +98,25 @@ class SensorCircuit:
 
     @classmethod
     def from_config(cls, sensor: dict, resistance_ohm: float) -> "SensorCircuit":
-        """Build from the validated ``sensor`` config section."""
+        """Build from the validated ``sensor`` config section (d33 and eps33^T: the configured
+        ``material``'s, or the section's own values where they are not null)."""
+        pzt = pzt_from_config(sensor)
         return cls(
             pzt_diameter_m=sensor["pzt_diameter_m"],
             pzt_height_m=sensor["pzt_height_m"],
-            d33_C_per_N=sensor["d33_C_per_N"],
-            eps33_T_rel=sensor["eps33_T_rel"],
+            d33_C_per_N=pzt.d33_C_per_N,
+            eps33_T_rel=pzt.eps33_T_rel,
             cable_length_m=sensor["cable_length_m"],
             cable_capacitance_F_per_m=sensor["cable_capacitance_F_per_m"],
             resistance_ohm=float(resistance_ohm),
+            daq_capacitance_F=sensor.get("daq_capacitance_F", 0.0),
         )
+
+
+def design_resistance_ohm(sensor: dict, fitted_ohm: float) -> float:
+    """The DAQ input resistance of the ``sensor`` config section, or the calibration's fitted R where it is null [Ohm]."""
+    r = sensor.get("daq_resistance_ohm")
+    return float(fitted_ohm) if r is None else float(r)
 
 
 def rc_voltage(force_N: np.ndarray, dt_s: float, gain_V_per_N: float, tau_s: float) -> np.ndarray:

@@ -71,7 +71,7 @@ import scipy.sparse.linalg as spla
 
 from piezobearing import sparse_solve
 from piezobearing.sensor.materials import IsotropicMaterial, StressChargeForm
-from piezobearing.sensor.mesh import GROUP_BOTTOM_DISK, GROUP_PZT, GROUP_TOP_DISK, StackMesh
+from piezobearing.sensor.mesh import GROUP_ADHESIVE, GROUP_BOTTOM_DISK, GROUP_PZT, GROUP_TOP_DISK, StackMesh
 
 log = logging.getLogger(__name__)
 
@@ -91,12 +91,14 @@ class StackMaterials:
     """Material data the FEM needs.
 
     ``pzt`` in stress-charge form (sfepy order), ``pzt_density_kg_per_m3``,
-    and the alumina of the two disks.
+    the alumina of the two disks, and the bond layers' ``adhesive`` (needed
+    only if the mesh has adhesive cells).
     """
 
     pzt: StressChargeForm
     pzt_density_kg_per_m3: float
     alumina: IsotropicMaterial
+    adhesive: IsotropicMaterial | None = None
 
 
 @dataclass
@@ -213,7 +215,7 @@ def assemble(mesh: StackMesh, mat: StackMaterials, order: int = 2, load_face: st
     present = set(np.unique(mesh.groups))
     regions = {
         g: domain.create_region(f"G{g}", f"cells of group {g}")
-        for g in (GROUP_BOTTOM_DISK, GROUP_PZT, GROUP_TOP_DISK)
+        for g in (GROUP_BOTTOM_DISK, GROUP_PZT, GROUP_TOP_DISK, GROUP_ADHESIVE)
         if g in present
     }
     if load_face not in ("bottom", "top"):
@@ -237,9 +239,15 @@ def assemble(mesh: StackMesh, mat: StackMaterials, order: int = 2, load_face: st
         e=mat.pzt.e_C_per_m2,
         kappa=mat.pzt.eps_S_F_per_m,
     )
+    passive = {GROUP_BOTTOM_DISK: m_alu, GROUP_TOP_DISK: m_alu}
+    if GROUP_ADHESIVE in regions:
+        if mat.adhesive is None:
+            raise ValueError("the mesh has adhesive layers but StackMaterials.adhesive is not given")
+        adh = mat.adhesive
+        passive[GROUP_ADHESIVE] = Material("adh", D=adh.stiffness_voigt(), rho=adh.density_kg_per_m3)
     t_stiff, t_mass = [], []
     for g, reg in regions.items():
-        mm = m_pzt if g == GROUP_PZT else m_alu
+        mm = m_pzt if g == GROUP_PZT else passive[g]
         t_stiff.append(
             Term.new(f"dw_lin_elastic({mm.name}.D, v, u)", integral, reg, **{mm.name: mm}, v=v, u=u)
         )

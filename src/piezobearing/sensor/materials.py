@@ -75,6 +75,10 @@ class PiezoMaterial:
         Permittivity at constant stress [F/m].
     density_kg_per_m3 : float
         Mass density [kg/m^3].
+    mechanical_quality_factor : float
+        Typical Qm of the ceramic [-] (sets the modal damping 1/(2 Qm)).
+    source : str
+        Where the constants come from.
     """
 
     name: str
@@ -82,6 +86,8 @@ class PiezoMaterial:
     d_C_per_N: np.ndarray = field(repr=False)
     eps_T_F_per_m: np.ndarray = field(repr=False)
     density_kg_per_m3: float = 7700.0
+    mechanical_quality_factor: float = 80.0
+    source: str = ""
 
     @property
     def d33_C_per_N(self) -> float:
@@ -90,6 +96,12 @@ class PiezoMaterial:
     @property
     def eps33_T_F_per_m(self) -> float:
         return float(self.eps_T_F_per_m[2, 2])
+
+    @property
+    def eps33_T_rel(self) -> float:
+        """eps33^T / eps0 [-], to 9 significant digits (datasheets give at most 4; this undoes the
+        last-bit rounding of eps0 x eps_rel / eps0)."""
+        return float(f"{self.eps33_T_F_per_m / epsilon_0:.9g}")
 
 
 def to_sfepy_voigt(a: np.ndarray) -> np.ndarray:
@@ -154,7 +166,37 @@ def transverse_isotropy_report(c_E_Pa: np.ndarray, rtol: float = 0.02) -> dict:
     out = {}
     for name, (lhs, rhs) in rel.items():
         scale = max(abs(lhs), abs(rhs), 1e-30) if name != "symmetric" else np.abs(c).max()
-        out[name] = {"lhs": float(lhs), "rhs": float(rhs), "holds": abs(lhs - rhs) <= rtol * scale}
+        out[name] = {"lhs": float(lhs), "rhs": float(rhs), "holds": bool(abs(lhs - rhs) <= rtol * scale)}
+    return out
+
+
+def symmetry_report(pzt: PiezoMaterial, rtol: float = 0.02) -> dict:
+    """Every relation a ceramic poled along 3 (class 6mm, C6v) must satisfy, checked on ``pzt``.
+
+    The stiffness relations of :func:`transverse_isotropy_report`, and
+    d31 = d32, d15 = d24, eps11 = eps22 with every other d_ip and eps_ik
+    zero; c^E positive definite and eps^S (:func:`stress_charge_form`)
+    positive definite. Each entry: ``lhs``, ``rhs``, ``holds``.
+    """
+    out = transverse_isotropy_report(pzt.c_E_Pa, rtol)
+    d, eps = pzt.d_C_per_N, pzt.eps_T_F_per_m
+    mask = np.zeros_like(d, dtype=bool)
+    mask[2, :3] = mask[0, 4] = mask[1, 3] = True
+    scale = np.abs(d).max()
+    rel = {
+        "d31=d32": (d[2, 0], d[2, 1], scale),
+        "d15=d24": (d[0, 4], d[1, 3], scale),
+        "d: zeros elsewhere": (float(np.abs(d[~mask]).max()), 0.0, scale),
+        "eps11=eps22": (eps[0, 0], eps[1, 1], eps[0, 0]),
+        "eps: diagonal": (float(np.abs(eps - np.diag(np.diag(eps))).max()), 0.0, eps[0, 0]),
+    }
+    for name, (lhs, rhs, sc) in rel.items():
+        out[name] = {"lhs": float(lhs), "rhs": float(rhs), "holds": bool(abs(lhs - rhs) <= rtol * sc)}
+    lam_c = float(np.linalg.eigvalsh(pzt.c_E_Pa).min())
+    eps_s = pzt.eps_T_F_per_m - pzt.d_C_per_N @ pzt.c_E_Pa @ pzt.d_C_per_N.T
+    lam_e = float(np.linalg.eigvalsh(eps_s).min())
+    out["c^E positive definite"] = {"lhs": lam_c, "rhs": 0.0, "holds": lam_c > 0}
+    out["eps^S positive definite"] = {"lhs": lam_e, "rhs": 0.0, "holds": lam_e > 0}
     return out
 
 
@@ -201,17 +243,94 @@ def paper_pzt(c66_rule: str = "isotropy", density_kg_per_m3: float = 7700.0) -> 
         ]
     )
     eps_t = 1800 * epsilon_0 * np.eye(3)
-    return PiezoMaterial("APC 850", c, d, eps_t, density_kg_per_m3)
+    return PiezoMaterial(
+        "APC 850",
+        c,
+        d,
+        eps_t,
+        density_kg_per_m3,
+        80.0,
+        "the paper, Eq. 7-9; density and Qm = 80 from APC International, 'Physical and piezoelectric "
+        "properties of APC materials' (APC 850)",
+    )
+
+
+# --------------------------------------------------------------------------- the library
+
+
+def _strain_charge(name, s11, s12, s13, s33, s44, d31, d33, d15, eps11_rel, eps33_rel, density, qm, source):
+    """A 6mm ceramic from its strain-charge constants (s^E in 1e-12 m^2/N, d in 1e-12 C/N, eps^T / eps0).
+
+    s66 = 2 (s11 - s12) is the 6mm relation; the stiffness is c^E = (s^E)^-1.
+    """
+    s = np.zeros((6, 6))
+    s[:3, :3] = [[s11, s12, s13], [s12, s11, s13], [s13, s13, s33]]
+    s[3, 3] = s[4, 4] = s44
+    s[5, 5] = 2 * (s11 - s12)
+    d = np.zeros((3, 6))
+    d[2, :3] = [d31, d31, d33]
+    d[0, 4] = d[1, 3] = d15
+    eps = np.diag([eps11_rel, eps11_rel, eps33_rel]) * epsilon_0
+    return PiezoMaterial(name, np.linalg.inv(1e-12 * s), 1e-12 * d, eps, density, qm, source)
+
+
+def _library() -> dict:
+    """Every ceramic of :data:`PIEZO_MATERIALS` (built once at import)."""
+    berlincourt = (
+        "Berlincourt, Curran and Jaffe, 'Piezoelectric and piezomagnetic materials', in Physical "
+        "Acoustics vol. I-A (Academic Press, 1964); the same table in Sherman and Butler, 'Transducers "
+        "and Arrays for Underwater Sound' (Springer, 2007), App. A.5"
+    )
+    return {
+        "apc850_paper": paper_pzt(),
+        "pzt5a": _strain_charge(
+            "PZT-5A (Navy Type II; APC 850 class)",
+            16.4, -5.74, -7.22, 18.8, 47.5, -171.0, 374.0, 584.0, 1730.0, 1700.0, 7750.0, 75.0,
+            berlincourt + "; also Erturk and Inman, 'Piezoelectric Energy Harvesting' (Wiley, 2011), Table E.1",
+        ),
+        "pzt4": _strain_charge(
+            "PZT-4 (Navy Type I, hard; APC 841 class)",
+            12.3, -4.05, -5.31, 15.5, 39.0, -123.0, 289.0, 496.0, 1475.0, 1300.0, 7500.0, 500.0,
+            berlincourt,
+        ),
+        "pzt8": _strain_charge(
+            "PZT-8 (Navy Type III, hard; APC 880 class)",
+            11.5, -3.7, -4.8, 13.5, 31.9, -97.0, 225.0, 330.0, 1290.0, 1000.0, 7600.0, 1000.0,
+            berlincourt,
+        ),
+        "pzt5h": _strain_charge(
+            "PZT-5H (Navy Type VI, soft; APC 855 class)",
+            16.5, -4.78, -8.45, 20.7, 43.5, -274.0, 593.0, 741.0, 3130.0, 3400.0, 7500.0, 65.0,
+            berlincourt + "; also Erturk and Inman, 'Piezoelectric Energy Harvesting' (Wiley, 2011), Table E.1",
+        ),
+    }
+
+
+def piezo_material(key: str, c66_rule: str = "isotropy") -> PiezoMaterial:
+    """The ceramic ``key`` of :data:`PIEZO_MATERIALS` (``c66_rule`` applies to ``apc850_paper`` only)."""
+    if key not in PIEZO_MATERIALS:
+        raise KeyError(f"PZT material '{key}' is unknown; known: {', '.join(PIEZO_MATERIALS)}")
+    if key == "apc850_paper":
+        return paper_pzt(c66_rule=c66_rule)
+    return PIEZO_MATERIALS[key]
 
 
 def pzt_from_config(sensor: dict) -> PiezoMaterial:
-    """The PZT of the validated ``sensor`` config section: the paper's APC 850 (Eq. 7-9) with the
-    configured c66 rule, density, d33 and eps33^T (the calibration's constants) in place."""
-    pzt = paper_pzt(c66_rule=sensor["c66_rule"], density_kg_per_m3=sensor["pzt_density_kg_per_m3"])
+    """The PZT of the validated ``sensor`` config section.
+
+    The ceramic ``sensor.material`` of the library; ``d33_C_per_N``,
+    ``eps33_T_rel`` and ``pzt_density_kg_per_m3`` replace its values where
+    they are not null (a calibrated disk of that ceramic).
+    """
+    pzt = piezo_material(sensor.get("material", "apc850_paper"), sensor["c66_rule"])
+    if sensor.get("pzt_density_kg_per_m3") is not None:
+        pzt = replace(pzt, density_kg_per_m3=sensor["pzt_density_kg_per_m3"])
     d = pzt.d_C_per_N.copy()
-    d[2, 2] = sensor["d33_C_per_N"]
+    if sensor.get("d33_C_per_N") is not None:
+        d[2, 2] = sensor["d33_C_per_N"]
     eps = pzt.eps_T_F_per_m.copy()
-    eps[2, 2] = sensor["eps33_T_rel"] * epsilon_0
+    if sensor.get("eps33_T_rel") is not None:
+        eps[2, 2] = sensor["eps33_T_rel"] * epsilon_0
     return replace(pzt, d_C_per_N=d, eps_T_F_per_m=eps)
 
 
@@ -225,7 +344,24 @@ def alumina_from_config(sensor_fem: dict) -> IsotropicMaterial:
     )
 
 
+def adhesive_from_config(sensor_fem: dict) -> IsotropicMaterial:
+    """The bond layer's material of the validated ``sensor_fem`` config section."""
+    return IsotropicMaterial(
+        "adhesive",
+        sensor_fem["adhesive_young_Pa"],
+        sensor_fem["adhesive_poisson"],
+        sensor_fem["adhesive_density_kg_per_m3"],
+    )
+
+
 #: Table I of the paper.
 CAST_IRON = IsotropicMaterial("cast iron (housing)", 110e9, 0.28, 7200.0)
 STEEL = IsotropicMaterial("steel (outer ring)", 200e9, 0.30, 7800.0)
 ALUMINA = IsotropicMaterial("alumina (sensor protection disks)", 330e9, 0.22, 3900.0)
+
+#: A cured, unfilled two-part structural epoxy: E = 3.0 GPa, nu = 0.35, rho = 1200 kg/m^3. Nominal values
+#: (not one product's datasheet): such epoxies lie at E = 2-4 GPa, nu = 0.33-0.40, rho = 1100-1300 kg/m^3.
+EPOXY = IsotropicMaterial("epoxy adhesive (nominal)", 3.0e9, 0.35, 1200.0)
+
+#: The piezoceramics by config key (``sensor.material``); see :func:`_library` for each source.
+PIEZO_MATERIALS = _library()

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 #: Cell groups (material ids) of the mesh.
-GROUP_BOTTOM_DISK, GROUP_PZT, GROUP_TOP_DISK = 1, 2, 3
+GROUP_BOTTOM_DISK, GROUP_PZT, GROUP_TOP_DISK, GROUP_ADHESIVE = 1, 2, 3, 4
 
 
 @dataclass(frozen=True)
@@ -40,6 +40,9 @@ class StackGeometry:
         PZT disk [m].
     top_disk_diameter_m, top_disk_height_m : float
         Alumina disk against the housing (clamped face) [m].
+    adhesive_height_m : float
+        Bond layer between the PZT and each alumina disk [m]; it covers the
+        narrower of the two faces it joins. 0: no layer (the disks touch the PZT).
     """
 
     bottom_disk_diameter_m: float = 3.0e-3
@@ -48,12 +51,31 @@ class StackGeometry:
     pzt_height_m: float = 3.4e-3
     top_disk_diameter_m: float = 5.0e-3
     top_disk_height_m: float = 1.0e-3
+    adhesive_height_m: float = 0.0
 
     @property
     def z_interfaces_m(self) -> np.ndarray:
         """z of the bottom face, the two PZT faces and the top face [m]."""
-        h = np.cumsum([0.0, self.bottom_disk_height_m, self.pzt_height_m, self.top_disk_height_m])
-        return h
+        a = self.adhesive_height_m
+        if a == 0.0:
+            return np.cumsum([0.0, self.bottom_disk_height_m, self.pzt_height_m, self.top_disk_height_m])
+        z = np.cumsum([0.0, self.bottom_disk_height_m, a, self.pzt_height_m, a, self.top_disk_height_m])
+        return z[[0, 2, 3, 5]]
+
+    @property
+    def layers(self) -> list[tuple[int, float, float, float]]:
+        """(group, radius [m], z_low [m], z_high [m]) of each layer, bottom to top."""
+        r_b, r_p, r_t = self.radii_m
+        a = self.adhesive_height_m
+        spec = [(GROUP_BOTTOM_DISK, r_b, self.bottom_disk_height_m)]
+        if a > 0.0:
+            spec.append((GROUP_ADHESIVE, min(r_b, r_p), a))
+        spec.append((GROUP_PZT, r_p, self.pzt_height_m))
+        if a > 0.0:
+            spec.append((GROUP_ADHESIVE, min(r_t, r_p), a))
+        spec.append((GROUP_TOP_DISK, r_t, self.top_disk_height_m))
+        z = np.cumsum([0.0] + [h for _, _, h in spec])
+        return [(g, r, float(z[k]), float(z[k + 1])) for k, (g, r, _) in enumerate(spec)]
 
     @property
     def radii_m(self) -> tuple[float, float, float]:
@@ -67,8 +89,8 @@ class MeshDensity:
     ``n_core`` divisions per side of the square core; ``n_rings`` radial
     divisions of the rings (core to r_bottom, r_bottom to r_pzt, r_pzt to
     r_top) when the radii are in that order; ``n_layers`` axial divisions of
-    the bottom disk, PZT and top disk; ``grading`` the ratio of the largest to
-    the smallest element in a graded run.
+    the bottom disk, PZT and top disk (an adhesive layer gets one); ``grading``
+    the ratio of the largest to the smallest element in a graded run.
     """
 
     n_core: int = 2
@@ -230,28 +252,29 @@ def stack_mesh(
     pts2, quads2, qrad = cross_section(
         radii, divisions(density.n_core, level), n_rings, density.grading, corners
     )
-    zs = geometry.z_interfaces_m
-    zlist = [np.array([zs[0]])]
-    groups_z = []
-    for m in range(3):
-        nl = divisions(density.n_layers[m], level)
-        # Refine towards the PZT faces (the corners sit there).
-        ends = {0: "hi", 1: "both", 2: "lo"}[m]
-        t = graded(nl, density.grading, ends)
-        zlist.append(zs[m] + t[1:] * (zs[m + 1] - zs[m]))
-        groups_z += [m] * nl
+    n_layers = {GROUP_BOTTOM_DISK: density.n_layers[0], GROUP_PZT: density.n_layers[1]}
+    n_layers[GROUP_TOP_DISK] = density.n_layers[2]
+    # Refine towards the PZT faces (the corners sit there); a bond layer is one element thick.
+    ends = {GROUP_BOTTOM_DISK: "hi", GROUP_PZT: "both", GROUP_TOP_DISK: "lo", GROUP_ADHESIVE: "none"}
+    layers = geometry.layers
+    zlist = [np.array([layers[0][2]])]
+    layer_of_cell_row = []
+    for k, (gid, _, z0, z1) in enumerate(layers):
+        nl = 1 if gid == GROUP_ADHESIVE else divisions(n_layers[gid], level)
+        t = graded(nl, density.grading, ends[gid])
+        zlist.append(z0 + t[1:] * (z1 - z0))
+        layer_of_cell_row += [k] * nl
     z = np.concatenate(zlist)
     n2 = len(pts2)
     coors = np.column_stack([np.tile(pts2, (len(z), 1)), np.repeat(z, n2)])
-    layer_radius = {0: r_b, 1: r_p, 2: r_t}
-    group_id = {0: GROUP_BOTTOM_DISK, 1: GROUP_PZT, 2: GROUP_TOP_DISK}
     cells, groups = [], []
-    for layer, m in enumerate(groups_z):
-        keep = qrad <= layer_radius[m] * (1 + 1e-9)
+    for row, k in enumerate(layer_of_cell_row):
+        gid, radius = layers[k][0], layers[k][1]
+        keep = qrad <= radius * (1 + 1e-9)
         q = quads2[keep]
-        lo, hi = layer * n2, (layer + 1) * n2
+        lo, hi = row * n2, (row + 1) * n2
         cells.append(np.hstack([q + lo, q + hi]))
-        groups.append(np.full(len(q), group_id[m]))
+        groups.append(np.full(len(q), gid))
     cells = np.vstack(cells)
     groups = np.concatenate(groups)
     used, inv = np.unique(cells, return_inverse=True)

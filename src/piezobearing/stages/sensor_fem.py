@@ -23,7 +23,7 @@ from ..sensor.analysis import (
     modal_results,
     placement_check,
 )
-from ..sensor.calibration import SensorCircuit
+from ..sensor.calibration import SensorCircuit, design_resistance_ohm
 from ..sensor.mesh import StackMesh, stack_mesh
 from . import log_progress
 
@@ -114,7 +114,7 @@ def sensor_harmonic(
             f"{resistance_json}: resistance_ohm = {r} is not a positive number; rerun fit_resistance"
         )
     mesh = read_mesh(mesh_vtk, p, p.multiplier)
-    rc = SensorCircuit.from_config(config["sensor"], r)
+    rc = SensorCircuit.from_config(config["sensor"], design_resistance_ohm(config["sensor"], r))
     df, band = harmonic_results(mesh, p, rc, float(low["linear_from_Hz"]))
     if not np.isclose(band["first_axial_short_Hz"], modal["first_resonance_short_Hz"], rtol=1e-6):
         raise SensorFemError(

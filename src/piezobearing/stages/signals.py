@@ -25,7 +25,7 @@ from ..io import (
     write_csv,
     write_json,
 )
-from ..sensor.calibration import SensorCircuit, circuit_voltage, frequency_response
+from ..sensor.calibration import SensorCircuit, circuit_voltage, design_resistance_ohm, frequency_response
 from ..signals import classification as sclass
 from ..signals import daq
 from ..signals import detection as sig
@@ -52,7 +52,8 @@ def sensor_circuit(config: dict, resistance_json: str) -> tuple[SensorCircuit, d
     res = read_json(resistance_json)
     if "resistance_ohm" not in res:
         raise SignalFileError(f"{resistance_json}: key 'resistance_ohm' missing; rerun rule fit_resistance")
-    return SensorCircuit.from_config(config["sensor"], res["resistance_ohm"]), res
+    r = design_resistance_ohm(config["sensor"], res["resistance_ohm"])  # sensor.daq_resistance_ohm, or the fitted R
+    return SensorCircuit.from_config(config["sensor"], r), res
 
 
 def sensor_voltage(

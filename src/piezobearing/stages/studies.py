@@ -7,13 +7,14 @@ process, into the case's own folder, and reduces them to one summary row.
 from __future__ import annotations
 
 import copy
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from ..bearing.lpm import BearingGeometry
-from ..io import read_json, write_json
+from ..io import read_json, read_kinematics, read_series, write_json
 from ..studies import case_config
 from .calibration import extract_sensitivity, fit_resistance, lowfreq, synthesize_calibration
 
@@ -153,6 +154,138 @@ def fault_detection_case(config: dict, outdir: Path, resistance: str, harmonic: 
     }
 
 
+def sensor_design_housing(out_json: str, config: dict) -> None:
+    """The housing seen by the sensor, once for the sensor_design study: the workflow's path (healthy mesh at
+    ``housing.mesh_level``, model with the configured sensor spring), its influence line's peak (the configured
+    design's load share) and the housing's flexibility at the sensor (the port compliance)."""
+    from ..bearing import transient as brs
+    from ..bearing.housing_mesh import build_housing_mesh
+
+    model = brs.make_model(build_housing_mesh(brs.housing_geometry(config), False, config["housing"]["mesh_level"]),
+                           config)
+    write_json(
+        {
+            "load_share": float(model.influence_line()[2].max()),
+            "sensor_spring_N_per_m": model.sensor_stiffness_N_per_m,
+            "port_compliance_m_per_N": model.sensor_port_compliance_m_per_N(),
+            "bottom_disk_diameter_m": config["sensor_fem"]["bottom_disk_diameter_m"],
+            "n_dofs": model.n_dofs,
+            "config": {k: config[k] for k in ("sensor", "sensor_fem", "bearing", "housing")},
+        },
+        out_json,
+    )
+
+
+def _load_share(config: dict, housing: dict, spring_N_per_m: float) -> float:
+    """This design's load share: from the housing's port compliance (exact, same contact disk), else its own model."""
+    from ..bearing import transient as brs
+    from ..bearing.housing_fem import spring_share_factor
+    from ..bearing.housing_mesh import build_housing_mesh
+
+    if config["sensor_fem"]["bottom_disk_diameter_m"] == housing["bottom_disk_diameter_m"]:
+        k_ref, a0 = housing["sensor_spring_N_per_m"], housing["port_compliance_m_per_N"]
+        return housing["load_share"] * spring_share_factor(spring_N_per_m, k_ref, a0)
+    mesh = build_housing_mesh(brs.housing_geometry(config), False, config["housing"]["mesh_level"])
+    return float(brs.make_model(mesh, config).influence_line()[2].max())
+
+
+def sensor_design_case(
+    config: dict,
+    outdir: Path,
+    resistance: str,
+    force_healthy: str,
+    force_faulty: str,
+    kinematics: str,
+    housing: str,
+) -> dict:
+    """One sensor design: its FEM figures of merit, its load share in the housing, detection at the DAQ's noise.
+
+    1. The stack (``sensor``, ``sensor_fem``) on the study's mesh (``sensor_fem.design_mesh_multiplier``)
+       with its measuring circuit (``sensor.daq_resistance_ohm``, or the workflow's fitted ``resistance``
+       where null; cable plus DAQ capacitance): :func:`piezobearing.sensor.design.design_figures`.
+    2. The load share: the sensor force per newton of radial roller load with a roller over the sensor.
+       The sensor is a rank-one spring on the housing, so its stiffness scales the whole influence line by
+       one factor (:func:`piezobearing.bearing.housing_fem.spring_share_factor`, from the ``housing``
+       file of :func:`sensor_design_housing`); a design with another contact disk gets its own housing model.
+    3. The workflow's sensor force records (``force_healthy``/``force_faulty``, made with the configured
+       design) scaled by the ratio of this design's load share to the configured one: exact for the
+       quasi-static force (the dynamic part is below 1e-4 of it, README), approximate for another contact disk.
+    4. Voltage through this design's RC circuit (FEM d33_eff / C and tau, exact for piecewise-linear
+       force), the first ``signals.skip_s`` dropped; the DAQ's absolute noise and ADC
+       (:func:`noise_settings`); the envelope indicator over ``signals.study_n_seeds`` replicates.
+    """
+    from ..bearing import transient as brs
+    from ..sensor import design as sd
+    from ..sensor import fem
+    from ..sensor.analysis import SensorFemParams
+    from ..sensor.calibration import design_resistance_ohm, rc_voltage
+    from ..sensor.mesh import stack_mesh
+    from ..signals import detection as sig
+
+    s, f = config["sensor"], config["sensor_fem"]
+    p = SensorFemParams.from_config(config)
+    r_ohm = design_resistance_ohm(s, read_json(resistance)["resistance_ohm"])
+    circuit = fem.MeasuringCircuit(r_ohm, p.cable_capacitance_F)
+    mesh = stack_mesh(p.geometry, p.density, f["design_mesh_multiplier"])
+    settings = sd.DesignSettings(
+        order=p.order,
+        damping_ratio=p.damping_ratio,
+        n_ritz_modes=p.n_ritz_modes,
+        reference_frequency_Hz=p.reference_frequency_Hz,
+        band_ratio_dB=p.band_ratio_dB,
+        linear_tolerance=config["lowfreq"]["deviation_threshold"],
+    )
+    figs = sd.design_figures(mesh, p.materials, circuit, settings)
+
+    port = read_json(housing)
+    spring = brs.sensor_spring(config)
+    share = _load_share(config, port, spring)
+    kin = read_kinematics(kinematics)
+    sg = config["signals"]
+    voltages, p2p = {}, {}
+    for case, path in (("healthy", force_healthy), ("faulty", force_faulty)):
+        _, force, dt = read_series(path, "force_N")
+        v = rc_voltage(force * (share / port["load_share"]), dt, figs["open_circuit_gain_V_per_N"], figs["tau_s"])
+        voltages[case] = v[int(round(sg["skip_s"] / dt)):]
+        p2p[case] = float(np.ptp(voltages[case]))
+    det = sd.detection_at_noise(
+        voltages, dt, kin["bpfo_Hz"], noise_settings(config), sg["study_n_seeds"], config["seed"],
+        sig.EnvelopeSettings.from_config(sg), sig.IndicatorSettings.from_config(sg),
+        sg["study_required_detection_rate"],
+    )
+    return {
+        "material": s["material"],
+        "pzt_diameter_m": s["pzt_diameter_m"],
+        "pzt_thickness_m": s["pzt_height_m"],
+        "bottom_disk_diameter_m": f["bottom_disk_diameter_m"],
+        "bottom_disk_thickness_m": f["bottom_disk_height_m"],
+        "top_disk_diameter_m": f["top_disk_diameter_m"],
+        "top_disk_thickness_m": f["top_disk_height_m"],
+        "adhesive_thickness_m": f["adhesive_height_m"],
+        "cable_length_m": s["cable_length_m"],
+        "daq_capacitance_F": s["daq_capacitance_F"],
+        **figs,
+        "sensor_spring_N_per_m": spring,
+        "load_share": share,
+        "load_share_configured": port["load_share"],
+        "voltage_peak_to_peak_healthy_V": p2p["healthy"],
+        "voltage_peak_to_peak_faulty_V": p2p["faulty"],
+        **det,
+        "bpfo_Hz": kin["bpfo_Hz"],
+        "mesh_multiplier": f["design_mesh_multiplier"],
+    }
+
+
+def noise_settings(config: dict):
+    """The DAQ's absolute noise: ``signals.noise`` where the config has it (model forced to absolute), else
+    :class:`piezobearing.signals.daq.NoiseSettings`' absolute defaults (1 uV/sqrt(Hz), 24 bits, +-60 V)."""
+    from ..signals import daq
+
+    if "noise" in config["signals"]:
+        return replace(daq.NoiseSettings.from_config(config["signals"]), model="absolute")
+    return daq.NoiseSettings(model="absolute")
+
+
 def detector_case(config: dict, outdir: Path, resistance: str, harmonic: str | None = None) -> dict:
     """The fault_detection case, then the search detector over noise seeds at the configured DAQ.
 
@@ -203,6 +336,7 @@ KINDS = {
     "daq_noise": detector_case,
     "defect_position": detector_case,
     "fault_type_speed": detector_case,
+    "sensor_design": sensor_design_case,
 }
 
 
