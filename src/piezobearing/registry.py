@@ -26,15 +26,21 @@ PACKAGE_DIR = Path(__file__).resolve().parent
 
 #: The sensor circuit of Eq. 6 (SensorCircuit.from_config) without R.
 _CIRCUIT = [
+    "sensor.material",
+    "sensor.daq_resistance_ohm",
+    "sensor.daq_capacitance_F",
     "sensor.pzt_diameter_m",
     "sensor.pzt_height_m",
     "sensor.d33_C_per_N",
     "sensor.eps33_T_rel",
+    "sensor.pzt_density_kg_per_m3",
+    "sensor.c66_rule",
     "sensor.cable_length_m",
     "sensor.cable_capacitance_F_per_m",
 ]
 #: The PZT disk as a material and a spring (materials.pzt_from_config and the disk's size); no cable.
 _PZT = [
+    "sensor.material",
     "sensor.pzt_diameter_m",
     "sensor.pzt_height_m",
     "sensor.d33_C_per_N",
@@ -49,6 +55,10 @@ _ALUMINA_DISK = [
     "sensor_fem.alumina_young_Pa",
     "sensor_fem.alumina_poisson",
     "sensor_fem.alumina_density_kg_per_m3",
+    "sensor_fem.adhesive_height_m",
+    "sensor_fem.adhesive_young_Pa",
+    "sensor_fem.adhesive_poisson",
+    "sensor_fem.adhesive_density_kg_per_m3",
 ]
 #: The sensor stack's geometry and mesh density (sensor.analysis.mesh_inputs).
 _STACK_MESH = [
@@ -57,6 +67,7 @@ _STACK_MESH = [
     "sensor_fem.bottom_disk_diameter_m",
     "sensor_fem.bottom_disk_height_m",
     "sensor_fem.top_disk_diameter_m",
+    "sensor_fem.adhesive_height_m",
     "sensor_fem.top_disk_height_m",
     "sensor_fem.mesh_n_core",
     "sensor_fem.mesh_n_rings",
