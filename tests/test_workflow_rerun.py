@@ -202,10 +202,10 @@ def test_an_undeclared_key_read_raises_naming_the_rule_and_the_fix():
     from piezobearing.registry import UndeclaredKeyError, declared, declared_config
 
     config = cfg.load(ROOT / "config/ci.yaml")
-    sub = declared_config(declared(config, "noisy"), "noisy")
-    assert sub["signals"]["snr_dB"] == config["signals"]["snr_dB"]
-    with pytest.raises(UndeclaredKeyError, match=r"signals\.band_rule.*READS\['noisy'\]"):
-        sub["signals"]["band_rule"]
+    sub = declared_config(declared(config, "sensor_voltage"), "sensor_voltage")
+    assert sub["signals"]["skip_s"] == config["signals"]["skip_s"]
+    with pytest.raises(UndeclaredKeyError, match=r"signals\.snr_dB.*READS\['sensor_voltage'\]"):
+        sub["signals"]["snr_dB"]
 
 
 @pytest.mark.parametrize(
