@@ -255,8 +255,9 @@ def test_diagnosis_json_interface(paper_config):
         assert {"effect", "delta_bic", "nrmse", "params"} <= set(r)
     # best first; within a BIC tie (< 2) an effect may follow the one it declares itself equivalent to
     # (d33_scale after extra_capacitance: the same record, see selection.yield_ties)
-    bics = [r["delta_bic"] for r in d["ranking"]]
-    for (a, b), (ra, rb) in zip(zip(bics, bics[1:]), zip(d["ranking"], d["ranking"][1:])):
+    rk = d["ranking"]
+    for ra, rb in zip(rk[:-1], rk[1:], strict=True):
+        a, b = ra["delta_bic"], rb["delta_bic"]
         assert a >= b or (b - a < 2.0 and {ra["effect"], rb["effect"]} == {"d33_scale", "extra_capacitance"})
     for s in d["steps"]:
         assert {"effects", "nrmse", "bic"} <= set(s)
