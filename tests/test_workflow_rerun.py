@@ -44,7 +44,7 @@ import sys
 from pathlib import Path
 
 a = sys.argv[1:]
-for p in [a[1]] + [a[i + 2] for i, x in enumerate(a[:-2]) if x == "-p" and a[i + 1] == "figure"]:
+for p in [a[1]] + [a[i + 2] for i, x in enumerate(a[:-2]) if x in ("-p", "-r") and a[i + 1] == "figure"]:
     Path(p).parent.mkdir(parents=True, exist_ok=True)
     Path(p).write_text("stand-in")
 """
@@ -53,7 +53,7 @@ for p in [a[1]] + [a[i + 2] for i, x in enumerate(a[:-2]) if x == "-p" and a[i +
 SKIP = {"calibration.measurement", "synthesis.hidden_effects"}
 #: String choices: another valid value.
 OTHER = {"type": "inner_race", "band_rule": "kurtogram", "method": "direct", "sensor_electrical": "short", "resample": "sample",
-         "c66_rule": "paper"}
+         "c66_rule": "paper", "material": "pzt5h", "model": "absolute", "window": "rectangular"}
 
 
 def _stub(script: Path) -> str:
