@@ -151,9 +151,11 @@ class CalibrationSubject:
     def read(self, path: str, config: dict) -> tuple[Measurement, list[Impulse]]:
         return read_record(path, config)
 
-    def problem(self, observation: tuple[Measurement, list[Impulse]], config: dict) -> Problem:
+    @staticmethod
+    def _engine_inputs(observation: tuple[Measurement, list[Impulse]], config: dict) -> tuple:
+        """The record, voltage, nominal circuit, configured effects, settings and impulses the engine takes."""
         m, imps = observation
-        return calibration_problem(
+        return (
             ForceRecord(m.time_s, m.force_N),
             m.voltage_V,
             nominal_circuit(config),
@@ -161,6 +163,9 @@ class CalibrationSubject:
             DiagnosticsSettings.from_config(config.get("diagnostics")),
             imps,
         )
+
+    def problem(self, observation: tuple[Measurement, list[Impulse]], config: dict) -> Problem:
+        return calibration_problem(*self._engine_inputs(observation, config))
 
     def synthesise(
         self, config: dict, seed: int, hidden_effects: list[dict]
@@ -183,16 +188,7 @@ class CalibrationSubject:
         self, observation, config: dict, progress: Callable[[str], None] | None = None
     ) -> tuple[Diagnosis, dict]:
         """Run the engine on a record read by :meth:`read`; returns the diagnosis and its JSON-ready dict."""
-        m, imps = observation
-        return diagnose_record(
-            ForceRecord(m.time_s, m.force_N),
-            m.voltage_V,
-            nominal_circuit(config),
-            config["model"]["effects"],
-            DiagnosticsSettings.from_config(config.get("diagnostics")),
-            imps,
-            progress,
-        )
+        return diagnose_record(*self._engine_inputs(observation, config), progress)
 
 
 #: The calibration subject.
