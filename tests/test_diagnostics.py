@@ -263,6 +263,13 @@ def test_diagnosis_json_interface(paper_config):
         assert {"effects", "nrmse", "bic"} <= set(s)
     assert d["verdict"] in ("explained", "unexplained") and isinstance(d["unexplained"], list)
     assert isinstance(d["selected"], list)
+    # every free parameter of the final fit has an interval whose Jacobian form was checked (or profiled)
+    iv = d["identifiability"]["intervals"]
+    assert "resistance_ohm" in iv and "mains_h1_sin_V" in iv and set(iv) <= set(d["final"]["params"])
+    for name, i in iv.items():
+        assert i["method"] in ("jacobian (checked)", "profile", "jacobian (not honest; not profiled)")
+        assert i["ci"][0] <= d["final"]["params"][name] <= i["ci"][1]
+        assert d["final"]["ci95"][name] == i["ci"]
 
 
 # --------------------------------------------------------------------------- the subject interface

@@ -22,6 +22,7 @@ NRMSE = rms(residual) / rms(measured voltage) throughout.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
@@ -103,8 +104,29 @@ class ModelFit:
             "params": r.values,
             "stderr": r.stderr,
             "ci95": r.ci95,
+            **({"ci95_jacobian": r.ci95_jacobian} if r.ci95_jacobian is not None else {}),
             "converged": r.success,
         }
+
+
+def likelihood_residual(
+    model: Model, record: Record, voltage_V: np.ndarray, floor: NoiseFloor
+) -> Callable[[dict], np.ndarray]:
+    """The fit's residual function: values -> the residual weighted by the floor (chi2 = its sum of squares).
+
+    The model is driven by its :meth:`~piezobearing.diagnosis.model.Model.fit_input`
+    and the floor is that of the input filtered by ``fit_weight`` (module docstring).
+    The engine's profile likelihood (:mod:`~piezobearing.diagnosis.profile`) refits with it.
+    """
+    v = np.asarray(voltage_V, dtype=float)
+    clean = model.fit_input(record)
+    w = model.fit_weight(record)
+
+    def weighted(values: dict) -> np.ndarray:
+        s = floor.spectrum(model.response(values, record) * w)
+        return fd_weighted(v - model.simulate(values, record, clean), s)
+
+    return weighted
 
 
 def fit_model(
@@ -123,13 +145,7 @@ def fit_model(
     overrides some of them for one more start, and the best fit is kept.
     """
     v = np.asarray(voltage_V, dtype=float)
-    clean = model.fit_input(record)
-    w = model.fit_weight(record)
-
-    def weighted(values: dict) -> np.ndarray:
-        s = floor.spectrum(model.response(values, record) * w)
-        return fd_weighted(v - model.simulate(values, record, clean), s)
-
+    weighted = likelihood_residual(model, record, v, floor)
     best = None
     for extra in starts or [{}]:
         res = fit(weighted, model.params(record, {**(start or {}), **extra}), max_nfev=max_nfev, ftol=ftol)

@@ -35,6 +35,8 @@ class FitResult:
     chi2: float = float("nan")
     success: bool = True
     message: str = ""
+    #: The Gauss-Newton intervals when ``ci95`` was replaced by honest ones (:mod:`~piezobearing.diagnosis.profile`).
+    ci95_jacobian: dict[str, list[float]] | None = None
 
     @property
     def aic(self) -> float:
@@ -56,6 +58,7 @@ class FitResult:
             "values": self.values,
             "stderr": self.stderr,
             "ci95": self.ci95,
+            **({"ci95_jacobian": self.ci95_jacobian} if self.ci95_jacobian is not None else {}),
             "correlation": self.correlation,
             "n_data": self.n_data,
             "n_free": self.n_free,
