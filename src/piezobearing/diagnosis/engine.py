@@ -196,7 +196,7 @@ def final_intervals(final: ModelFit, record: Record, v: np.ndarray, floor: Noise
     """
     res = final.result
     out = honest_intervals(
-        likelihood_residual(final.model, record, v, floor),
+        likelihood_residual(final.model, record, v, floor, final.scale),
         final.model.params(record, res.values),
         res,
         max_profiles=PROFILES,
