@@ -38,8 +38,9 @@ def test_model_linear_in_its_parameters_keeps_the_jacobian_interval():
         assert h[name].method == "jacobian (checked)"
         assert h[name].rise == pytest.approx([1.0, 1.0], abs=1e-6)
         assert h[name].ci == res.ci95[name]
-    prof = profile_interval(fn, ps, res, "slope_V")
-    assert prof.ci == pytest.approx(res.ci95["slope_V"], rel=1e-6)
+    prof = profile_interval(fn, ps, res, "slope_V")  # the ends are found to 1% of the half-width in sqrt(P)
+    lo, hi = res.ci95["slope_V"]
+    assert prof.ci == pytest.approx([lo, hi], abs=0.01 * (hi - lo))
 
 
 def test_nonlinear_parameter_is_profiled_and_its_ends_raise_chi2_by_the_threshold():
@@ -57,6 +58,19 @@ def test_nonlinear_parameter_is_profiled_and_its_ends_raise_chi2_by_the_threshol
         fixed = [replace(p, vary=False, value=end) if p.name == "tau_s" else p for p in ps]
         assert fit(fn, fixed).chi2 - res.chi2 == pytest.approx(d, rel=0.02)
     assert h.ci[1] < h.jacobian_ci[1]
+
+
+def test_profile_follows_a_valley_of_two_confounded_parameters_to_a_bound():
+    """y = a b t: only the product is determined (r = -1). With b bounded to [0.5, 2] and a free, the profile of
+    a is flat while b compensates and closes where b reaches its bounds: [p / 2, 2 p] widened by D, not the
+    Jacobian's (meaningless) interval."""
+    y = 3.0 * T + np.random.default_rng(4).normal(0, 0.1, T.size)
+    fn = lambda v: (y - v["a_V"] * v["b_ratio"] * T) / 0.1  # noqa: E731
+    ps = [Param("a_V", 3.0, 0.0, 100.0), Param("b_ratio", 1.0, 0.5, 2.0)]
+    res = fit(fn, ps)
+    prod = res.values["a_V"] * res.values["b_ratio"]
+    h = profile_interval(fn, ps, res, "a_V")
+    assert h.ci[0] == pytest.approx(prod / 2, rel=0.03) and h.ci[1] == pytest.approx(2 * prod, rel=0.03)
 
 
 def test_an_end_the_data_do_not_close_is_the_bound():

@@ -102,7 +102,14 @@ class _Profile:
         self.lo = self.p.to_internal(self.p.lower) if np.isfinite(self.p.lower) else -np.inf
         self.hi = self.p.to_internal(self.p.upper) if np.isfinite(self.p.upper) else np.inf
         self.refits = 0
-        self.warm = dict(result.values)
+        self.warm: dict | None = None  # the last refit's values (a second start), None before the first
+        cov = _internal_cov(result, self.free)
+        self.ustar = np.array([q.to_internal(result.values[q.name]) for q in self.free])
+        self.line = (
+            cov[:, self.i] / cov[self.i, self.i]
+            if cov[self.i, self.i] > 0
+            else np.eye(len(self.free))[self.i]
+        )
 
     def chi2_at(self, values: dict) -> float:
         r = np.asarray(self.fn(values), dtype=float)
@@ -110,44 +117,61 @@ class _Profile:
 
     def refit(self, u: float) -> float:
         """P(u): chi2 with the parameter fixed at u and the others refitted, minus chi2_min."""
-        ps = [
-            replace(q, vary=False).with_value(q.to_physical(u))
-            if j == self.i
-            else q.with_value(self.warm[q.name])
-            for j, q in enumerate(self.free)
-        ]
-        res = fit(self.fn, [*ps, *self.fixed], max_nfev=self.max_nfev, ftol=self.ftol)
-        self.refits += 1
-        self.warm = {**self.warm, **res.values}
-        return res.chi2 - self.result.chi2
+        # start the others on the quadratic profile line (where they compensate the fixed parameter along a
+        # correlated valley), and from the last refit; keep the better
+        along = self.ustar + (u - self.u0) * self.line
+        best = None
+        starts = [{q.name: q.to_physical(a) for q, a in zip(self.free, along, strict=True)}]
+        for start in starts + ([self.warm] if self.warm is not None else []):
+            ps = [
+                replace(q, vary=False).with_value(q.to_physical(u))
+                if j == self.i
+                else q.with_value(start[q.name])
+                for j, q in enumerate(self.free)
+            ]
+            res = fit(self.fn, [*ps, *self.fixed], max_nfev=self.max_nfev, ftol=self.ftol)
+            self.refits += 1
+            if best is None or res.chi2 < best.chi2:
+                best = res
+        self.warm = dict(best.values)
+        return best.chi2 - self.result.chi2
 
     def end(self, side: int, u_start: float, p_start: float | None) -> tuple[float, bool]:
-        """The end on ``side`` (-1 lower, +1 upper) where P = D: bracket outward, then secant on sqrt(P)."""
+        """The end on ``side`` (-1 lower, +1 upper) where P = D: bracket outward (doubling the step), then
+        regula falsi on sqrt(P); (the bound, True) when P stays below D up to it."""
         bound = self.lo if side < 0 else self.hi
         target = np.sqrt(self.delta)
         a, fa = self.u0, 0.0  # P(u0) = 0
         b = u_start
         fb = np.sqrt(max(self.refit(b), 0.0)) if p_start is None else np.sqrt(max(p_start, 0.0))
-        step = abs(b - a)
-        for _ in range(8):  # bracket: grow the step until P >= D or the bound is reached
-            if fb >= target:
-                break
+        step, grown = abs(b - a), 0
+        while fb < target:  # bracket: grow the step until P >= D or the bound is reached
             if (b - bound) * side >= 0:
                 return bound, True
+            if grown == 16:
+                return b, False
             a, fa = b, fb
             step *= 2.0
+            grown += 1
             b = float(np.clip(b + side * step, min(bound, b), max(bound, b)))
             fb = np.sqrt(max(self.refit(b), 0.0))
-        else:
-            return b, False
-        self.warm = dict(self.result.values)
-        for _ in range(6):  # regula falsi on sqrt(P) - sqrt(D), nearly linear in u
-            c = a + (target - fa) * (b - a) / (fb - fa) if fb != fa else 0.5 * (a + b)
-            fc = np.sqrt(max(self.refit(c), 0.0))
-            if abs(fc - target) < 0.01 * target:
-                return c, False
-            a, fa, b, fb = (c, fc, b, fb) if fc < target else (a, fa, c, fc)
-        return c, False
+        self.warm = None
+        # Illinois regula falsi on g = sqrt(P) - sqrt(D) (nearly linear in u for a near-quadratic cost; it
+        # converges also where P is flat and then rises steeply, as along a valley ending at a bound)
+        ga, gb, last = fa - target, fb - target, 0
+        c = b
+        for _ in range(12):
+            c = (a * gb - b * ga) / (gb - ga)
+            gc = np.sqrt(max(self.refit(c), 0.0)) - target
+            if abs(gc) < 0.01 * target:
+                break
+            if gc > 0:
+                b, gb = c, gc
+                ga, last = (0.5 * ga if last == 1 else ga), 1
+            else:
+                a, ga = c, gc
+                gb, last = (0.5 * gb if last == -1 else gb), -1
+        return float(c), False
 
 
 def _wald(result: FitResult, p: Param) -> tuple[float, float, float]:
@@ -179,7 +203,7 @@ def profile_interval(
     w = w if np.isfinite(w) and w > 0 else max(abs(u0) * 1e-3, 1e-6)
     w *= float(student_t.ppf(0.5 + level / 2, 10**6) / student_t.ppf(0.975, 10**6))
     lo, lo_b = pr.end(-1, max(u0 - w, pr.lo), None)
-    pr.warm = dict(result.values)
+    pr.warm = None
     hi, hi_b = pr.end(+1, min(u0 + w, pr.hi), None)
     return ProfileInterval(
         name,
