@@ -21,7 +21,7 @@ NRMSE = rms(residual) / rms(measured voltage) throughout.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
@@ -67,8 +67,23 @@ class ModelFit:
     nrmse: float
     floor_nrmse: float
     floor_rms_V: float
+    residual_rms_V: float = float("nan")
     #: h(t) of a non-stationary noise model (None: stationary), :func:`noise_scale`.
     scale: np.ndarray | None = field(repr=False, default=None)
+
+    def compact(self) -> "ModelFit":
+        """This fit without its full-length arrays (its numbers and :meth:`summary` kept): what a ranked
+        candidate that is not added needs, so that a long record's ranking holds no series per candidate."""
+        empty = np.zeros(0)
+        return replace(
+            self,
+            result=replace(self.result, residual=empty),
+            model_V=empty,
+            residual_V=empty,
+            whitened=empty,
+            response=empty,
+            scale=None,
+        )
 
     @property
     def values(self) -> dict:
@@ -98,7 +113,7 @@ class ModelFit:
             "effects": self.model.names,
             "nrmse": self.nrmse,
             "noise_floor_nrmse": self.floor_nrmse,
-            "residual_rms_V": float(np.sqrt(np.mean(self.residual_V**2))),
+            "residual_rms_V": self.residual_rms_V,
             "noise_floor_rms_V": self.floor_rms_V,
             "chi2": r.chi2,
             "chi2_per_sample": r.chi2 / r.n_data,
@@ -188,7 +203,9 @@ def fit_model(
         )
         res.log_det = float(np.sum(np.log(np.square(h))))
         best = res
-    return finish(model, record, v, floor, best, h)
+    out = finish(model, record, v, floor, best, h)
+    model.release()
+    return out
 
 
 def finish(
@@ -202,5 +219,8 @@ def finish(
     r = v - mv
     floor_rms = floor.rms_V(g, record.n)
     vrms = float(np.sqrt(np.mean(v**2)))
+    rrms = float(np.sqrt(np.mean(r**2)))
     z = whiten(r if scale is None else r / scale, s)
-    return ModelFit(model, res, mv, r, z, np.asarray(g), nrmse(r, v), floor_rms / vrms, floor_rms, scale)
+    return ModelFit(
+        model, res, mv, r, z, np.asarray(g), nrmse(r, v), floor_rms / vrms, floor_rms, rrms, scale
+    )
