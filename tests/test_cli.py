@@ -46,6 +46,22 @@ def test_validate_ok(files, capsys):
     assert out.startswith("OK: ") and "500 Hz" in out and "6 impulses" in out
 
 
+def test_validate_says_the_voltage_is_clipped(files, capsys):
+    """A DAQ range 20% below the largest press: the voltage is stuck at the range's edge; validate still
+    accepts the file (exit 0) and says so in one line, naming the column, the level and the fix."""
+    import pandas as pd
+
+    df = pd.read_csv(files["record"])
+    top = 0.8 * df["voltage_V"].max()
+    clipped = files["dir"] / "clipped.csv"
+    df.assign(voltage_V=df["voltage_V"].clip(upper=top)).to_csv(clipped, index=False)
+    assert main(["validate", str(clipped)]) == 0
+    warn = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("WARNING")]
+    assert len(warn) == 1 and "voltage_V is stuck at" in warn[0] and "clipped" in warn[0] and "range" in warn[0]
+    assert main(["validate", str(files["record"])]) == 0
+    assert "WARNING" not in capsys.readouterr().out
+
+
 def test_validate_runs_the_workflows_checks(files, capsys):
     # A file the workflow rejects before any job must not pass validate: inverted polarity, one press.
     import pandas as pd

@@ -128,6 +128,16 @@ def _validate(args) -> int:
         f"OK: {args.file}: {m.time_s.size} rows, {m.sample_rate_Hz:.6g} Hz, "
         f"{m.time_s[-1] - m.time_s[0]:.6g} s, {len(imps)} impulses"
     )
+    from .diagnosis.describe import stuck_runs
+
+    stuck = stuck_runs(m.voltage_V, time_s=m.time_s)
+    if stuck["n_runs"]:  # readable, but no model can fit these samples
+        levels = ", ".join(f"{v:.6g} V" for v in stuck["levels"])
+        print(
+            f"WARNING: {args.file}: column voltage_V is stuck at {levels} in {stuck['n_runs']} run(s) "
+            f"({stuck['n_samples']} samples, the first at t = {stuck['runs'][0]['start_s']:.3f} s): "
+            "clipped; widen the DAQ's input range or lower the gain"
+        )
     print(f"config: {used}")
     return 0
 
@@ -197,8 +207,13 @@ def _diagnose(args) -> int:
         f"(floor {100 * final['noise_floor_nrmse']:.2f}%)"
     )
     print(f"verdict: {d['verdict']}")
+    stuck = (d.get("outside_catalogue") or {}).get("stuck") or {}
+    if stuck.get("where"):
+        print(f"WARNING: {stuck['where']}")
     for f in d["unexplained"][:5]:
         print(f"  - {f['where']}")
+    if len(d["unexplained"]) > 5:
+        print(f"  ... and {len(d['unexplained']) - 5} more (every one in the report)")
     print(f"report: {args.out}/report.md")
     return 0
 
@@ -235,6 +250,9 @@ def _diagnose_bearing(args) -> int:
     )
     print(f"fault: {f['type']}" + "".join(f"; {k} = {v:.6g} [{f['ci95'][k][0]:.6g}, {f['ci95'][k][1]:.6g}]" for k, v in f["params"].items() if f["ci95"].get(k)))
     print(f"verdict: {d['verdict']}")
+    stuck = (d.get("outside_catalogue") or {}).get("stuck") or {}
+    if stuck.get("where"):
+        print(f"WARNING: {stuck['where']}")
     for u in d["unexplained"][:5]:
         print(f"  - {u['where']}")
     print(f"report: {args.out}/report.md")

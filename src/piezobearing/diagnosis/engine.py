@@ -27,6 +27,7 @@ from typing import Callable
 
 import numpy as np
 
+from .describe import describe
 from .fit import ModelFit, fit_model, likelihood_residual
 from .identifiability import equivalences, identifiability
 from .noise import NoiseFloor
@@ -61,6 +62,7 @@ class Diagnosis:
     unexplained: list[dict]
     dropped: list[dict] = field(default_factory=list)
     identifiability: dict = field(default_factory=dict)
+    outside: dict = field(default_factory=dict)
 
     @property
     def record(self) -> Record:
@@ -99,6 +101,7 @@ class Diagnosis:
             "final": {**self.final.summary(), "tests": self.tests["final"].summary()},
             "verdict": self.verdict,
             "unexplained": self.unexplained,
+            "outside_catalogue": self.outside,
             "identifiability": self.identifiability,
             **{key: {k: j.summary for k, j in js.items()} for key, js in self.judgements.items()},
             "settings": self.settings.__dict__,
@@ -184,6 +187,16 @@ def diagnose(
         found,
         sel.dropped,
         idf,
+        describe(
+            final.whitened,
+            tests["final"].window_t0_s,
+            tests["final"].window_ratio,
+            record.input,
+            record.input_name,
+            p.segments,
+            v,
+            record.time_s,
+        ),
     )
 
 
