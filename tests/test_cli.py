@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from piezobearing.cli import main
@@ -47,14 +48,17 @@ def test_validate_ok(files, capsys):
 
 
 def test_validate_says_the_voltage_is_clipped(files, capsys):
-    """A DAQ range 20% below the largest press: the voltage is stuck at the range's edge; validate still
-    accepts the file (exit 0) and says so in one line, naming the column, the level and the fix."""
+    """The largest press just touches the DAQ's range: 4 samples held at its top (fewer than the reader's
+    error limit for a clipped channel). validate accepts the file (exit 0) and says in one line that the
+    voltage is stuck there, naming the column, the level and the fix."""
     import pandas as pd
 
     df = pd.read_csv(files["record"])
-    top = 0.8 * df["voltage_V"].max()
+    v = df["voltage_V"].to_numpy().copy()
+    i = int(np.argmax(v))
+    v[i - 1 : i + 3] = v[i]
     clipped = files["dir"] / "clipped.csv"
-    df.assign(voltage_V=df["voltage_V"].clip(upper=top)).to_csv(clipped, index=False)
+    df.assign(voltage_V=v).to_csv(clipped, index=False)
     assert main(["validate", str(clipped)]) == 0
     warn = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("WARNING")]
     assert len(warn) == 1 and "voltage_V is stuck at" in warn[0] and "clipped" in warn[0] and "range" in warn[0]

@@ -159,18 +159,7 @@ def diagnose(
     found = findings(tests["final"], record.input_name, p.segments)
     for js in judgements.values():
         found += js["final"].findings
-    idf = identifiability(
-        sel.steps,
-        sel.stop,
-        final,
-        cut,
-        equivalences(
-            p.catalogue.values(),
-            {c.effect.name for c in sel.added} | {c.effect.name for c in sel.ranking[:1]},
-            sel.ranking,
-        ),
-    )
-    idf["intervals"] = {k: i.report() for k, i in intervals.items()}
+    idf = how_firm(sel, final, cut, p, intervals)
     return Diagnosis(
         p,
         settings,
@@ -198,6 +187,23 @@ def diagnose(
             record.time_s,
         ),
     )
+
+
+def how_firm(sel, final: ModelFit, cut: bool, p: Problem, intervals: dict) -> dict:
+    """The ``identifiability`` block: margins, correlations, equivalences and the final fit's honest intervals."""
+    idf = identifiability(
+        sel.steps,
+        sel.stop,
+        final,
+        cut,
+        equivalences(
+            p.catalogue.values(),
+            {c.effect.name for c in sel.added} | {c.effect.name for c in sel.ranking[:1]},
+            sel.ranking,
+        ),
+    )
+    idf["intervals"] = {k: i.report() for k, i in intervals.items()}
+    return idf
 
 
 def final_intervals(final: ModelFit, record: Record, v: np.ndarray, floor: NoiseFloor, settings) -> dict:
