@@ -92,6 +92,18 @@ def _is_paper(df: pd.DataFrame) -> np.ndarray:
     return ok
 
 
+def _design_label(r) -> str:
+    """Ceramic and PZT size, and what else differs from the paper's stack (bond layer, cable, DAQ resistance)."""
+    out = f"{r['material']} {1e3 * r['pzt_diameter_m']:g}x{1e3 * r['pzt_thickness_m']:g}"
+    if r["adhesive_thickness_m"] > 0:
+        out += f", {1e6 * r['adhesive_thickness_m']:g} um bond"
+    if not np.isclose(r["cable_length_m"], PAPER_DESIGN["cable_length_m"]):
+        out += f", {r['cable_length_m']:g} m cable"
+    if not np.isclose(r["resistance_ohm"], 50e6):
+        out += f", R {r['resistance_ohm'] / 1e6:g} MOhm"
+    return out
+
+
 def sensor_design(df: pd.DataFrame):
     """Mid-band sensitivity against the +3 dB band edge, colour the detection margin with an ideal ADC (comparable
     over every design); the designs whose record clips the configured ADC range crossed out, the paper's stack
@@ -104,7 +116,7 @@ def sensor_design(df: pd.DataFrame):
     sc = ax.scatter(bw, sens, c=margin, cmap="viridis", s=36, edgecolors="k", linewidths=0.4, zorder=3)
     fig.colorbar(sc, ax=ax, label="detection margin, ideal ADC [dB]")
     range_V = float(df["range_V"].iloc[0])
-    ax.scatter(bw[clipped], sens[clipped], marker="x", s=70, c="r", linewidths=1.2, zorder=4,
+    ax.scatter(bw[clipped], sens[clipped], marker="x", s=40, c="r", linewidths=0.8, zorder=4,
                label=f"record clips the +-{range_V:g} V ADC range")
     front = pareto_front(bw, sens)
     ax.plot(bw[front], sens[front], "k--", lw=1, zorder=2, label="trade-off front")
@@ -112,9 +124,7 @@ def sensor_design(df: pd.DataFrame):
     ax.scatter(bw[paper], sens[paper], s=160, facecolors="none", edgecolors="r", linewidths=1.5, zorder=4,
                label="the paper's stack")
     for i in range(len(df)):
-        r = df.iloc[i]
-        ax.annotate(f"{r['material']} {1e3 * r['pzt_diameter_m']:g}x{1e3 * r['pzt_thickness_m']:g}",
-                    (bw[i], sens[i]), fontsize=5, xytext=(3, 2), textcoords="offset points")
+        ax.annotate(_design_label(df.iloc[i]), (bw[i], sens[i]), fontsize=5, xytext=(3, 2), textcoords="offset points")
     ax.set_xlabel("+3 dB band edge [kHz]")
     ax.set_ylabel("mid-band sensitivity [V/N]")
     ax.set_yscale("log")
