@@ -1,0 +1,120 @@
+"""One pipeline: a parameter study's case runs the workflow's own code path.
+
+The rules' stages (called as their scripts call them: file in, file out, each with only the config keys its
+rule declares) and the study's in-memory chain (:func:`piezobearing.stages.studies.workflow_chain`, the same
+functions the stages call, no files) must give the same results to the bit for the same config.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from piezobearing.bearing.transient import CASES
+from piezobearing.io import as_read, json_as_read, read_harmonic, read_json, read_series
+from piezobearing.registry import declared, declared_config
+from piezobearing.signals import outputs as sout
+from piezobearing.stages import bearing as brs
+from piezobearing.stages import signals as sgs
+from piezobearing.stages.studies import _fault_detection_row, workflow_chain
+
+
+def _rule(cfg: dict, rule: str):
+    """What the rule's script hands its stage: the declared keys only (registry.READS)."""
+    return declared_config(declared(cfg, rule), rule)
+
+
+@pytest.fixture(scope="module")
+def both(tmp_path_factory, ci_config):
+    """The rules' files and the study's chain on one CI-sized config (0.35 s record, coarse housing mesh,
+    5 noise seeds, the sensor FEM correction from a stand-in FEM response)."""
+    d = tmp_path_factory.mktemp("rules")
+    cfg = copy.deepcopy(ci_config)
+    cfg["bearing"].update(duration_s=0.35, settle_s=0.01, shaft_speed_rpm=1200.0)
+    cfg["housing"].update(mesh_level=0.35, n_modes=4, method="reduced", direct_check_s=0.0)
+    cfg["signals"].update(study_n_seeds=5, sensor_fem_correction=True)
+    cfg["signals"]["detector"]["roc_snr_dB"] = [0.0]
+    res = d / "resistance.json"
+    res.write_text(json.dumps({"resistance_ohm": 50.0e6}))
+    f = np.linspace(10.0, 200.0e3, 400)
+    harm = d / "harmonic.csv"
+    pd.DataFrame({"frequency_Hz": f, "voltage_per_force_V_per_N": 1.5 * (1 + 0.1 * (f / 121.0e3) ** 2),
+                  "phase": 0.0 * f}).to_csv(harm, index=False)
+
+    # the rules, in the workflow's order, through their files
+    kin = d / "kinematics.json"
+    npz = {c: d / f"contact_forces_{c}.npz" for c in CASES}
+    brs.bearing_lpm(kin, npz, {c: d / f"contact_forces_{c}.csv" for c in CASES}, d / "lpm.json",
+                    _rule(cfg, "bearing_lpm"))
+    for c in CASES:
+        brs.housing_mesh(c, d / f"mesh_{c}.npz", d / f"mesh_{c}.vtk", d / f"mesh_{c}.json", _rule(cfg, "housing_mesh"))
+        brs.housing_transient(c, d / f"mesh_{c}.npz", npz[c], d / f"sensor_force_{c}.csv", d / f"modes_{c}.json",
+                              d / f"housing_transient_{c}.json", d / f"influence_{c}.csv",
+                              _rule(cfg, "housing_transient"))
+        sgs.sensor_voltage(d / f"sensor_force_{c}.csv", res, harm, d / f"voltage_{c}.csv", d / f"voltage_{c}.json",
+                           _rule(cfg, "sensor_voltage"))
+        sgs.noisy(d / f"voltage_{c}.csv", c, d / f"noisy_{c}.csv", d / f"noisy_{c}.json", _rule(cfg, "noisy"))
+        sgs.envelope(d / f"noisy_{c}.csv", d / f"voltage_{c}.csv", kin, d / f"envelope_{c}.csv",
+                     d / f"envelope_{c}.json", _rule(cfg, "envelope"))
+    sgs.indicator({c: (d / f"envelope_{c}.csv", d / f"envelope_{c}.json") for c in CASES}, kin,
+                  {c: d / f"noisy_{c}.json" for c in CASES}, d / "fault_indicator.json",
+                  _rule(cfg, "fault_indicator"), {c: d / f"noisy_{c}.csv" for c in CASES})
+    sgs.classification({c: d / f"voltage_{c}.csv" for c in CASES}, kin, d / "classification.json",
+                       d / "classification.csv", d / "roc.csv", _rule(cfg, "fault_classification"))
+
+    # the study's chain: the same functions, in memory
+    run = workflow_chain(cfg, read_json(res), read_harmonic(harm), str(res))
+    return cfg, d, run, res, harm
+
+
+@pytest.mark.slow
+def test_the_study_chain_equals_the_rules_files_to_the_bit(both):
+    cfg, d, run, _, _ = both
+    assert run["indicator"] == read_json(d / "fault_indicator.json")
+    assert run["lpm"] == read_json(d / "lpm.json")
+    assert run["kinematics"]["bpfo_Hz"] == read_json(d / "kinematics.json")["bpfo_Hz"]
+    for c in CASES:
+        assert run["transient"][c] == read_json(d / f"housing_transient_{c}.json")
+        t, v, dt = read_series(d / f"voltage_{c}.csv", "voltage_V")
+        assert np.array_equal(run["voltage"][c][0], t) and np.array_equal(run["voltage"][c][1], v)
+        assert run["voltage"][c][2] == dt
+        y, dts, rec = run["noisy"][c]
+        assert np.array_equal(y, read_series(d / f"noisy_{c}.csv", "voltage_V")[1]) and dts > 0
+        assert rec == read_json(d / f"noisy_{c}.json")
+        table, record = run["envelope"][c]
+        assert table.equals(pd.read_csv(d / f"envelope_{c}.csv"))
+        assert record == read_json(d / f"envelope_{c}.json")
+    # the faulty bearing is detected and the healthy one is not: the chain is the physics, not a stub
+    assert run["indicator"]["faulty"]["detected"] and not run["indicator"]["healthy"]["detected"]
+    # the classification rule's function on the chain's voltages (as detector_case calls it)
+    record, rows, roc = sout.fault_classification({c: run["voltage"][c][1:] for c in CASES}, run["kinematics"], cfg)
+    assert json_as_read(record) == read_json(d / "classification.json")
+    assert as_read(rows).equals(pd.read_csv(d / "classification.csv"))
+    assert as_read(roc).equals(pd.read_csv(d / "roc.csv"))
+
+
+@pytest.mark.slow
+def test_a_fault_detection_row_reports_the_rules_values(both):
+    """The fault_detection kind's summary row of the chain carries the rules' numbers."""
+    cfg, d, run, _, _ = both
+    row = _fault_detection_row(cfg, run)
+    ind = read_json(d / "fault_indicator.json")
+    for c in CASES:
+        assert row[f"noiseless_indicator_{c}"] == ind[c]["noiseless"]["indicator"]
+        assert row[f"in_band_snr_{c}_dB"] == ind[c]["in_band_snr_dB"]
+        tr = read_json(d / f"housing_transient_{c}.json")
+        assert row[f"sensor_force_peak_to_peak_{c}_N"] == tr["sensor_force_max_N"] - tr["sensor_force_min_N"]
+    assert row["defect_max_drop_m"] == read_json(d / "lpm.json")["faulty"]["defect_max_drop_m"]
+    assert row["detection_rate_faulty"] == 1.0 and row["indicator_faulty"] > row["threshold"]
+    # the row's noise replicate 0 is the noisy rule's record (the DAQ samples at the model's rate here)
+    from piezobearing.signals import detection as sig
+
+    s = cfg["signals"]
+    _, v, dt = run["voltage"]["faulty"]
+    r0 = sig.snr_sweep(v, dt, run["kinematics"]["bpfo_Hz"], "faulty", [s["snr_dB"]], 1, cfg["seed"],
+                       sig.EnvelopeSettings.from_config(s), sig.IndicatorSettings.from_config(s))[0]
+    assert ind["faulty"]["indicator"] == pytest.approx(r0["indicator"], rel=1e-9)
