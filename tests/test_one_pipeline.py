@@ -20,7 +20,7 @@ from piezobearing.registry import declared, declared_config
 from piezobearing.signals import outputs as sout
 from piezobearing.stages import bearing as brs
 from piezobearing.stages import signals as sgs
-from piezobearing.stages.studies import _fault_detection_row, workflow_chain
+from piezobearing.stages.studies import KINDS, _fault_detection_row, workflow_chain
 
 
 def _results(record: dict) -> dict:
@@ -123,3 +123,26 @@ def test_a_fault_detection_row_reports_the_rules_values(both):
     r0 = sig.snr_sweep(v, dt, run["kinematics"]["bpfo_Hz"], "faulty", [s["snr_dB"]], 1, cfg["seed"],
                        sig.EnvelopeSettings.from_config(s), sig.IndicatorSettings.from_config(s))[0]
     assert ind["faulty"]["indicator"] == pytest.approx(r0["indicator"], rel=1e-9)
+
+
+def test_a_calibration_circuit_case_equals_the_calibration_rules_files(tmp_path, ci_config):
+    """The calibration_circuit kind (in memory, no file) reports the calibration rules' numbers to the bit."""
+    from piezobearing.stages import calibration as cal
+
+    cfg = copy.deepcopy(ci_config)
+    cfg["synthesis"]["resistance_ohm"] = 20.0e6
+    meas = tmp_path / "measurement.csv"
+    cal.synthesize_calibration(_rule(cfg, "synthesize_calibration"), meas)
+    cal.extract_sensitivity(meas, tmp_path / "sensitivity.json", _rule(cfg, "extract_sensitivity"))
+    cal.fit_resistance(meas, tmp_path / "resistance.json", tmp_path / "fit.csv", _rule(cfg, "fit_resistance"))
+    cal.lowfreq(tmp_path / "resistance.json", tmp_path / "lowfreq.json", tmp_path / "lowfreq.csv",
+                _rule(cfg, "lowfreq_sensitivity"))
+    case = tmp_path / "case"
+    row = KINDS["calibration_circuit"](cfg, case)
+    s, r, lf = (read_json(tmp_path / f) for f in ("sensitivity.json", "resistance.json", "lowfreq.json"))
+    assert row["impulse_sensitivity_V_per_N"] == s["sensitivity_V_per_N"]
+    assert row["resistance_fitted_ohm"] == r["resistance_ohm"] and row["nrmse"] == r["nrmse"]
+    assert row["linear_from_Hz"] == lf["linear_from_Hz"]
+    # the fit recovers the synthetic truth (20 MOhm)
+    assert row["resistance_fitted_ohm"] == pytest.approx(20.0e6, rel=0.01)
+    assert not case.exists()  # in memory

@@ -581,10 +581,21 @@ def file_digest(path: str | Path) -> str:
     return _digest(str(Path(path).resolve()), st.st_size, st.st_mtime_ns, st.st_ino)
 
 
+#: Digits of a record written by :func:`write_measurement`.
+MEASUREMENT_CSV_FORMAT = "%.9g"
+
+
 def write_measurement(m: Measurement, path: str | Path) -> None:
     """Write a record as CSV (used for the synthetic record under results/)."""
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    m.to_frame().to_csv(path, index=False, float_format="%.9g")
+    m.to_frame().to_csv(path, index=False, float_format=MEASUREMENT_CSV_FORMAT)
+
+
+def measurement_as_read(m: Measurement, source: str) -> Measurement:
+    """The record as :func:`read_measurement` reads back the file :func:`write_measurement` makes of it (in
+    memory, :func:`as_read`; a uniform record, as the synthetic one is), named ``source``."""
+    df = as_read(m.to_frame(), MEASUREMENT_CSV_FORMAT)
+    return Measurement(*(df[c].to_numpy(dtype=float) for c in COLUMNS), source)
 
 
 # --------------------------------------------------------------------------- result files

@@ -20,11 +20,13 @@ import pandas as pd
 from ..bearing import outputs as bout
 from ..bearing.lpm import BearingGeometry
 from ..bearing.transient import CASES
+from ..diagnosis.calibration.record import check_record
 from ..io import (
     FORCE_CSV_FORMAT,
     as_read,
     json_as_read,
     kinematics_of,
+    measurement_as_read,
     read_harmonic,
     read_json,
     read_kinematics,
@@ -32,21 +34,20 @@ from ..io import (
     table_series,
     write_json,
 )
+from ..sensor import outputs as cout
 from ..signals import outputs as sout
 from ..studies import case_config
-from .calibration import extract_sensitivity, fit_resistance, lowfreq, synthesize_calibration
 
 
 def calibration_circuit_case(config: dict, outdir: Path) -> dict:
-    """Synthesis, sensitivity, resistance fit and low-frequency limit for one case."""
-    meas = outdir / "measurement.csv"
-    synthesize_calibration(config, str(meas))
-    extract_sensitivity(str(meas), str(outdir / "sensitivity.json"), config)
-    fit_resistance(str(meas), str(outdir / "resistance.json"), str(outdir / "fit.csv"), config)
-    lowfreq(
-        str(outdir / "resistance.json"), str(outdir / "lowfreq.json"), str(outdir / "lowfreq.csv"), config
-    )
-    s, r, lf = (read_json(outdir / n) for n in ("sensitivity.json", "resistance.json", "lowfreq.json"))
+    """Synthesis, sensitivity, resistance fit and low-frequency limit for one case: the calibration rules'
+    functions (:mod:`piezobearing.sensor.outputs`) in memory, the synthetic record as extract_sensitivity and
+    fit_resistance read it back from measurement.csv (with the reader's checks)."""
+    m = measurement_as_read(cout.synthesize_calibration(config), "measurement.csv")
+    imps = check_record(m, config, m.source)
+    s = json_as_read(cout.extract_sensitivity(m, imps, config))
+    r = json_as_read(cout.fit_resistance(m, config)[0])
+    lf = json_as_read(cout.lowfreq(r["resistance_ohm"], config)[0])
     return {
         "impulse_sensitivity_V_per_N": s["sensitivity_V_per_N"],
         "resistance_fitted_ohm": r["resistance_ohm"],
