@@ -27,7 +27,8 @@ def bearing_lpm(config: dict, method: str = "compiled") -> dict:
 
     Returns ``kinematics`` (kinematics.json: shaft_Hz, ftf_Hz, bpfo_Hz, bpfi_Hz, bsf_Hz without slip;
     cage_slip, slip_jitter, the same frequencies at the mean slip under ``with_slip``, speed_ramp_Hz_per_s,
-    defect_types), ``contact`` (per case the arrays of contact_forces_{case}.npz: the fine integration grid
+    defect_types; with a tachometer its pulses_per_rev and pulse times ``tachometer_time_s`` on the record's time
+    axis), ``contact`` (per case the arrays of contact_forces_{case}.npz: the fine integration grid
     and the FEM-step series), ``tables`` (per case contact_forces_{case}.csv at the FEM step: time_s,
     load_N_jj, angle_rad_jj) and ``summary`` (lpm.json, the checks). ``method``: the LPM's step loop
     (simulate_lpm), for the benchmark.
@@ -45,7 +46,7 @@ def bearing_lpm(config: dict, method: str = "compiled") -> dict:
         "speed_ramp_Hz_per_s": b["speed_ramp_rpm_per_s"] / 60.0,
         "defect_types": [d["type"] for d in b["defects"]],
     }
-    out = {"kinematics": {**kin0.to_dict(), **operating, "config": {"bearing": b}}, "contact": {}, "tables": {}}
+    out = {"contact": {}, "tables": {}}
     summary = {
         "kinematics": kin0.to_dict(),
         "kinematics_with_slip": kin.to_dict(),
@@ -68,6 +69,12 @@ def bearing_lpm(config: dict, method: str = "compiled") -> dict:
             "fine_step_s": float(run["fine_time_s"][1] - run["fine_time_s"][0]),
             "newton_iterations_per_step": run["newton_iterations"] / len(run["fine_time_s"]),
         }
+    if b["tachometer_pulses_per_rev"] > 0:
+        # the shaft's pulses (the same in both cases: the defects do not move the shaft's angle), on the
+        # record's time axis, where the signals stages and a user read the kinematics
+        operating["tachometer_pulses_per_rev"] = b["tachometer_pulses_per_rev"]
+        operating["tachometer_time_s"] = run["tachometer_time_s"].tolist()
+    out["kinematics"] = {**kin0.to_dict(), **operating, "config": {"bearing": b}}
     out["summary"] = summary
     return out
 
