@@ -48,6 +48,20 @@ def diagnose(c, influence, hidden, snr, fs, tach=False, duration=2.0):
     return d, time.perf_counter() - t0, time.process_time() - c0
 
 
+def ratios(out: dict, old_path: str) -> None:
+    """Add each run's CPU time before the change and the ratio old / new (``--old``)."""
+    old = json.loads(Path(old_path).read_text())
+    ref = {(r["sample_rate_Hz"], r["hidden"]): r for r in old["runs"]}
+    for r in out["runs"]:
+        o = ref.get((r["sample_rate_Hz"], r["hidden"]))
+        if o is not None and "cpu_seconds" in r:
+            r["old_cpu_seconds"] = o.get("cpu_seconds")
+            r["old_seconds"] = o.get("seconds")
+            r["old_error"] = o.get("error")
+            r["speedup_cpu"] = o["cpu_seconds"] / r["cpu_seconds"] if o.get("cpu_seconds") else None
+    out["old"] = {"file": Path(old_path).name, "note": old.get("note", ""), "load_average_1min": old.get("load_average_1min")}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--ci", action="store_true", help="the CI housing mesh (config/ci.yaml)")
@@ -56,7 +70,13 @@ def main() -> None:
     ap.add_argument("--old", help="a previous run's JSON (the method before a change): CPU-time ratios old / new")
     ap.add_argument("--out", default="results/benchmarks/diagnosis_bearing.json")
     ap.add_argument("--note", default="", help="what this run measures (kept in the JSON)")
+    ap.add_argument("--ratios-only", action="store_true", help="add --old's ratios to --out (no runs)")
     args = ap.parse_args()
+    if args.ratios_only:
+        out = json.loads(Path(args.out).read_text())
+        ratios(out, args.old)
+        Path(args.out).write_text(json.dumps(out, indent=2) + "\n")
+        return
     c = cfg.load(cfg.CONFIG_DIR / "ci.yaml") if args.ci or args.verify_only else cfg.load()
     t0 = time.perf_counter()
     influence = influence_from_config(c)
@@ -65,21 +85,19 @@ def main() -> None:
     cases = [("healthy", [])] + [(n, [{"name": n, "params": HIDDEN[n]}]) for n in ("outer_race_defect", "inner_race_defect")]
     for fs in () if args.verify_only else (2550.0, 25600.0):
         for label, hidden in cases:
-            d, sec, cpu = diagnose(c, influence, hidden, 30.0, fs)
+            try:
+                d, sec, cpu = diagnose(c, influence, hidden, 30.0, fs)
+            except RuntimeError as e:  # a method that fails on a case is recorded, not hidden
+                out["runs"].append({"sample_rate_Hz": fs, "duration_s": 2.0, "hidden": label, "error": str(e)})
+                print(json.dumps(out["runs"][-1]), flush=True)
+                continue
             row = {"sample_rate_Hz": fs, "duration_s": 2.0, "hidden": label, "seconds": sec, "cpu_seconds": cpu,
                    "load_average_1min": os.getloadavg()[0], "selected": d["selected"], "verdict": d["verdict"],
                    "floor_remeasured": "final model's residual" in d["noise_floor"]["method"]}
             out["runs"].append(row)
             print(json.dumps(row), flush=True)
     if args.old:
-        old = json.loads(Path(args.old).read_text())
-        ref = {(r["sample_rate_Hz"], r["hidden"]): r for r in old["runs"]}
-        for r in out["runs"]:
-            o = ref.get((r["sample_rate_Hz"], r["hidden"]))
-            if o is not None:
-                r["old_cpu_seconds"] = o.get("cpu_seconds")
-                r["speedup_cpu"] = o["cpu_seconds"] / r["cpu_seconds"] if o.get("cpu_seconds") else None
-        out["old"] = {"file": args.old, "note": old.get("note", "")}
+        ratios(out, args.old)
     Path("results/benchmarks").mkdir(parents=True, exist_ok=True)
     if not args.verify_only:
         Path(args.out).write_text(json.dumps(out, indent=2) + "\n")

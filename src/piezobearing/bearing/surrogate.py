@@ -48,8 +48,9 @@ GROOVE_REFINE = 16
 #: Points per roller pitch of the table over a cage turn (roller scatter, no groove).
 SCATTER_POINTS = 256
 #: The table's points across one roller's passage over an outer-race groove (edges and centre included:
-#: the drop's kinks) are this share of the healthy table's spacing apart, and at least 129 (321 across a
-#: 0.6 mm groove: the record's voltage within 2.4e-6 of its rms of a table 8 times finer, 2e-5 with 129).
+#: the drop's kinks) are this share of the healthy table's spacing apart, and at least 257 (321 across a
+#: 0.6 mm groove: the record's voltage within 2.4e-6 of its rms of a table 8 times finer, 2e-5 with 129;
+#: box averages within 1e-4 of the groove's dip of a uniform table 16 times finer, tests/test_surrogate.py).
 GROOVE_SPACING = 0.5
 
 
@@ -98,6 +99,10 @@ class Operating:
 
     radial_load_N: float
     radial_clearance_m: float
+
+
+#: Force residual (share of F_r) accepted where Newton's method stalls after 200 steps (see quasi_static_loads).
+STALL_TOL = 1e-4
 
 
 def _normals(psi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -182,9 +187,15 @@ def quasi_static_loads(
             lam = np.where(bad, 0.5 * lam, lam)
         e[idx] = trial
         f[idx], q[idx], dq[idx], pot[idx] = ft, qt, dqt, pt
+    norm = np.hypot(f[:, 0], f[:, 1])
+    if np.all(norm <= STALL_TOL * radial_load_N):
+        # a shaft resting on one roller a few microradians off the load line (wide clearance): the Hessian has
+        # no sideways stiffness, and the sideways force left (< STALL_TOL F_r) would move the shaft tens of
+        # microns to the next roller; the loads are within that force of the equilibrium
+        return (q, e) if return_offset else q
     raise RuntimeError(
-        f"quasi_static_loads: no equilibrium for {int(active.sum())} of {n} roller configurations "
-        f"at F_r = {radial_load_N} N"
+        f"quasi_static_loads: no equilibrium for {int((norm > tol_N * radial_load_N).sum())} of {n} roller "
+        f"configurations at F_r = {radial_load_N} N"
     )
 
 
@@ -331,7 +342,7 @@ class Surrogate:
         if hasattr(outer_drop, "passages"):
             spans = outer_drop.passages(period)
             step = GROOVE_SPACING * period / (bt.phase.size - 1)
-            nodes = np.linspace(-1.0, 1.0, 2 * max(64, int(np.ceil(spans[0][1] / step))) + 1) if spans else None
+            nodes = np.linspace(-1.0, 1.0, 2 * max(128, int(np.ceil(spans[0][1] / step))) + 1) if spans else None
             local = np.concatenate([c + h * nodes for c, h in spans]) if spans else np.zeros(0)
             local = local[(local >= 0.0) & (local <= period)]
             inside = np.zeros(bt.phase.size, dtype=bool)
