@@ -47,8 +47,10 @@ MIN_WIDTH_M = 0.25e-3
 PRE_ROLL_TAU = 8.0
 #: Values that act after the sensor force (with ``mains_*``): a change of them reuses the force.
 AFTER_FORCE = frozenset({"load_share_ratio", "dc_offset_V"})
-#: Forces (as circuit voltages) a rig keeps: the current point and a finite-difference Jacobian's steps.
+#: Forces (as circuit voltages) a rig keeps: the current point and a finite-difference Jacobian's steps,
+#: within CACHE_BYTES for a long record.
 CACHE_SIZE = 24
+CACHE_BYTES = 64e6
 
 
 @dataclass(frozen=True, eq=False)
@@ -225,7 +227,7 @@ def unit_voltage(rig: Rig, values: dict) -> np.ndarray:
     v = rc_voltage(f, rig.dt_s, rig.gain_V_per_N, rig.tau_s)[rig.n_pre :]
     v.flags.writeable = False
     rig.cache[key] = v
-    while len(rig.cache) > CACHE_SIZE:
+    while len(rig.cache) > int(np.clip(CACHE_BYTES / (8 * v.size), 2, CACHE_SIZE)):
         rig.cache.pop(next(iter(rig.cache)))
     return v
 
