@@ -114,8 +114,8 @@ def test_sensor_spring_scales_the_whole_influence_line(ci_config):
     which is what lets the study scale the workflow's sensor force by the ratio of load shares."""
     from piezobearing.bearing import housing_fem
     from piezobearing.bearing.housing_mesh import build_housing_mesh
+    from piezobearing.bearing.transient import housing_geometry
     from piezobearing.sensor.materials import CAST_IRON, STEEL
-    from piezobearing.stages.bearing import housing_geometry
 
     mesh = build_housing_mesh(housing_geometry(ci_config), False, 0.35)
     models = [housing_fem.build_model(mesh, STEEL, CAST_IRON, k, 0.1e-3) for k in (3.8e8, 1.5e9)]
