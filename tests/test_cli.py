@@ -66,6 +66,23 @@ def test_validate_says_the_voltage_is_clipped(files, capsys):
     assert "WARNING" not in capsys.readouterr().out
 
 
+def test_hide_and_find_says_whether_the_diagnosis_finds_the_hidden_effect(files, capsys):
+    """A 15 ms channel delay hidden in the CI-sized record: found first, its fitted value printed beside the
+    hidden one, exit 0; an unknown effect or parameter is one line naming it (exit 1)."""
+    ci = str(files["dir"] / "ci.yaml")
+    assert main(["hide-and-find", "channel_delay", "--param", "delay_s=0.015", "--config", ci]) == 0
+    out = capsys.readouterr().out
+    assert "ranked first: channel_delay" in out and "verdict: explained" in out and out.rstrip().endswith("FOUND")
+    line = [ln for ln in out.splitlines() if ln.strip().startswith("delay_s =")][0]
+    assert "(hidden 0.015)" in line and abs(float(line.split("=")[1].split()[0]) - 0.015) < 1e-4
+    assert main(["hide-and-find", "no_such_effect", "--config", ci]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "unknown effect 'no_such_effect'" in err[0] and "channel_delay" in err[0]
+    assert main(["hide-and-find", "channel_delay", "--param", "delay_ms=15", "--config", ci]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--param delay_ms" in err[0] and "delay_s" in err[0]
+
+
 def test_validate_runs_the_workflows_checks(files, capsys):
     # A file the workflow rejects before any job must not pass validate: inverted polarity, one press.
     import pandas as pd
