@@ -17,6 +17,30 @@ from piezobearing.synthesis import PressProtocol, synthesize
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 
+#: Fixtures that run the whole CI workflow (once per test process each).
+WORKFLOW_FIXTURES = ("ci_run", "ci_rerun")
+
+
+def pytest_collection_modifyitems(config, items):
+    """Group the tests for pytest-xdist's ``--dist loadgroup`` and put the long ones first.
+
+    Every test that uses a CI workflow run (:data:`WORKFLOW_FIXTURES`, directly or through another fixture) is in
+    one group, ``ci_workflow``, so the session runs the workflow once on one worker, not once on each; every
+    other test is grouped by its module, so a module's fixtures are built once. The workflow group, then the
+    rerun test's scratch workflow, go first: the other worker takes the rest meanwhile. Without xdist only the
+    order changes.
+    """
+    def group(item) -> str:
+        if any(f in getattr(item, "fixturenames", ()) for f in WORKFLOW_FIXTURES):
+            return "ci_workflow"
+        return item.nodeid.split("::")[0]
+
+    rank = {"ci_workflow": 0, "tests/test_workflow_rerun.py": 1}
+    for item in items:
+        item.add_marker(pytest.mark.xdist_group(group(item)))
+    items.sort(key=lambda item: rank.get(group(item), 2))  # stable: the collection order within each rank
+
+
 @pytest.fixture(scope="session")
 def paper_config() -> dict:
     return cfg.load()
@@ -75,19 +99,37 @@ def dry_run_errors(configfile: Path) -> tuple[subprocess.CompletedProcess, list[
     return out, [line for line in out.stderr.splitlines() if line.startswith("piezobearing:")]
 
 
+#: What the reproducibility check compares: every JSON and CSV result, not the logs, timings or notebooks.
+NUMBERS_SKIP = ("results/logs", "results/benchmarks", "results/notebooks")
+#: The number files of the first run as it finished (in its folder, outside results/).
+NUMBERS_LIST = ".result_numbers"
+
+
+def result_numbers(root: Path) -> list[str]:
+    """The result files of a run that hold its numbers (JSON and CSV), relative to ``root``, sorted."""
+    return sorted(
+        rel
+        for p in (root / "results").rglob("*")
+        if p.suffix in {".json", ".csv"} and not (rel := p.relative_to(root).as_posix()).startswith(NUMBERS_SKIP)
+    )
+
+
 @pytest.fixture(scope="session")
 def ci_run(tmp_path_factory) -> Path:
     """A complete `snakemake --cores 2 --configfile config/ci.yaml` in a fresh copy; its folder."""
     work = _copy_repo(tmp_path_factory.mktemp("ci_run"))
     out = run_workflow(work)
     assert out.returncode == 0, out.stderr[-4000:]
+    (work / NUMBERS_LIST).write_text("\n".join(result_numbers(work)))  # before other tests add files
     return work
 
 
 @pytest.fixture(scope="session")
-def ci_rerun(tmp_path_factory) -> Path:
-    """A second, independent clean run of the same workflow, for reproducibility checks."""
+def ci_rerun(tmp_path_factory, ci_run) -> Path:
+    """A second, independent clean run in a fresh copy, for reproducibility checks: it builds every number
+    file of the first run (and everything they need) from nothing; the figures, which the check does not
+    compare, are not drawn again."""
     work = _copy_repo(tmp_path_factory.mktemp("ci_rerun"))
-    out = run_workflow(work)
+    out = run_workflow(work, *(ci_run / NUMBERS_LIST).read_text().split("\n"))
     assert out.returncode == 0, out.stderr[-4000:]
     return work
