@@ -19,21 +19,28 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 #: Fixtures that run the whole CI workflow (once per test process each).
 WORKFLOW_FIXTURES = ("ci_run", "ci_rerun")
+#: Modules whose module fixtures take seconds and whose tests take minutes: spread over both workers anyway.
+SPREAD = ("tests/test_diagnosis_bearing.py",)
 
 
 def pytest_collection_modifyitems(config, items):
     """Group the tests for pytest-xdist's ``--dist loadgroup`` and put the long ones first.
 
     Every test that uses a CI workflow run (:data:`WORKFLOW_FIXTURES`, directly or through another fixture) is in
-    one group, ``ci_workflow``, so the session runs the workflow once on one worker, not once on each; every
-    other test is grouped by its module, so a module's fixtures are built once. The workflow group, then the
-    rerun test's scratch workflow, go first: the other worker takes the rest meanwhile. Without xdist only the
-    order changes.
+    one group, ``ci_workflow``, so the session runs the workflow once on one worker, not once on each; a test
+    that uses a module- or class-scoped fixture is grouped with its module, so the fixture is built once; every
+    other test goes to whichever worker is free. The workflow group, then the rerun test's scratch workflow, go
+    first: the other worker takes the rest meanwhile. Without xdist only the order changes.
     """
     def group(item) -> str:
         if any(f in getattr(item, "fixturenames", ()) for f in WORKFLOW_FIXTURES):
             return "ci_workflow"
-        return item.nodeid.split("::")[0]
+        info = getattr(item, "_fixtureinfo", None)
+        defs = info.name2fixturedefs.values() if info is not None else ()
+        module = item.nodeid.split("::")[0]
+        if module not in SPREAD and any(d.scope in ("module", "class", "package") for fd in defs for d in fd):
+            return module
+        return item.nodeid
 
     rank = {"ci_workflow": 0, "tests/test_workflow_rerun.py": 1}
     for item in items:
