@@ -11,8 +11,13 @@ presses per 12 s) on one continuous clock, then measures in fresh processes
 - ``fit_resistance``: the stage (read, checks, fit, fit.csv);
 - ``diagnose``: the stage (whole catalogue), and the size of diagnosis.npz.
 
-Usage: ``python benchmarks/bench_large_record.py [--rows 6000000 --diagnose-rows 180000]``;
-writes results/benchmarks/large_record.json. Times depend on the machine's
+With ``--old-src DIR`` (the ``src`` folder of an older checkout) the
+``diagnose`` rows run with both codes, side by side with their ratios
+(``diagnose_old_vs_new``); ``--only-diagnose`` skips the other stages.
+
+Usage: ``python benchmarks/bench_large_record.py [--rows 6000000 --diagnose-rows 180000]
+[--old-src ../old/src --only-diagnose]``; writes results/benchmarks/large_record.json
+(``large_record_diagnose.json`` with ``--only-diagnose``). Times depend on the machine's
 load (``cpu_seconds``, with imports, depends less on it); memory does not.
 """
 
@@ -20,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -82,10 +88,18 @@ def make_record(rows: int, path: Path) -> float:
     return path.stat().st_size / 1e6
 
 
-def measure(what: str, record: Path, work: Path) -> dict:
+def measure(what: str, record: Path, work: Path, src: str | None = None) -> dict:
+    """One measurement in a fresh process; ``src``: import piezobearing from that folder instead."""
+    env = dict(os.environ)
+    if src:
+        env["PYTHONPATH"] = os.pathsep.join([str(Path(src).resolve()), env.get("PYTHONPATH", "")])
     t0 = time.perf_counter()
     out = subprocess.run(
-        [sys.executable, "-c", CHILD, what, str(record), str(work)], capture_output=True, text=True, check=True
+        [sys.executable, "-c", CHILD, what, str(record), str(work)],
+        capture_output=True,
+        text=True,
+        check=True,
+        env=env,
     )
     wall = time.perf_counter() - t0
     r = json.loads(out.stdout.strip().splitlines()[-1])
@@ -97,24 +111,34 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rows", type=int, default=6_000_000, help="rows of the large record (6 M: about 213 MB)")
     ap.add_argument("--diagnose-rows", type=int, nargs="*", default=[60_000, 180_000])
+    ap.add_argument("--old-src", help="src folder of an older checkout: diagnose with both codes")
+    ap.add_argument("--only-diagnose", action="store_true", help="measure diagnose only")
     args = ap.parse_args()
     result = {"rows": args.rows}
     with tempfile.TemporaryDirectory() as d:
         d = Path(d)
-        big = d / "big.csv"
-        result["record_MB"] = make_record(args.rows, big)
-        # a fresh process per measurement, each reporting its own peak RSS
-        result["read"] = measure("read", big, d)
-        result["check_first_start"] = measure("check", big, d)
-        result["check_second_start"] = measure("check", big, d)
-        result["fit_resistance"] = measure("fit_resistance", big, d)
+        if not args.only_diagnose:
+            big = d / "big.csv"
+            result["record_MB"] = make_record(args.rows, big)
+            # a fresh process per measurement, each reporting its own peak RSS
+            result["read"] = measure("read", big, d)
+            result["check_first_start"] = measure("check", big, d)
+            result["check_second_start"] = measure("check", big, d)
+            result["fit_resistance"] = measure("fit_resistance", big, d)
         result["diagnose"] = []
         for rows in args.diagnose_rows:
             rec = d / f"r{rows}.csv"
-            mb = make_record(rows, rec)
-            result["diagnose"].append({"rows": rows, "record_MB": mb, **measure("diagnose", rec, d)})
-    OUT.parent.mkdir(parents=True, exist_ok=True)
-    OUT.write_text(json.dumps(result, indent=2) + "\n")
+            row = {"rows": rows, "record_MB": make_record(rows, rec), **measure("diagnose", rec, d)}
+            if args.old_src:
+                old = measure("diagnose", rec, d, args.old_src)
+                row["old"] = old
+                row["old_over_new"] = {
+                    k: old[k] / row[k] for k in ("peak_rss_MB", "npz_MB", "cpu_seconds") if row.get(k)
+                }
+            result["diagnose"].append(row)
+    out = OUT.with_name("large_record_diagnose.json") if args.only_diagnose else OUT
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(result, indent=2) + "\n")
     print(json.dumps(result, indent=2))
 
 

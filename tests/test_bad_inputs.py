@@ -100,6 +100,8 @@ def workdir() -> Path:
         "defect.yaml": "bearing:\n  defects:\n    - {type: outer_race, width_m: 12.0e-3, depth_m: 1.0e-3, angle_deg: 0.0}\n",
         "mesh_level.yaml": "sensor_fem:\n  mesh_level: 5\n",
         "rollers.yaml": "bearing:\n  n_rollers: 14\n",
+        "flat_roller.yaml": "bearing:\n  defects:\n    - {type: rolling_element, width_m: 0.9e-3, depth_m: 1.0e-3, "
+        "angle_deg: 0.0, roller: 11}\n",
         "band.yaml": "signals:\n  band_Hz: [1250.0, 500.0]\n",
         "effect.yaml": CI + "model: {effects: [ringing]}\n",
     }
@@ -187,6 +189,8 @@ CASES = [
     Case("config: defect wider than roller", (*V, REC, "--config", f"{W}/defect.yaml"), "not narrower than"),
     Case("config: mesh level not listed", (*V, REC, "--config", f"{W}/mesh_level.yaml"), "listed levels"),
     Case("config: rollers do not fit", (*V, REC, "--config", f"{W}/rollers.yaml"), "do not fit"),
+    Case("config: flat on a roller that does not exist", (*V, REC, "--config", f"{W}/flat_roller.yaml"),
+         "does not exist"),
     Case("config: band decreasing", (*V, REC, "--config", f"{W}/band.yaml"), "write [low, high]"),
     # diagnose --out (point 4)
     Case(

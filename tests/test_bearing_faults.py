@@ -217,6 +217,23 @@ def test_rolling_element_flat_strikes_both_races_at_twice_bsf(bcfg, base):
     assert np.abs(dq[strike & (np.abs(rf.psi_rad[:, 0]) > np.radians(100))]).max() < 1.0
 
 
+def test_flat_on_any_roller_is_roller_0_turned_by_its_pitch(bcfg, base):
+    """With equal rollers, a flat on roller j is the flat on roller 0 with the start angle moved by j
+    pitches (the rollers are interchangeable); the config's ``roller`` picks it."""
+    j = 4
+    b = {**bcfg, "defects": [{"type": "rolling_element", "width_m": 0.9e-3, "depth_m": 1e-3, "angle_deg": 20.0,
+                              "roller": j}]}
+    p = brg.LPMParameters.from_config(b, True, seed=7)
+    assert p.defects[0].roller == j
+    q = replace(p, defects=(replace(p.defects[0], roller=0),),
+                start_angle_rad=p.start_angle_rad + j * p.geometry.roller_pitch_rad)
+    t = np.linspace(0, 0.5, 20001)
+    dp, dq = p.drops(p.motion(t)), q.drops(q.motion(t))
+    assert (dp[:, j] > 0).any() and not np.delete(dp, j, axis=1).any()
+    np.testing.assert_array_equal(dp[:, j], dq[:, 0])
+    np.testing.assert_allclose(p.motion(t).psi_rad[:, j], q.motion(t).psi_rad[:, 0], atol=1e-12)
+
+
 def test_several_defects_superpose(base):
     defects = (
         brg.Defect(0.0, 0.9e-3, 1e-3, "outer_race"),
@@ -290,6 +307,8 @@ def test_bearing_lpm_stage_with_slip_tachometer_and_two_defects(ci_config, tmp_p
     assert kin["cage_slip"] == 0.015 and kin["defect_types"] == ["outer_race", "rolling_element"]
     tach = np.load(npz["faulty"])["tachometer_time_s"]
     np.testing.assert_allclose(np.diff(tach), 60 / 1000, rtol=1e-12)
+    np.testing.assert_array_equal(kin["tachometer_time_s"], tach)  # where a user reads the kinematics
+    assert kin["tachometer_pulses_per_rev"] == 1
     lpm = json.loads((tmp_path / "l.json").read_text())
     d0, d1 = lpm["faulty"]["defects"]
     assert d0["max_drop_m"] == pytest.approx(16.5e-6, rel=2e-3) and d0["max_drop_flat_raceway_m"] > d0["max_drop_m"]

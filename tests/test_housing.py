@@ -120,6 +120,28 @@ def test_defect_removes_its_volume(meshes, geo):
     assert expect == pytest.approx(geo.defect_width_m * geo.defect_depth_m * geo.ring_half_width_m, rel=0.02)
 
 
+def test_every_outer_race_groove_is_cut(paper_config):
+    """Two outer-race grooves (and an inner-race defect, which the ring does not see): both volumes removed."""
+    b = dict(paper_config["bearing"])
+    b["defects"] = [
+        {"type": "outer_race", "width_m": 0.9e-3, "depth_m": 1.0e-3, "angle_deg": 0.0},
+        {"type": "inner_race", "width_m": 0.9e-3, "depth_m": 1.0e-3, "angle_deg": 30.0},
+        {"type": "outer_race", "width_m": 0.6e-3, "depth_m": 0.5e-3, "angle_deg": 170.0},
+    ]
+    g = st.housing_geometry(dict(paper_config, bearing=b))
+    assert len(g.grooves) == 2
+    vh = _hex_volumes(build_housing_mesh(g, False, LEVEL)).sum()
+    m = build_housing_mesh(g, True, LEVEL)
+    r0 = g.raceway_radius_m
+    expect = sum(0.5 * w / r0 * ((r0 + h) ** 2 - r0**2) * g.ring_half_width_m for _, w, h in g.grooves)
+    assert vh - _hex_volumes(m).sum() == pytest.approx(expect, rel=1e-6)
+    assert mesh_quality(m)["min_scaled_jacobian"] > 0
+    # the raceway loses its columns inside each groove, nowhere else
+    for a, w, _ in g.grooves:
+        gap = np.abs(np.angle(np.exp(1j * (m.raceway_psi - a))))
+        assert gap.min() == pytest.approx(0.5 * w / r0, rel=1e-6)
+
+
 def test_nested_dissection_is_a_permutation(meshes):
     m = meshes["healthy"]
     order = nested_dissection_order(m)

@@ -154,6 +154,12 @@ def physical_problems(config: dict) -> list[str]:
                     "drop into it completely, outside what the model describes; use a width below "
                     "bearing.roller_diameter_m"
                 )
+    for i, d in enumerate(b.get("defects") or []):
+        if isinstance(d, dict) and "roller" in d and "n_rollers" in b and d["roller"] >= b["n_rollers"]:
+            out.append(
+                f"key 'bearing.defects[{i}].roller': roller {d['roller']} does not exist in a bearing of "
+                f"{b['n_rollers']} rollers; use 0 to {b['n_rollers'] - 1}"
+            )
     f = config.get("sensor_fem", {})
     if "mesh_level" in f and "refinement_multipliers" in f:
         n = len(f["refinement_multipliers"])

@@ -71,8 +71,10 @@ class HousingGeometry:
         Diameter of the sensor's contact disk on the ring.
     roller_half_length_m : float
         Half the roller's contact length (the loaded part of the raceway).
-    defect_angle_rad, defect_width_m, defect_depth_m : float
-        The groove cut into the ring: the first outer-race defect of ``bearing.defects`` (zeros if none).
+    grooves : tuple of (float, float, float)
+        The grooves cut into the ring, one (angle_rad, width_m, depth_m) per
+        outer-race defect of ``bearing.defects`` (empty if none). Inner-race and
+        rolling-element defects act through the LPM's loads only.
     """
 
     raceway_radius_m: float
@@ -87,16 +89,22 @@ class HousingGeometry:
     hole_diameter_m: float
     tip_diameter_m: float
     roller_half_length_m: float
-    defect_angle_rad: float
-    defect_width_m: float
-    defect_depth_m: float
+    grooves: tuple[tuple[float, float, float], ...] = ()
+
+    def __post_init__(self):
+        # a tuple of tuples also when read back from JSON (lists)
+        object.__setattr__(self, "grooves", tuple(tuple(float(v) for v in g) for g in self.grooves))
 
     @classmethod
     def from_config(cls, bearing: dict, housing: dict, tip_diameter_m: float) -> HousingGeometry:
         """From the config sections ``bearing`` and ``housing`` and the diameter of the sensor's contact disk."""
         h = housing
-        # the ring's groove: the first outer-race defect (the others act through the LPM's loads only)
-        groove = next((d for d in bearing.get("defects", []) if d["type"] == "outer_race"), None)
+        # the ring's grooves: every outer-race defect (the others act through the LPM's loads only)
+        grooves = tuple(
+            (float(np.radians(d["angle_deg"])), d["width_m"], d["depth_m"])
+            for d in bearing.get("defects", [])
+            if d["type"] == "outer_race"
+        )
         geo = cls(
             raceway_radius_m=0.5 * (bearing["pitch_diameter_m"] + bearing["roller_diameter_m"]),
             ring_outer_radius_m=0.5 * bearing["outer_diameter_m"],
@@ -110,9 +118,7 @@ class HousingGeometry:
             hole_diameter_m=h["hole_diameter_m"],
             tip_diameter_m=tip_diameter_m,
             roller_half_length_m=0.5 * bearing["roller_length_m"],
-            defect_angle_rad=np.radians(groove["angle_deg"]) if groove else 0.0,
-            defect_width_m=groove["width_m"] if groove else 0.0,
-            defect_depth_m=groove["depth_m"] if groove else 0.0,
+            grooves=grooves,
         )
         geo.check()
         return geo
@@ -152,7 +158,7 @@ class HousingGeometry:
                 "housing.hole_diameter_m must be below bearing.width_m",
             ),
             (
-                self.defect_depth_m < ro - self.raceway_radius_m,
+                all(depth < ro - self.raceway_radius_m for _, _, depth in self.grooves),
                 "bearing.defects: an outer_race depth_m must be below the ring thickness",
             ),
             (
@@ -180,8 +186,29 @@ class HousingGeometry:
         return float(np.arcsin(self.hole_half_side_m / self.ring_outer_radius_m))
 
     @property
+    def groove_zones_rad(self) -> list[tuple[float, float]]:
+        """Angular extent (from, to) of each groove at the raceway [rad]."""
+        return [(a - 0.5 * w / self.raceway_radius_m, a + 0.5 * w / self.raceway_radius_m) for a, w, _ in self.grooves]
+
+    # the first groove (the paper's single defect), for its figure and checks; zeros without a groove
+    @property
+    def defect_angle_rad(self) -> float:
+        """Angle of the first groove [rad] (0 without one)."""
+        return self.grooves[0][0] if self.grooves else 0.0
+
+    @property
+    def defect_width_m(self) -> float:
+        """Width of the first groove [m] (0 without one)."""
+        return self.grooves[0][1] if self.grooves else 0.0
+
+    @property
+    def defect_depth_m(self) -> float:
+        """Depth of the first groove [m] (0 without one)."""
+        return self.grooves[0][2] if self.grooves else 0.0
+
+    @property
     def defect_half_angle_rad(self) -> float:
-        """Half the defect's angular width at the raceway [rad]."""
+        """Half the first groove's angular width at the raceway [rad]."""
         return 0.5 * self.defect_width_m / self.raceway_radius_m
 
 
@@ -304,19 +331,31 @@ def _size_near(s: np.ndarray, zones: list[tuple[float, float]], fine: float, coa
 # ---------------------------------------------------------------------------
 
 
+def _wrap(angle_rad: float) -> float:
+    """An angle to [-pi, pi) [rad]."""
+    return float(np.mod(angle_rad + np.pi, 2 * np.pi) - np.pi)
+
+
 def _psi_nodes(g: HousingGeometry, sz: MeshSizes, psi_corner: float) -> np.ndarray:
-    """Angles of the node columns on [-pi, pi): fine over the hole and the defect."""
+    """Angles of the node columns on [-pi, pi): fine over the hole and every groove."""
     ri = g.raceway_radius_m
     ph = g.hole_angle_rad
-    pd, hd = g.defect_angle_rad, g.defect_half_angle_rad
     pt = g.tip_half_side_m / g.ring_outer_radius_m
     top_corner = np.pi - np.arctan2(g.body_half_width_m, g.body_top_m)
-    must = [0.0, ph, -ph, pt, -pt, pd - hd, pd + hd, psi_corner, -psi_corner, top_corner, -top_corner]
-    zones = [(-ph, ph), (pd - hd, pd + hd)]
-    lo = min(-ph, pd - hd)
-    hi = max(ph, pd + hd)
-    # a little fine margin beyond the hole walls
+    # a groove's edges wrapped to [-pi, pi) (a groove across pi is cut in two zones)
+    grooves = []
+    for a, b in g.groove_zones_rad or [(0.0, 0.0)]:  # no groove: the old zero-width zone at 0 (same mesh)
+        a, b = float(_wrap(a)), float(_wrap(a)) + (b - a)
+        grooves += [(a, min(b, np.pi)), (-np.pi, b - 2 * np.pi)] if b > np.pi else [(a, b)]
+    must = [0.0, ph, -ph, pt, -pt, psi_corner, -psi_corner, top_corner, -top_corner]
+    must += [e for z in grooves for e in z]
+    zones = [(-ph, ph), *grooves]
+    # a little fine margin beyond the hole walls and the grooves next to the hole
+    near = [z for z in grooves if z[1] >= -ph - 2 * sz.fine_m / ri and z[0] <= ph + 2 * sz.fine_m / ri]
+    lo = min([-ph] + [z[0] for z in near])
+    hi = max([ph] + [z[1] for z in near])
     zones.append((lo - 2 * sz.fine_m / ri, hi + 2 * sz.fine_m / ri))
+    zones += [(a - 2 * sz.fine_m / ri, b + 2 * sz.fine_m / ri) for a, b in grooves if (a, b) not in near]
     must = np.unique(np.round(np.array(must), 12))
     breaks = np.concatenate([[-np.pi], must[(must > -np.pi) & (must < np.pi)], [np.pi]])
 
@@ -363,7 +402,7 @@ def _cross_section(g: HousingGeometry, sz: MeshSizes):
 
     # ring: radial nodes, fine at the raceway, a node at the defect's depth
     r_ring = graded_nodes(
-        np.unique([ri, ri + g.defect_depth_m, ro]),  # no node layer without a groove
+        np.unique([ri, ro] + [ri + depth for _, _, depth in g.grooves]),  # a node layer at each groove's depth
         lambda r: _size_near(r, [(ri, ri)], sz.ring_radial_fine_m, sz.ring_radial_m, sz.growth),
     )
     # housing O-grid: parameter rho in [0, 1] from the ring's surface to the outline, graded
@@ -456,7 +495,7 @@ def build_housing_mesh(g: HousingGeometry, faulty: bool, level: float = 1.0, siz
     ----------
     g : HousingGeometry
     faulty : bool
-        Remove the defect's groove from the ring.
+        Remove the grooves from the ring.
     level : float
         Refinement level: every target size is divided by it.
     sizes : MeshSizes, optional
@@ -489,13 +528,14 @@ def build_housing_mesh(g: HousingGeometry, faulty: bool, level: float = 1.0, siz
     if faulty:
         r = np.hypot(cen[:, 1], cen[:, 2])
         psi = np.arctan2(cen[:, 1], -cen[:, 2])
-        dpsi = np.angle(np.exp(1j * (psi - g.defect_angle_rad)))
-        groove = (
-            (group == GROUP_RING)
-            & (r < g.raceway_radius_m + g.defect_depth_m)
-            & (np.abs(dpsi) < g.defect_half_angle_rad)
-        )
-        remove = remove | groove
+        for angle, width, depth in g.grooves:
+            dpsi = np.angle(np.exp(1j * (psi - angle)))
+            groove = (
+                (group == GROUP_RING)
+                & (r < g.raceway_radius_m + depth)
+                & (np.abs(dpsi) < 0.5 * width / g.raceway_radius_m)
+            )
+            remove = remove | groove
     conn, group = conn[~remove], group[~remove]
 
     # sfepy's hexahedron: bottom face counter-clockwise seen from the top, then the top face.

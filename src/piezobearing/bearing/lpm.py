@@ -321,10 +321,16 @@ class Defect:
 
 
 def defects_from_config(bearing: dict) -> tuple[Defect, ...]:
-    """The defects of ``bearing.defects`` (a list of {type, width_m, depth_m, angle_deg})."""
+    """The defects of ``bearing.defects`` (a list of {type, width_m, depth_m, angle_deg[, roller]}).
+
+    ``roller`` (rolling element only, default 0): the roller with the flat. With equal
+    rollers a flat on roller j is the flat on roller 0 with ``start_angle_deg`` moved by
+    j 360/Z deg (the rollers are interchangeable); with ``roller_diameter_scatter_m`` > 0
+    they are not, and the index picks which roller carries it.
+    """
     out = []
     for d in bearing.get("defects", []):
-        out.append(Defect(np.radians(d["angle_deg"]), d["width_m"], d["depth_m"], d["type"]))
+        out.append(Defect(np.radians(d["angle_deg"]), d["width_m"], d["depth_m"], d["type"], d.get("roller", 0)))
     return tuple(out)
 
 

@@ -194,33 +194,99 @@ def residual_psd(x: np.ndarray, dt_s: float, segment_s: float) -> tuple[np.ndarr
     return np.fft.rfftfreq(seg, dt_s), 2 * p * dt_s
 
 
-def arrays(d: Diagnosis) -> dict[str, np.ndarray]:
-    """The arrays the figures need (saved as diagnosis.npz next to diagnosis.json)."""
+#: Full-length series longer than this are stored for the figures as a min/max envelope of this many
+#: points (two per bin, :func:`envelope_thin`), so diagnosis.npz stays a few MB for a record of any
+#: length; the stretch the figures zoom on (:func:`zoom_window`) is kept at the full rate.
+DISPLAY_POINTS = 20_000
+
+
+def envelope_thin(x: np.ndarray, points: int = DISPLAY_POINTS) -> np.ndarray:
+    """``x`` as at most ``points`` values: per bin of ``ceil(2 n / points)`` samples its minimum and
+    maximum in the order they occur, which is what a line plot of ``x`` at that width shows. Unchanged
+    if short."""
+    x = np.asarray(x)
+    n = x.size
+    if n <= points:
+        return x
+    bs = -(-n // (points // 2))
+    bins = -(-n // bs)
+    xp = np.concatenate([x, np.full(bins * bs - n, x[-1], dtype=x.dtype)]).reshape(bins, bs)
+    i_lo, i_hi = xp.argmin(axis=1), xp.argmax(axis=1)
+    rows = np.arange(bins)
+    lo, hi = xp[rows, i_lo], xp[rows, i_hi]
+    first = np.where(i_lo <= i_hi, lo, hi)
+    second = np.where(i_lo <= i_hi, hi, lo)
+    return np.stack([first, second], axis=1).ravel()
+
+
+def thinned_time(time_s: np.ndarray, points: int = DISPLAY_POINTS) -> np.ndarray:
+    """The time axis of :func:`envelope_thin`: each bin's two values at its first and third quarter [s]."""
+    n = time_s.size
+    if n <= points:
+        return time_s
+    bs = -(-n // (points // 2))
+    bins = -(-n // bs)
+    pos = (np.arange(bins)[:, None] * bs + np.array([0.25, 0.75]) * bs).ravel()
+    return np.interp(np.minimum(pos, n - 1), np.arange(n), time_s)
+
+
+def zoom_window(residual_V: np.ndarray, seg: Segments, count: int) -> tuple[int, int]:
+    """Sample range [start, stop) of the ``count`` consecutive segments where ``residual_V`` has the
+    largest mean square (the whole record if it has no more segments than that)."""
+    start, stop = np.asarray(seg.start, dtype=int), np.asarray(seg.stop, dtype=int)
+    n = residual_V.size
+    if start.size == 0:
+        return 0, n
+    if start.size <= count:
+        return int(start[0]), int(min(stop[-1], n))
+    c = np.concatenate([[0.0], np.cumsum(residual_V**2)])
+    lo, hi = start[: start.size - count + 1], np.minimum(stop[count - 1 :], n)
+    k = int(np.argmax((c[hi] - c[lo]) / np.maximum(hi - lo, 1)))
+    return int(lo[k]), int(hi[k])
+
+
+def arrays(d: Diagnosis, points: int = DISPLAY_POINTS) -> dict[str, np.ndarray]:
+    """The arrays the figures need (saved as diagnosis.npz next to diagnosis.json).
+
+    Full-length series (time, input, voltage, each model's voltage and residual, the quiet mask) are
+    stored through :func:`envelope_thin` with ``points`` points; ``zoom_*`` holds the stretch of
+    ``problem.zoom_segments`` segments where the baseline misses most at the full rate
+    (``zoom_start``/``zoom_stop``: its sample range). Segment indices (``<segment>_start`` ...) refer
+    to the full record: sample i is at ``t0_s + i dt_s``.
+    """
     rec, st, seg = d.record, d.settings, d.segments
-    out = {"time_s": rec.time_s}
+    series = {"time_s": rec.time_s}
     if rec.input is not None:
-        out[rec.input_key] = rec.input
+        series[rec.input_key] = rec.input
+    series["voltage_V"] = d.voltage_V
+    series["quiet_mask"] = (
+        np.zeros(rec.n, np.int8) if d.floor.quiet_mask is None else d.floor.quiet_mask.astype(np.int8)
+    )
+    fits = (("baseline", d.baseline), ("configured", d.configured), ("final", d.final))
+    for key, f in fits:
+        series[f"{key}_model_V"] = f.model_V
+        series[f"{key}_residual_V"] = f.residual_V
+    z0, z1 = zoom_window(d.baseline.residual_V, seg, d.problem.zoom_segments)
+    out = {k: thinned_time(a, points) if k == "time_s" else envelope_thin(a, points) for k, a in series.items()}
+    out.update({f"zoom_{k}": a[z0:z1] for k, a in series.items() if k != "quiet_mask"})
     out.update(
         {
-            "voltage_V": d.voltage_V,
-            "quiet_mask": (
-                np.zeros(rec.n, np.int8) if d.floor.quiet_mask is None else d.floor.quiet_mask.astype(np.int8)
-            ),
+            "t0_s": np.array(float(rec.time_s[0])),
+            "dt_s": np.array(float(rec.dt_s)),
+            "zoom_start": np.array(z0),
+            "zoom_stop": np.array(z1),
             f"{seg.name}_start": np.asarray(seg.start, dtype=int),
             f"{seg.name}_stop": np.asarray(seg.stop, dtype=int),
             f"{seg.name}_peak": np.asarray(seg.anchor_index, dtype=int),
         }
     )
-    for key, f in (("baseline", d.baseline), ("configured", d.configured), ("final", d.final)):
+    for key, f in fits:
         t = d.tests[key]
         freq, psd = residual_psd(f.residual_V, rec.dt_s, st.spectrum_segment_s)
         s = d.floor.spectrum(f.response)
         floor_psd = 2 * np.interp(freq, rec.freq_Hz, np.broadcast_to(s, rec.freq_Hz.shape)) * rec.dt_s
         out.update(
             {
-                f"{key}_model_V": f.model_V,
-                f"{key}_residual_V": f.residual_V,
-                f"{key}_whitened": f.whitened,
                 f"{key}_psd_freq_Hz": freq,
                 f"{key}_psd_V2_per_Hz": psd,
                 f"{key}_floor_psd_V2_per_Hz": floor_psd,

@@ -21,7 +21,7 @@ NRMSE = rms(residual) / rms(measured voltage) throughout.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -66,6 +66,20 @@ class ModelFit:
     nrmse: float
     floor_nrmse: float
     floor_rms_V: float
+    residual_rms_V: float = float("nan")
+
+    def compact(self) -> "ModelFit":
+        """This fit without its full-length arrays (its numbers and :meth:`summary` kept): what a ranked
+        candidate that is not added needs, so that a long record's ranking holds no series per candidate."""
+        empty = np.zeros(0)
+        return replace(
+            self,
+            result=replace(self.result, residual=empty),
+            model_V=empty,
+            residual_V=empty,
+            whitened=empty,
+            response=empty,
+        )
 
     @property
     def values(self) -> dict:
@@ -94,7 +108,7 @@ class ModelFit:
             "effects": self.model.names,
             "nrmse": self.nrmse,
             "noise_floor_nrmse": self.floor_nrmse,
-            "residual_rms_V": float(np.sqrt(np.mean(self.residual_V**2))),
+            "residual_rms_V": self.residual_rms_V,
             "noise_floor_rms_V": self.floor_rms_V,
             "chi2": r.chi2,
             "chi2_per_sample": r.chi2 / r.n_data,
@@ -135,7 +149,9 @@ def fit_model(
         res = fit(weighted, model.params(record, {**(start or {}), **extra}), max_nfev=max_nfev, ftol=ftol)
         if best is None or res.chi2 < best.chi2:
             best = res
-    return finish(model, record, v, floor, best)
+    out = finish(model, record, v, floor, best)
+    model.release()
+    return out
 
 
 def finish(model: Model, record: Record, v: np.ndarray, floor: NoiseFloor, res: FitResult) -> ModelFit:
@@ -146,4 +162,7 @@ def finish(model: Model, record: Record, v: np.ndarray, floor: NoiseFloor, res: 
     r = v - mv
     floor_rms = floor.rms_V(g, record.n)
     vrms = float(np.sqrt(np.mean(v**2)))
-    return ModelFit(model, res, mv, r, whiten(r, s), np.asarray(g), nrmse(r, v), floor_rms / vrms, floor_rms)
+    rrms = float(np.sqrt(np.mean(r**2)))
+    return ModelFit(
+        model, res, mv, r, whiten(r, s), np.asarray(g), nrmse(r, v), floor_rms / vrms, floor_rms, rrms
+    )

@@ -53,3 +53,7 @@ class Model(Protocol):
 
     def fit_weight(self, record: Record) -> np.ndarray | float:
         """W(f): the filter :meth:`fit_input` applied to the input, at ``record.freq_Hz`` (1: none)."""
+
+    def release(self) -> None:
+        """Drop whatever the model cached during one fit (the engine calls it when the fit is done, so
+        the many models of a ranking hold no full-length arrays)."""

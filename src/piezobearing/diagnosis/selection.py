@@ -129,7 +129,11 @@ def rank(
             )
         )
     out.sort(key=lambda c: -c.delta_bic)
-    return yield_ties(out)
+    out = yield_ties(out)
+    # only the best can become the next step's model: the others keep their numbers, not their series
+    for c in out[1:]:
+        c.fit = c.fit.compact()
+    return out
 
 
 def yield_ties(cands: list[Candidate]) -> list[Candidate]:

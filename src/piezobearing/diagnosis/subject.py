@@ -121,6 +121,9 @@ class Problem:
         Stretches findings are named by (impulses, roller passages).
     representations : sequence of Representation
         Views the residual is judged in besides the whitened time residual.
+    zoom_segments : int
+        How many consecutive segments the figures show at the full rate (where the baseline misses
+        most; :func:`piezobearing.diagnosis.engine.zoom_window`): one impulse, a dozen roller passages.
     """
 
     record: Record
@@ -133,6 +136,7 @@ class Problem:
     floor: NoiseFloor
     segments: Segments
     representations: Sequence[Representation] = ()
+    zoom_segments: int = 1
 
 
 @runtime_checkable

@@ -13,8 +13,6 @@ from matplotlib.figure import Figure
 from .diagnostics import ladder, ranking
 
 BASE, FINAL, FLOOR, MEAS = "#D55E00", "#0072B2", "#000000", "#999999"
-#: Roller passages shown in the time overlay.
-N_SHOWN = 12
 
 
 def _label(d: dict, key: str) -> str:
@@ -22,35 +20,22 @@ def _label(d: dict, key: str) -> str:
     return "baseline" if not eff else "baseline + " + " + ".join(eff)
 
 
-def _worst_window(a: dict, n: int) -> tuple[int, int]:
-    """Sample range of the N_SHOWN passages where the baseline's residual is largest."""
-    start, stop = a["passage_start"], a["passage_stop"]
-    if start.size <= N_SHOWN:
-        return 0, n
-    r2 = a["baseline_residual_V"] ** 2
-    e = np.array([r2[s:t].sum() for s, t in zip(start, stop, strict=True)])
-    c = np.convolve(e, np.ones(N_SHOWN), mode="valid")
-    k = int(np.argmax(c))
-    return int(start[k]), int(stop[k + N_SHOWN - 1])
-
-
 def overlay(a: dict, d: dict) -> Figure:
     """Measured voltage, baseline and final model over 12 roller passages, the passages marked."""
     fig = Figure(figsize=(7.0, 5.0))
     ax, ar = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [1.5, 1]})
-    t = a["time_s"]
-    s, e = _worst_window(a, t.size)
-    sl = slice(s, e)
-    ax.plot(t[sl], a["voltage_V"][sl], color=MEAS, lw=1.6, label="measured")
-    ax.plot(t[sl], a["baseline_model_V"][sl], color=BASE, lw=0.9, label=_label(d, "baseline"))
-    ar.plot(t[sl], a["baseline_residual_V"][sl], color=BASE, lw=0.8, label="baseline residual")
+    t = a["zoom_time_s"]
+    s, e = int(a["zoom_start"]), int(a["zoom_stop"])
+    ax.plot(t, a["zoom_voltage_V"], color=MEAS, lw=1.6, label="measured")
+    ax.plot(t, a["zoom_baseline_model_V"], color=BASE, lw=0.9, label=_label(d, "baseline"))
+    ar.plot(t, a["zoom_baseline_residual_V"], color=BASE, lw=0.8, label="baseline residual")
     if d["final"]["effects"]:
-        ax.plot(t[sl], a["final_model_V"][sl], color=FINAL, lw=0.9, ls="--", label=_label(d, "final"))
-        ar.plot(t[sl], a["final_residual_V"][sl], color=FINAL, lw=0.8, label="final residual")
+        ax.plot(t, a["zoom_final_model_V"], color=FINAL, lw=0.9, ls="--", label=_label(d, "final"))
+        ar.plot(t, a["zoom_final_residual_V"], color=FINAL, lw=0.8, label="final residual")
     for c in a["passage_peak"]:
         if s <= c < e:
             for axis in (ax, ar):
-                axis.axvline(t[c], color="0.8", lw=0.6, zorder=0)
+                axis.axvline(t[c - s], color="0.8", lw=0.6, zorder=0)
     ax.set_ylabel("voltage (V)")
     ar.set_ylabel("residual (V)")
     ar.set_xlabel("time (s); grey lines: a roller over the sensor (baseline's kinematics)")

@@ -17,25 +17,32 @@ def _label(d: dict, key: str) -> str:
     return "baseline" if not eff else "baseline + " + " + ".join(eff)
 
 
+def sample_time(a: dict, index) -> np.ndarray:
+    """Time [s] of full-record sample ``index`` (the series in ``a`` may be thinned for display)."""
+    return float(a["t0_s"]) + np.asarray(index) * float(a["dt_s"])
+
+
 def _shade_impulses(ax, a: dict) -> None:
-    t = a["time_s"]
     for k, (s, e) in enumerate(zip(a["impulse_start"], a["impulse_stop"], strict=True)):
         if k % 2 == 0:
-            ax.axvspan(t[s], t[min(e, t.size) - 1], color="0.92", zorder=0, lw=0)
+            ax.axvspan(sample_time(a, s), sample_time(a, e - 1), color="0.92", zorder=0, lw=0)
     for p in a["impulse_peak"]:
-        ax.axvline(t[p], color="0.75", lw=0.6, zorder=0)
+        ax.axvline(sample_time(a, p), color="0.75", lw=0.6, zorder=0)
 
 
 def overlay(a: dict, d: dict) -> Figure:
-    """Measured voltage, baseline and final model; a zoom on the impulse where the baseline misses most."""
+    """Measured voltage, baseline and final model; a zoom on the impulse where the baseline misses most
+    (``zoom_*``: full rate; the whole record may be thinned for display)."""
     fig = Figure(figsize=(7.0, 5.4))
     ax, az = fig.subplots(2, 1, gridspec_kw={"height_ratios": [1.3, 1]})
     t = a["time_s"]
-    for axis in (ax, az):
-        axis.plot(t, a["voltage_V"], color=MEAS, lw=1.6, label="measured")
-        axis.plot(t, a["baseline_model_V"], color=BASE, lw=0.9, label=_label(d, "baseline"))
+    for axis, z in ((ax, ""), (az, "zoom_")):
+        axis.plot(a[f"{z}time_s"], a[f"{z}voltage_V"], color=MEAS, lw=1.6, label="measured")
+        axis.plot(a[f"{z}time_s"], a[f"{z}baseline_model_V"], color=BASE, lw=0.9, label=_label(d, "baseline"))
         if d["final"]["effects"]:
-            axis.plot(t, a["final_model_V"], color=FINAL, lw=0.9, ls="--", label=_label(d, "final"))
+            axis.plot(
+                a[f"{z}time_s"], a[f"{z}final_model_V"], color=FINAL, lw=0.9, ls="--", label=_label(d, "final")
+            )
         axis.set_ylabel("voltage (V)")
     _shade_impulses(ax, a)
     ax.set_xlim(t[0], t[-1])
@@ -44,17 +51,13 @@ def overlay(a: dict, d: dict) -> Figure:
         f"NRMSE baseline {100 * d['baseline']['nrmse']:.2f}%, final {100 * d['final']['nrmse']:.2f}%, "
         f"noise floor {100 * d['final']['noise_floor_nrmse']:.2f}%"
     )
-    if a["impulse_start"].size:
-        r = a["baseline_residual_V"]
-        err = [
-            np.sqrt(np.mean(r[s:e] ** 2)) for s, e in zip(a["impulse_start"], a["impulse_stop"], strict=True)
-        ]
-        k = int(np.argmax(err))
-        s, e = a["impulse_start"][k], a["impulse_stop"][k]
-        az.set_xlim(t[s], t[min(e, t.size) - 1])
-        az.set_title(f"impulse {k + 1} (largest baseline error)")
+    zt = a["zoom_time_s"]
+    az.set_xlim(zt[0], zt[-1])
+    k = np.flatnonzero(a["impulse_start"] == int(a["zoom_start"]))
+    if k.size:
+        az.set_title(f"impulse {k[0] + 1} (largest baseline error)")
     fax = az.twinx()
-    fax.plot(t, a["force_N"], color="0.6", lw=0.7)
+    fax.plot(zt, a["zoom_force_N"], color="0.6", lw=0.7)
     fax.set_ylabel("force (N)", color="0.5")
     fax.grid(False)
     az.set_xlabel("time (s)")

@@ -40,7 +40,8 @@ def bearing_lpm(
     """Stage bearing_lpm: kinematic frequencies and both cases' roller contact loads.
 
     Writes ``kinematics.json`` (shaft_Hz, ftf_Hz, bpfo_Hz, bpfi_Hz, bsf_Hz without slip; cage_slip,
-    slip_jitter, the same frequencies at the mean slip under ``with_slip``, speed_ramp_Hz_per_s, defect_types),
+    slip_jitter, the same frequencies at the mean slip under ``with_slip``, speed_ramp_Hz_per_s, defect_types;
+    with a tachometer its pulses_per_rev and pulse times ``tachometer_time_s`` on the record's time axis),
     per case an NPZ with the fine integration grid and the FEM-step series
     and a CSV at the FEM step (time_s, load_N_jj, angle_rad_jj), and a JSON
     of the checks. ``method``: the LPM's step loop (simulate_lpm), for the benchmark.
@@ -59,7 +60,6 @@ def bearing_lpm(
         "speed_ramp_Hz_per_s": b["speed_ramp_rpm_per_s"] / 60.0,
         "defect_types": [d["type"] for d in b["defects"]],
     }
-    write_json({**kin0.to_dict(), **operating, "config": {"bearing": b}}, out_kinematics)
     summary = {
         "kinematics": kin0.to_dict(),
         "kinematics_with_slip": kin.to_dict(),
@@ -82,6 +82,12 @@ def bearing_lpm(
             "fine_step_s": float(run["fine_time_s"][1] - run["fine_time_s"][0]),
             "newton_iterations_per_step": run["newton_iterations"] / len(run["fine_time_s"]),
         }
+    if b["tachometer_pulses_per_rev"] > 0:
+        # the shaft's pulses (the same in both cases: the defects do not move the shaft's angle), on the
+        # record's time axis, where the signals stages and a user read the kinematics
+        operating["tachometer_pulses_per_rev"] = b["tachometer_pulses_per_rev"]
+        operating["tachometer_time_s"] = run["tachometer_time_s"].tolist()
+    write_json({**kin0.to_dict(), **operating, "config": {"bearing": b}}, out_kinematics)
     write_json(summary, out_json)
 
 

@@ -58,6 +58,10 @@ class BearingModel:
     def with_effect(self, effect: Effect) -> "BearingModel":
         return BearingModel((*self.effects, effect))
 
+    def release(self) -> None:
+        """Empty the model's cache (the engine calls it when a fit is done)."""
+        self._cache.clear()
+
     def nuisance(self, record: RigRecord) -> list[Param]:
         """Start phase, speed within tolerance (no tachometer) and DC level."""
         rig = record.rig

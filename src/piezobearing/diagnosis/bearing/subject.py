@@ -31,6 +31,8 @@ from .representations import REPRESENTATIONS, passages
 
 #: Phases of the baseline's start scan over one roller pitch.
 PHASE_SCAN = 24
+#: Roller passages the overlay figure shows at the full rate (where the baseline misses most).
+ZOOM_PASSAGES = 12
 #: Final NRMSE below this share of the record's floor: the floor is measured again on the final residual.
 REMEASURE_BELOW = 0.8
 
@@ -129,6 +131,7 @@ class BearingSubject:
         return Problem(
             rr, v, BearingModel(), start, starts, configured, catalogue_for(rec.speed_rpm is not None),
             noise_floor(v, rr.dt_s, rec.clipped), segments(rr, {**start, **starts[0]}), REPRESENTATIONS,
+            zoom_segments=ZOOM_PASSAGES,
         )
 
     def synthesise(self, config: dict, seed: int, hidden_effects: list[dict], influence: InfluenceLine) -> BearingRecord:

@@ -151,6 +151,10 @@ class ForwardModel:
             self._cache.pop(next(iter(self._cache)))
         return out
 
+    def release(self) -> None:
+        """Empty the cache of :meth:`_cached` (a finished fit needs it no more)."""
+        self._cache.clear()
+
     def fit_input(self, record: ForceRecord) -> np.ndarray:
         """The force the likelihood fit drives the model with: its noise removed above twice its band
         (:func:`~piezobearing.diagnosis.calibration.effects.base.denoised_force`) [N]."""

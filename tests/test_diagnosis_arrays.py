@@ -1,0 +1,93 @@
+"""What a diagnosis keeps of a long record: display-thinned series, the zoom at the full rate, no
+series held per ranked candidate (issue 16, point 10: memory and diagnosis.npz proportional to need)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from piezobearing.diagnosis import engine
+from piezobearing.diagnosis.record import Segments
+
+
+def test_envelope_thin_keeps_every_bins_extremes_in_order():
+    rng = np.random.default_rng(1)
+    x = rng.normal(size=100_003)
+    x[54_321] = 40.0  # one spike a stride decimation would lose
+    y = engine.envelope_thin(x, 1000)
+    bs = -(-x.size // 500)
+    bins = -(-x.size // bs)
+    assert y.size == 2 * bins and 990 <= y.size <= 1000
+    assert y.max() == 40.0 and y.min() == x.min()
+    for b in (0, 17, bins - 1):
+        chunk = x[b * bs : (b + 1) * bs]
+        first, second = y[2 * b], y[2 * b + 1]
+        assert {first, second} == {chunk.min(), chunk.max()}
+        assert (first == chunk.min()) == (np.argmin(chunk) <= np.argmax(chunk))
+    t = engine.thinned_time(np.arange(x.size) * 1e-3, 1000)
+    assert t.size == y.size and np.all(np.diff(t) > 0) and t[-1] <= (x.size - 1) * 1e-3
+    short = np.arange(10.0)
+    assert engine.envelope_thin(short, 1000) is short
+
+
+def test_zoom_window_is_where_the_residual_is_largest():
+    r = np.ones(1000)
+    r[600:700] = 5.0
+    seg = Segments(
+        "impulse", "force_peak", np.arange(0, 1000, 100), np.arange(100, 1001, 100), np.arange(50, 1000, 100)
+    )
+    assert engine.zoom_window(r, seg, 1) == (600, 700)
+    lo, hi = engine.zoom_window(r, seg, 3)
+    assert lo <= 600 and hi >= 700 and hi - lo == 300
+    assert engine.zoom_window(r, Segments.none(), 1) == (0, 1000)
+
+
+@pytest.fixture(scope="module")
+def mains_diagnosis(ci_config):
+    from piezobearing.diagnosis.calibration.subject import SUBJECT
+
+    hidden = [{"name": "mains_pickup", "params": {"mains_h1_cos_V": 0.02}}]
+    obs = SUBJECT.synthesise(ci_config, ci_config["seed"], hidden)
+    d, diag = SUBJECT.diagnose(obs, ci_config)
+    return d, diag
+
+
+def test_arrays_thin_series_and_keep_the_zoom_at_full_rate(mains_diagnosis):
+    d, diag = mains_diagnosis
+    n = d.record.n
+    full = engine.arrays(d)
+    assert n <= engine.DISPLAY_POINTS and np.array_equal(full["voltage_V"], d.voltage_V)
+    a = engine.arrays(d, points=600)
+    for key in ("time_s", "voltage_V", "force_N", "baseline_model_V", "final_residual_V", "quiet_mask"):
+        assert 500 <= a[key].size <= 600 and a[key].size == a["time_s"].size, key
+    assert a["voltage_V"].max() == d.voltage_V.max() and a["voltage_V"].min() == d.voltage_V.min()
+    z0, z1 = int(a["zoom_start"]), int(a["zoom_stop"])
+    r = d.baseline.residual_V
+    ms = [np.mean(r[s:e] ** 2) for s, e in zip(d.segments.start, d.segments.stop, strict=True)]
+    k = int(np.argmax(ms))
+    assert (z0, z1) == (d.segments.start[k], d.segments.stop[k])
+    assert np.array_equal(a["zoom_voltage_V"], d.voltage_V[z0:z1])
+    assert np.array_equal(a["zoom_final_model_V"], d.final.model_V[z0:z1])
+    assert float(a["t0_s"]) + z0 * float(a["dt_s"]) == pytest.approx(d.record.time_s[z0])
+
+
+def test_figures_draw_from_thinned_arrays(mains_diagnosis):
+    from piezobearing.plotting.diagnostics import all_figures
+
+    d, diag = mains_diagnosis
+    figs = all_figures(engine.arrays(d, points=600), diag)
+    overlay = figs["overlay"]
+    zoom = overlay.axes[1]
+    assert zoom.get_xlim()[1] - zoom.get_xlim()[0] < 0.5 * (d.record.time_s[-1] - d.record.time_s[0])
+
+
+def test_ranked_candidates_hold_no_series(mains_diagnosis):
+    d, diag = mains_diagnosis
+    assert diag["selected"] == ["mains_pickup"]
+    for c in d.ranking[1:]:
+        assert c.fit.model_V.size == c.fit.residual_V.size == c.fit.result.residual.size == 0
+        assert np.isfinite(c.fit.residual_rms_V) and c.fit.summary()["nrmse"] == c.fit.nrmse
+    for c in d.ranking:
+        assert not getattr(c.fit.model, "_cache", {})
+    assert d.final.residual_V.size == d.record.n
+    assert diag["ranking"][1]["nrmse"] == d.ranking[1].fit.nrmse
