@@ -23,6 +23,7 @@ WORKFLOW_FIXTURES = ("ci_run", "ci_rerun")
 SPREAD = ("tests/test_diagnosis_bearing.py",)
 
 
+@pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups into the node ids
 def pytest_collection_modifyitems(config, items):
     """Group the tests for pytest-xdist's ``--dist loadgroup`` and put the long ones first.
 
@@ -44,7 +45,8 @@ def pytest_collection_modifyitems(config, items):
 
     rank = {"ci_workflow": 0, "tests/test_workflow_rerun.py": 1}
     for item in items:
-        item.add_marker(pytest.mark.xdist_group(group(item)))
+        if group(item) != item.nodeid:  # a test of its own needs no group
+            item.add_marker(pytest.mark.xdist_group(group(item)))
     items.sort(key=lambda item: rank.get(group(item), 2))  # stable: the collection order within each rank
 
 
