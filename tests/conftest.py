@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -23,7 +25,6 @@ WORKFLOW_FIXTURES = ("ci_run", "ci_rerun")
 SPREAD = ("tests/test_diagnosis_bearing.py",)
 
 
-@pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups into the node ids
 def pytest_collection_modifyitems(config, items):
     """Group the tests for pytest-xdist's ``--dist loadgroup`` and put the long ones first.
 
@@ -44,10 +45,50 @@ def pytest_collection_modifyitems(config, items):
         return item.nodeid
 
     rank = {"ci_workflow": 0, "tests/test_workflow_rerun.py": 1}
-    for item in items:
-        if group(item) != item.nodeid:  # a test of its own needs no group
-            item.add_marker(pytest.mark.xdist_group(group(item)))
-    items.sort(key=lambda item: rank.get(group(item), 2))  # stable: the collection order within each rank
+    groups = {item.nodeid: group(item) for item in items}
+    items.sort(key=lambda item: rank.get(groups[item.nodeid], 2))  # stable: the collection order within each rank
+    worker = getattr(config, "workerinput", {})
+    if worker.get("workerid") == "gw0":  # xdist: tell the controller's scheduler (every worker collects the same)
+        Path(worker[GROUPS_KEY]).write_text(json.dumps({nodeid: g for nodeid, g in groups.items() if g != nodeid}))
+
+
+#: The workers' input key naming the file of the test groups (see pytest_collection_modifyitems).
+GROUPS_KEY = "piezobearing_test_groups"
+
+
+def pytest_configure_node(node):
+    """xdist controller: each worker writes the test groups to this session's file (the same for all)."""
+    node.workerinput[GROUPS_KEY] = str(Path(node.config.option.basetemp or tempfile.gettempdir()) / _groups_name())
+
+
+def _groups_name() -> str:
+    return f"piezobearing-test-groups-{os.getpid()}.json"
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_xdist_make_scheduler(config, log):
+    """``--dist loadgroup`` with the groups of pytest_collection_modifyitems.
+
+    xdist's own loadgroup reads ``xdist_group`` marks into the node ids through ``item._nodeid``, which pytest 9
+    no longer reads (``nodeid`` comes from ``item._id``): every test would be its own group and each worker
+    would run the CI workflow. This scheduler reads the groups the workers wrote instead.
+    """
+    if config.getvalue("dist") != "loadgroup":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    path = Path(config.option.basetemp or tempfile.gettempdir()) / _groups_name()
+
+    class GroupScheduling(LoadScopeScheduling):
+        _groups: dict | None = None
+
+        def _split_scope(self, nodeid: str) -> str:
+            if self._groups is None:
+                self._groups = json.loads(path.read_text()) if path.exists() else {}
+            return self._groups.get(nodeid, nodeid)
+
+    config.option.loadscopereorder = False  # keep the collection order: the long groups first, one a worker
+    return GroupScheduling(config, log)
 
 
 @pytest.fixture(scope="session")
