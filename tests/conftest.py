@@ -56,6 +56,7 @@ def pytest_collection_modifyitems(config, items):
 GROUPS_KEY = "piezobearing_test_groups"
 
 
+@pytest.hookimpl(optionalhook=True)  # an xdist hook: no error where xdist is not installed
 def pytest_configure_node(node):
     """xdist controller: each worker writes the test groups to this session's file (the same for all)."""
     node.workerinput[GROUPS_KEY] = str(Path(node.config.option.basetemp or tempfile.gettempdir()) / _groups_name())
@@ -65,7 +66,7 @@ def _groups_name() -> str:
     return f"piezobearing-test-groups-{os.getpid()}.json"
 
 
-@pytest.hookimpl(tryfirst=True)
+@pytest.hookimpl(tryfirst=True, optionalhook=True)
 def pytest_xdist_make_scheduler(config, log):
     """``--dist loadgroup`` with the groups of pytest_collection_modifyitems.
 
