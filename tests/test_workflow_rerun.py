@@ -53,7 +53,8 @@ for p in [a[1]] + [a[i + 2] for i, x in enumerate(a[:-2]) if x in ("-p", "-r") a
 SKIP = {"calibration.measurement", "synthesis.hidden_effects"}
 #: String choices: another valid value.
 OTHER = {"type": "inner_race", "band_rule": "kurtogram", "method": "direct", "sensor_electrical": "short", "resample": "sample",
-         "c66_rule": "paper", "material": "pzt5h", "model": "absolute", "window": "rectangular"}
+         "c66_rule": "paper", "material": "pzt5h", "model": "absolute", "window": "rectangular",
+         "classification_types": "inner_race"}
 
 
 def _stub(script: Path) -> str:
