@@ -307,7 +307,8 @@ rule fault_type_voltage:
         "../envs/piezobearing.yaml"
     threads: 1
     resources:
-        mem_mb=2000,
+        # the LPM and the housing_transient rule's solve (2.3 GB) in one job
+        mem_mb=2500,
         runtime=10,
     params:
         **stage_params("fault_type_voltage", "workflow/scripts/fault_type_voltage.py"),
