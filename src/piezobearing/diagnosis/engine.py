@@ -27,6 +27,7 @@ from typing import Callable
 
 import numpy as np
 
+from .describe import describe
 from .fit import ModelFit, fit_model, likelihood_residual
 from .identifiability import equivalences, identifiability
 from .noise import NoiseFloor
@@ -61,6 +62,7 @@ class Diagnosis:
     unexplained: list[dict]
     dropped: list[dict] = field(default_factory=list)
     identifiability: dict = field(default_factory=dict)
+    outside: dict = field(default_factory=dict)
 
     @property
     def record(self) -> Record:
@@ -99,6 +101,7 @@ class Diagnosis:
             "final": {**self.final.summary(), "tests": self.tests["final"].summary()},
             "verdict": self.verdict,
             "unexplained": self.unexplained,
+            "outside_catalogue": self.outside,
             "identifiability": self.identifiability,
             **{key: {k: j.summary for k, j in js.items()} for key, js in self.judgements.items()},
             "settings": self.settings.__dict__,
@@ -156,18 +159,7 @@ def diagnose(
     found = findings(tests["final"], record.input_name, p.segments)
     for js in judgements.values():
         found += js["final"].findings
-    idf = identifiability(
-        sel.steps,
-        sel.stop,
-        final,
-        cut,
-        equivalences(
-            p.catalogue.values(),
-            {c.effect.name for c in sel.added} | {c.effect.name for c in sel.ranking[:1]},
-            sel.ranking,
-        ),
-    )
-    idf["intervals"] = {k: i.report() for k, i in intervals.items()}
+    idf = how_firm(sel, final, cut, p, intervals)
     return Diagnosis(
         p,
         settings,
@@ -184,7 +176,34 @@ def diagnose(
         found,
         sel.dropped,
         idf,
+        describe(
+            final.whitened,
+            tests["final"].window_t0_s,
+            tests["final"].window_ratio,
+            record.input,
+            record.input_name,
+            p.segments,
+            v,
+            record.time_s,
+        ),
     )
+
+
+def how_firm(sel, final: ModelFit, cut: bool, p: Problem, intervals: dict) -> dict:
+    """The ``identifiability`` block: margins, correlations, equivalences and the final fit's honest intervals."""
+    idf = identifiability(
+        sel.steps,
+        sel.stop,
+        final,
+        cut,
+        equivalences(
+            p.catalogue.values(),
+            {c.effect.name for c in sel.added} | {c.effect.name for c in sel.ranking[:1]},
+            sel.ranking,
+        ),
+    )
+    idf["intervals"] = {k: i.report() for k, i in intervals.items()}
+    return idf
 
 
 def final_intervals(final: ModelFit, record: Record, v: np.ndarray, floor: NoiseFloor, settings) -> dict:

@@ -141,13 +141,28 @@ def verdict_paragraph(d: dict, input_name: str = "input") -> list[str]:
             "The final residual is consistent with the measured noise: white, uncorrelated with the "
             f"{input_name}, no frequency and no time window above the floor.",
             "",
+            *outside(d),
         ]
     return [
         "Structure remains in the final residual that no effect of the catalogue explains. Where:",
         "",
         *findings_lines(d["unexplained"]),
         "",
+        *outside(d),
     ]
+
+
+def outside(d: dict) -> list[str]:
+    """What the structure outside the catalogue looks like (trend, input dependence, stuck samples), with the
+    mechanisms each suggests; stuck samples are always said, the others where the verdict is unexplained."""
+    o = d.get("outside_catalogue") or {}
+    keys = ("stuck",) if d.get("verdict") == "explained" else ("trend", "input_dependence", "stuck")
+    items = [o[k] for k in keys if k in o and o[k].get("where")]
+    if not items:
+        return []
+    out = ["What it looks like, and what could cause it:", ""]
+    out += [f"- {i['where']}. Suggests: {i['mechanisms']}." for i in items]
+    return out + [""]
 
 
 def compare(d: dict, figures: Figures, overlay_caption: str) -> list[str]:
