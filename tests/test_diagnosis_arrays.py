@@ -102,3 +102,7 @@ def test_clock_drift_interpolates_in_chunks_with_the_same_numbers(monkeypatch):
     chunked = cd.drifted(x, 1e-4, 25)
     monkeypatch.setattr(cd, "CHUNK", x.size)
     assert np.array_equal(chunked, cd.drifted(x, 1e-4, 25))
+    f = np.fft.rfftfreq(x.size)
+    gain = cd.noise_gain(f, 1e-4, x.size)
+    monkeypatch.setattr(cd, "CHUNK", 7)
+    assert np.array_equal(gain, cd.noise_gain(f, 1e-4, x.size))

@@ -74,8 +74,12 @@ def noise_gain(f_per_sample: np.ndarray, epsilon: float, n: int, k: int = 16) ->
     """
     shift = epsilon * np.linspace(0, n - 1, k)
     m, h = kernel(shift - np.floor(shift))
-    e = np.exp(-2j * np.pi * np.outer(m, np.asarray(f_per_sample, dtype=float)))
-    return np.sqrt(np.mean(np.abs(h @ e) ** 2, axis=0))
+    f = np.asarray(f_per_sample, dtype=float)
+    out = np.empty(f.shape)
+    for a in range(0, f.size, CHUNK):  # (taps x frequencies) complex arrays, a chunk at a time
+        e = np.exp(-2j * np.pi * np.outer(m, f[a : a + CHUNK]))
+        out[a : a + CHUNK] = np.sqrt(np.mean(np.abs(h @ e) ** 2, axis=0))
+    return out
 
 
 class ClockDrift(Effect):
