@@ -26,8 +26,8 @@ import numpy as np
 
 from piezobearing import config as cfg
 from piezobearing.bearing import housing_fem as fem
+from piezobearing.bearing import transient as st
 from piezobearing.bearing.housing_mesh import build_housing_mesh
-from piezobearing.stages import bearing as st
 
 
 def main() -> None:

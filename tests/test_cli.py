@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from piezobearing.cli import main
@@ -44,6 +45,42 @@ def test_validate_ok(files, capsys):
     assert main(["validate", str(files["record"])]) == 0
     out = capsys.readouterr().out
     assert out.startswith("OK: ") and "500 Hz" in out and "6 impulses" in out
+
+
+def test_validate_says_the_voltage_is_clipped(files, capsys):
+    """The largest press just touches the DAQ's range: 4 samples held at its top (fewer than the reader's
+    error limit for a clipped channel). validate accepts the file (exit 0) and says in one line that the
+    voltage is stuck there, naming the column, the level and the fix."""
+    import pandas as pd
+
+    df = pd.read_csv(files["record"])
+    v = df["voltage_V"].to_numpy().copy()
+    i = int(np.argmax(v))
+    v[i - 1 : i + 3] = v[i]
+    clipped = files["dir"] / "clipped.csv"
+    df.assign(voltage_V=v).to_csv(clipped, index=False)
+    assert main(["validate", str(clipped)]) == 0
+    warn = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("WARNING")]
+    assert len(warn) == 1 and "voltage_V is stuck at" in warn[0] and "clipped" in warn[0] and "range" in warn[0]
+    assert main(["validate", str(files["record"])]) == 0
+    assert "WARNING" not in capsys.readouterr().out
+
+
+def test_hide_and_find_says_whether_the_diagnosis_finds_the_hidden_effect(files, capsys):
+    """A 15 ms channel delay hidden in the CI-sized record: found first, its fitted value printed beside the
+    hidden one, exit 0; an unknown effect or parameter is one line naming it (exit 1)."""
+    ci = str(files["dir"] / "ci.yaml")
+    assert main(["hide-and-find", "channel_delay", "--param", "delay_s=0.015", "--config", ci]) == 0
+    out = capsys.readouterr().out
+    assert "ranked first: channel_delay" in out and "verdict: explained" in out and out.rstrip().endswith("FOUND")
+    line = [ln for ln in out.splitlines() if ln.strip().startswith("delay_s =")][0]
+    assert "(hidden 0.015)" in line and abs(float(line.split("=")[1].split()[0]) - 0.015) < 1e-4
+    assert main(["hide-and-find", "no_such_effect", "--config", ci]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "unknown effect 'no_such_effect'" in err[0] and "channel_delay" in err[0]
+    assert main(["hide-and-find", "channel_delay", "--param", "delay_ms=15", "--config", ci]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--param delay_ms" in err[0] and "delay_s" in err[0]
 
 
 def test_validate_runs_the_workflows_checks(files, capsys):

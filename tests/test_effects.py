@@ -273,3 +273,26 @@ def test_a_parameter_needs_a_registered_unit_suffix_and_reports_in_its_unit():
     assert format_value("delay_s", 0.015) == "15 ms"
     assert format_value("resistance_ohm", 5.0e7) == "50 MOhm"
     assert format_value("beta_per_N", 0.01) == "0.01 1/N"
+
+
+def test_noise_envelope_is_the_product_of_the_effects_gains_on_the_force_noise(record, circuit):
+    """d33_nonlinearity carries the force noise with 1 + 2 beta F(t), sensitivity_drift with g(t): together their
+    product; linear, time-invariant effects (a delay, mains) have none, and a neutral value switches it off."""
+    from piezobearing.diagnosis.calibration.effects.base import denoised_force
+    from piezobearing.diagnosis.calibration.effects.sensitivity_drift import gain
+
+    lti, v = model_from_specs(
+        circuit, [{"name": "channel_delay", "params": ON["channel_delay"]}, {"name": "mains_pickup"}], record
+    )
+    assert lti.noise_envelope(v, record) is None
+    specs = [
+        {"name": "d33_nonlinearity", "params": {"beta_per_N": 5e-3}},
+        {"name": "sensitivity_drift", "params": {"sensitivity_slope_per_s": 2e-3}},
+    ]
+    m, v = model_from_specs(circuit, specs, record)
+    a = m.noise_envelope(v, record)
+    expect = (1 + 2 * 5e-3 * denoised_force(record)) * gain(v, record, record.n)
+    assert a.shape == (record.n,) and np.allclose(a, expect)
+    assert a[np.argmax(denoised_force(record))] > 1.05  # louder at the largest press
+    off, v0 = model_from_specs(circuit, [{"name": "d33_nonlinearity"}], record)
+    assert off.noise_envelope(v0, record) is None

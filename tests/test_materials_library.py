@@ -36,6 +36,7 @@ def test_library_has_the_ceramics_the_design_needs_with_sources():
     for key in KEYS:
         m = PIEZO_MATERIALS[key]
         assert m.source, key
+        assert m.quality_factor_source, key
         assert 7000 < m.density_kg_per_m3 < 8000
     with pytest.raises(KeyError, match="known"):
         piezo_material("apc851")
@@ -68,6 +69,32 @@ def test_config_picks_the_material_and_overrides_only_what_is_set(paper_config):
     s["d33_C_per_N"] = 300e-12
     pzt = pzt_from_config(s)
     assert pzt.d33_C_per_N == 300e-12 and pzt.d_C_per_N[2, 0] == PIEZO_MATERIALS["pzt4"].d_C_per_N[2, 0]
+
+
+def test_hard_ceramics_have_the_larger_mechanical_q():
+    """Hard PZT-8 > PZT-4 (acceptor-doped, low loss) >> soft PZT-5A ~ APC 850 > PZT-5H (the Navy types' ranking)."""
+    q = {k: piezo_material(k).mechanical_quality_factor for k in KEYS}
+    assert q["pzt8"] > q["pzt4"] > 5 * q["apc850_paper"]
+    assert q["apc850_paper"] >= q["pzt5a"] > q["pzt5h"]
+
+
+@pytest.mark.parametrize("key", KEYS)
+def test_the_fems_damping_is_the_ceramics_own_q_unless_the_config_sets_one(paper_config, key):
+    """sensor_fem.mechanical_quality_factor null (the paper config): damping ratio 1/(2 Qm) of the ceramic;
+    a number replaces it for every ceramic. The paper's design keeps exactly the 1/160 of its former Qm = 80."""
+    import copy
+
+    from piezobearing.sensor.analysis import SensorFemParams
+
+    cfg = copy.deepcopy(paper_config)
+    cfg["sensor"]["material"] = key
+    assert cfg["sensor_fem"]["mechanical_quality_factor"] is None
+    zeta = SensorFemParams.from_config(cfg).damping_ratio
+    assert zeta == 1.0 / (2.0 * piezo_material(key).mechanical_quality_factor)
+    if key == "apc850_paper":
+        assert zeta == 1.0 / 160.0
+    cfg["sensor_fem"]["mechanical_quality_factor"] = 40.0
+    assert SensorFemParams.from_config(cfg).damping_ratio == 1.0 / 80.0
 
 
 def _mats(key):

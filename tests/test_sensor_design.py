@@ -114,8 +114,8 @@ def test_sensor_spring_scales_the_whole_influence_line(ci_config):
     which is what lets the study scale the workflow's sensor force by the ratio of load shares."""
     from piezobearing.bearing import housing_fem
     from piezobearing.bearing.housing_mesh import build_housing_mesh
+    from piezobearing.bearing.transient import housing_geometry
     from piezobearing.sensor.materials import CAST_IRON, STEEL
-    from piezobearing.stages.bearing import housing_geometry
 
     mesh = build_housing_mesh(housing_geometry(ci_config), False, 0.35)
     models = [housing_fem.build_model(mesh, STEEL, CAST_IRON, k, 0.1e-3) for k in (3.8e8, 1.5e9)]
@@ -149,16 +149,30 @@ def test_detection_margin_grows_with_the_gain_by_exactly_the_gain():
     b = sd.detection_at_noise({k: 2 * x for k, x in v.items()}, dt, f0, noise, 8, 3, es, ins, 0.95)
     assert a["detection_rate_faulty"] == 1.0 and a["indicator_faulty"] > a["threshold"]
     assert b["detection_margin_dB"] - a["detection_margin_dB"] == pytest.approx(20 * np.log10(2), abs=1e-3)
+    assert not a["clipped"] and not b["clipped"]
     assert b["indicator_faulty"] > a["indicator_faulty"]
 
 
-def test_clipping_is_reported():
+def test_a_clipped_design_is_flagged_and_its_margin_kept_apart():
+    """The records peak at 40 V; a +-30 V ADC clips them: `clipped`, no `detection_margin_dB` (NaN), the number
+    measured on the clipped record apart; with the ideal ADC the margin is the unclipped design's (the same
+    records on a +-100 V ADC that does not clip), and it grows with the gain by exactly the gain."""
     v, dt, f0 = _impulse_records()
-    noise = daq.NoiseSettings(model="absolute", noise_density_V_per_sqrtHz=1e-3, adc_bits=24, range_V=30.0)
     es = sig.EnvelopeSettings("fixed", (500.0, 1250.0), 300.0, 4)
     ins = sig.IndicatorSettings(3, 0.5, 2, 1e-3)
-    d = sd.detection_at_noise(v, dt, f0, noise, 3, 1, es, ins, 0.95)
-    assert d["clipped_fraction"] > 0.1
+    narrow = daq.NoiseSettings(model="absolute", noise_density_V_per_sqrtHz=1e-3, adc_bits=24, range_V=30.0)
+    wide = replace(narrow, range_V=100.0)
+    d = sd.detection_at_noise(v, dt, f0, narrow, 3, 1, es, ins, 0.95)
+    assert d["clipped"] and d["clipped_fraction"] > 0.1
+    assert d["range_needed_V"] == pytest.approx(40.0, rel=1e-6) and d["range_V"] == 30.0
+    assert np.isnan(d["detection_margin_dB"]) and np.isfinite(d["detection_margin_as_clipped_dB"])
+    w = sd.detection_at_noise(v, dt, f0, wide, 3, 1, es, ins, 0.95)
+    assert not w["clipped"] and np.isnan(w["detection_margin_as_clipped_dB"])
+    assert d["detection_margin_ideal_adc_dB"] == w["detection_margin_ideal_adc_dB"]
+    assert w["detection_margin_dB"] == pytest.approx(w["detection_margin_ideal_adc_dB"], abs=0.5)
+    g = sd.detection_at_noise({k: 2 * x for k, x in v.items()}, dt, f0, narrow, 3, 1, es, ins, 0.95)
+    assert g["detection_margin_ideal_adc_dB"] - d["detection_margin_ideal_adc_dB"] == pytest.approx(
+        20 * np.log10(2), abs=1e-3)
 
 
 @pytest.mark.slow

@@ -51,16 +51,8 @@ def test_one_case_detects_the_fault_and_gathers(tmp_path, tiny):
     assert s["indicator_faulty"] > s["threshold"] > 0
     assert s["detection_rate_faulty"] == 1.0
     assert s["detection_rate_healthy"] <= 0.2  # 5 seeds: at most one false alarm
-    case = out.parent
-    seeds = pd.read_csv(case / "seeds.csv")
-    assert len(seeds) == 2 * 5 and set(seeds["snr_dB"]) == {cfg["signals"]["snr_dB"]}
-    for f in ("kinematics.json", "sensor_force_faulty.csv", "voltage_faulty.csv", "fault_indicator.json"):
-        assert (case / f).exists(), f
-    assert not list(case.glob("*.npz")) and not list(case.glob("*.vtk"))  # large intermediates removed
-    # the case's own (replicate 0) indicator file matches the seeds table's replicate 0
-    ind = json.loads((case / "fault_indicator.json").read_text())
-    r0 = seeds[(seeds["case"] == "faulty") & (seeds["seed"] == 0)]["indicator"].iloc[0]
-    assert ind["faulty"]["indicator"] == pytest.approx(r0, rel=1e-9)
+    # in memory: the case folder holds its summary only (no intermediate files written and deleted)
+    assert [p.name for p in out.parent.iterdir()] == ["summary.json"]
     summarize(
         "fault_detection", [str(out)], str(tmp_path / "fd" / "summary.csv"), str(tmp_path / "fd" / "s.png")
     )

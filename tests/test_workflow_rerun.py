@@ -53,7 +53,8 @@ for p in [a[1]] + [a[i + 2] for i, x in enumerate(a[:-2]) if x in ("-p", "-r") a
 SKIP = {"calibration.measurement", "synthesis.hidden_effects"}
 #: String choices: another valid value.
 OTHER = {"type": "inner_race", "band_rule": "kurtogram", "method": "direct", "sensor_electrical": "short", "resample": "sample",
-         "c66_rule": "paper", "material": "pzt5h", "model": "absolute", "window": "rectangular"}
+         "c66_rule": "paper", "material": "pzt5h", "model": "absolute", "window": "rectangular",
+         "classification_types": "rolling_element"}
 
 
 def _stub(script: Path) -> str:
@@ -217,7 +218,7 @@ def test_an_undeclared_key_read_raises_naming_the_rule_and_the_fix():
         (
             "signals/analysis.py",
             {"sensor_voltage", "noisy", "envelope", "fault_indicator", "snr_study", "snr_study_figure",
-             "defect_events"},
+             "defect_events", "fault_type_voltage"},
         ),
     ],
 )

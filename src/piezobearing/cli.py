@@ -17,6 +17,14 @@
     polarity); prints ``OK`` and a summary, or the one-line problem (exit
     status 1).
 
+``piezobearing hide-and-find EFFECT [--param NAME=VALUE ...] [--seed N] [--config FILE]``
+    Hide a catalogue effect (a new one, while it is being written) in the
+    configured synthetic calibration record and diagnose it with the whole
+    catalogue: prints what came first, what was selected, the fitted
+    parameters with their 95% intervals and the verdict; exit status 0 when
+    the effect (or one it is declared exactly equivalent to) is ranked and
+    selected first with the verdict ``explained``, else 1.
+
 Exit status: 0 done; 1 a user error (bad file, bad config, unknown effect,
 unusable --out), one line naming the file or key and the fix, never a
 traceback; 2 a usage error (unknown option, missing argument); 3 an internal
@@ -128,6 +136,16 @@ def _validate(args) -> int:
         f"OK: {args.file}: {m.time_s.size} rows, {m.sample_rate_Hz:.6g} Hz, "
         f"{m.time_s[-1] - m.time_s[0]:.6g} s, {len(imps)} impulses"
     )
+    from .diagnosis.describe import stuck_runs
+
+    stuck = stuck_runs(m.voltage_V, time_s=m.time_s)
+    if stuck["n_runs"]:  # readable, but no model can fit these samples
+        levels = ", ".join(f"{v:.6g} V" for v in stuck["levels"])
+        print(
+            f"WARNING: {args.file}: column voltage_V is stuck at {levels} in {stuck['n_runs']} run(s) "
+            f"({stuck['n_samples']} samples, the first at t = {stuck['runs'][0]['start_s']:.3f} s): "
+            "clipped; widen the DAQ's input range or lower the gain"
+        )
     print(f"config: {used}")
     return 0
 
@@ -197,10 +215,65 @@ def _diagnose(args) -> int:
         f"(floor {100 * final['noise_floor_nrmse']:.2f}%)"
     )
     print(f"verdict: {d['verdict']}")
+    stuck = (d.get("outside_catalogue") or {}).get("stuck") or {}
+    if stuck.get("where"):
+        print(f"WARNING: {stuck['where']}")
     for f in d["unexplained"][:5]:
         print(f"  - {f['where']}")
+    if len(d["unexplained"]) > 5:
+        print(f"  ... and {len(d['unexplained']) - 5} more (every one in the report)")
     print(f"report: {args.out}/report.md")
     return 0
+
+
+def _hide_and_find(args) -> int:
+    from . import config as cfg
+    from .diagnosis.calibration.effects import CATALOGUE, EffectError, ForceRecord
+    from .diagnosis.calibration.subject import diagnose_record
+    from .diagnosis.settings import DiagnosticsSettings
+    from .sensor.calibration import detect_impulses
+    from .stages.calibration import nominal_circuit
+    from .synthesis import PressProtocol, synthesize
+
+    try:
+        config, used = _load_config(args)
+    except cfg.ConfigError as e:
+        return _fail(str(e))
+    params = {}
+    for i, item in enumerate(args.param or []):
+        name, eq, value = item.partition("=")
+        try:
+            params[name] = float(value)
+        except ValueError:
+            eq = ""
+        if not eq:
+            return _fail(f"--param {item}: give NAME=VALUE with a number, e.g. --param delay_s=0.015 (item {i + 1})")
+    hidden = [{"name": args.effect, "params": params}]
+    seed = config["seed"] if args.seed is None else args.seed
+    try:
+        m = synthesize(PressProtocol.from_config(config["synthesis"]), nominal_circuit(config), seed, hidden)
+    except EffectError as e:
+        key = "synthesis.hidden_effects[0]"
+        return _fail(str(e).replace(f"{key}.params.", "--param ").replace(key, f"hide-and-find {args.effect}"))
+    t, f, v = m.time_s, m.force_N, m.voltage_V
+    imps = detect_impulses(f, v, t[1] - t[0], 0.2, 0.8)
+    circuit = nominal_circuit(config, config["calibration"]["initial_resistance_ohm"])
+    settings = DiagnosticsSettings.from_config(config["diagnostics"])
+    _, d = diagnose_record(ForceRecord(t, f), v, circuit, [], settings, imps)
+    same = {args.effect, *CATALOGUE[args.effect].equivalent_to}
+    same |= {e.name for e in CATALOGUE.values() if args.effect in e.equivalent_to}
+    first = d["ranking"][0] if d["ranking"] else None
+    found = first is not None and first["effect"] in same and d["selected"][:1] == [first["effect"]]
+    print(f"config: {used}; seed {seed}; hidden: {args.effect} {params or '(defaults)'}")
+    if first is not None:
+        print(f"ranked first: {first['effect']} (delta BIC {first['delta_bic']:.4g}): {first['summary']}")
+    print(f"selected: {', '.join(d['selected']) or 'nothing'}; verdict: {d['verdict']}")
+    for k, val in d["final"]["params"].items():
+        lo, hi = d["final"]["ci95"].get(k, [float("nan")] * 2)
+        print(f"  {k} = {val:.6g} [{lo:.6g}, {hi:.6g}]" + (f" (hidden {params[k]:.6g})" if k in params else ""))
+    ok = found and d["verdict"] == "explained"
+    print("FOUND" if ok else "NOT FOUND: " + ("ranked first but " if found else "") + "see the lines above")
+    return 0 if ok else EXIT_USER
 
 
 def _diagnose_bearing(args) -> int:
@@ -235,6 +308,9 @@ def _diagnose_bearing(args) -> int:
     )
     print(f"fault: {f['type']}" + "".join(f"; {k} = {v:.6g} [{f['ci95'][k][0]:.6g}, {f['ci95'][k][1]:.6g}]" for k, v in f["params"].items() if f["ci95"].get(k)))
     print(f"verdict: {d['verdict']}")
+    stuck = (d.get("outside_catalogue") or {}).get("stuck") or {}
+    if stuck.get("where"):
+        print(f"WARNING: {stuck['where']}")
     for u in d["unexplained"][:5]:
         print(f"  - {u['where']}")
     print(f"report: {args.out}/report.md")
@@ -310,6 +386,24 @@ def _parser() -> argparse.ArgumentParser:
         help="YAML file merged over the checkout's config/config.yaml (calibration.* settings)",
     )
     v.set_defaults(func=_validate)
+    h = sub.add_parser(
+        "hide-and-find",
+        help="hide a catalogue effect in the synthetic calibration record and check the diagnosis finds it",
+        description="Hide one catalogue effect in the configured synthetic record, diagnose it, say whether it "
+        "came first (exit 0) or not (exit 1).",
+    )
+    h.add_argument("effect", help="the effect's identifier (e.g. channel_delay)")
+    h.add_argument(
+        "--param",
+        action="append",
+        metavar="NAME=VALUE",
+        help="a hidden parameter value, e.g. delay_s=0.015 (repeat for more; others: the neutral default)",
+    )
+    h.add_argument("--seed", type=int, help="seed of the synthetic record (default: the config's seed)")
+    h.add_argument(
+        "--config", metavar="FILE", help="YAML file merged over config/config.yaml (synthesis, diagnostics)"
+    )
+    h.set_defaults(func=_hide_and_find)
     return p
 
 

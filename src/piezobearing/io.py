@@ -16,6 +16,7 @@ from __future__ import annotations
 import codecs
 import functools
 import hashlib
+import io
 import json
 import math
 import re
@@ -580,10 +581,21 @@ def file_digest(path: str | Path) -> str:
     return _digest(str(Path(path).resolve()), st.st_size, st.st_mtime_ns, st.st_ino)
 
 
+#: Digits of a record written by :func:`write_measurement`.
+MEASUREMENT_CSV_FORMAT = "%.9g"
+
+
 def write_measurement(m: Measurement, path: str | Path) -> None:
     """Write a record as CSV (used for the synthetic record under results/)."""
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    m.to_frame().to_csv(path, index=False, float_format="%.9g")
+    m.to_frame().to_csv(path, index=False, float_format=MEASUREMENT_CSV_FORMAT)
+
+
+def measurement_as_read(m: Measurement, source: str) -> Measurement:
+    """The record as :func:`read_measurement` reads back the file :func:`write_measurement` makes of it (in
+    memory, :func:`as_read`; a uniform record, as the synthetic one is), named ``source``."""
+    df = as_read(m.to_frame(), MEASUREMENT_CSV_FORMAT)
+    return Measurement(*(df[c].to_numpy(dtype=float) for c in COLUMNS), source)
 
 
 # --------------------------------------------------------------------------- result files
@@ -642,10 +654,31 @@ def read_npz(path: str | Path) -> dict:
     return {k: d[k] for k in d.files}
 
 
-def write_csv(df: pd.DataFrame, path: str | Path, float_format: str | None = "%.10g") -> None:
+#: Digits of the tables the stages hand on: CSV at 10 significant digits, the sensor force and the LPM's
+#: contact loads at 9 (stages.bearing).
+CSV_FORMAT = "%.10g"
+FORCE_CSV_FORMAT = "%.9g"
+
+
+def write_csv(df: pd.DataFrame, path: str | Path, float_format: str | None = CSV_FORMAT) -> None:
     """A table as CSV without the index, creating the folder."""
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     df.to_csv(path, index=False, float_format=float_format)
+
+
+def as_read(df: pd.DataFrame, float_format: str | None = CSV_FORMAT) -> pd.DataFrame:
+    """The table as the next stage reads it back from the file :func:`write_csv` makes of it (formatted and
+    parsed in memory, no file): what a study hands from one rule's function to the next, so that its values
+    are the workflow's to the bit."""
+    buf = io.StringIO()
+    df.to_csv(buf, index=False, float_format=float_format)
+    buf.seek(0)
+    return pd.read_csv(buf)
+
+
+def json_as_read(obj: dict) -> dict:
+    """The record as :func:`read_json` reads back the file :func:`write_json` makes of it (in memory)."""
+    return json.loads(json.dumps(_jsonable(obj), allow_nan=False))
 
 
 class SignalFileError(ValueError):
@@ -664,35 +697,43 @@ def read_series(path: str | Path, column: str) -> tuple[np.ndarray, np.ndarray, 
     path = Path(path)
     if not path.exists():
         raise SignalFileError(f"{path}: file not found; run the stage that writes it")
-    df = pd.read_csv(path)
+    return table_series(pd.read_csv(path), column, path)
+
+
+def table_series(df: pd.DataFrame, column: str, source) -> tuple[np.ndarray, np.ndarray, float]:
+    """:func:`read_series` on a table already read (``source`` names it in errors)."""
     for c in ("time_s", column):
         if c not in df.columns:
-            raise SignalFileError(f"{path}: column '{c}' missing (header: {', '.join(df.columns)}); "
+            raise SignalFileError(f"{source}: column '{c}' missing (header: {', '.join(df.columns)}); "
                                   f"write time_s,{column}")
     t = df["time_s"].to_numpy(dtype=float)
     x = df[column].to_numpy(dtype=float)
     bad = np.flatnonzero(~(np.isfinite(t) & np.isfinite(x)))
     if bad.size:
-        raise SignalFileError(f"{path}: line {int(bad[0]) + 2}: not a finite number ({bad.size} rows); "
+        raise SignalFileError(f"{source}: line {int(bad[0]) + 2}: not a finite number ({bad.size} rows); "
                               "fix the stage that writes it")
     if t.size < 8:
-        raise SignalFileError(f"{path}: only {t.size} rows; a signal needs a time series")
+        raise SignalFileError(f"{source}: only {t.size} rows; a signal needs a time series")
     dt = float((t[-1] - t[0]) / (t.size - 1))
     off = np.flatnonzero(np.abs(np.diff(t) - dt) > SERIES_UNIFORM_RTOL * dt)
     if dt <= 0 or off.size:
         i = int(off[0]) + 1 if off.size else 1
-        raise SignalFileError(f"{path}: line {i + 2}, column time_s: uneven or decreasing time step; "
+        raise SignalFileError(f"{source}: line {i + 2}, column time_s: uneven or decreasing time step; "
                               "the signal stages need a uniform clock")
     return t, x, dt
 
 
 def read_kinematics(path: str | Path) -> dict:
     """The bearing's kinematic frequencies [Hz] (shaft, FTF, BPFO, BPFI, BSF) from kinematics.json."""
-    k = read_json(path)
+    return kinematics_of(read_json(path), path)
+
+
+def kinematics_of(k: dict, source) -> dict:
+    """:func:`read_kinematics` on the record already read (``source`` names it in errors)."""
     need = ("shaft_Hz", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz")
     miss = [n for n in need if n not in k]
     if miss:
-        raise SignalFileError(f"{path}: key '{miss[0]}' missing; kinematics.json needs {', '.join(need)}")
+        raise SignalFileError(f"{source}: key '{miss[0]}' missing; kinematics.json needs {', '.join(need)}")
     return {n: float(k[n]) for n in need}
 
 

@@ -1,6 +1,8 @@
 # Parameter studies (config `studies`, tables in config/studies/*.tsv), built by
-# the target `study_all`, not by `all`. Each case runs only the stages its
-# study affects; a summary table and figure gather the cases.
+# the target `study_all`, not by `all`. Each case runs, in process and in
+# memory, only the rules its study affects, through the functions their stages
+# call (one pipeline: piezobearing.stages.studies); its only file is its
+# summary.json. A summary table and figure gather the cases.
 import sys
 
 import pandas as pd

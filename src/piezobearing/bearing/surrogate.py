@@ -33,7 +33,7 @@ touch a roller, the healthy table elsewhere.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Callable, NamedTuple
 
 import numpy as np
 
@@ -41,12 +41,17 @@ from .lpm import BearingGeometry, chord_drop_m, contact_law, kinematic_frequenci
 
 #: Points of the cage-phase table over one roller pitch.
 TABLE_POINTS = 4096
-#: The table with an outer-race groove is this many times finer (the groove's edges are kinks that a
-#: coarse table would put at grid points: a bias of the fitted angle of about one table step); over a
-#: cage turn (with roller scatter) twice.
+#: A table with a drop function other than an :class:`OuterGroove` is this many times finer (the groove's
+#: edges are kinks that a coarse table would put at grid points: a bias of the fitted angle of about one
+#: table step); over a cage turn (with roller scatter) twice.
 GROOVE_REFINE = 16
 #: Points per roller pitch of the table over a cage turn (roller scatter, no groove).
 SCATTER_POINTS = 256
+#: The table's points across one roller's passage over an outer-race groove (edges and centre included:
+#: the drop's kinks) are this share of the healthy table's spacing apart, and at least 257 (321 across a
+#: 0.6 mm groove: the record's voltage within 2.4e-6 of its rms of a table 8 times finer, 2e-5 with 129;
+#: box averages within 1e-4 of the groove's dip of a uniform table 16 times finer, tests/test_surrogate.py).
+GROOVE_SPACING = 0.5
 
 
 @dataclass(frozen=True)
@@ -94,6 +99,10 @@ class Operating:
 
     radial_load_N: float
     radial_clearance_m: float
+
+
+#: Force residual (share of F_r) accepted where Newton's method stalls after 200 steps (see quasi_static_loads).
+STALL_TOL = 1e-4
 
 
 def _normals(psi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -178,9 +187,15 @@ def quasi_static_loads(
             lam = np.where(bad, 0.5 * lam, lam)
         e[idx] = trial
         f[idx], q[idx], dq[idx], pot[idx] = ft, qt, dqt, pt
+    norm = np.hypot(f[:, 0], f[:, 1])
+    if np.all(norm <= STALL_TOL * radial_load_N):
+        # a shaft resting on one roller a few microradians off the load line (wide clearance): the Hessian has
+        # no sideways stiffness, and the sideways force left (< STALL_TOL F_r) would move the shaft tens of
+        # microns to the next roller; the loads are within that force of the equilibrium
+        return (q, e) if return_offset else q
     raise RuntimeError(
-        f"quasi_static_loads: no equilibrium for {int(active.sum())} of {n} roller configurations "
-        f"at F_r = {radial_load_N} N"
+        f"quasi_static_loads: no equilibrium for {int((norm > tol_N * radial_load_N).sum())} of {n} roller "
+        f"configurations at F_r = {radial_load_N} N"
     )
 
 
@@ -191,6 +206,36 @@ def _state(e, idx, s, c, drop, gap_m, k_contact, load):
     q, dq = contact_law(delta, k_contact)
     pot = np.sum(q * np.maximum(delta, 0.0), 1) * (9 / 19) - e @ load
     return np.stack([np.sum(q * si, 1), np.sum(q * ci, 1)], 1) - load, q, dq, pot
+
+
+class Table(NamedTuple):
+    """F_s tabulated over one period of cage phase (closed: the last point is the first, a period on).
+
+    Attributes
+    ----------
+    force : ndarray
+        F_s at the phases [N].
+    integral : ndarray
+        Its running integral from phase 0 (trapezoidal, exact for the linear table) [N rad].
+    period : float
+        A roller pitch, or a cage turn with roller scatter [rad].
+    phase : ndarray
+        The table's cage phases, increasing from 0 to the period [rad].
+    loaded, offset : ndarray or None
+        Without a groove: which rollers carry load (n, Z) and the shaft offset (n, 2) [m] at the phases.
+    """
+
+    force: np.ndarray
+    integral: np.ndarray
+    period: float
+    phase: np.ndarray
+    loaded: np.ndarray | None = None
+    offset: np.ndarray | None = None
+
+
+def running_integral(phase: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Trapezoidal running integral of f over the phases, 0 at the first [N rad]."""
+    return np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(phase))])
 
 
 @dataclass(frozen=True)
@@ -235,64 +280,90 @@ class Surrogate:
         outer_drop: Callable[[np.ndarray], np.ndarray] | None = None,
         key=None,
         offsets_m: tuple[float, ...] | None = None,
-    ) -> tuple[np.ndarray, np.ndarray, float]:
-        """F_s over one period of cage phase, its running integral, and the period.
+    ) -> Table:
+        """F_s over one period of cage phase and its running integral (a :class:`Table`).
 
         ``outer_drop(psi)`` is the drop [m] of a stationary (outer-race)
         defect at roller angles psi; ``key`` identifies it for the cache.
         ``offsets_m`` (Z,) are per-roller reductions of the roller diameter
         (roller scatter, [m]; an oversize roller is negative): they add to
         each roller's gap, and the period becomes a whole cage turn instead
-        of one roller pitch. Returns F on phi_k = k period / m, k = 0..m
-        (closed: the last equals the first), G(phi) = integral of F from 0
-        [N rad], and the period [rad].
+        of one roller pitch. The table is closed (its last point, at the
+        period, equals the first) and linear between its points.
+
+        Without a groove the phases are uniform. With an :class:`OuterGroove`
+        the phases at which a roller stands in the groove are replaced by
+        :data:`GROOVE_SPACING` points across each passage, aligned with the
+        groove: its edges and its centre (the kinks of the drop) are table
+        points, so a change of the groove's angle or width moves the table
+        smoothly (no bias of a grid step, smooth finite differences). Any
+        other drop function: a uniform grid :data:`GROOVE_REFINE` times finer.
         """
         offsets = None if offsets_m is None or not np.any(offsets_m) else tuple(float(o) for o in offsets_m)
-        offsets_m = offsets
         ck = ("table", op, key, offsets)
         hit = self._cache.get(ck)
         if hit is not None:
             return hit
-        z = self.geometry.n_rollers
-        period = self.geometry.roller_pitch_rad if offsets is None else 2 * np.pi
-        base = np.zeros(z) if offsets is None else np.asarray(offsets)
         if outer_drop is None:
-            # with scatter the table spans a cage turn: a coarser grid, the loads smooth without a groove
-            m = self.table_points if offsets is None else SCATTER_POINTS * z
-            phi = np.linspace(0.0, period, m + 1)
-            psi = self.roller_angles(phi)
-            e0 = None
-            if offsets is not None:  # start from the equal rollers' equilibrium
-                ft = self.table(op)
-                grid = np.linspace(0.0, ft[2], ft[4].shape[0])
-                e0 = np.stack([np.interp(np.mod(phi, ft[2]), grid, ft[4][:, i]) for i in (0, 1)], 1)
-            q, e = quasi_static_loads(
-                psi, np.broadcast_to(base, psi.shape), op.radial_load_N, 0.5 * op.radial_clearance_m,
-                self.k_contact, e0_m=e0, return_offset=True,
-            )
-            f = np.sum(q * self.influence(psi), axis=1)
-            f[-1] = f[0]
-            g = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(phi))])
-            out = (f, g, period, q > 0, e)
+            out = self._healthy_table(op, offsets)
         else:
-            # only the phases at which a roller stands in the groove differ from the table without it
-            m = (GROOVE_REFINE * self.table_points) if offsets is None else (2 * self.table_points * z)
-            phi = np.linspace(0.0, period, m + 1)
-            bt = self.table(op, None, None, offsets)
-            grid = np.linspace(0.0, period, bt[0].size)
-            f = np.interp(phi, grid, bt[0])
-            drop = outer_drop(self.roller_angles(phi))
-            rows = np.flatnonzero(drop.max(axis=1) > 0)
-            if rows.size:
-                k = np.rint(phi[rows] / period * (bt[0].size - 1)).astype(int)
-                f[rows] = self.sensor_force_at(phi[rows], op, drop[rows] + base[None, :], e0_m=bt[4][k])[0]
-            f[-1] = f[0]
-            g = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(phi))])
-            out = (f, g, period)
+            out = self._groove_table(op, outer_drop, offsets)
         self._cache[ck] = out
         while len(self._cache) > 16:
             self._cache.pop(next(iter(self._cache)))
         return out
+
+    def _healthy_table(self, op: Operating, offsets: tuple | None) -> Table:
+        z = self.geometry.n_rollers
+        period = self.geometry.roller_pitch_rad if offsets is None else 2 * np.pi
+        base = np.zeros(z) if offsets is None else np.asarray(offsets)
+        # with scatter the table spans a cage turn: a coarser grid, the loads smooth without a groove
+        m = self.table_points if offsets is None else SCATTER_POINTS * z
+        phi = np.linspace(0.0, period, m + 1)
+        psi = self.roller_angles(phi)
+        e0 = None
+        if offsets is not None:  # start from the equal rollers' equilibrium
+            ft = self.table(op)
+            e0 = np.stack([np.interp(np.mod(phi, ft.period), ft.phase, ft.offset[:, i]) for i in (0, 1)], 1)
+        q, e = quasi_static_loads(
+            psi, np.broadcast_to(base, psi.shape), op.radial_load_N, 0.5 * op.radial_clearance_m,
+            self.k_contact, e0_m=e0, return_offset=True,
+        )
+        f = np.sum(q * self.influence(psi), axis=1)
+        f[-1] = f[0]
+        return Table(f, running_integral(phi, f), period, phi, q > 0, e)
+
+    def _groove_table(self, op: Operating, outer_drop, offsets: tuple | None) -> Table:
+        """Only the phases at which a roller stands in the groove differ from the table without it."""
+        z = self.geometry.n_rollers
+        bt = self.table(op, None, None, offsets)
+        period = bt.period
+        base = np.zeros(z) if offsets is None else np.asarray(offsets)
+        if hasattr(outer_drop, "passages"):
+            spans = outer_drop.passages(period)
+            step = GROOVE_SPACING * period / (bt.phase.size - 1)
+            nodes = np.linspace(-1.0, 1.0, 2 * max(128, int(np.ceil(spans[0][1] / step))) + 1) if spans else None
+            local = np.concatenate([c + h * nodes for c, h in spans]) if spans else np.zeros(0)
+            local = local[(local >= 0.0) & (local <= period)]
+            inside = np.zeros(bt.phase.size, dtype=bool)
+            for c, h in spans:
+                inside |= np.abs(bt.phase - c) < h
+            inside[[0, -1]] = False
+            phi = np.unique(np.concatenate([bt.phase[~inside], local]))
+            rows = np.searchsorted(phi, local)
+        else:
+            m = (GROOVE_REFINE * self.table_points) if offsets is None else (2 * self.table_points * z)
+            phi = np.linspace(0.0, period, m + 1)
+            rows = np.arange(phi.size)
+        f = np.interp(phi, bt.phase, bt.force)
+        drop = outer_drop(self.roller_angles(phi[rows]))
+        hit = drop.max(axis=1) > 0
+        rows, drop = rows[hit], drop[hit]
+        if rows.size:
+            k = np.rint(phi[rows] / period * (bt.phase.size - 1)).astype(int)
+            f[rows] = self.sensor_force_at(phi[rows], op, drop + base[None, :], e0_m=bt.offset[k])[0]
+        f[-1] = f[0]
+        return Table(f, running_integral(phi, f), period, phi)
 
     def box_average(
         self, phase_edges_rad: np.ndarray, op: Operating, outer_drop=None, key=None, offsets_m=None
@@ -303,12 +374,12 @@ class Surrogate:
         integral G(phi) = (phi // P) G(P) + G(phi mod P) is differenced at the
         window edges. A zero-length window gives F_s there.
         """
-        f, g, period = self.table(op, outer_drop, key, offsets_m)[:3]
-        grid = np.linspace(0.0, period, f.size)
+        t = self.table(op, outer_drop, key, offsets_m)
+        period, g = t.period, t.integral
 
         def big_g(p):
             k = np.floor(p / period)
-            return k * g[-1] + np.interp(p - k * period, grid, g)
+            return k * g[-1] + np.interp(p - k * period, t.phase, g)
 
         edges = np.asarray(phase_edges_rad, dtype=float)
         width = np.diff(edges)
@@ -317,8 +388,13 @@ class Surrogate:
         ge = big_g(edges)
         out[ok] = (ge[1:][ok] - ge[:-1][ok]) / width[ok]
         mid = 0.5 * (edges[1:] + edges[:-1])
-        out[~ok] = np.interp(np.mod(mid[~ok], period), grid, f)
+        out[~ok] = np.interp(np.mod(mid[~ok], period), t.phase, t.force)
         return out
+
+    def table_force(self, phase_rad: np.ndarray, op: Operating, outer_drop=None, key=None, offsets_m=None) -> np.ndarray:
+        """F_s [N] at cage phases (n,) from the table (linear between its points), no moving defect."""
+        t = self.table(op, outer_drop, key, offsets_m)
+        return np.interp(np.mod(np.asarray(phase_rad, dtype=float), t.period), t.phase, t.force)
 
     def fine_force(
         self, phase_rad: np.ndarray, op: Operating, drop_m: np.ndarray, outer_drop=None, key=None, offsets_m=None
@@ -328,11 +404,11 @@ class Surrogate:
         The table (with any outer-race defect and roller scatter) where no
         roller stands in the moving defect, the equilibrium solved where one does.
         """
-        f, _, period = self.table(op, outer_drop, key, offsets_m)[:3]
-        loaded, e_tab = self.table(op, None, None, offsets_m)[3:5]
-        grid = np.linspace(0.0, period, f.size)
+        period = self.table(op, outer_drop, key, offsets_m).period
+        bt = self.table(op, None, None, offsets_m)
+        loaded, e_tab = bt.loaded, bt.offset
         phi = np.asarray(phase_rad, dtype=float)
-        out = np.interp(np.mod(phi, period), grid, f)
+        out = self.table_force(phi, op, outer_drop, key, offsets_m)
         # a drop under a roller that carries nothing changes nothing: solve only where a loaded roller drops
         # (loaded at the nearest table phase or either neighbour)
         m = loaded.shape[0] - 1
@@ -411,6 +487,48 @@ def outer_race_drop(psi_rad: np.ndarray, angle_rad: float, width_m: float, geome
     return groove_drop(ro * wrap(np.asarray(psi_rad) - angle_rad), width_m, geometry.relative_radius_m("outer"))
 
 
+@dataclass(frozen=True)
+class OuterGroove:
+    """A groove on the outer raceway as the drop function of :meth:`Surrogate.table` (``outer_drop``).
+
+    Calling it gives :func:`outer_race_drop`; :meth:`passages` says at
+    which cage phases a roller stands in it, where :meth:`Surrogate.table`
+    puts its points.
+
+    Parameters
+    ----------
+    angle_rad : float
+        Groove centre from the sensor [rad].
+    width_m : float
+        Groove width along the raceway [m].
+    geometry : BearingGeometry
+    """
+
+    angle_rad: float
+    width_m: float
+    geometry: BearingGeometry
+
+    def __call__(self, psi_rad: np.ndarray) -> np.ndarray:
+        return outer_race_drop(psi_rad, self.angle_rad, self.width_m, self.geometry)
+
+    @property
+    def key(self) -> tuple:
+        return ("outer", self.width_m, self.angle_rad)
+
+    def passages(self, period_rad: float) -> list[tuple[float, float]]:
+        """(centre, half-width) in cage phase of every passage of a roller over the groove that touches
+        [0, period] (roller j is centred on it at phi = angle - j pitch + 2 pi k) [rad]."""
+        half = 0.5 * self.width_m / self.geometry.outer_raceway_radius_m
+        pitch, z = self.geometry.roller_pitch_rad, self.geometry.n_rollers
+        out = []
+        for j in range(z):
+            for k in range(-2, 3):
+                c = self.angle_rad - j * pitch + 2 * np.pi * k
+                if c + half >= 0.0 and c - half <= period_rad:
+                    out.append((float(c), float(half)))
+        return out
+
+
 def inner_race_drop(
     psi_rad: np.ndarray, shaft_angle_rad: np.ndarray, width_m: float, geometry: BearingGeometry
 ) -> np.ndarray:
@@ -422,15 +540,25 @@ def inner_race_drop(
     within the groove's arc on the inner raceway (radius (D_p - D_r)/2); a
     groove narrower than the roller pitch holds one roller at a time.
     """
+    psi0 = np.asarray(psi_rad)[:, 0]
+    j, d = inner_race_contact(psi0, shaft_angle_rad, width_m, geometry)
+    out = np.zeros((psi0.size, geometry.n_rollers))
+    out[np.arange(psi0.size), j] = d
+    return out
+
+
+def inner_race_contact(
+    psi0_rad: np.ndarray, shaft_angle_rad: np.ndarray, width_m: float, geometry: BearingGeometry
+) -> tuple[np.ndarray, np.ndarray]:
+    """The roller nearest to an inner-race groove and its drop [m] at roller 0's angles psi_0 (n,) and the
+    shaft angles theta (n,): the one nonzero column of :func:`inner_race_drop` of each row."""
     ri = 0.5 * (geometry.pitch_diameter_m - geometry.roller_diameter_m)
     z, pitch = geometry.n_rollers, geometry.roller_pitch_rad
-    psi0 = np.asarray(psi_rad)[:, 0]
+    psi0 = np.asarray(psi0_rad, dtype=float)
     theta = np.asarray(shaft_angle_rad)
     j = np.mod(np.rint((theta - psi0) / pitch), z).astype(int)
     u = ri * wrap(psi0 + j * pitch - theta)
-    out = np.zeros((psi0.size, z))
-    out[np.arange(psi0.size), j] = groove_drop(u, width_m, geometry.relative_radius_m("inner"))
-    return out
+    return j, groove_drop(u, width_m, geometry.relative_radius_m("inner"))
 
 
 def rolling_element_drop(
@@ -442,11 +570,17 @@ def rolling_element_drop(
     the inner raceway: the roller sinks twice per spin turn (2 x BSF), by the
     relative radius of each contact.
     """
-    r = 0.5 * geometry.roller_diameter_m
-    beta = np.asarray(spin_rad)
-    d = groove_drop(r * wrap(beta), width_m, geometry.relative_radius_m("outer")) + groove_drop(
-        r * wrap(beta - np.pi), width_m, geometry.relative_radius_m("inner")
-    )
-    out = np.zeros((beta.size, n_rollers))
+    d = roller_groove_drop(spin_rad, width_m, geometry)
+    out = np.zeros((d.size, n_rollers))
     out[:, roller] = d
     return out
+
+
+def roller_groove_drop(spin_rad: np.ndarray, width_m: float, geometry: BearingGeometry) -> np.ndarray:
+    """Drop [m] of a roller with a groove at its spin angles beta (n,): the one nonzero column of
+    :func:`rolling_element_drop`."""
+    r = 0.5 * geometry.roller_diameter_m
+    beta = np.asarray(spin_rad, dtype=float)
+    return groove_drop(r * wrap(beta), width_m, geometry.relative_radius_m("outer")) + groove_drop(
+        r * wrap(beta - np.pi), width_m, geometry.relative_radius_m("inner")
+    )

@@ -27,15 +27,20 @@ from typing import Callable
 
 import numpy as np
 
-from .fit import ModelFit, fit_model
+from .describe import describe
+from .fit import ModelFit, fit_model, likelihood_residual
 from .identifiability import equivalences, identifiability
 from .noise import NoiseFloor
+from .profile import honest_intervals
 from .record import Record, Segments
 from .residual_tests import Z99, ResidualTests, residual_tests
 from .selection import Candidate, add_effect, cut_stand_ins, stepwise
 from .settings import DiagnosticsSettings
 from .subject import Judgement, Problem
 from .verdict import findings, verdict
+
+#: Most parameters of the final model whose intervals are profiled (the rest keep the Jacobian's, flagged).
+PROFILES = 4
 
 
 @dataclass
@@ -57,6 +62,7 @@ class Diagnosis:
     unexplained: list[dict]
     dropped: list[dict] = field(default_factory=list)
     identifiability: dict = field(default_factory=dict)
+    outside: dict = field(default_factory=dict)
 
     @property
     def record(self) -> Record:
@@ -95,6 +101,7 @@ class Diagnosis:
             "final": {**self.final.summary(), "tests": self.tests["final"].summary()},
             "verdict": self.verdict,
             "unexplained": self.unexplained,
+            "outside_catalogue": self.outside,
             "identifiability": self.identifiability,
             **{key: {k: j.summary for k, j in js.items()} for key, js in self.judgements.items()},
             "settings": self.settings.__dict__,
@@ -147,9 +154,12 @@ def diagnose(
         r.key: {"baseline": r.judge(baseline, p, settings), "final": r.judge(final, p, settings)}
         for r in p.representations
     }
+    note("intervals of the final model")
+    intervals = final_intervals(final, record, v, floor, settings)
     found = findings(tests["final"], record.input_name, p.segments)
     for js in judgements.values():
         found += js["final"].findings
+    idf = how_firm(sel, final, cut, p, intervals)
     return Diagnosis(
         p,
         settings,
@@ -165,18 +175,57 @@ def diagnose(
         verdict(found),
         found,
         sel.dropped,
-        identifiability(
-            sel.steps,
-            sel.stop,
-            final,
-            cut,
-            equivalences(
-                p.catalogue.values(),
-                {c.effect.name for c in sel.added} | {c.effect.name for c in sel.ranking[:1]},
-                sel.ranking,
-            ),
+        idf,
+        describe(
+            final.whitened,
+            tests["final"].window_t0_s,
+            tests["final"].window_ratio,
+            record.input,
+            record.input_name,
+            p.segments,
+            v,
+            record.time_s,
         ),
     )
+
+
+def how_firm(sel, final: ModelFit, cut: bool, p: Problem, intervals: dict) -> dict:
+    """The ``identifiability`` block: margins, correlations, equivalences and the final fit's honest intervals."""
+    idf = identifiability(
+        sel.steps,
+        sel.stop,
+        final,
+        cut,
+        equivalences(
+            p.catalogue.values(),
+            {c.effect.name for c in sel.added} | {c.effect.name for c in sel.ranking[:1]},
+            sel.ranking,
+        ),
+    )
+    idf["intervals"] = {k: i.report() for k, i in intervals.items()}
+    return idf
+
+
+def final_intervals(final: ModelFit, record: Record, v: np.ndarray, floor: NoiseFloor, settings) -> dict:
+    """Honest 95% intervals of the final model's parameters (:func:`~piezobearing.diagnosis.profile.honest_intervals`).
+
+    The Jacobian interval of each free parameter is checked along its
+    quadratic profile line and profiled where it fails; the final fit's
+    ``ci95`` then holds the honest interval and ``ci95_jacobian`` the Jacobian's.
+    """
+    res = final.result
+    out = honest_intervals(
+        likelihood_residual(final.model, record, v, floor, final.scale),
+        final.model.params(record, res.values),
+        res,
+        max_profiles=PROFILES,
+        max_nfev=settings.max_nfev,
+        ftol=settings.ftol,
+    )
+    final.model.release()
+    res.ci95_jacobian = dict(res.ci95)
+    res.ci95 = {**res.ci95, **{k: i.ci for k, i in out.items()}}
+    return out
 
 
 # =========================================================================== arrays for figures

@@ -22,6 +22,7 @@ NRMSE = rms(residual) / rms(measured voltage) throughout.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from typing import Callable
 
 import numpy as np
 
@@ -67,6 +68,8 @@ class ModelFit:
     floor_nrmse: float
     floor_rms_V: float
     residual_rms_V: float = float("nan")
+    #: h(t) of a non-stationary noise model (None: stationary), :func:`noise_scale`.
+    scale: np.ndarray | None = field(repr=False, default=None)
 
     def compact(self) -> "ModelFit":
         """This fit without its full-length arrays (its numbers and :meth:`summary` kept): what a ranked
@@ -79,6 +82,7 @@ class ModelFit:
             residual_V=empty,
             whitened=empty,
             response=empty,
+            scale=None,
         )
 
     @property
@@ -87,7 +91,8 @@ class ModelFit:
 
     @property
     def chi2(self) -> float:
-        return self.result.chi2
+        """-2 ln L + const: the weighted sum of squares plus sum ln h^2 of a non-stationary noise model."""
+        return self.result.chi2 + self.result.log_det
 
     @property
     def bic(self) -> float:
@@ -112,13 +117,56 @@ class ModelFit:
             "noise_floor_rms_V": self.floor_rms_V,
             "chi2": r.chi2,
             "chi2_per_sample": r.chi2 / r.n_data,
+            "noise_follows_signal": self.scale is not None,
+            "noise_log_det": r.log_det,
             "bic": r.bic,
             "n_free": r.n_free,
             "params": r.values,
             "stderr": r.stderr,
             "ci95": r.ci95,
+            **({"ci95_jacobian": r.ci95_jacobian} if r.ci95_jacobian is not None else {}),
             "converged": r.success,
         }
+
+
+def likelihood_residual(
+    model: Model, record: Record, voltage_V: np.ndarray, floor: NoiseFloor, scale: np.ndarray | None = None
+) -> Callable[[dict], np.ndarray]:
+    """The fit's residual function: values -> the residual weighted by the floor (chi2 = its sum of squares).
+
+    The model is driven by its :meth:`~piezobearing.diagnosis.model.Model.fit_input`
+    and the floor is that of the input filtered by ``fit_weight`` (module docstring);
+    ``scale`` (h(t), :meth:`~piezobearing.diagnosis.noise.NoiseFloor.scale`) divides
+    the residual first. The engine's profile likelihood (:mod:`~piezobearing.diagnosis.profile`)
+    refits with it.
+    """
+    v = np.asarray(voltage_V, dtype=float)
+    clean = model.fit_input(record)
+    w = model.fit_weight(record)
+    inv = None if scale is None else 1.0 / scale
+
+    def weighted(values: dict) -> np.ndarray:
+        s = floor.spectrum(model.response(values, record) * w)
+        r = v - model.simulate(values, record, clean)
+        return fd_weighted(r if inv is None else r * inv, s)
+
+    return weighted
+
+
+def noise_scale(model: Model, values: dict, record: Record, floor: NoiseFloor) -> np.ndarray | None:
+    """h(t) of the model at ``values`` (None when its noise is stationary).
+
+    A model states a time-varying gain of its input-noise path with the
+    optional method ``noise_envelope(values, record)`` (an array a(t), or
+    None); see :meth:`~piezobearing.diagnosis.noise.NoiseFloor.scale`. Below
+    a 0.1% change of h along the record the model counts as stationary.
+    """
+    env = getattr(model, "noise_envelope", None)
+    a = None if env is None else env(values, record)
+    if a is None:
+        return None
+    h = floor.scale(model.response(values, record), a, record.n)
+    return None if h is None or np.ptp(h) < 1e-3 else h
 
 
 def fit_model(
@@ -137,25 +185,34 @@ def fit_model(
     overrides some of them for one more start, and the best fit is kept.
     """
     v = np.asarray(voltage_V, dtype=float)
-    clean = model.fit_input(record)
-    w = model.fit_weight(record)
-
-    def weighted(values: dict) -> np.ndarray:
-        s = floor.spectrum(model.response(values, record) * w)
-        return fd_weighted(v - model.simulate(values, record, clean), s)
-
+    weighted = likelihood_residual(model, record, v, floor)
     best = None
     for extra in starts or [{}]:
         res = fit(weighted, model.params(record, {**(start or {}), **extra}), max_nfev=max_nfev, ftol=ftol)
         if best is None or res.chi2 < best.chi2:
             best = res
-    out = finish(model, record, v, floor, best)
+    h = noise_scale(model, best.values, record, floor)
+    if h is not None:
+        # the noise follows the signal: refit once with the scale of the first fit held (feasible
+        # generalised least squares: the scale must not be a lever of the fit), -2 ln L gains sum ln h^2
+        res = fit(
+            likelihood_residual(model, record, v, floor, h),
+            model.params(record, best.values),
+            max_nfev=max_nfev,
+            ftol=ftol,
+        )
+        res.log_det = float(np.sum(np.log(np.square(h))))
+        best = res
+    out = finish(model, record, v, floor, best, h)
     model.release()
     return out
 
 
-def finish(model: Model, record: Record, v: np.ndarray, floor: NoiseFloor, res: FitResult) -> ModelFit:
-    """The fit's model voltage, residual and whitened residual, driven by the measured input as it is."""
+def finish(
+    model: Model, record: Record, v: np.ndarray, floor: NoiseFloor, res: FitResult, scale: np.ndarray | None = None
+) -> ModelFit:
+    """The fit's model voltage, residual and whitened residual (divided by ``scale`` first), driven by the
+    measured input as it is."""
     mv = model.simulate(res.values, record)
     g = model.response(res.values, record)
     s = floor.spectrum(g)
@@ -163,6 +220,7 @@ def finish(model: Model, record: Record, v: np.ndarray, floor: NoiseFloor, res: 
     floor_rms = floor.rms_V(g, record.n)
     vrms = float(np.sqrt(np.mean(v**2)))
     rrms = float(np.sqrt(np.mean(r**2)))
+    z = whiten(r if scale is None else r / scale, s)
     return ModelFit(
-        model, res, mv, r, whiten(r, s), np.asarray(g), nrmse(r, v), floor_rms / vrms, floor_rms, rrms
+        model, res, mv, r, z, np.asarray(g), nrmse(r, v), floor_rms / vrms, floor_rms, rrms, scale
     )

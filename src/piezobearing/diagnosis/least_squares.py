@@ -35,20 +35,24 @@ class FitResult:
     chi2: float = float("nan")
     success: bool = True
     message: str = ""
+    #: sum ln h^2 of a non-stationary noise model (:meth:`NoiseFloor.scale`): -2 ln L = chi2 + log_det + const.
+    log_det: float = 0.0
+    #: The Gauss-Newton intervals when ``ci95`` was replaced by honest ones (:mod:`~piezobearing.diagnosis.profile`).
+    ci95_jacobian: dict[str, list[float]] | None = None
 
     @property
     def aic(self) -> float:
-        """Akaike information criterion chi2 + 2 k.
+        """Akaike information criterion chi2 + log_det + 2 k.
 
         Equal to -2 log L up to a constant when the residual is normalised
-        by a known noise level (chi2 is then -2 log L + const).
+        by a known noise level (chi2 + log_det is then -2 log L + const).
         """
-        return self.chi2 + 2.0 * self.n_free
+        return self.chi2 + self.log_det + 2.0 * self.n_free
 
     @property
     def bic(self) -> float:
-        """Bayesian information criterion chi2 + k ln n (same normalisation as :attr:`aic`)."""
-        return self.chi2 + self.n_free * float(np.log(max(self.n_data, 1)))
+        """Bayesian information criterion chi2 + log_det + k ln n (same normalisation as :attr:`aic`)."""
+        return self.chi2 + self.log_det + self.n_free * float(np.log(max(self.n_data, 1)))
 
     def report(self) -> dict:
         """JSON-ready summary (no arrays)."""
@@ -56,12 +60,14 @@ class FitResult:
             "values": self.values,
             "stderr": self.stderr,
             "ci95": self.ci95,
+            **({"ci95_jacobian": self.ci95_jacobian} if self.ci95_jacobian is not None else {}),
             "correlation": self.correlation,
             "n_data": self.n_data,
             "n_free": self.n_free,
             "chi2": self.chi2,
             "aic": self.aic,
             "bic": self.bic,
+            "log_det": self.log_det,
             "success": self.success,
             "message": self.message,
         }

@@ -7,6 +7,13 @@ phase, the speed within its tolerance), all in :meth:`Model.params` and so
 fitted in every model, and a tuple of catalogue effects on top. The engine
 never builds a model itself: the subject gives it the baseline model, and
 the engine grows it with :meth:`Model.with_effect`.
+
+Optional: ``noise_envelope(values, record) -> ndarray | None``, the gain of
+the input-noise path at each sample when it changes along the record (a
+force-dependent sensitivity); the engine then lets the residual's std follow
+it (:func:`piezobearing.diagnosis.fit.noise_scale`). A model without it (or
+returning None) has stationary noise. It is not part of the Protocol, so
+models without it still satisfy ``isinstance(m, Model)``.
 """
 
 from __future__ import annotations

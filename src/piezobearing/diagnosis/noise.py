@@ -9,6 +9,14 @@ spectrum S(f) = s_v^2 + s_f^2 |G(f)|^2, the floor of that model
 rests (:func:`quiet_mask`), as a line-free trimmed mean of the periodogram
 between 5% and 45% of the sampling rate (:func:`white_level`), so that drift,
 decaying tails and mains lines do not inflate them.
+
+Where the model's gain from input to output changes along the record (a
+force-dependent sensitivity, a drifting gain), the carried input noise is
+louder where the gain is higher: the model says so with its noise envelope
+a(t), and the residual's std follows it (:meth:`NoiseFloor.scale`, h(t)).
+The fit divides the residual by h before weighting it by S(f) and adds
+sum ln h^2 to chi2 (the log-determinant of the noise covariance, so -2 ln L
+stays comparable between models with and without an envelope).
 """
 
 from __future__ import annotations
@@ -64,6 +72,24 @@ class NoiseFloor:
         if n % 2 == 0:
             w[-1] = 1.0
         return float(np.sqrt(np.sum(w * s) / n))
+
+    def scale(self, response: np.ndarray, envelope: np.ndarray | None, n: int) -> np.ndarray | None:
+        """h(t): the residual noise's std at each sample over its rms on the record [-] (None: stationary).
+
+        A model whose gain from input to output changes along the record
+        (the d33 nonlinearity: 1 + 2 beta F(t); a drifting sensitivity)
+        carries the input noise with the envelope a(t) (rms 1 over the
+        record; :meth:`Model.noise_envelope <piezobearing.diagnosis.model.Model>`), so the residual
+        variance at t is s_v^2 + a(t)^2 s_c^2, s_c^2 the carried variance of the stationary floor
+        (Parseval of s_f^2 |G|^2). h^2 is that over its mean s_v^2 + s_c^2, so mean(h^2) = 1.
+        """
+        if envelope is None:
+            return None
+        own = self.voltage_noise_V**2
+        carried = max(self.rms_V(response, n) ** 2 - own, 0.0)
+        a2 = np.square(np.asarray(envelope, dtype=float))
+        a2 = a2 / max(float(np.mean(a2)), 1e-30)
+        return np.sqrt((own + carried * a2) / max(own + carried, 1e-30))
 
     def report(self) -> dict:
         return {

@@ -92,24 +92,39 @@ def _is_paper(df: pd.DataFrame) -> np.ndarray:
     return ok
 
 
+def _design_label(r) -> str:
+    """Ceramic and PZT size, and what else differs from the paper's stack (bond layer, cable, DAQ resistance)."""
+    out = f"{r['material']} {1e3 * r['pzt_diameter_m']:g}x{1e3 * r['pzt_thickness_m']:g}"
+    if r["adhesive_thickness_m"] > 0:
+        out += f", {1e6 * r['adhesive_thickness_m']:g} um bond"
+    if not np.isclose(r["cable_length_m"], PAPER_DESIGN["cable_length_m"]):
+        out += f", {r['cable_length_m']:g} m cable"
+    if not np.isclose(r["resistance_ohm"], 50e6):
+        out += f", R {r['resistance_ohm'] / 1e6:g} MOhm"
+    return out
+
+
 def sensor_design(df: pd.DataFrame):
-    """Mid-band sensitivity against the +3 dB band edge, colour the detection margin; the paper's stack
+    """Mid-band sensitivity against the +3 dB band edge, colour the detection margin with an ideal ADC (comparable
+    over every design); the designs whose record clips the configured ADC range crossed out, the paper's stack
     marked, the trade-off front drawn. Right: where the DAQ resistance puts the low-frequency corner."""
-    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.4), gridspec_kw={"width_ratios": [1.7, 1.0]})
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.6), gridspec_kw={"width_ratios": [1.7, 1.0]})
     ax = axes[0]
     bw, sens = df["band_high_Hz"].to_numpy(float) / 1e3, df["sensitivity_V_per_N"].to_numpy(float)
-    margin = df["detection_margin_dB"].to_numpy(float)
+    margin = df["detection_margin_ideal_adc_dB"].to_numpy(float)
+    clipped = df["clipped"].astype(bool).to_numpy()
     sc = ax.scatter(bw, sens, c=margin, cmap="viridis", s=36, edgecolors="k", linewidths=0.4, zorder=3)
-    fig.colorbar(sc, ax=ax, label="detection margin [dB]")
+    fig.colorbar(sc, ax=ax, label="detection margin, ideal ADC [dB]")
+    range_V = float(df["range_V"].iloc[0])
+    ax.scatter(bw[clipped], sens[clipped], marker="x", s=40, c="r", linewidths=0.8, zorder=4,
+               label=f"record clips the +-{range_V:g} V ADC range")
     front = pareto_front(bw, sens)
     ax.plot(bw[front], sens[front], "k--", lw=1, zorder=2, label="trade-off front")
     paper = _is_paper(df) & np.isclose(df["resistance_ohm"].to_numpy(float), 50e6)
     ax.scatter(bw[paper], sens[paper], s=160, facecolors="none", edgecolors="r", linewidths=1.5, zorder=4,
                label="the paper's stack")
     for i in range(len(df)):
-        r = df.iloc[i]
-        ax.annotate(f"{r['material']} {1e3 * r['pzt_diameter_m']:g}x{1e3 * r['pzt_thickness_m']:g}",
-                    (bw[i], sens[i]), fontsize=5, xytext=(3, 2), textcoords="offset points")
+        ax.annotate(_design_label(df.iloc[i]), (bw[i], sens[i]), fontsize=5, xytext=(3, 2), textcoords="offset points")
     ax.set_xlabel("+3 dB band edge [kHz]")
     ax.set_ylabel("mid-band sensitivity [V/N]")
     ax.set_yscale("log")
@@ -124,8 +139,10 @@ def sensor_design(df: pd.DataFrame):
     ax.set_xlabel("DAQ input resistance [MOhm]")
     ax.set_ylabel("frequency [Hz]")
     ax.legend(fontsize=7)
-    fig.suptitle(f"{len(df)} sensor designs; colour: detection margin = 20 log10(largest noise density still "
-                 f"detected / {df['noise_density_V_per_sqrtHz'].iloc[0]:.3g} V/sqrt(Hz))", fontsize=8)
+    fig.suptitle(f"{len(df)} sensor designs ({int(clipped.sum())} clip the ADC range); colour: detection margin = "
+                 "20 log10(largest noise density still detected / "
+                 f"{df['noise_density_V_per_sqrtHz'].iloc[0]:.3g} V/sqrt(Hz)) with an ADC that neither clips nor "
+                 "quantises", fontsize=7.5)
     fig.tight_layout()
     return fig
 

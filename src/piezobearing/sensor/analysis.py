@@ -73,6 +73,13 @@ def mesh_inputs(config: dict) -> tuple[StackGeometry, MeshDensity, tuple]:
     return geo, dens, mult
 
 
+def quality_factor(sensor_fem: dict, pzt) -> float:
+    """The stack's mechanical Q [-]: ``sensor_fem.mechanical_quality_factor``, or where it is null the ceramic's
+    own Qm (:attr:`piezobearing.sensor.materials.PiezoMaterial.mechanical_quality_factor`)."""
+    q = sensor_fem["mechanical_quality_factor"]
+    return float(pzt.mechanical_quality_factor if q is None else q)
+
+
 @dataclass(frozen=True)
 class SensorFemParams:
     """Everything the sensor FEM stages take from the validated config."""
@@ -113,7 +120,7 @@ class SensorFemParams:
         pzt = pzt_from_config(s)
         alu = alumina_from_config(f)
         mats = fem.StackMaterials(stress_charge_form(pzt), pzt.density_kg_per_m3, alu, adhesive_from_config(f))
-        q = f["mechanical_quality_factor"]
+        q = quality_factor(f, pzt)
         return cls(
             geometry=geo,
             density=dens,
@@ -123,7 +130,7 @@ class SensorFemParams:
             materials=mats,
             c66_rule=s["c66_rule"],
             modal_max_frequency_Hz=f["modal_max_frequency_Hz"],
-            damping_ratio=0.0 if q is None else 1.0 / (2.0 * q),
+            damping_ratio=1.0 / (2.0 * q),
             n_ritz_modes=int(f["n_ritz_modes"]),
             sweep_min_Hz=f["sweep_min_frequency_Hz"],
             sweep_max_Hz=f["sweep_max_frequency_Hz"],

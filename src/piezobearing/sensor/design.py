@@ -121,6 +121,7 @@ def design_figures(mesh: StackMesh, materials: fem.StackMaterials, circuit: fem.
         "band_high_Hz": band_high,
         "stack_stiffness_short_N_per_m": k_short,
         "stack_stiffness_open_N_per_m": k_open,
+        "mechanical_quality_factor": 1.0 / (2.0 * settings.damping_ratio) if settings.damping_ratio > 0 else float("inf"),
         "n_dof": int(asm.n_u + asm.p_coors.shape[0]),
     }
 
@@ -149,6 +150,36 @@ def _detect(v: np.ndarray, dt_s: float, f0_Hz: float, noise, shapes: np.ndarray,
     }
 
 
+#: An ADC that neither clips nor quantises at any noise the bisection tries (48 bits over +-1 MV: a 7 nV step,
+#: 3.6e4 V rms of noise at the bisection's top density still inside the range).
+IDEAL_ADC = {"adc_bits": 48, "range_V": 1.0e6}
+
+
+def _noise_limit(v: np.ndarray, dt_s: float, f0_Hz: float, noise, shapes, seeds, es, ins,
+                 required_rate: float) -> float:
+    """Largest input noise density [V/sqrt(Hz)] at which ``v`` is detected in ``required_rate`` of the
+    replicates: bisection on a log scale over 1 nV .. 1 kV/sqrt(Hz) (NaN if not even at 1 nV)."""
+    from dataclasses import replace
+
+    def detected(log_density):
+        n = replace(noise, noise_density_V_per_sqrtHz=10.0**log_density)
+        return _detect(v, dt_s, f0_Hz, n, shapes, seeds, es, ins)["detection_rate"] >= required_rate
+
+    lo, hi = -9.0, 3.0  # 1 nV/sqrt(Hz) .. 1 kV/sqrt(Hz)
+    if not detected(lo):
+        return float("nan")
+    if detected(hi):
+        return 10.0**hi
+    for _ in range(16):  # 12 decades / 2^16: 2e-4 decade (0.004 dB)
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if detected(mid) else (lo, mid)
+    return 10.0**lo
+
+
+def _margin_dB(limit: float, density: float) -> float:
+    return float(20 * np.log10(limit / density)) if np.isfinite(limit) else float("nan")
+
+
 def detection_at_noise(voltages: dict, dt_s: float, f0_Hz: float, noise, n_seeds: int, master_seed: int,
                        es, ins, required_rate: float) -> dict:
     """Envelope fault indicator of the healthy and faulty voltages under the DAQ's absolute noise.
@@ -163,6 +194,14 @@ def detection_at_noise(voltages: dict, dt_s: float, f0_Hz: float, noise, n_seeds
     of the replicates is found by bisection on a log scale (ADC and
     interference as configured); the margin is its ratio to the configured
     density in dB (20 log10), the headroom a design has against a noisier rig.
+
+    Clipping: ``clipped`` is True where the configured ADC clips either record at the configured density
+    (any replicate). A clipped record's margin measures the clipped waveform (the clipping's own harmonics
+    and flat tops), not the design, so ``detection_margin_dB`` is NaN there and the number measured on the
+    clipped record is kept apart as ``detection_margin_as_clipped_dB``. ``detection_margin_ideal_adc_dB``
+    repeats the bisection with an ADC that neither clips nor quantises (:data:`IDEAL_ADC`; same noise and
+    interference): comparable over every design, it scales with the gain exactly.
+    ``range_needed_V`` is the noiseless records' peak |v|: the ADC range the design needs.
     """
     from dataclasses import replace
 
@@ -177,31 +216,28 @@ def detection_at_noise(voltages: dict, dt_s: float, f0_Hz: float, noise, n_seeds
         draws[case] = (shapes, seeds)
         out[case] = _detect(v, dt_s, f0_Hz, noise, shapes, seeds, es, ins)
     shapes, seeds = draws["faulty"]
-
-    def detected(log_density):
-        n = replace(noise, noise_density_V_per_sqrtHz=10.0**log_density)
-        return _detect(voltages["faulty"], dt_s, f0_Hz, n, shapes, seeds, es, ins)["detection_rate"] >= required_rate
-
-    lo, hi = -9.0, 3.0  # 1 nV/sqrt(Hz) .. 1 kV/sqrt(Hz)
-    if not detected(lo):
-        limit = float("nan")
-    elif detected(hi):
-        limit = 10.0**hi
-    else:
-        for _ in range(16):  # 12 decades / 2^16: 2e-4 decade (0.004 dB)
-            mid = 0.5 * (lo + hi)
-            lo, hi = (mid, hi) if detected(mid) else (lo, mid)
-        limit = 10.0**lo
-    margin = 20 * np.log10(limit / noise.noise_density_V_per_sqrtHz) if np.isfinite(limit) else float("nan")
+    args = (voltages["faulty"], dt_s, f0_Hz)
+    limit = _noise_limit(*args, noise, shapes, seeds, es, ins, required_rate)
+    limit_ideal = _noise_limit(*args, replace(noise, **IDEAL_ADC), shapes, seeds, es, ins, required_rate)
+    density = noise.noise_density_V_per_sqrtHz
+    clipped_fraction = max(out["faulty"]["clipped_fraction"], out["healthy"]["clipped_fraction"])
+    clipped = clipped_fraction > 0
+    margin = _margin_dB(limit, density)
     return {
         "indicator_faulty": out["faulty"]["indicator"],
         "indicator_healthy": out["healthy"]["indicator"],
         "threshold": max(out["faulty"]["threshold"], out["healthy"]["threshold"]),
         "detection_rate_faulty": out["faulty"]["detection_rate"],
         "detection_rate_healthy": out["healthy"]["detection_rate"],
-        "clipped_fraction": max(out["faulty"]["clipped_fraction"], out["healthy"]["clipped_fraction"]),
-        "noise_density_V_per_sqrtHz": noise.noise_density_V_per_sqrtHz,
-        "noise_std_V": float(noise.noise_density_V_per_sqrtHz * np.sqrt(0.5 / dt_s)),
+        "clipped": bool(clipped),
+        "clipped_fraction": clipped_fraction,
+        "range_V": noise.range_V,
+        "range_needed_V": float(max(np.abs(v).max() for v in voltages.values())),
+        "noise_density_V_per_sqrtHz": density,
+        "noise_std_V": float(density * np.sqrt(0.5 / dt_s)),
         "noise_limit_V_per_sqrtHz": limit,
-        "detection_margin_dB": float(margin),
+        "detection_margin_dB": float("nan") if clipped else margin,
+        "detection_margin_as_clipped_dB": margin if clipped else float("nan"),
+        "noise_limit_ideal_adc_V_per_sqrtHz": limit_ideal,
+        "detection_margin_ideal_adc_dB": _margin_dB(limit_ideal, density),
     }

@@ -76,9 +76,13 @@ class PiezoMaterial:
     density_kg_per_m3 : float
         Mass density [kg/m^3].
     mechanical_quality_factor : float
-        Typical Qm of the ceramic [-] (sets the modal damping 1/(2 Qm)).
+        The ceramic's mechanical quality factor Qm [-]: the small-signal value of its table, measured at the
+        resonance of a free, poled sample. With ``sensor_fem.mechanical_quality_factor: null`` it sets the
+        FEM's modal damping ratio 1/(2 Qm).
     source : str
         Where the constants come from.
+    quality_factor_source : str
+        Where Qm comes from, or that the constants' source gives none.
     """
 
     name: str
@@ -88,6 +92,7 @@ class PiezoMaterial:
     density_kg_per_m3: float = 7700.0
     mechanical_quality_factor: float = 80.0
     source: str = ""
+    quality_factor_source: str = ""
 
     @property
     def d33_C_per_N(self) -> float:
@@ -252,14 +257,18 @@ def paper_pzt(c66_rule: str = "isotropy", density_kg_per_m3: float = 7700.0) -> 
         80.0,
         "the paper, Eq. 7-9; density and Qm = 80 from APC International, 'Physical and piezoelectric "
         "properties of APC materials' (APC 850)",
+        "the paper gives no Qm; Qm = 80 is APC International's sheet value for APC 850 ('Physical and "
+        "piezoelectric properties of APC materials')",
     )
 
 
 # --------------------------------------------------------------------------- the library
 
 
-def _strain_charge(name, s11, s12, s13, s33, s44, d31, d33, d15, eps11_rel, eps33_rel, density, qm, source):
-    """A 6mm ceramic from its strain-charge constants (s^E in 1e-12 m^2/N, d in 1e-12 C/N, eps^T / eps0).
+def _strain_charge(name, s11, s12, s13, s33, s44, d31, d33, d15, eps11_rel, eps33_rel, density, qm, source,
+                   qm_source):
+    """A 6mm ceramic from its strain-charge constants (s^E in 1e-12 m^2/N, d in 1e-12 C/N, eps^T / eps0)
+    and its Qm (``qm_source`` says where Qm comes from).
 
     s66 = 2 (s11 - s12) is the 6mm relation; the stiffness is c^E = (s^E)^-1.
     """
@@ -271,7 +280,7 @@ def _strain_charge(name, s11, s12, s13, s33, s44, d31, d33, d15, eps11_rel, eps3
     d[2, :3] = [d31, d31, d33]
     d[0, 4] = d[1, 3] = d15
     eps = np.diag([eps11_rel, eps11_rel, eps33_rel]) * epsilon_0
-    return PiezoMaterial(name, np.linalg.inv(1e-12 * s), 1e-12 * d, eps, density, qm, source)
+    return PiezoMaterial(name, np.linalg.inv(1e-12 * s), 1e-12 * d, eps, density, qm, source, qm_source)
 
 
 def _library() -> dict:
@@ -281,27 +290,35 @@ def _library() -> dict:
         "Acoustics vol. I-A (Academic Press, 1964); the same table in Sherman and Butler, 'Transducers "
         "and Arrays for Underwater Sound' (Springer, 2007), App. A.5"
     )
+
+    def qm_berlincourt(qm: float) -> str:
+        return (f"Qm = {qm:g}: the Navy type's small-signal Qm of a free sample as listed with these constants by "
+                "Berlincourt, Krueger and Near, 'Properties of Morgan Electro Ceramic ceramics' (Morgan "
+                "Electro Ceramics, Technical Publication TP-226); a bonded, clamped stack is damped more")
+
     return {
         "apc850_paper": paper_pzt(),
         "pzt5a": _strain_charge(
             "PZT-5A (Navy Type II; APC 850 class)",
             16.4, -5.74, -7.22, 18.8, 47.5, -171.0, 374.0, 584.0, 1730.0, 1700.0, 7750.0, 75.0,
             berlincourt + "; also Erturk and Inman, 'Piezoelectric Energy Harvesting' (Wiley, 2011), Table E.1",
+            qm_berlincourt(75.0),
         ),
         "pzt4": _strain_charge(
             "PZT-4 (Navy Type I, hard; APC 841 class)",
             12.3, -4.05, -5.31, 15.5, 39.0, -123.0, 289.0, 496.0, 1475.0, 1300.0, 7500.0, 500.0,
-            berlincourt,
+            berlincourt, qm_berlincourt(500.0),
         ),
         "pzt8": _strain_charge(
             "PZT-8 (Navy Type III, hard; APC 880 class)",
             11.5, -3.7, -4.8, 13.5, 31.9, -97.0, 225.0, 330.0, 1290.0, 1000.0, 7600.0, 1000.0,
-            berlincourt,
+            berlincourt, qm_berlincourt(1000.0),
         ),
         "pzt5h": _strain_charge(
             "PZT-5H (Navy Type VI, soft; APC 855 class)",
             16.5, -4.78, -8.45, 20.7, 43.5, -274.0, 593.0, 741.0, 3130.0, 3400.0, 7500.0, 65.0,
             berlincourt + "; also Erturk and Inman, 'Piezoelectric Energy Harvesting' (Wiley, 2011), Table E.1",
+            qm_berlincourt(65.0),
         ),
     }
 

@@ -1,7 +1,11 @@
 """Stage functions of the parameter studies (rules study_case, study_summary).
 
-Each study kind runs, per case, only the stages its varied keys affect, in
-process, into the case's own folder, and reduces them to one summary row.
+Each study kind runs, per case, only the rules its varied keys affect, in process and in memory, and reduces
+them to one summary row (the case's summary.json, its only file). A kind runs the workflow's own code path:
+the functions the rules' stages call (:mod:`piezobearing.bearing.outputs`, :mod:`piezobearing.signals.outputs`;
+:func:`workflow_chain` from the bearing to the fault indicator), each output handed on as the next rule reads
+it back from its file, so a case's results equal the workflow's for the same config to the bit and a change
+to a rule changes every study.
 """
 
 from __future__ import annotations
@@ -13,22 +17,37 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..bearing import outputs as bout
 from ..bearing.lpm import BearingGeometry
-from ..io import read_json, read_kinematics, read_series, write_json
+from ..bearing.transient import CASES
+from ..diagnosis.calibration.record import check_record
+from ..io import (
+    FORCE_CSV_FORMAT,
+    as_read,
+    json_as_read,
+    kinematics_of,
+    measurement_as_read,
+    read_harmonic,
+    read_json,
+    read_kinematics,
+    read_series,
+    table_series,
+    write_json,
+)
+from ..sensor import outputs as cout
+from ..signals import outputs as sout
 from ..studies import case_config
-from .calibration import extract_sensitivity, fit_resistance, lowfreq, synthesize_calibration
 
 
 def calibration_circuit_case(config: dict, outdir: Path) -> dict:
-    """Synthesis, sensitivity, resistance fit and low-frequency limit for one case."""
-    meas = outdir / "measurement.csv"
-    synthesize_calibration(config, str(meas))
-    extract_sensitivity(str(meas), str(outdir / "sensitivity.json"), config)
-    fit_resistance(str(meas), str(outdir / "resistance.json"), str(outdir / "fit.csv"), config)
-    lowfreq(
-        str(outdir / "resistance.json"), str(outdir / "lowfreq.json"), str(outdir / "lowfreq.csv"), config
-    )
-    s, r, lf = (read_json(outdir / n) for n in ("sensitivity.json", "resistance.json", "lowfreq.json"))
+    """Synthesis, sensitivity, resistance fit and low-frequency limit for one case: the calibration rules'
+    functions (:mod:`piezobearing.sensor.outputs`) in memory, the synthetic record as extract_sensitivity and
+    fit_resistance read it back from measurement.csv (with the reader's checks)."""
+    m = measurement_as_read(cout.synthesize_calibration(config), "measurement.csv")
+    imps = check_record(m, config, m.source)
+    s = json_as_read(cout.extract_sensitivity(m, imps, config))
+    r = json_as_read(cout.fit_resistance(m, config)[0])
+    lf = json_as_read(cout.lowfreq(r["resistance_ohm"], config)[0])
     return {
         "impulse_sensitivity_V_per_N": s["sensitivity_V_per_N"],
         "resistance_fitted_ohm": r["resistance_ohm"],
@@ -41,95 +60,88 @@ def calibration_circuit_case(config: dict, outdir: Path) -> dict:
     }
 
 
-def fault_detection_case(config: dict, outdir: Path, resistance: str, harmonic: str | None = None) -> dict:
-    """Bearing LPM, housing (reduced), voltage, noise over seeds, envelope and indicator for one case.
+def workflow_chain(config: dict, resistance: dict, harmonic=None, resistance_source: str = "resistance.json") -> dict:
+    """The workflow's rules from the bearing to the fault indicator for one config, in memory.
 
-    The stage functions of the bearing and signals areas run in turn into
-    ``outdir``, healthy and faulty: bearing_lpm, housing_mesh and
-    housing_transient (the reduced modal solve only: ``housing.method`` =
-    reduced, no direct check), sensor_voltage (the workflow's fitted
-    ``resistance`` JSON and, if ``signals.sensor_fem_correction``, the sensor
-    FEM's ``harmonic`` CSV: neither depends on the bearing), noisy, envelope
-    and indicator (noise replicate 0: ``fault_indicator.json``), then the
-    indicator at ``signals.snr_dB`` over ``signals.study_n_seeds`` noise
-    replicates (``seeds.csv``; replicate 0 is the noisy stage's record).
-    The large binary intermediates (contact-force NPZ, mesh NPZ and VTK) are
-    deleted once used.
+    bearing_lpm, housing_mesh and housing_transient, sensor_voltage, noisy, envelope (healthy and faulty) and
+    fault_indicator: each rule's own function (:mod:`piezobearing.bearing.outputs`,
+    :mod:`piezobearing.signals.outputs`), called as its stage calls it, each output handed to the next rule as
+    that rule reads it back from the file (:func:`piezobearing.io.as_read`, :func:`piezobearing.io.json_as_read`:
+    the CSVs' digits), so the results are the workflow's to the bit and no file is written. ``resistance``: the
+    fit_resistance record; ``harmonic``: the sensor FEM's (frequency, |V/F|) where
+    ``signals.sensor_fem_correction``, else None.
+
+    Returns the records by rule (``kinematics``, ``lpm``, per case ``transient``, ``voltage`` (t, v, dt),
+    ``noisy`` (y, dt, record), ``envelope`` (table, record)) and ``indicator`` (fault_indicator.json).
     """
-    from ..signals import detection as sig
-    from . import bearing as brs
-    from . import signals as sgs
+    lpm = bout.bearing_lpm(config)
+    kin = kinematics_of(json_as_read(lpm["kinematics"]), "kinematics.json")
+    circuit = sout.sensor_circuit(config, resistance, resistance_source)
+    out = {"kinematics": kin, "lpm": json_as_read(lpm["summary"]), "transient": {}, "voltage": {}, "noisy": {},
+           "envelope": {}}
+    for c in CASES:
+        mesh, _ = bout.housing_mesh(c, config)
+        tr = bout.housing_transient(c, mesh, lpm["contact"][c], config)
+        del mesh
+        out["transient"][c] = json_as_read(tr["summary"])
+        force = table_series(as_read(tr["force"], FORCE_CSV_FORMAT), "force_N", f"sensor_force_{c}.csv")
+        volt, _ = sout.sensor_voltage(*force, circuit, harmonic, config, f"sensor_force_{c}.csv")
+        out["voltage"][c] = table_series(as_read(volt), "voltage_V", f"voltage_{c}.csv")
+        table, record = sout.noisy(*out["voltage"][c], c, config)
+        table = as_read(table)
+        _, y, dt = table_series(table, "voltage_V", f"noisy_{c}.csv")
+        _, v, _ = table_series(table, "noiseless_V", f"noisy_{c}.csv")
+        out["noisy"][c] = (y, dt, json_as_read(record))
+        env, env_record = sout.envelope(y, v, dt, kin, config)
+        out["envelope"][c] = (as_read(env), json_as_read(env_record))
+    out["indicator"] = json_as_read(sout.fault_indicator(out["envelope"], kin, out["noisy"], config))
+    return out
 
+
+def _chain_of_case(config: dict, resistance: str, harmonic: str | None) -> tuple[dict, dict]:
+    """The case's config (the housing's reduced solve only: ``housing.method`` = reduced, no direct check) and
+    :func:`workflow_chain` on it, with the workflow's fitted ``resistance`` JSON and, if
+    ``signals.sensor_fem_correction``, the sensor FEM's ``harmonic`` CSV."""
     cfg = copy.deepcopy(config)
     cfg["housing"].update(method="reduced", direct_check_s=0.0)
-    s = cfg["signals"]
-    if s["sensor_fem_correction"] and not harmonic:
+    if cfg["signals"]["sensor_fem_correction"] and not harmonic:
         raise ValueError(
             "signals.sensor_fem_correction is on but no sensor FEM response was given; "
             "pass results/sensor/harmonic.csv as input 'harmonic'"
         )
-    d = Path(outdir)
-    cases = brs.CASES
-    kin_json = d / "kinematics.json"
-    contact = {c: d / f"contact_forces_{c}.npz" for c in cases}
-    brs.bearing_lpm(kin_json, contact, {c: d / f"contact_forces_{c}.csv" for c in cases}, d / "lpm.json", cfg)
-    for c in cases:
-        mesh = d / f"housing_mesh_{c}.npz"
-        brs.housing_mesh(c, mesh, d / f"housing_mesh_{c}.vtk", d / f"housing_mesh_{c}.json", cfg)
-        brs.housing_transient(
-            c,
-            mesh,
-            contact[c],
-            d / f"sensor_force_{c}.csv",
-            d / f"housing_modes_{c}.json",
-            d / f"housing_transient_{c}.json",
-            d / f"influence_line_{c}.csv",
-            cfg,
-        )
-        for p in (mesh, d / f"housing_mesh_{c}.vtk", contact[c]):
-            p.unlink()
-        sgs.sensor_voltage(
-            d / f"sensor_force_{c}.csv",
-            resistance,
-            harmonic if s["sensor_fem_correction"] else None,
-            d / f"voltage_{c}.csv",
-            d / f"voltage_{c}.json",
-            cfg,
-        )
-        sgs.noisy(d / f"voltage_{c}.csv", c, d / f"noisy_{c}.csv", d / f"noisy_{c}.json", cfg)
-        sgs.envelope(
-            d / f"noisy_{c}.csv",
-            d / f"voltage_{c}.csv",
-            kin_json,
-            d / f"envelope_{c}.csv",
-            d / f"envelope_{c}.json",
-            cfg,
-        )
-    ind_json = d / "fault_indicator.json"
-    sgs.indicator(
-        {c: (d / f"envelope_{c}.csv", d / f"envelope_{c}.json") for c in cases},
-        kin_json,
-        {c: d / f"noisy_{c}.json" for c in cases},
-        ind_json,
-        cfg,
-    )
-    kin = sgs.kinematics(kin_json)
+    fem = read_harmonic(harmonic) if cfg["signals"]["sensor_fem_correction"] else None
+    return cfg, workflow_chain(cfg, read_json(resistance), fem, resistance)
+
+
+def fault_detection_case(config: dict, outdir: Path, resistance: str, harmonic: str | None = None) -> dict:
+    """Bearing LPM, housing (reduced), voltage, noise over seeds, envelope and indicator for one case.
+
+    The workflow's chain (:func:`workflow_chain`, in memory: the case writes its summary only), then the
+    indicator at ``signals.snr_dB`` over ``signals.study_n_seeds`` noise replicates (replicate 0 is the
+    noisy rule's record).
+    """
+    cfg, run = _chain_of_case(config, resistance, harmonic)
+    return _fault_detection_row(cfg, run)
+
+
+def _fault_detection_row(cfg: dict, run: dict) -> dict:
+    """The fault_detection summary row of a case's chain (:func:`workflow_chain`)."""
+    from ..signals import detection as sig
+
+    s, b, kin = cfg["signals"], cfg["bearing"], run["kinematics"]
     f0 = kin["bpfo_Hz"]
-    b = cfg["bearing"]
     # time a roller centre takes to cross the (first) groove (it sinks over this arc; lpm.chord_drop_m)
     crossing_s = b["defects"][0]["width_m"] / (
         BearingGeometry.from_config(b).outer_raceway_radius_m * 2 * np.pi * kin["ftf_Hz"]
     )
     es, ins = sig.EnvelopeSettings.from_config(s), sig.IndicatorSettings.from_config(s)
     rows = []
-    for c in cases:
-        _, v, dt = sgs.read_series(d / f"voltage_{c}.csv", "voltage_V")
+    for c in CASES:
+        _, v, dt = run["voltage"][c]
         rows += sig.snr_sweep(v, dt, f0, c, [s["snr_dB"]], s["study_n_seeds"], cfg["seed"], es, ins)
     seeds = pd.DataFrame(rows)
-    sgs.write_csv(seeds, d / "seeds.csv")
-    ind, lpm = read_json(ind_json), read_json(d / "lpm.json")
-    tr = {c: read_json(d / f"housing_transient_{c}.json") for c in cases}
-    by = {c: seeds[seeds["case"] == c] for c in cases}
+    ind, lpm, tr = run["indicator"], run["lpm"], run["transient"]
+    by = {c: seeds[seeds["case"] == c] for c in CASES}
     return {
         "bpfo_Hz": f0,
         "snr_dB": s["snr_dB"],
@@ -159,10 +171,8 @@ def sensor_design_housing(out_json: str, config: dict) -> None:
     ``housing.mesh_level``, model with the configured sensor spring), its influence line's peak (the configured
     design's load share) and the housing's flexibility at the sensor (the port compliance)."""
     from ..bearing import transient as brs
-    from ..bearing.housing_mesh import build_housing_mesh
 
-    model = brs.make_model(build_housing_mesh(brs.housing_geometry(config), False, config["housing"]["mesh_level"]),
-                           config)
+    model = brs.make_model(bout.housing_mesh("healthy", config)[0], config)  # the housing_mesh rule's healthy mesh
     write_json(
         {
             "load_share": float(model.influence_line()[2].max()),
@@ -180,13 +190,11 @@ def _load_share(config: dict, housing: dict, spring_N_per_m: float) -> float:
     """This design's load share: from the housing's port compliance (exact, same contact disk), else its own model."""
     from ..bearing import transient as brs
     from ..bearing.housing_fem import spring_share_factor
-    from ..bearing.housing_mesh import build_housing_mesh
 
     if config["sensor_fem"]["bottom_disk_diameter_m"] == housing["bottom_disk_diameter_m"]:
         k_ref, a0 = housing["sensor_spring_N_per_m"], housing["port_compliance_m_per_N"]
         return housing["load_share"] * spring_share_factor(spring_N_per_m, k_ref, a0)
-    mesh = build_housing_mesh(brs.housing_geometry(config), False, config["housing"]["mesh_level"])
-    return float(brs.make_model(mesh, config).influence_line()[2].max())
+    return float(brs.make_model(bout.housing_mesh("healthy", config)[0], config).influence_line()[2].max())
 
 
 def sensor_design_case(
@@ -218,7 +226,7 @@ def sensor_design_case(
     from ..sensor import design as sd
     from ..sensor import fem
     from ..sensor.analysis import SensorFemParams
-    from ..sensor.calibration import design_resistance_ohm, rc_voltage
+    from ..sensor.calibration import design_resistance_ohm
     from ..sensor.mesh import stack_mesh
     from ..signals import detection as sig
 
@@ -244,9 +252,10 @@ def sensor_design_case(
     sg = config["signals"]
     voltages, p2p = {}, {}
     for case, path in (("healthy", force_healthy), ("faulty", force_faulty)):
-        _, force, dt = read_series(path, "force_N")
-        v = rc_voltage(force * (share / port["load_share"]), dt, figs["open_circuit_gain_V_per_N"], figs["tau_s"])
-        voltages[case] = v[int(round(sg["skip_s"] / dt)):]
+        t, force, dt = read_series(path, "force_N")
+        # the sensor_voltage rule's RC step, with this design's gain and time constant
+        voltages[case] = sout.rc_record(t, force * (share / port["load_share"]), dt, figs["open_circuit_gain_V_per_N"],
+                                        figs["tau_s"], sg["skip_s"], path)[2]
         p2p[case] = float(np.ptp(voltages[case]))
     det = sd.detection_at_noise(
         voltages, dt, kin["bpfo_Hz"], noise_settings(config), sg["study_n_seeds"], config["seed"],
@@ -289,25 +298,18 @@ def noise_settings(config: dict):
 def detector_case(config: dict, outdir: Path, resistance: str, harmonic: str | None = None) -> dict:
     """The fault_detection case, then the search detector over noise seeds at the configured DAQ.
 
-    Runs :func:`fault_detection_case` (bearing to fault_indicator.json; its
-    SNR sweep at the model clock), then the classification stage (sampling
-    at signals.sample_rate_Hz, the configured noise model, every seed; no
-    ROC) into ``outdir``. The row adds: the faulty and healthy
-    classifications, the rate at which the faulty case is classified as its
-    true type and the healthy one as none, each type's detection rate on
-    the faulty case, and the largest clipped fraction.
+    The fault_detection row (:func:`workflow_chain`; its SNR sweep at the model clock), then the
+    fault_classification rule's function (sampling at signals.sample_rate_Hz, the configured noise model,
+    every seed; no ROC) on the chain's voltages. The row adds: the faulty and healthy classifications, the
+    rate at which the faulty case is classified as its true type and the healthy one as none, each type's
+    detection rate on the faulty case, and the largest clipped fraction.
     """
-    from . import signals as sgs
-
     cfg = copy.deepcopy(config)
     cfg["signals"]["detector"]["roc_snr_dB"] = []
-    row = fault_detection_case(cfg, outdir, resistance, harmonic)
-    d = Path(outdir)
-    sgs.classification({c: str(d / f"voltage_{c}.csv") for c in ("healthy", "faulty")}, str(d / "kinematics.json"),
-                       str(d / "classification.json"), str(d / "classification.csv"), str(d / "roc.csv"), cfg)
-    cm = read_json(d / "classification.json")
-    seeds = pd.read_csv(d / "classification.csv")
-    ind = read_json(d / "fault_indicator.json")
+    cfg, run = _chain_of_case(cfg, resistance, harmonic)
+    row = _fault_detection_row(cfg, run)
+    record, rows, _ = sout.fault_classification({c: run["voltage"][c][1:] for c in CASES}, run["kinematics"], cfg)
+    cm, seeds, ind = json_as_read(record), as_read(rows), run["indicator"]
     faulty = seeds[seeds["case"] == "faulty"]
     true = cm["true_types"]["faulty"]
     row.update({

@@ -32,12 +32,12 @@ from ...bearing.lpm import BearingGeometry, kinematic_frequencies
 from ...bearing.surrogate import (
     InfluenceLine,
     Operating,
+    OuterGroove,
     Surrogate,
     cage_phase,
-    inner_race_drop,
-    outer_race_drop,
+    inner_race_contact,
     phase_edges,
-    rolling_element_drop,
+    roller_groove_drop,
 )
 from ...sensor.calibration import rc_voltage
 
@@ -45,6 +45,12 @@ from ...sensor.calibration import rc_voltage
 MIN_WIDTH_M = 0.25e-3
 #: Pre-roll before the record, in RC time constants (steady state to e^-8).
 PRE_ROLL_TAU = 8.0
+#: Values that act after the sensor force (with ``mains_*``): a change of them reuses the force.
+AFTER_FORCE = frozenset({"load_share_ratio", "dc_offset_V"})
+#: Forces (as circuit voltages) a rig keeps: the current point and a finite-difference Jacobian's steps,
+#: within CACHE_BYTES for a long record.
+CACHE_SIZE = 24
+CACHE_BYTES = 64e6
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,6 +84,7 @@ class Rig:
     time_s: np.ndarray
     tach_Hz: np.ndarray | None = None
     surrogate: Surrogate = field(default=None, repr=False)
+    cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self):
         if self.surrogate is None:
@@ -146,40 +153,92 @@ def sensor_force(rig: Rig, values: dict) -> tuple[np.ndarray, np.ndarray]:
     outer, key = None, None
     w_o = values.get("outer_defect_width_m", 0.0)
     if w_o > 0:
-        ang = values["outer_defect_angle_rad"]
-
-        def outer(psi, ang=ang, w=w_o):
-            return outer_race_drop(psi, ang, w, g)
-
-        key = ("outer", w_o, ang)
+        outer = OuterGroove(float(values["outer_defect_angle_rad"]), float(w_o), g)
+        key = outer.key
     w_i = values.get("inner_defect_width_m", 0.0)
     w_r = values.get("roller_defect_width_m", 0.0)
-    if w_i <= 0 and w_r <= 0:
-        return rig.surrogate.box_average(phase_edges(phi), op, outer, key, offsets), t_ext
-    # moving defects: sub-samples at the centres of S equal parts of each sample window
-    s = rig.substeps()
     edges = phase_edges(phi)
+    f = rig.surrogate.box_average(edges, op, outer, key, offsets)
+    if w_i <= 0 and w_r <= 0:
+        return f, t_ext
+    return f + moving_defect_change(rig, values, edges, op, outer, key, offsets), t_ext
+
+
+def moving_defect_change(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, key, offsets) -> np.ndarray:
+    """What an inner-race or rolling-element groove changes in each sample's mean sensor force [N].
+
+    Each sample window is cut into S equal parts (:meth:`Rig.substeps`);
+    only the samples in which a sub-sample finds a roller over the groove
+    are solved: the mean over their sub-samples of the equilibrium with the
+    groove's drop minus the table without it (the rest of the sample is the
+    table's exact box average, :meth:`~piezobearing.bearing.surrogate.Surrogate.box_average`).
+    """
+    g = rig.geometry
+    slip = values.get("cage_slip_ratio", 0.0)
+    w_i = values.get("inner_defect_width_m", 0.0)
+    w_r = values.get("roller_defect_width_m", 0.0)
+    s = rig.substeps()
     frac = (np.arange(s) + 0.5) / s
     phi_f = (edges[:-1, None] + np.diff(edges)[:, None] * frac[None, :]).ravel()
-    drop = np.zeros((phi_f.size, g.n_rollers))
+    hit = np.zeros(phi_f.size, dtype=bool)
     if w_i > 0:
         # the shaft turns f_r / FTF times as far as the cage
         theta = values["inner_defect_angle_rad"] + (phi_f - values["start_phase_rad"]) / (rig.ftf_ratio() * (1 - slip))
-        drop += inner_race_drop(rig.surrogate.roller_angles(phi_f), theta, w_i, g)
+        j_i, d_i = inner_race_contact(phi_f, theta, w_i, g)
+        hit |= d_i > 0
     if w_r > 0:
         spin = values["roller_defect_spin_rad"] + (g.outer_raceway_radius_m / (0.5 * g.roller_diameter_m)) * (
             phi_f - values["start_phase_rad"]
         )
-        drop += rolling_element_drop(g.n_rollers, int(values.get("roller_defect_index", 0)), spin, w_r, g)
-    f = rig.surrogate.fine_force(phi_f, op, drop, outer, key, offsets)
-    return f.reshape(-1, s).mean(axis=1), t_ext
+        d_r = roller_groove_drop(spin, w_r, g)
+        hit |= d_r > 0
+    change = np.zeros(edges.size - 1)
+    samples = np.unique(np.flatnonzero(hit) // s)
+    if not samples.size:
+        return change
+    sub = (samples[:, None] * s + np.arange(s)[None, :]).ravel()
+    drop = np.zeros((sub.size, g.n_rollers))
+    rows = np.arange(sub.size)
+    if w_i > 0:
+        drop[rows, j_i[sub]] += d_i[sub]
+    if w_r > 0:
+        drop[:, int(values.get("roller_defect_index", 0))] += d_r[sub]
+    sur = rig.surrogate
+    diff = sur.fine_force(phi_f[sub], op, drop, outer, key, offsets) - sur.table_force(phi_f[sub], op, outer, key, offsets)
+    change[samples] = diff.reshape(-1, s).mean(axis=1)
+    return change
+
+
+def force_key(values: dict) -> tuple:
+    """The values the sensor force depends on: all but the mounting's share, the DC level and the
+    additive interference (``mains_*``), which act after the force (a finite-difference step in one
+    of them reuses the force)."""
+    return tuple(sorted((k, float(v)) for k, v in values.items() if k not in AFTER_FORCE and not k.startswith("mains_")))
+
+
+def unit_voltage(rig: Rig, values: dict) -> np.ndarray:
+    """The circuit's voltage for the whole sensor force (share 1, no DC) on the record's clock [V], cached
+    per :func:`force_key` (the fit evaluates the chain at the same force many times)."""
+    key = force_key(values)
+    hit = rig.cache.get(key)
+    if hit is not None:
+        return hit
+    f, _ = sensor_force(rig, values)
+    v = rc_voltage(f, rig.dt_s, rig.gain_V_per_N, rig.tau_s)[rig.n_pre :]
+    v.flags.writeable = False
+    rig.cache[key] = v
+    while len(rig.cache) > int(np.clip(CACHE_BYTES / (8 * v.size), 2, CACHE_SIZE)):
+        rig.cache.pop(next(iter(rig.cache)))
+    return v
 
 
 def voltage(rig: Rig, values: dict, additive: np.ndarray | None = None) -> np.ndarray:
-    """The recorded voltage the chain predicts on the record's clock [V]."""
-    f, _ = sensor_force(rig, values)
+    """The recorded voltage the chain predicts on the record's clock [V].
+
+    The circuit is linear: the share s scales the voltage of the whole force (:func:`unit_voltage`).
+    """
     share = values.get("load_share_ratio", 1.0)
-    v = rc_voltage(share * f, rig.dt_s, rig.gain_V_per_N, rig.tau_s)[rig.n_pre :]
+    v = share * unit_voltage(rig, values)
     v = v + values.get("dc_offset_V", 0.0)
     if additive is not None:
         v = v + additive

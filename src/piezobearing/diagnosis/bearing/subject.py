@@ -157,18 +157,23 @@ class BearingSubject:
         """
         from dataclasses import replace
 
+        from threadpoolctl import threadpool_limits
+
         from ..engine import diagnose
         from ..settings import DiagnosticsSettings
 
         settings = DiagnosticsSettings.from_config(config.get("diagnostics"))
-        problem = self.problem(obs, config)
-        d = diagnose(problem, settings, progress)
-        if d.final.nrmse < REMEASURE_BELOW * d.final.floor_nrmse:
-            rec = obs[0]
-            fl = noise_floor(d.final.residual_V, problem.record.dt_s, rec.clipped)
-            fl = replace(fl, method=f"{fl.method}, of the final model's residual: the record's own "
-                         f"({problem.floor.voltage_noise_V:.4g} V) was lifted by the fault's lines")
-            d = diagnose(replace(problem, floor=fl), settings, progress)
+        # the fits' linear algebra is on matrices of n x (a few) values: a second BLAS thread only waits
+        # (each SVD of the trust-region step 70x slower on a loaded 2-core machine, benchmarks/bench_diagnosis_bearing.py)
+        with threadpool_limits(limits=1, user_api="blas"):
+            problem = self.problem(obs, config)
+            d = diagnose(problem, settings, progress)
+            if d.final.nrmse < REMEASURE_BELOW * d.final.floor_nrmse:
+                rec = obs[0]
+                fl = noise_floor(d.final.residual_V, problem.record.dt_s, rec.clipped)
+                fl = replace(fl, method=f"{fl.method}, of the final model's residual: the record's own "
+                             f"({problem.floor.voltage_noise_V:.4g} V) was lifted by the fault's lines")
+                d = diagnose(replace(problem, floor=fl), settings, progress)
         return d, d.to_dict(self.answer(d))
 
 

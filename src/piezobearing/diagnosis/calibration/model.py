@@ -168,6 +168,19 @@ class ForwardModel:
         """G(f) from recorded force to voltage at ``record.freq_Hz`` [V/N] (complex)."""
         return self._cached("response", record, values, record, lambda: self._response(values, record))
 
+    def noise_envelope(self, values: dict, record: ForceRecord) -> np.ndarray | None:
+        """a(t): the product of the effects' gains on the force noise along the record [-] (None: constant).
+
+        The engine's optional hook of a model whose input-noise gain changes
+        with time (:func:`piezobearing.diagnosis.fit.noise_scale`).
+        """
+        out = None
+        for e in self.effects:
+            a = e.noise_envelope(values, record)
+            if a is not None:
+                out = a if out is None else out * a
+        return out
+
     def _response(self, values: dict, record: ForceRecord) -> np.ndarray:
         c = self.fitted_circuit(values)
         g = rc_response(record.freq_Hz, record.dt_s, c.open_circuit_gain_V_per_N, c.tau_s)

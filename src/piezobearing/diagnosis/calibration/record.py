@@ -61,6 +61,14 @@ def read_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]
         channels=c.get("channels"),
         wav_full_scale_V=c.get("wav_full_scale_V"),
     )
+    return m, check_record(m, config, path)
+
+
+def check_record(m: Measurement, config: dict, path) -> list[cal.Impulse]:
+    """The checks of :func:`read_record` beyond the file's own on a record already read (``path`` names it in
+    errors): no dead, constant or clipped channel, at least two impulses, a voltage with the sensor's signal
+    and its polarity. Returns the impulses."""
+    c = config["calibration"]
     check_channels(m)  # dead, constant or clipped
     imps = cal.detect_impulses(
         m.force_N, m.voltage_V, m.dt_s, c["min_prominence_fraction"], c["min_separation_s"]
@@ -94,7 +102,7 @@ def read_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]
             f"{path}: column voltage_V: polarity inverted (in {neg} of {len(imps)} impulses the voltage "
             "is anti-correlated with the model's); swap the electrode leads or negate voltage_V in a copy of the file"
         )
-    return m, imps
+    return imps
 
 
 def impulse_segments(impulses: list[cal.Impulse]) -> Segments:

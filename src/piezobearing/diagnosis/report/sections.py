@@ -141,13 +141,28 @@ def verdict_paragraph(d: dict, input_name: str = "input") -> list[str]:
             "The final residual is consistent with the measured noise: white, uncorrelated with the "
             f"{input_name}, no frequency and no time window above the floor.",
             "",
+            *outside(d),
         ]
     return [
         "Structure remains in the final residual that no effect of the catalogue explains. Where:",
         "",
         *findings_lines(d["unexplained"]),
         "",
+        *outside(d),
     ]
+
+
+def outside(d: dict) -> list[str]:
+    """What the structure outside the catalogue looks like (trend, input dependence, stuck samples), with the
+    mechanisms each suggests; stuck samples are always said, the others where the verdict is unexplained."""
+    o = d.get("outside_catalogue") or {}
+    keys = ("stuck",) if d.get("verdict") == "explained" else ("trend", "input_dependence", "stuck")
+    items = [o[k] for k in keys if k in o and o[k].get("where")]
+    if not items:
+        return []
+    out = ["What it looks like, and what could cause it:", ""]
+    out += [f"- {i['where']}. Suggests: {i['mechanisms']}." for i in items]
+    return out + [""]
 
 
 def compare(d: dict, figures: Figures, overlay_caption: str) -> list[str]:
@@ -351,6 +366,32 @@ def identifiability(d: dict) -> list[str]:
             " (correlations from the Jacobian at the optimum, in `diagnosis.json`).",
             "",
         ]
+    out += intervals(idf.get("intervals") or {})
+    return out
+
+
+def intervals(iv: dict) -> list[str]:
+    """How each 95% interval of the final fit was found: the Jacobian's (checked) or the profile likelihood's."""
+    if not iv:
+        return []
+    prof = {k: i for k, i in iv.items() if i["method"] != "jacobian (checked)"}
+    out = [
+        f"95% intervals of the final fit: {len(iv) - len(prof)} of {len(iv)} from the Jacobian, checked (chi2 "
+        "rises by the threshold within 25% at both ends along the profile line)"
+        + ("." if not prof else "; where not, the profile likelihood (the others refitted at each trial value):"),
+        "",
+    ]
+    if prof:
+        out += ["| parameter | value | interval | Jacobian's interval | chi2 rise at the Jacobian's ends | method |"]
+        out.append("|---|---|---|---|---|---|")
+        for k, i in prof.items():
+            rise = ", ".join(f"{r:.2f}" for r in i["rise_at_jacobian_ends"])
+            bound = " (reaches the bound)" if any(i["at_bound"]) else ""
+            out.append(
+                f"| `{k}` | {format_value(k, i['value'])} | {ci(k, i['ci'])}{bound} | {ci(k, i['jacobian_ci'])} | "
+                f"{rise} x D | {i['method']} |"
+            )
+        out.append("")
     return out
 
 

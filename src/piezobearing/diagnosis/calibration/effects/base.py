@@ -10,7 +10,8 @@ An effect overrides the hooks of the links it changes and leaves the others
 as the identity. Besides the simulation it states its parameters (with units
 in their names, bounds and a typical scale), its frequency response on the
 force-noise path (:meth:`Effect.response`, used for the noise floor and the
-weighting of the fit) and, optionally, data-driven start values.
+weighting of the fit; :meth:`Effect.noise_envelope` where that gain changes
+along the record) and, optionally, data-driven start values.
 """
 
 from __future__ import annotations
@@ -129,6 +130,20 @@ class Effect(engine.Effect):
 
         The forward model multiplies the circuit's response by it to carry the
         force channel's white noise to the voltage (the noise floor). Additive
-        effects leave it at 1.
+        effects leave it at 1. An effect whose gain changes along the record
+        returns its rms over the record here and its shape in
+        :meth:`noise_envelope`.
         """
         return 1.0
+
+    def noise_envelope(self, values: dict, record: ForceRecord) -> np.ndarray | None:
+        """The gain this effect puts on the force noise at each sample of the record, a(t) [-] (None: constant).
+
+        Only its shape counts (the model multiplies the effects' envelopes and
+        normalises to rms 1; the level is :meth:`response`'s). The engine then
+        lets the residual's std follow it
+        (:meth:`~piezobearing.diagnosis.noise.NoiseFloor.scale`), so a correct
+        model with a force-dependent or drifting gain is not called
+        ``unexplained`` for its louder noise at the peaks.
+        """
+        return None

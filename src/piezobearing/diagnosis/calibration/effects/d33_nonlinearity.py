@@ -17,8 +17,11 @@ cannot follow whatever R.
 Model
 -----
 The circuit is driven by F + beta F^2 (the recorded force on the disk).
-For the noise floor the force noise reaches the voltage with the
-time-averaged gain sqrt(mean((1 + 2 beta F)^2)).
+The force noise reaches the voltage with the small-signal gain
+1 + 2 beta F(t): its rms sqrt(mean((1 + 2 beta F)^2)) on the noise path
+(``response``) and its shape along the record (``noise_envelope``, F the
+denoised recorded force), so the residual is allowed to be louder at the
+press peaks by as much as the model says.
 
 Parameter: ``beta_per_N`` in [-0.05, 0.05] 1/N.
 """
@@ -28,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...params import Param
-from .base import Effect, ForceRecord
+from .base import Effect, ForceRecord, denoised_force
 
 
 class D33Nonlinearity(Effect):
@@ -58,6 +61,11 @@ class D33Nonlinearity(Effect):
 
     def response(self, values, record):
         return float(np.sqrt(np.mean((1 + 2 * values["beta_per_N"] * record.force_N) ** 2)))
+
+    def noise_envelope(self, values, record):
+        if values["beta_per_N"] == 0:
+            return None
+        return 1 + 2 * values["beta_per_N"] * denoised_force(record)
 
     def summary(self, values):
         b = values["beta_per_N"]

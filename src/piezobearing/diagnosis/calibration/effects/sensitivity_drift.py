@@ -15,8 +15,8 @@ Model
 The voltage across the electrodes is multiplied by
 g(t) = 1 + s (t - t_mid), t_mid the middle of the record (so that s alone
 cannot mimic a constant d33 error), before the DAQ. The carried force noise
-is scaled by the same g(t); on the noise path (stationary by construction)
-that is its rms over the record, sqrt(mean g^2).
+is scaled by the same g(t): its rms over the record, sqrt(mean g^2), on the
+noise path (``response``) and g(t) itself as the noise envelope.
 
 Parameter: ``sensitivity_slope_per_s`` (s) in [-0.01, 0.01] 1/s.
 """
@@ -68,6 +68,11 @@ class SensitivityDrift(Effect):
         if values["sensitivity_slope_per_s"] == 0:
             return 1.0
         return float(np.sqrt(np.mean(gain(values, record, record.n) ** 2)))
+
+    def noise_envelope(self, values, record):
+        if values["sensitivity_slope_per_s"] == 0:
+            return None
+        return gain(values, record, record.n)
 
     def summary(self, values):
         s = values["sensitivity_slope_per_s"]
