@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -15,6 +17,79 @@ from piezobearing.stages.calibration import nominal_circuit
 from piezobearing.synthesis import PressProtocol, synthesize
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+
+#: Fixtures that run the whole CI workflow (once per test process each).
+WORKFLOW_FIXTURES = ("ci_run", "ci_rerun")
+#: Modules whose module fixtures take seconds and whose tests take minutes: spread over both workers anyway.
+SPREAD = ("tests/test_diagnosis_bearing.py",)
+
+
+def pytest_collection_modifyitems(config, items):
+    """Group the tests for pytest-xdist's ``--dist loadgroup`` and put the long ones first.
+
+    Every test that uses a CI workflow run (:data:`WORKFLOW_FIXTURES`, directly or through another fixture) is in
+    one group, ``ci_workflow``, so the session runs the workflow once on one worker, not once on each; a test
+    that uses a module- or class-scoped fixture is grouped with its module, so the fixture is built once; every
+    other test goes to whichever worker is free. The workflow group, then the rerun test's scratch workflow, go
+    first: the other worker takes the rest meanwhile. Without xdist only the order changes.
+    """
+    def group(item) -> str:
+        if any(f in getattr(item, "fixturenames", ()) for f in WORKFLOW_FIXTURES):
+            return "ci_workflow"
+        info = getattr(item, "_fixtureinfo", None)
+        defs = info.name2fixturedefs.values() if info is not None else ()
+        module = item.nodeid.split("::")[0]
+        if module not in SPREAD and any(d.scope in ("module", "class", "package") for fd in defs for d in fd):
+            return module
+        return item.nodeid
+
+    rank = {"ci_workflow": 0, "tests/test_workflow_rerun.py": 1}
+    groups = {item.nodeid: group(item) for item in items}
+    items.sort(key=lambda item: rank.get(groups[item.nodeid], 2))  # stable: the collection order within each rank
+    worker = getattr(config, "workerinput", {})
+    if worker.get("workerid") == "gw0":  # xdist: tell the controller's scheduler (every worker collects the same)
+        Path(worker[GROUPS_KEY]).write_text(json.dumps({nodeid: g for nodeid, g in groups.items() if g != nodeid}))
+
+
+#: The workers' input key naming the file of the test groups (see pytest_collection_modifyitems).
+GROUPS_KEY = "piezobearing_test_groups"
+
+
+@pytest.hookimpl(optionalhook=True)  # an xdist hook: no error where xdist is not installed
+def pytest_configure_node(node):
+    """xdist controller: each worker writes the test groups to this session's file (the same for all)."""
+    node.workerinput[GROUPS_KEY] = str(Path(node.config.option.basetemp or tempfile.gettempdir()) / _groups_name())
+
+
+def _groups_name() -> str:
+    return f"piezobearing-test-groups-{os.getpid()}.json"
+
+
+@pytest.hookimpl(tryfirst=True, optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """``--dist loadgroup`` with the groups of pytest_collection_modifyitems.
+
+    xdist's own loadgroup reads ``xdist_group`` marks into the node ids through ``item._nodeid``, which pytest 9
+    no longer reads (``nodeid`` comes from ``item._id``): every test would be its own group and each worker
+    would run the CI workflow. This scheduler reads the groups the workers wrote instead.
+    """
+    if config.getvalue("dist") != "loadgroup":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    path = Path(config.option.basetemp or tempfile.gettempdir()) / _groups_name()
+
+    class GroupScheduling(LoadScopeScheduling):
+        _groups: dict | None = None
+
+        def _split_scope(self, nodeid: str) -> str:
+            if self._groups is None:
+                self._groups = json.loads(path.read_text()) if path.exists() else {}
+            return self._groups.get(nodeid, nodeid)
+
+    config.option.loadscopereorder = False  # keep the collection order: the long groups first, one a worker
+    return GroupScheduling(config, log)
 
 
 @pytest.fixture(scope="session")
@@ -75,19 +150,37 @@ def dry_run_errors(configfile: Path) -> tuple[subprocess.CompletedProcess, list[
     return out, [line for line in out.stderr.splitlines() if line.startswith("piezobearing:")]
 
 
+#: What the reproducibility check compares: every JSON and CSV result, not the logs, timings or notebooks.
+NUMBERS_SKIP = ("results/logs", "results/benchmarks", "results/notebooks")
+#: The number files of the first run as it finished (in its folder, outside results/).
+NUMBERS_LIST = ".result_numbers"
+
+
+def result_numbers(root: Path) -> list[str]:
+    """The result files of a run that hold its numbers (JSON and CSV), relative to ``root``, sorted."""
+    return sorted(
+        rel
+        for p in (root / "results").rglob("*")
+        if p.suffix in {".json", ".csv"} and not (rel := p.relative_to(root).as_posix()).startswith(NUMBERS_SKIP)
+    )
+
+
 @pytest.fixture(scope="session")
 def ci_run(tmp_path_factory) -> Path:
     """A complete `snakemake --cores 2 --configfile config/ci.yaml` in a fresh copy; its folder."""
     work = _copy_repo(tmp_path_factory.mktemp("ci_run"))
     out = run_workflow(work)
     assert out.returncode == 0, out.stderr[-4000:]
+    (work / NUMBERS_LIST).write_text("\n".join(result_numbers(work)))  # before other tests add files
     return work
 
 
 @pytest.fixture(scope="session")
-def ci_rerun(tmp_path_factory) -> Path:
-    """A second, independent clean run of the same workflow, for reproducibility checks."""
+def ci_rerun(tmp_path_factory, ci_run) -> Path:
+    """A second, independent clean run in a fresh copy, for reproducibility checks: it builds every number
+    file of the first run (and everything they need) from nothing; the figures, which the check does not
+    compare, are not drawn again."""
     work = _copy_repo(tmp_path_factory.mktemp("ci_rerun"))
-    out = run_workflow(work)
+    out = run_workflow(work, *(ci_run / NUMBERS_LIST).read_text().split("\n"))
     assert out.returncode == 0, out.stderr[-4000:]
     return work

@@ -91,3 +91,18 @@ def test_ranked_candidates_hold_no_series(mains_diagnosis):
         assert not getattr(c.fit.model, "_cache", {})
     assert d.final.residual_V.size == d.record.n
     assert diag["ranking"][1]["nrmse"] == d.ranking[1].fit.nrmse
+
+
+def test_clock_drift_interpolates_in_chunks_with_the_same_numbers(monkeypatch):
+    """The windowed-sinc reading of clock_drift works through the record in chunks (its kernel arrays
+    are samples x 32: a 600k-sample record took 1.6 GB at once); the result is bit-identical."""
+    from piezobearing.diagnosis.calibration.effects import clock_drift as cd
+
+    x = np.random.default_rng(3).normal(size=3 * cd.CHUNK + 17)
+    chunked = cd.drifted(x, 1e-4, 25)
+    monkeypatch.setattr(cd, "CHUNK", x.size)
+    assert np.array_equal(chunked, cd.drifted(x, 1e-4, 25))
+    f = np.fft.rfftfreq(x.size)
+    gain = cd.noise_gain(f, 1e-4, x.size)
+    monkeypatch.setattr(cd, "CHUNK", 7)
+    assert np.array_equal(gain, cd.noise_gain(f, 1e-4, x.size))

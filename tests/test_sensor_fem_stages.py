@@ -1,4 +1,8 @@
-"""The sensor FEM stages end to end on the CI config (coarse meshes), and their input checks."""
+"""The sensor FEM stages end to end on the CI config (coarse meshes), and their input checks.
+
+The files are those of the session's CI workflow run (``ci_run``, tests/conftest.py): the stages ran there once,
+not again here.
+"""
 
 from __future__ import annotations
 
@@ -10,38 +14,42 @@ import pandas as pd
 import pytest
 
 from piezobearing.stages import sensor_fem as st
-from piezobearing.stages.scorecard import scorecard_sensor_fem
+
+pytestmark = pytest.mark.slow  # the workflow run
+
+#: The sensor FEM files of the CI workflow run (tests/conftest.py), by the short names used below.
+FILES = {
+    "modal.json": "results/sensor/modal.json",
+    "mode.npz": "results/sensor/first_axial_mode.npz",
+    "harmonic.csv": "results/sensor/harmonic.csv",
+    "band.json": "results/sensor/band.json",
+    "convergence.csv": "results/sensor/convergence.csv",
+    "sensor_fem.csv": "results/scorecard/sensor_fem.csv",
+    "lowfreq.json": "results/sensor/lowfreq.json",
+    "stack_L3.vtk": "results/sensor/mesh/stack_L3.vtk",
+    "ritz_model.npz": "results/sensor/ritz_model.npz",
+}
+
+
+class _Results:
+    """``results / "modal.json"``: a sensor FEM file of the workflow run."""
+
+    def __init__(self, root):
+        self.root = root
+
+    def __truediv__(self, name: str):
+        return self.root / FILES[name]
 
 
 @pytest.fixture(scope="module")
-def ci_run(tmp_path_factory, ci_config):
-    """Mesh, convergence, modal, harmonic and scorecard on the CI config into a temporary folder."""
-    d = tmp_path_factory.mktemp("sensor_fem")
-    c = ci_config
-    p = st.SensorFemParams.from_config(c)
-    meshes = [str(d / f"stack_L{k}.vtk") for k in range(1, len(p.multipliers) + 1)]
-    st.sensor_mesh(meshes, str(d / "mesh.json"), c)
-    st.sensor_convergence(meshes, str(d / "convergence.csv"), c)
-    st.sensor_modal(meshes[p.mesh_level - 1], str(d / "modal.json"), str(d / "mode.npz"), c)
-    (d / "resistance.json").write_text(json.dumps({"resistance_ohm": 50e6}))
-    (d / "lowfreq.json").write_text(json.dumps({"linear_from_Hz": 30.0}))
-    st.sensor_harmonic(
-        meshes[p.mesh_level - 1],
-        str(d / "modal.json"),
-        str(d / "resistance.json"),
-        str(d / "lowfreq.json"),
-        str(d / "harmonic.csv"),
-        str(d / "band.json"),
-        c,
-    )
-    scorecard_sensor_fem(
-        str(d / "modal.json"), str(d / "band.json"), str(d / "convergence.csv"), str(d / "sensor_fem.csv")
-    )
-    return d
+def sensor_run(ci_run):
+    """Mesh, convergence, modal, harmonic and scorecard as the CI workflow ran them (the session's one run;
+    the harmonic with the fitted R and the low-frequency stage's band edge, 30 Hz on this config)."""
+    return _Results(ci_run)
 
 
-def test_modal_json_lists_labelled_modes_and_the_first_axial(ci_run):
-    modal = json.loads((ci_run / "modal.json").read_text())
+def test_modal_json_lists_labelled_modes_and_the_first_axial(sensor_run):
+    modal = json.loads((sensor_run / "modal.json").read_text())
     labels = [m["label"] for m in modal["modes"]]
     assert "axial" in labels and "bending/rocking" in labels and "torsion" in labels
     assert all(m["frequency_short_Hz"] < modal["modal_max_frequency_Hz"] for m in modal["modes"])
@@ -51,15 +59,15 @@ def test_modal_json_lists_labelled_modes_and_the_first_axial(ci_run):
     assert modal["first_resonance_short_Hz"] == pytest.approx(1.21e5, rel=0.03)
     assert modal["material_symmetry"]["c66=(c11-c12)/2"]["holds"] is False
     assert "sensor_fem" in modal["config"]
-    mode = np.load(ci_run / "mode.npz")
+    mode = np.load(sensor_run / "mode.npz")
     assert 0.95 < np.abs(mode["displacement"]).max() <= 1.0 + 1e-12  # max |u| = 1 over all nodes
 
 
-def test_harmonic_csv_and_band_json(ci_run):
-    df = pd.read_csv(ci_run / "harmonic.csv")
+def test_harmonic_csv_and_band_json(sensor_run):
+    df = pd.read_csv(sensor_run / "harmonic.csv")
     assert list(df.columns[:3]) == ["frequency_Hz", "voltage_per_force_V_per_N", "phase_deg"]
     assert df["frequency_Hz"].is_monotonic_increasing and df["frequency_Hz"].iloc[-1] == pytest.approx(130e3)
-    band = json.loads((ci_run / "band.json").read_text())
+    band = json.loads((sensor_run / "band.json").read_text())
     assert band["band_low_Hz"] == 30.0
     assert band["reference_frequency_Hz"] < band["band_high_27_percent_Hz"] < band["band_high_Hz"]
     assert band["band_high_Hz"] < band["loaded_resonance_Hz"] < band["first_axial_open_Hz"]
@@ -72,37 +80,53 @@ def test_harmonic_csv_and_band_json(ci_run):
     np.testing.assert_allclose(mid["phase_deg"], lead, atol=0.05)
 
 
-def test_scorecard_rows(ci_run):
-    sc = pd.read_csv(ci_run / "sensor_fem.csv")
+def test_scorecard_rows(sensor_run):
+    sc = pd.read_csv(sensor_run / "sensor_fem.csv")
     assert len(sc) >= 6
     first = sc[sc["quantity"].str.startswith("first resonance (first axial")].iloc[0]
     assert first["paper"] == 1.21e5 and abs(first["rel_error"]) < 0.03
     assert sc["note"].str.contains("cannot be a \\+3 dB edge").any()
 
 
-def test_convergence_csv(ci_run):
-    conv = pd.read_csv(ci_run / "convergence.csv")
+def test_convergence_csv(sensor_run):
+    conv = pd.read_csv(sensor_run / "convergence.csv")
     assert len(conv) == 3 and conv["n_dof"].is_monotonic_increasing
 
 
-def test_bad_config_and_inputs_name_the_key_or_file(ci_config, ci_run, tmp_path):
+def test_bad_config_and_inputs_name_the_key_or_file(ci_config, sensor_run, tmp_path):
     bad = copy.deepcopy(ci_config)
     bad["sensor_fem"]["mesh_level"] = 9
     with pytest.raises(st.SensorFemError, match="sensor_fem.mesh_level"):
         st.SensorFemParams.from_config(bad)
     (tmp_path / "r.json").write_text(json.dumps({"R": 1}))
-    mesh = str(ci_run / "stack_L3.vtk")
+    ritz = str(sensor_run / "ritz_model.npz")
     with pytest.raises(st.SensorFemError, match="resistance_ohm"):
         st.sensor_harmonic(
-            mesh,
-            str(ci_run / "modal.json"),
+            ritz,
+            str(sensor_run / "modal.json"),
             str(tmp_path / "r.json"),
-            str(ci_run / "lowfreq.json"),
+            str(sensor_run / "lowfreq.json"),
             str(tmp_path / "h.csv"),
             str(tmp_path / "b.json"),
             ci_config,
         )
+    (tmp_path / "r.json").write_text(json.dumps({"resistance_ohm": 50e6}))
+    with pytest.raises(st.SensorFemError, match="none.npz: file not found; run the rule sensor_modal"):
+        st.sensor_harmonic(
+            str(tmp_path / "none.npz"),
+            str(sensor_run / "modal.json"),
+            str(tmp_path / "r.json"),
+            str(sensor_run / "lowfreq.json"),
+            str(tmp_path / "h.csv"),
+            str(tmp_path / "b.json"),
+            ci_config,
+        )
+    (tmp_path / "row.json").write_text(json.dumps({"row": {"level": 1, "multiplier": 0.5}}))
+    meshes = [str(sensor_run.root / f"results/sensor/mesh/stack_L{k}.vtk") for k in (1, 2, 3)]
+    with pytest.raises(st.SensorFemError, match="row.json: the row of level 1 is not this config's sensor_fem.mesh_level"):
+        st.sensor_convergence(meshes, str(tmp_path / "row.json"), str(tmp_path / "c.csv"), ci_config)
     with pytest.raises(st.SensorFemError, match="mesh file not found"):
         st.sensor_modal(
-            str(tmp_path / "none.vtk"), str(tmp_path / "m.json"), str(tmp_path / "m.npz"), ci_config
+            str(tmp_path / "none.vtk"), str(tmp_path / "m.json"), str(tmp_path / "m.npz"), str(tmp_path / "r.npz"),
+            str(tmp_path / "row.json"), ci_config,
         )

@@ -82,3 +82,48 @@ def test_detector_study_figures_annotate_each_case():
     texts = [t.get_text() for t in fig.axes[0].texts]
     assert sorted(texts) == ["50", "60", "70"]
     assert set(SUMMARY_FIGURES) >= {"daq_noise", "defect_position", "fault_type_speed"}
+
+
+def test_extra_fault_types_and_their_config(paper_config):
+    """The types a confusion-matrix row needs a record for, and that record's config: the first defect as that type."""
+    from piezobearing.signals.outputs import extra_fault_types, fault_type_config
+
+    assert extra_fault_types(paper_config) == ["inner_race", "rolling_element"]  # the faulty case is outer race
+    c = copy.deepcopy(paper_config)
+    c["bearing"]["defects"] = []
+    assert extra_fault_types(c) == []  # no defect: no size to give the other types
+    c["bearing"]["defects"] = [dict(paper_config["bearing"]["defects"][0], type="inner_race", angle_deg=30.0)]
+    assert extra_fault_types(c) == ["outer_race", "rolling_element"]
+    t = fault_type_config(c, "rolling_element")
+    assert t["bearing"]["defects"] == [dict(c["bearing"]["defects"][0], type="rolling_element")]
+    assert t["housing"]["method"] == "reduced" and t["housing"]["direct_check_s"] == 0.0
+    assert c["bearing"]["defects"][0]["type"] == "inner_race"  # the input untouched
+
+
+def test_fault_type_records_and_their_confusion_rows(tmp_path, inputs, ci_config):  # noqa: F811
+    """Rule fault_type_voltage on the CI bearing: the inner-race record carries the shaft-rate line of the load
+    zone, which the outer-race record (periodic at BPFO, no slip) lacks; both get a row of the confusion matrix."""
+    import numpy as np
+
+    cfg = copy.deepcopy(ci_config)
+    cfg["signals"]["study_n_seeds"] = 4
+    cfg["signals"]["detector"]["roc_snr_dB"] = []
+    types, line = [], {}
+    for t in ("outer_race", "inner_race"):
+        paths = [tmp_path / f"sensor_force_{t}.csv", tmp_path / f"voltage_{t}.csv", tmp_path / f"voltage_{t}.json"]
+        st.fault_type_voltage(t, inputs["resistance"], None, *paths, cfg)
+        f = pd.read_csv(paths[0])["force_N"].to_numpy()
+        dt = 1.0 / json.loads(paths[2].read_text())["sample_rate_Hz"]
+        w = np.hanning(f.size)
+        a = 2 * np.abs(np.fft.rfft(w * (f - f.mean()))) / w.sum()
+        k = int(round(cfg["bearing"]["shaft_speed_rpm"] / 60 * f.size * dt))
+        line[t] = a[k - 1 : k + 2].max()
+        types.append(str(paths[1]))
+    assert line["inner_race"] > 0.1 and line["inner_race"] > 100 * line["outer_race"]  # [N]
+    out = tmp_path / "out"
+    out.mkdir()
+    volt = {"healthy": types[0], "faulty": types[0]}  # files stand in for the main chain's (not what is tested)
+    st.classification(volt, inputs["kinematics"], out / "cls.json", out / "cls.csv", out / "roc.csv", cfg, types[1:])
+    cm = json.loads((out / "cls.json").read_text())
+    assert cm["true_types"]["inner_race"] == "inner_race"
+    assert sum(cm["counts"][cm["classes"].index("inner_race")]) == 4

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from conftest import result_numbers
 
 pytestmark = pytest.mark.slow
 
@@ -60,13 +61,7 @@ def test_nothing_left_to_do_after_a_run(ci_run: Path):
 
 
 def _numbers(root: Path) -> dict[str, str]:
-    skip = ("results/logs", "results/benchmarks", "results/notebooks")
-    out = {}
-    for p in sorted((root / "results").rglob("*")):
-        rel = p.relative_to(root).as_posix()
-        if p.suffix in {".json", ".csv"} and not rel.startswith(skip):
-            out[rel] = p.read_text()
-    return out
+    return {rel: (root / rel).read_text() for rel in result_numbers(root)}
 
 
 def _first_difference(a: str, b: str) -> str:

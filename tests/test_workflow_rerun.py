@@ -5,13 +5,16 @@ A scratch copy of the workflow is built once with stand-in scripts that only cre
 real scripts' imports, unexecuted, for the code hash) and a stand-in papermill; then ``snakemake -n`` is asked,
 for each rule, after a change to the config keys its stage reads (piezobearing.registry.READS), after an edit of
 a package module in the scratch copy, and after the record is replaced. The rules it lists must be exactly the
-changed rules and the rules downstream of them in the rule graph (``snakemake --rulegraph``).
+changed rules and the rules downstream of them in the rule graph (``snakemake --rulegraph``). The dry runs go
+through warm Snakemake servers (tests/warm_snakemake.py: forked ``snakemake -n`` processes that skip the
+imports), two at a time.
 """
 
 from __future__ import annotations
 
 import ast
 import os
+import queue
 import re
 import shutil
 import subprocess
@@ -21,6 +24,7 @@ from pathlib import Path
 
 import pytest
 import yaml
+from warm_snakemake import WarmSnakemake
 
 from piezobearing import config as cfg
 from piezobearing.registry import READS, RECORD_RULES
@@ -53,7 +57,8 @@ for p in [a[1]] + [a[i + 2] for i, x in enumerate(a[:-2]) if x in ("-p", "-r") a
 SKIP = {"calibration.measurement", "synthesis.hidden_effects"}
 #: String choices: another valid value.
 OTHER = {"type": "inner_race", "band_rule": "kurtogram", "method": "direct", "sensor_electrical": "short", "resample": "sample",
-         "c66_rule": "paper", "material": "pzt5h", "model": "absolute", "window": "rectangular"}
+         "c66_rule": "paper", "material": "pzt5h", "model": "absolute", "window": "rectangular",
+         "classification_types": "rolling_element"}
 
 
 def _stub(script: Path) -> str:
@@ -106,6 +111,26 @@ def build_scratch(d: Path) -> tuple[Path, dict, dict[str, set[str]]]:
 def scratch(tmp_path_factory):
     """A built scratch copy of the workflow (stand-in stages), its environment and its rule graph."""
     return build_scratch(tmp_path_factory.mktemp("rerun"))
+
+
+@pytest.fixture(scope="module")
+def dry(scratch):
+    """``dry(args)``: ``snakemake ARGS`` in the scratch copy through one of two warm servers (one per thread)."""
+    d, env, _ = scratch
+    servers: queue.Queue = queue.Queue()
+    for _ in range(2):
+        servers.put(WarmSnakemake(env))
+
+    def run(args: list[str]) -> subprocess.CompletedProcess:
+        server = servers.get()
+        try:
+            return server.run(args, d)
+        finally:
+            servers.put(server)
+
+    yield run
+    while not servers.empty():
+        servers.get().close()
 
 
 def _downstream(rules: set[str], children: dict[str, set[str]]) -> set[str]:
@@ -175,24 +200,24 @@ def _readers(key: str) -> set[str]:
     return {r for r, paths in READS.items() if any(key == p or key.startswith(p + ".") for p in paths)}
 
 
-def test_every_rule_reruns_on_the_keys_its_stage_reads_and_no_other_rule_does(scratch):
+def test_every_rule_reruns_on_the_keys_its_stage_reads_and_no_other_rule_does(scratch, dry):
     d, env, children = scratch
     config = cfg.load(d / "config/ci.yaml")
 
     with ThreadPoolExecutor(2) as pool:
-        results = list(pool.map(lambda rule: check_rule(d, env, children, config, rule), sorted(READS)))
+        results = list(pool.map(lambda rule: check_rule(d, dry, children, config, rule), sorted(READS)))
     for rule, keys, expected, listed in results:
         assert rule in listed, f"{rule} does not rerun after a change of {keys}"
         assert listed == expected, f"after a change of {rule}'s keys: extra {listed - expected}, missing {expected - listed}"
 
 
-def check_rule(d: Path, env: dict, children: dict, config: dict, rule: str):
+def check_rule(d: Path, dry, children: dict, config: dict, rule: str):
     """Change every key ``rule`` reads; (rule, keys, the rules expected to rerun, the rules snakemake -n lists)."""
     keys = sorted(k for k in {leaf for p in READS[rule] for leaf in _leaves(config, p)} - SKIP
                   if _value(config, k) is not None)  # an unset optional key (a path, a WAV scale) stays unset
     extra = d / f"change_{rule}.yaml"
     extra.write_text(yaml.safe_dump(_override(config, keys)))
-    out = _run(["-n", "--configfile", "config/ci.yaml", extra.name], d, env)
+    out = dry(["-n", "--configfile", "config/ci.yaml", extra.name])
     assert out.returncode == 0, f"{rule}: {out.stderr[-2000:]}"
     expected = _downstream(set().union(*(_readers(k) for k in keys)), children)
     return rule, keys, expected, _jobs(out.stdout + out.stderr)
@@ -217,24 +242,24 @@ def test_an_undeclared_key_read_raises_naming_the_rule_and_the_fix():
         (
             "signals/analysis.py",
             {"sensor_voltage", "noisy", "envelope", "fault_indicator", "snr_study", "snr_study_figure",
-             "defect_events"},
+             "defect_events", "fault_type_voltage"},
         ),
     ],
 )
-def test_a_changed_package_module_reruns_exactly_the_rules_whose_code_imports_it(scratch, module, rules):
+def test_a_changed_package_module_reruns_exactly_the_rules_whose_code_imports_it(scratch, dry, module, rules):
     d, env, children = scratch
     f = d / "src/piezobearing" / module
     original = f.read_text()
     try:
         f.write_text(original + "\n# an edit\n")
-        out = _run(["-n", "--configfile", "config/ci.yaml"], d, env)
+        out = dry(["-n", "--configfile", "config/ci.yaml"])
     finally:
         f.write_text(original)
     assert out.returncode == 0, out.stderr[-2000:]
     assert _jobs(out.stdout + out.stderr) == _downstream(rules, children)
 
 
-def test_a_replaced_record_with_an_older_time_reruns_what_reads_it(scratch):
+def test_a_replaced_record_with_an_older_time_reruns_what_reads_it(scratch, dry):
     from piezobearing.io import write_measurement
     from piezobearing.stages.calibration import nominal_circuit
     from piezobearing.synthesis import PressProtocol, synthesize
@@ -255,7 +280,7 @@ def test_a_replaced_record_with_an_older_time_reruns_what_reads_it(scratch):
     before = record.stat().st_mtime
     write(2)  # another record, then dated a day back (as cp -p, unzip or rsync -a leave it)
     os.utime(record, (before - 86400, before - 86400))
-    out = _run(["-n", *args], d, env)
+    out = dry(["-n", *args])
     assert out.returncode == 0, out.stderr[-2000:]
     assert _jobs(out.stdout + out.stderr) == _downstream(set(RECORD_RULES), children)
     assert RECORD_RULES == {"diagnose", "extract_sensitivity", "fig05", "fit_resistance"}

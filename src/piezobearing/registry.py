@@ -158,6 +158,10 @@ READS: dict[str, list[str]] = {
     "fault_indicator": ["seed", "signals"],
     "snr_study": ["seed", "signals"],
     "fault_classification": ["seed", "signals", "bearing.defects"],
+    "fault_type_voltage": [
+        "seed", *_BEARING, *_HOUSING_GEOMETRY, "housing", *_PZT, *_ALUMINA_DISK,
+        "signals.skip_s", "signals.sensor_fem_correction", *_CIRCUIT,
+    ],
     # diagnostics.smk
     "diagnose": ["seed", "sensor", "synthesis", "calibration", "model", "diagnostics"],
     # diagnostics_bearing.smk

@@ -61,7 +61,10 @@ def pardiso_available() -> bool:
 
 
 def default_solver() -> str:
-    """``pardiso`` if it loads, else ``superlu``."""
+    """``pardiso`` if it loads, else ``superlu``; the environment variable ``PIEZOBEARING_SOLVER=superlu``
+    forces the previous method (benchmarks/bench_workflow.py compares whole runs with each)."""
+    if os.environ.get("PIEZOBEARING_SOLVER") == "superlu":
+        return "superlu"
     return "pardiso" if pardiso_available() else "superlu"
 
 

@@ -46,6 +46,7 @@ rule sensor_convergence:
         meshes=expand(
             f"{RESULTS}/sensor/mesh/stack_L{{level}}.vtk", level=SENSOR_FEM_LEVELS
         ),
+        modal_row=f"{RESULTS}/sensor/convergence_modal_level.json",
     output:
         csv=f"{RESULTS}/sensor/convergence.csv",
     log:
@@ -70,6 +71,8 @@ rule sensor_modal:
     output:
         json=f"{RESULTS}/sensor/modal.json",
         mode=f"{RESULTS}/sensor/first_axial_mode.npz",
+        ritz=f"{RESULTS}/sensor/ritz_model.npz",
+        convergence_row=f"{RESULTS}/sensor/convergence_modal_level.json",
     log:
         f"{RESULTS}/logs/sensor_modal.log",
     benchmark:
@@ -88,7 +91,7 @@ rule sensor_modal:
 
 rule sensor_harmonic:
     input:
-        mesh=SENSOR_FEM_MESH,
+        ritz=f"{RESULTS}/sensor/ritz_model.npz",
         modal=f"{RESULTS}/sensor/modal.json",
         resistance=f"{RESULTS}/calibration/resistance.json",
         lowfreq=f"{RESULTS}/sensor/lowfreq.json",
@@ -103,7 +106,7 @@ rule sensor_harmonic:
         "../envs/piezobearing.yaml"
     threads: 1
     resources:
-        mem_mb=2600,
+        mem_mb=500,
         runtime=2,
     params:
         **stage_params("sensor_harmonic", "workflow/scripts/sensor_harmonic.py"),

@@ -1,6 +1,7 @@
 # From sensor force to fault detection (paper Sec. IV, Fig. 9 and 10): voltage
 # through the calibrated sensor model, white noise at the configured SNR,
-# envelope spectrum, fault indicator, detection against SNR.
+# envelope spectrum, fault indicator, detection against SNR, fault-type classification.
+from piezobearing.signals.outputs import extra_fault_types
 
 FIGURES.extend([f"{RESULTS}/figures/{n}.png" for n in ("fig09", "fig10", "snr_study")])
 SCORECARD_PARTS.append(f"{RESULTS}/scorecard/signals.csv")
@@ -284,11 +285,47 @@ rule scorecard_signals:
         "../scripts/scorecard_signals.py"
 
 
+rule fault_type_voltage:
+    input:
+        resistance=f"{RESULTS}/calibration/resistance.json",
+        harmonic=(
+            [f"{RESULTS}/sensor/harmonic.csv"]
+            if config["signals"]["sensor_fem_correction"]
+            else []
+        ),
+    output:
+        force=f"{RESULTS}/signals/fault_types/sensor_force_{{fault_type}}.csv",
+        csv=f"{RESULTS}/signals/fault_types/voltage_{{fault_type}}.csv",
+        json=f"{RESULTS}/signals/fault_types/voltage_{{fault_type}}.json",
+    log:
+        f"{RESULTS}/logs/fault_type_voltage_{{fault_type}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/fault_type_voltage_{{fault_type}}.tsv"
+    wildcard_constraints:
+        fault_type="outer_race|inner_race|rolling_element",
+    conda:
+        "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        # the LPM and the housing_transient rule's solve (2.3 GB) in one job
+        mem_mb=2500,
+        runtime=10,
+    params:
+        **stage_params("fault_type_voltage", "workflow/scripts/fault_type_voltage.py"),
+    script:
+        "../scripts/fault_type_voltage.py"
+
+
 rule fault_classification:
     input:
         healthy=f"{RESULTS}/signals/voltage_healthy.csv",
         faulty=f"{RESULTS}/signals/voltage_faulty.csv",
         kinematics=f"{RESULTS}/bearing/kinematics.json",
+        # one record per further fault type of signals.detector.classification_types
+        types=[
+            f"{RESULTS}/signals/fault_types/voltage_{t}.csv"
+            for t in extra_fault_types(config)
+        ],
     output:
         json=f"{RESULTS}/signals/classification.json",
         csv=f"{RESULTS}/signals/classification.csv",

@@ -8,4 +8,4 @@ from piezobearing.stages.signals import classification
 config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
 
 i, o = snakemake.input, snakemake.output
-classification({"healthy": i.healthy, "faulty": i.faulty}, i.kinematics, o.json, o.csv, o.roc, config)
+classification({"healthy": i.healthy, "faulty": i.faulty}, i.kinematics, o.json, o.csv, o.roc, config, list(i.types))

@@ -8,4 +8,4 @@ from piezobearing.stages.sensor_fem import sensor_harmonic
 config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
 
 i, o = snakemake.input, snakemake.output
-sensor_harmonic(i.mesh, i.modal, i.resistance, i.lowfreq, o.csv, o.band, config)
+sensor_harmonic(i.ritz, i.modal, i.resistance, i.lowfreq, o.csv, o.band, config)

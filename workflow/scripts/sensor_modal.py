@@ -7,4 +7,5 @@ from piezobearing.stages.sensor_fem import sensor_modal
 
 config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
 
-sensor_modal(snakemake.input.mesh, snakemake.output.json, snakemake.output.mode, config)
+o = snakemake.output
+sensor_modal(snakemake.input.mesh, o.json, o.mode, o.ritz, o.convergence_row, config)

@@ -108,3 +108,13 @@ def housing_transient(case: str, m: HousingMesh, contact: dict, config: dict) ->
         "modes": {**modes, "config": {"housing": config["housing"]}},
         "summary": {**summary, "config": {k: config[k] for k in ("housing", "bearing", "sensor", "sensor_fem")}},
     }
+
+
+def fault_type_force(config: dict) -> pd.DataFrame:
+    """Rule fault_type_voltage's bearing part: the faulty case's sensor force (time_s, force_N) of ``config``
+    in one pass: the LPM (faulty case only), the housing mesh with its grooves, the housing solve."""
+    b = config["bearing"]
+    run = run_lpm(b, True, "compiled", config["seed"])
+    m = build_housing_mesh(housing_geometry(config), True, config["housing"]["mesh_level"])
+    tr = transient("faulty", m, {k: run[k] for k in ("time_s", "load_N", "angle_rad")}, config)
+    return pd.DataFrame({"time_s": tr["time_s"], "force_N": tr["force_N"]})

@@ -146,27 +146,36 @@ def _assemble(mesh: StackMesh, p: SensorFemParams) -> fem.Assembled:
     return fem.assemble(mesh, p.materials, order=p.order, load_face="bottom")
 
 
-def convergence_table(meshes: list[StackMesh], p: SensorFemParams) -> pd.DataFrame:
-    """First axial frequency (short and open circuit) on every mesh, with the change from the previous one."""
+def convergence_row(rs: fem.ReducedSystem, level: int, mesh: StackMesh) -> dict:
+    """The convergence table's row of one mesh: the SS family's first axial frequency, short and open."""
+    short = fem.modes(rs, 3, "short")
+    labels = [fem.label_mode(rs, short.shapes[:, i])[0] for i in range(3)]
+    i_ax = labels.index("axial")
+    f_open = fem.modes(rs, 3, "open").frequency_Hz[i_ax]
+    return {
+        "level": level,
+        "multiplier": mesh.level,
+        "n_cells": mesh.n_cells,
+        "n_dof": int(rs.asm.n_u + rs.asm.p_coors.shape[0]),
+        "first_axial_short_Hz": float(short.frequency_Hz[i_ax]),
+        "first_axial_open_Hz": float(f_open),
+    }
+
+
+def convergence_table(meshes: list, p: SensorFemParams, known: dict | None = None) -> pd.DataFrame:
+    """First axial frequency (short and open circuit) on every mesh, with the change from the previous one.
+
+    ``known``: rows already computed, by level (1-based), as :func:`convergence_row` returns them (the rule
+    sensor_modal computes the row of its own mesh on the system it factorised anyway).
+    """
     rows = []
-    for k, mesh in enumerate(meshes, start=1):
+    for k, mesh in enumerate(meshes, start=1):  # a level in ``known`` may have None for its mesh
+        if known and k in known:
+            rows.append(dict(known[k]))
+            continue
         t0 = time.perf_counter()
-        asm = _assemble(mesh, p)
-        rs = fem.reduce(asm, fem.stack_conditions(p.geometry.z_interfaces_m, "SS"))
-        short = fem.modes(rs, 3, "short")
-        labels = [fem.label_mode(rs, short.shapes[:, i])[0] for i in range(3)]
-        i_ax = labels.index("axial")
-        f_open = fem.modes(rs, 3, "open").frequency_Hz[i_ax]
-        rows.append(
-            {
-                "level": k,
-                "multiplier": mesh.level,
-                "n_cells": mesh.n_cells,
-                "n_dof": int(asm.n_u + asm.p_coors.shape[0]),
-                "first_axial_short_Hz": float(short.frequency_Hz[i_ax]),
-                "first_axial_open_Hz": float(f_open),
-            }
-        )
+        rs = fem.reduce(_assemble(mesh, p), fem.stack_conditions(p.geometry.z_interfaces_m, "SS"))
+        rows.append(convergence_row(rs, k, mesh))
         # Wall-clock time goes to the log only: result files must be identical from run to run.
         log.info("convergence level %d (%.2f s): %s", k, time.perf_counter() - t0, rows[-1])
     df = pd.DataFrame(rows)
@@ -292,23 +301,53 @@ def sweep_frequencies(p: SensorFemParams, f_res_Hz: float) -> np.ndarray:
     return np.unique(f)
 
 
+def ritz_arrays(rs: fem.ReducedSystem, p: SensorFemParams) -> dict:
+    """The harmonic analysis's Ritz model of the SS family, as arrays (what :func:`harmonic_from_ritz` needs).
+
+    ``p.n_ritz_modes`` short-circuit modes plus the static shapes (:func:`fem.reduced_model`, undamped: the
+    damping ratio is applied where the model is used), the first axial frequency short and open, and the
+    size of the displacement field. Computed by the rule sensor_modal on its SS system, whose saddle
+    factorisation it already holds, so sensor_harmonic assembles and factorises nothing.
+    """
+    short = fem.modes(rs, p.n_ritz_modes, "short")
+    model = fem.reduced_model(rs, short)
+    labels = [fem.label_mode(rs, short.shapes[:, i])[0] for i in range(len(short.frequency_Hz))]
+    i_ax = labels.index("axial")
+    f_open = fem.modes(rs, i_ax + 2, "open").frequency_Hz[i_ax]
+    return {
+        "omega2": model.omega2,
+        "b_k": model.b_k,
+        "f_k": model.f_k,
+        "c0_F": np.float64(model.c0_F),
+        "first_axial_short_Hz": np.float64(short.frequency_Hz[i_ax]),
+        "first_axial_open_Hz": np.float64(f_open),
+        "n_dof_displacement": np.int64(rs.asm.n_u),
+    }
+
+
 def harmonic_results(mesh: StackMesh, p: SensorFemParams, rc_paper: SensorCircuit, band_low_Hz: float):
-    """Harmonic response with the circuit, the band edges, the RC comparison.
+    """Harmonic response with the circuit, the band edges, the RC comparison (assembling the mesh's system).
 
     ``rc_paper`` is the calibration stage's RC model (fitted R, cable, the
     paper's d33 and Cp); its R and cable capacitance are the FEM's circuit.
     Returns (the sweep DataFrame, the band dict).
     """
-    resistance_ohm = rc_paper.resistance_ohm
     t0 = time.perf_counter()
-    asm = _assemble(mesh, p)
-    rs = fem.reduce(asm, fem.stack_conditions(p.geometry.z_interfaces_m, "SS"))
-    short = fem.modes(rs, p.n_ritz_modes, "short")
-    model = fem.reduced_model(rs, short, p.damping_ratio)
+    rs = fem.reduce(_assemble(mesh, p), fem.stack_conditions(p.geometry.z_interfaces_m, "SS"))
+    out = harmonic_from_ritz(ritz_arrays(rs, p), p, rc_paper, band_low_Hz)
+    log.info("harmonic analysis: %.2f s", time.perf_counter() - t0)
+    return out
+
+
+def harmonic_from_ritz(ritz: dict, p: SensorFemParams, rc_paper: SensorCircuit, band_low_Hz: float):
+    """:func:`harmonic_results` from the Ritz model of :func:`ritz_arrays` (no FEM solve)."""
+    resistance_ohm = rc_paper.resistance_ohm
+    model = fem.ReducedModel(
+        omega2=ritz["omega2"], b_k=ritz["b_k"], f_k=ritz["f_k"], c0_F=float(ritz["c0_F"]),
+        damping_ratio=p.damping_ratio,
+    )
     circuit = fem.MeasuringCircuit(resistance_ohm, p.cable_capacitance_F)
-    labels = [fem.label_mode(rs, short.shapes[:, i])[0] for i in range(len(short.frequency_Hz))]
-    f_short = float(short.frequency_Hz[labels.index("axial")])
-    f_open = float(fem.modes(rs, labels.index("axial") + 2, "open").frequency_Hz[labels.index("axial")])
+    f_short, f_open = float(ritz["first_axial_short_Hz"]), float(ritz["first_axial_open_Hz"])
     f_peak = fem.loaded_resonance_Hz(model, circuit, 0.97 * f_short, 1.03 * f_open)
     ref = abs(model.voltage_per_force(p.reference_frequency_Hz, circuit)[0])
     r_db = 10 ** (p.band_ratio_dB / 20)
@@ -364,7 +403,7 @@ def harmonic_results(mesh: StackMesh, p: SensorFemParams, rc_paper: SensorCircui
             "band_high_Hz": PAPER_BAND_HIGH_HZ,
             "reference_sensitivity_V_per_N": PAPER_REFERENCE_SENSITIVITY_V_PER_N,
         },
-        "mesh": {"level": p.mesh_level, "multiplier": p.multiplier, "n_dof_displacement": int(asm.n_u)},
+        "mesh": {"level": p.mesh_level, "multiplier": p.multiplier,
+                 "n_dof_displacement": int(ritz["n_dof_displacement"])},
     }
-    log.info("harmonic analysis: %.2f s", time.perf_counter() - t0)
     return df, band

@@ -47,8 +47,9 @@ import numpy as np
 from scipy.signal import butter, sosfreqz
 from scipy.stats import f as f_dist
 
-#: Stable codes of the cases, used to derive independent noise streams.
-CASE_CODES = {"healthy": 0, "faulty": 1}
+#: Stable codes of the cases, used to derive independent noise streams (the fault types: the
+#: classification's records per type, rule fault_type_voltage).
+CASE_CODES = {"healthy": 0, "faulty": 1, "outer_race": 2, "inner_race": 3, "rolling_element": 4}
 
 
 # --------------------------------------------------------------------------- settings

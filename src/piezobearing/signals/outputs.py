@@ -186,19 +186,43 @@ def true_fault_type(bearing: dict) -> str:
     return types[0]
 
 
-def fault_classification(voltages: dict, kinematics: dict, config: dict) -> tuple[dict, pd.DataFrame, pd.DataFrame]:
+def extra_fault_types(config: dict) -> list[str]:
+    """The fault types of ``signals.detector.classification_types`` that need their own record (rule
+    fault_type_voltage): all but the faulty case's own type when it has exactly one; none without a defect
+    (the size and place of the extra types' defect come from the faulty case's first defect)."""
+    defects = config["bearing"]["defects"]
+    if not defects:
+        return []
+    own = {d["type"] for d in defects}
+    return [t for t in dict.fromkeys(config["signals"]["detector"]["classification_types"]) if own != {t}]
+
+
+def fault_type_config(config: dict, fault_type: str) -> dict:
+    """The config of rule fault_type_voltage_{type}: the faulty case with one defect, the first of
+    ``bearing.defects`` (its width, depth, angle) as a ``fault_type`` defect; the housing by the reduced
+    modal solve without the direct check (the main chain checks the method)."""
+    d = dict(config["bearing"]["defects"][0], type=fault_type)
+    return {**config, "bearing": {**config["bearing"], "defects": [d]},
+            "housing": {**config["housing"], "method": "reduced", "direct_check_s": 0.0}}
+
+
+def fault_classification(voltages: dict, kinematics: dict, config: dict,
+                         type_voltages: dict | None = None) -> tuple[dict, pd.DataFrame, pd.DataFrame]:
     """Rule fault_classification: fault type over noise seeds and ROC across SNR.
 
-    ``voltages`` maps healthy and faulty to their voltage (v [V], dt [s]) on the model clock; each is sampled
-    at signals.sample_rate_Hz, then replicate j adds the configured DAQ noise from noise_rng(seed, case, j)
-    (replicate 0 is the noisy rule's record). Rows of the confusion matrix: true type (healthy: none),
-    columns: classified type. Returns the record (classification.json), the per-seed table
-    (classification.csv) and the ROC table (roc.csv).
+    ``voltages`` maps healthy and faulty to their voltage (v [V], dt [s]) on the model clock;
+    ``type_voltages`` (optional) maps further fault types to theirs (rule fault_type_voltage_{type}), so
+    that the confusion matrix has a row per fault type. Each record is sampled at signals.sample_rate_Hz,
+    then replicate j adds the configured DAQ noise from noise_rng(seed, case, j) (replicate 0 of healthy
+    and faulty is the noisy rule's record). Rows of the confusion matrix: true type (healthy: none),
+    columns: classified type. The ROC is the faulty case's. Returns the record (classification.json), the
+    per-seed table (classification.csv) and the ROC table (roc.csv).
     """
     s = config["signals"]
     truth = {"healthy": "none", "faulty": true_fault_type(config["bearing"])}
+    truth.update({t: t for t in (type_voltages or {})})
     records = {}
-    for case, (v, dt) in voltages.items():
+    for case, (v, dt) in {**voltages, **(type_voltages or {})}.items():
         smp = daq.sample(v, dt, s["sample_rate_Hz"])
         records[case] = (truth[case], smp.voltage_V, smp.dt_s)
     es, ds, ns = sig.EnvelopeSettings.from_config(s), sdet.DetectorSettings.from_config(s), daq.NoiseSettings.from_config(s)

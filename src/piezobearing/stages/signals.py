@@ -169,11 +169,30 @@ def defect_events(healthy_csv: str, faulty_csv: str, kinematics_json: str, out_c
 
 
 def classification(voltages: dict, kinematics_json: str, out_json: str, out_csv: str, out_roc_csv: str,
-                   config: dict) -> None:
+                   config: dict, type_voltages: list[str] | None = None) -> None:
     """Fault type over noise seeds and ROC across SNR → classification.json, classification.csv, roc.csv
-    (:func:`piezobearing.signals.outputs.fault_classification`; ``voltages``: healthy and faulty voltage CSVs)."""
+    (:func:`piezobearing.signals.outputs.fault_classification`; ``voltages``: healthy and faulty voltage CSVs;
+    ``type_voltages``: rule fault_type_voltage's CSVs, ``voltage_{type}.csv``)."""
     series = {case: read_series(path, "voltage_V")[1:] for case, path in voltages.items()}
-    record, rows, roc = outputs.fault_classification(series, kinematics(kinematics_json), config)
+    types = {Path(p).stem.removeprefix("voltage_"): read_series(p, "voltage_V")[1:] for p in type_voltages or []}
+    record, rows, roc = outputs.fault_classification(series, kinematics(kinematics_json), config, types)
     write_csv(rows, out_csv)
     write_csv(roc, out_roc_csv)
     write_json(record, out_json)
+
+
+def fault_type_voltage(fault_type: str, resistance_json: str, harmonic_csv: str | None, out_force_csv: str,
+                       out_csv: str, out_json: str, config: dict) -> None:
+    """The sensor force and voltage of one more fault type for the classification →
+    fault_types/{sensor_force,voltage}_{type}.csv, voltage_{type}.json.
+
+    The faulty case's first defect as a ``fault_type`` defect (:func:`~piezobearing.signals.outputs.fault_type_config`)
+    through the bearing chain's functions (:func:`piezobearing.bearing.outputs.fault_type_force`: LPM, housing
+    mesh, reduced housing solve) and the sensor_voltage rule's function.
+    """
+    from ..bearing.outputs import fault_type_force
+
+    cfg = outputs.fault_type_config(config, fault_type)
+    force = fault_type_force(cfg)
+    write_csv(force, out_force_csv, "%.9g")
+    sensor_voltage(out_force_csv, resistance_json, harmonic_csv, out_csv, out_json, cfg)

@@ -12,7 +12,7 @@ noise floor is the voltage channel's alone (response 0).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -85,9 +85,12 @@ class BearingModel:
         return out
 
     def params(self, record: RigRecord, start: dict[str, float] | None = None) -> list[Param]:
+        """Nuisance and effect parameters at ``start``; a nuisance parameter an effect takes over
+        (``Effect.holds``, e.g. the speed within tolerance under ``shaft_speed``) is held at its nominal value."""
         start = {**self.defaults(record), **(start or {})}
-        ps = self.nuisance(record) + [p for e in self.effects for p in e.params(record)]
-        return [p.with_value(start.get(p.name)) for p in ps]
+        held = {n for e in self.effects for n in getattr(e, "holds", ())}
+        out = [replace(p, vary=False) if p.name in held else p.with_value(start.get(p.name)) for p in self.nuisance(record)]
+        return out + [p.with_value(start.get(p.name)) for e in self.effects for p in e.params(record)]
 
     def simulate(self, values: dict, record: RigRecord, input_: np.ndarray | None = None) -> np.ndarray:
         add = None

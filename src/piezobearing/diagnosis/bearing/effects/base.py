@@ -18,7 +18,11 @@ from .. import chain
 
 
 class Effect(EngineEffect):
-    """Base class of a running-bearing effect (hooks: :meth:`additive`)."""
+    """Base class of a running-bearing effect (hooks: :meth:`additive`; :attr:`holds`)."""
+
+    #: Nuisance parameters the effect takes over: held at their nominal value while it is in the model
+    #: (a free nuisance parameter that the effect's own parameter only multiplies would make the two one).
+    holds: tuple[str, ...] = ()
 
     def additive(self, values: dict, record) -> np.ndarray | None:
         """A voltage added to the record, independent of the bearing [V]."""

@@ -14,6 +14,17 @@ Model
 P_d / 2 is each roller's gap with concentric rings in the quasi-static
 equilibrium; a negative value is a preload. Trades off partly with the load.
 
+Where it cannot be seen: once the clearance is so wide that at most two
+rollers ever carry the load, their loads follow from statics alone and the
+sensor force no longer depends on it. A roller alone at the bottom
+deflects by d_1 = (F_r / K)^0.9; its neighbours at +-one pitch theta touch
+only while (P_d / 2 + d_1) cos(theta) > P_d / 2, i.e. below
+P_d = 2 d_1 cos(theta) / (1 - cos(theta)): 35.3 um for the paper's bearing
+at 500 N (53.9 um at 800 N). Above that knee a record only bounds the
+clearance from below (the profile-likelihood interval of the diagnosis
+reaches the upper bound, 200 um); near it the cost is one-sided and the
+Jacobian's symmetric interval is not to be trusted.
+
 Parameter: ``radial_clearance_m`` in [-20, 200] um, neutral at the config's
 ``bearing.radial_clearance_m``.
 """

@@ -41,6 +41,8 @@ from .base import Effect, ForceRecord
 
 #: Half-length [samples] and Kaiser beta of the interpolation kernel.
 HALF, BETA = 16, 6.0
+#: Samples interpolated at once: the kernel's (samples x 2 HALF) arrays stay ~1 MB each for any record length.
+CHUNK = 1 << 12
 
 
 def kernel(frac: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -55,11 +57,14 @@ def kernel(frac: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def drifted(force_N: np.ndarray, epsilon: float, pad: int) -> np.ndarray:
     """The force read at index pad + (j - pad)(1 + epsilon) for each index j >= pad [N]."""
     x = np.asarray(force_N, dtype=float)
-    j = np.arange(x.size, dtype=float)
-    src = np.clip(np.where(j >= pad, pad + (j - pad) * (1.0 + epsilon), j), 0.0, x.size - 1.0)
-    k0 = np.floor(src).astype(int)
-    m, h = kernel(src - k0)
-    return np.sum(x[np.clip(k0[:, None] + m[None, :], 0, x.size - 1)] * h, axis=1)
+    out = np.empty_like(x)
+    for a in range(0, x.size, CHUNK):
+        j = np.arange(a, min(a + CHUNK, x.size), dtype=float)
+        src = np.clip(np.where(j >= pad, pad + (j - pad) * (1.0 + epsilon), j), 0.0, x.size - 1.0)
+        k0 = np.floor(src).astype(int)
+        m, h = kernel(src - k0)
+        out[a : a + j.size] = np.sum(x[np.clip(k0[:, None] + m[None, :], 0, x.size - 1)] * h, axis=1)
+    return out
 
 
 def noise_gain(f_per_sample: np.ndarray, epsilon: float, n: int, k: int = 16) -> np.ndarray:
@@ -69,8 +74,12 @@ def noise_gain(f_per_sample: np.ndarray, epsilon: float, n: int, k: int = 16) ->
     """
     shift = epsilon * np.linspace(0, n - 1, k)
     m, h = kernel(shift - np.floor(shift))
-    e = np.exp(-2j * np.pi * np.outer(m, np.asarray(f_per_sample, dtype=float)))
-    return np.sqrt(np.mean(np.abs(h @ e) ** 2, axis=0))
+    f = np.asarray(f_per_sample, dtype=float)
+    out = np.empty(f.shape)
+    for a in range(0, f.size, CHUNK):  # (taps x frequencies) complex arrays, a chunk at a time
+        e = np.exp(-2j * np.pi * np.outer(m, f[a : a + CHUNK]))
+        out[a : a + CHUNK] = np.sqrt(np.mean(np.abs(h @ e) ** 2, axis=0))
+    return out
 
 
 class ClockDrift(Effect):

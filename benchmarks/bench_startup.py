@@ -1,0 +1,90 @@
+"""Snakemake's start-up on this workflow (``snakemake -n``), the previous code beside this checkout's, as ratios.
+
+Every ``snakemake`` call parses the Snakefile, which hashes the package code each rule runs
+(``registry.code_hash``): a dry run, each of the rerun test's 27 dry runs, the start of every real run.
+``--old REV`` (a git revision) is exported to a temporary folder; the two run in turn (old, new, old, new
+...), each a fresh process, and each call's CPU seconds (user + system, this process's children) and wall
+seconds are recorded; the ratio is taken pair by pair, which keeps it meaningful on a shared machine.
+
+Writes ``results/benchmarks/startup.json``. Usage: ``python benchmarks/bench_startup.py --old main [-n 5]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+BIN = Path(sys.executable).parent
+
+
+def _export(rev: str, dest: Path) -> Path:
+    dest.mkdir(parents=True)
+    archive = subprocess.run(["git", "archive", rev], cwd=ROOT, capture_output=True, check=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(dest)], input=archive, check=True)
+    (dest / "data").mkdir(exist_ok=True)
+    return dest
+
+
+def timed(folder: Path, args: list[str]) -> dict:
+    """One ``snakemake ARGS`` in ``folder`` with its own package (PYTHONPATH): CPU and wall seconds."""
+    env = {**os.environ, "PYTHONPATH": str(folder / "src")}
+    r0, t0 = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
+    out = subprocess.run([str(BIN / "snakemake"), *args], cwd=folder, env=env, capture_output=True, text=True)
+    wall, r1 = time.perf_counter() - t0, resource.getrusage(resource.RUSAGE_CHILDREN)
+    if out.returncode != 0:
+        raise RuntimeError(out.stderr[-2000:])
+    return {"cpu_s": r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime, "wall_s": wall}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--old", default="main")
+    ap.add_argument("-n", type=int, default=5)
+    a = ap.parse_args()
+    tmp = Path(tempfile.mkdtemp(prefix="bench_startup_"))
+    old, new = _export(a.old, tmp / "old"), _export("HEAD", tmp / "new")
+    args = ["-n", "--configfile", "config/ci.yaml"]
+    timed(old, args), timed(new, args)  # warm-up: bytecode compiled, files in the page cache
+    pairs = [(timed(old, args), timed(new, args)) for _ in range(a.n)]
+    sys.path.insert(0, str(ROOT / "tests"))
+    from warm_snakemake import WarmSnakemake
+
+    warm = WarmSnakemake({**os.environ, "PYTHONPATH": str(new / "src")})
+    warm_runs = []
+    for _ in range(a.n):
+        t0 = time.perf_counter()
+        assert warm.run(args, new).returncode == 0
+        warm_runs.append({"cpu_s": warm.last_cpu_s, "wall_s": time.perf_counter() - t0})
+    warm.close()
+    rec = {
+        "what": "snakemake -n --configfile config/ci.yaml (a clean folder: every job listed), a fresh process",
+        "old_revision": a.old,
+        "runs": a.n,
+        "old": {k: statistics.median(p[0][k] for p in pairs) for k in ("cpu_s", "wall_s")},
+        "new": {k: statistics.median(p[1][k] for p in pairs) for k in ("cpu_s", "wall_s")},
+        "new_over_old_median_of_pairs": {
+            k: statistics.median(p[1][k] / p[0][k] for p in pairs) for k in ("cpu_s", "wall_s")
+        },
+        "pairs": pairs,
+        "new_warm": {k: statistics.median(r[k] for r in warm_runs) for k in ("cpu_s", "wall_s")},
+        "new_warm_note": "the same dry run as a child forked from tests/warm_snakemake.py's server (Snakemake, "
+        "SciPy and the package imported once), as the rerun test asks its 27 dry runs",
+        "load_average_1_5_15_at_end": os.getloadavg(),
+    }
+    out = ROOT / "results/benchmarks/startup.json"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(rec, indent=1) + "\n")
+    print(json.dumps({k: rec[k] for k in ("old", "new", "new_over_old_median_of_pairs", "new_warm")}, indent=1))
+
+
+if __name__ == "__main__":
+    main()

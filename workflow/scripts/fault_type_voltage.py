@@ -1,0 +1,12 @@
+import sys
+
+sys.stderr = open(snakemake.log[0], "w")
+
+from piezobearing.registry import declared_config
+from piezobearing.stages.signals import fault_type_voltage
+
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
+
+i, o = snakemake.input, snakemake.output
+harmonic = i.harmonic[0] if i.harmonic else None
+fault_type_voltage(snakemake.wildcards.fault_type, i.resistance, harmonic, o.force, o.csv, o.json, config)
