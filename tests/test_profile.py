@@ -79,3 +79,14 @@ def test_an_end_the_data_do_not_close_is_the_bound():
     h = honest_intervals(fn, ps, res)["tau_s"]
     assert h.method == "profile"
     assert h.at_bound == [True, False] and h.ci[0] == pytest.approx(1e-3)
+
+
+def test_an_evaluation_budget_stops_a_profile_and_says_so():
+    """The same profiled tau (seed 0 of the decay) with too few evaluations allowed keeps the Jacobian
+    interval, flagged; the cheap checks are counted too, and a generous budget changes nothing."""
+    fn, ps, res = decay_problem(0)
+    free = honest_intervals(fn, ps, res)["tau_s"]
+    stopped = honest_intervals(fn, ps, res, max_evaluations=6)["tau_s"]
+    assert stopped.method == "jacobian (not honest; profile over budget)"
+    assert stopped.ci == stopped.jacobian_ci == free.jacobian_ci
+    assert honest_intervals(fn, ps, res, max_evaluations=100_000)["tau_s"].ci == free.ci

@@ -41,6 +41,10 @@ from .verdict import findings, verdict
 
 #: Most parameters of the final model whose intervals are profiled (the rest keep the Jacobian's, flagged).
 PROFILES = 4
+#: Most forward-model evaluations the interval checks and profiles may spend in all (a count, so the
+#: diagnosis stays reproducible): a bearing model of 16 parameters (roller_scatter) took over 6 CPU
+#: minutes without it; a calibration diagnosis spends 2-4 (its intervals pass the cheap check).
+PROFILE_EVALUATIONS = 600
 
 
 @dataclass
@@ -221,6 +225,7 @@ def final_intervals(final: ModelFit, record: Record, v: np.ndarray, floor: Noise
         max_profiles=PROFILES,
         max_nfev=settings.max_nfev,
         ftol=settings.ftol,
+        max_evaluations=PROFILE_EVALUATIONS,
     )
     final.model.release()
     res.ci95_jacobian = dict(res.ci95)

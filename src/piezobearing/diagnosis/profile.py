@@ -248,6 +248,7 @@ def honest_intervals(
     max_profiles: int = 6,
     max_nfev: int | None = None,
     ftol: float = 1e-8,
+    max_evaluations: int | None = None,
 ) -> dict[str, ProfileInterval]:
     """95% intervals of ``names`` (default: every free parameter), profiled where the Jacobian's are not honest.
 
@@ -256,8 +257,15 @@ def honest_intervals(
     [1 - ``tolerance``, 1 + ``tolerance``] times D, or reach a bound, is
     replaced by :func:`profile_interval`, at most ``max_profiles`` of them
     (the worst first; the others keep the Jacobian's with ``method``
-    ``"jacobian (not honest; not profiled)"``), so the cost stays bounded.
+    ``"jacobian (not honest; not profiled)"``), and at most
+    ``max_evaluations`` residual evaluations in all (checks and profiles; a
+    profile that would go beyond them is stopped and its parameter keeps the
+    Jacobian's interval, ``method`` ``"jacobian (not honest; profile over
+    budget)"``), so the cost stays bounded for a model of many parameters
+    whose every evaluation runs a long forward model.
     """
+    budget = _Budget(residual_fn, max_evaluations)
+    residual_fn = budget
     free = [p for p in params if p.vary]
     index = {p.name: j for j, p in enumerate(free)}
     names = [n for n in (names if names is not None else index) if n in index]
@@ -279,10 +287,31 @@ def honest_intervals(
         if k >= max_profiles:
             out[n].method = "jacobian (not honest; not profiled)"
             continue
-        prof = profile_interval(residual_fn, params, result, n, max_nfev=max_nfev, ftol=ftol)
+        try:
+            prof = profile_interval(residual_fn, params, result, n, max_nfev=max_nfev, ftol=ftol)
+        except BudgetSpent:
+            out[n].method = "jacobian (not honest; profile over budget)"
+            continue
         prof.rise = out[n].rise
         out[n] = prof
     return out
+
+
+class BudgetSpent(Exception):
+    """Raised by :class:`_Budget` when the evaluations allowed are spent."""
+
+
+class _Budget:
+    """``residual_fn`` counted: raises :class:`BudgetSpent` past ``limit`` calls (None: no limit)."""
+
+    def __init__(self, fn: Callable[[dict[str, float]], np.ndarray], limit: int | None):
+        self.fn, self.limit, self.calls = fn, limit, 0
+
+    def __call__(self, values: dict[str, float]) -> np.ndarray:
+        if self.limit is not None and self.calls >= self.limit:
+            raise BudgetSpent
+        self.calls += 1
+        return self.fn(values)
 
 
 def _internal_cov(result: FitResult, free: list[Param]) -> np.ndarray:
