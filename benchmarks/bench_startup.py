@@ -26,7 +26,8 @@ ROOT = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
 
 
-def _export(rev: str, dest: Path) -> Path:
+def export_revision(rev: str, dest: Path) -> Path:
+    """Revision ``rev`` of this repository as a plain folder ``dest`` (with an empty ``data/``)."""
     dest.mkdir(parents=True)
     archive = subprocess.run(["git", "archive", rev], cwd=ROOT, capture_output=True, check=True).stdout
     subprocess.run(["tar", "-x", "-C", str(dest)], input=archive, check=True)
@@ -51,7 +52,7 @@ def main() -> None:
     ap.add_argument("-n", type=int, default=5)
     a = ap.parse_args()
     tmp = Path(tempfile.mkdtemp(prefix="bench_startup_"))
-    old, new = _export(a.old, tmp / "old"), _export("HEAD", tmp / "new")
+    old, new = export_revision(a.old, tmp / "old"), export_revision("HEAD", tmp / "new")
     args = ["-n", "--configfile", "config/ci.yaml"]
     timed(old, args), timed(new, args)  # warm-up: bytecode compiled, files in the page cache
     pairs = [(timed(old, args), timed(new, args)) for _ in range(a.n)]

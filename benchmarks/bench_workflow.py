@@ -32,6 +32,8 @@ import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+from bench_startup import export_revision  # benchmarks/ is on sys.path when run as a script
+
 ROOT = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
 SKIP = ("results/logs", "results/benchmarks", "results/notebooks", "results/.checked")
@@ -101,14 +103,6 @@ def _run(folder: Path, args: list[str], log: Path, extra_env: dict) -> None:
         f.write(f"\nrc={code}\n")
 
 
-def _export(rev: str, dest: Path) -> Path:
-    dest.mkdir(parents=True)
-    archive = subprocess.run(["git", "archive", rev], cwd=ROOT, capture_output=True, check=True).stdout
-    subprocess.run(["tar", "-x", "-C", str(dest)], input=archive, check=True)
-    (dest / "data").mkdir(exist_ok=True)
-    return dest
-
-
 def record(name: str, old: str, args: list[str], logs: tuple[Path, Path], dirs: tuple[Path, Path]) -> dict:
     t_old, t_new = (parse_time_log(p.read_text()) for p in logs)
     ratio = {k: t_new[k] / t_old[k] for k in ("wall_s", "cpu_s", "peak_rss_MB") if t_old[k]}
@@ -138,7 +132,7 @@ def main() -> None:
         logs, dirs = (Path(a.parse[0]), Path(a.parse[1])), (Path(a.parse[2]), Path(a.parse[3]))
     else:
         tmp = Path(tempfile.mkdtemp(prefix="bench_workflow_"))
-        dirs = (_export(a.old, tmp / "old"), _export("HEAD", tmp / "new"))
+        dirs = (export_revision(a.old, tmp / "old"), export_revision("HEAD", tmp / "new"))
         logs = (tmp / "old.log", tmp / "new.log")
         with ThreadPoolExecutor(2) as pool:
             envs = (dict(e.split("=", 1) for e in a.old_env), {})

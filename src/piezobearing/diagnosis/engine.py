@@ -254,6 +254,12 @@ def residual_psd(x: np.ndarray, dt_s: float, segment_s: float) -> tuple[np.ndarr
 DISPLAY_POINTS = 20_000
 
 
+def _display_bins(n: int, points: int) -> tuple[int, int]:
+    """Samples per bin and number of bins of :func:`envelope_thin` for ``n`` samples, two points per bin."""
+    size = -(-n // (points // 2))
+    return size, -(-n // size)
+
+
 def envelope_thin(x: np.ndarray, points: int = DISPLAY_POINTS) -> np.ndarray:
     """``x`` as at most ``points`` values: per bin of ``ceil(2 n / points)`` samples its minimum and
     maximum in the order they occur, which is what a line plot of ``x`` at that width shows. Unchanged
@@ -262,8 +268,7 @@ def envelope_thin(x: np.ndarray, points: int = DISPLAY_POINTS) -> np.ndarray:
     n = x.size
     if n <= points:
         return x
-    bs = -(-n // (points // 2))
-    bins = -(-n // bs)
+    bs, bins = _display_bins(n, points)
     xp = np.concatenate([x, np.full(bins * bs - n, x[-1], dtype=x.dtype)]).reshape(bins, bs)
     i_lo, i_hi = xp.argmin(axis=1), xp.argmax(axis=1)
     rows = np.arange(bins)
@@ -278,8 +283,7 @@ def thinned_time(time_s: np.ndarray, points: int = DISPLAY_POINTS) -> np.ndarray
     n = time_s.size
     if n <= points:
         return time_s
-    bs = -(-n // (points // 2))
-    bins = -(-n // bs)
+    bs, bins = _display_bins(n, points)
     pos = (np.arange(bins)[:, None] * bs + np.array([0.25, 0.75]) * bs).ravel()
     return np.interp(np.minimum(pos, n - 1), np.arange(n), time_s)
 

@@ -12,7 +12,7 @@ noise floor is the voltage channel's alone (response 0).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -41,7 +41,6 @@ class BearingModel:
     """
 
     effects: tuple[Effect, ...] = ()
-    _cache: dict = field(default_factory=dict, compare=False, repr=False, hash=False)
 
     @classmethod
     def build(cls, names=(), key: str = "bearing.effects") -> "BearingModel":
@@ -59,8 +58,8 @@ class BearingModel:
         return BearingModel((*self.effects, effect))
 
     def release(self) -> None:
-        """Empty the model's cache (the engine calls it when a fit is done)."""
-        self._cache.clear()
+        """Nothing to drop: the model holds no arrays (the chain's voltage cache lives on the record's
+        rig, bounded to 64 MB, and serves every model of the diagnosis)."""
 
     def nuisance(self, record: RigRecord) -> list[Param]:
         """Start phase, speed within tolerance (no tachometer) and DC level."""
