@@ -146,7 +146,16 @@ def _validate(args) -> int:
             f"({stuck['n_samples']} samples, the first at t = {stuck['runs'][0]['start_s']:.3f} s): "
             "clipped; widen the DAQ's input range or lower the gain"
         )
-    print(f"config: {used}")
+    if m.filled is not None:  # resampled across gaps: those samples are the interpolation's
+        from .diagnosis.record import Record
+
+        g = Record(m.time_s, filled=m.filled).filled_gaps()
+        first = g["gaps"][0]
+        print(
+            f"WARNING: {args.file}: column time_s: {g['n_samples']} samples lost in {len(g['gaps'])} gap(s) "
+            f"(the first {first['duration_s'] * 1e3:.3g} ms at t = {first['start_s']:.4g} s) were filled by "
+            "resample_to_uniform; the diagnosis leaves them out of its fit"
+        )
     return 0
 
 
@@ -218,6 +227,10 @@ def _diagnose(args) -> int:
     stuck = (d.get("outside_catalogue") or {}).get("stuck") or {}
     if stuck.get("where"):
         print(f"WARNING: {stuck['where']}")
+    if (d.get("filled_gaps") or {}).get("n_samples"):
+        from .diagnosis.report.sections import filled_gaps_line
+
+        print(f"WARNING: {filled_gaps_line(d['filled_gaps'])}")
     for f in d["unexplained"][:5]:
         print(f"  - {f['where']}")
     if len(d["unexplained"]) > 5:
