@@ -13,8 +13,22 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
+class UniformClock:
+    """Length and step of a uniform clock ``time_s`` (a field of the dataclass that inherits this)."""
+
+    time_s: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return int(self.time_s.size)
+
+    @property
+    def dt_s(self) -> float:
+        return float((self.time_s[-1] - self.time_s[0]) / (self.n - 1))
+
+
 @dataclass(frozen=True, eq=False)
-class Record:
+class Record(UniformClock):
     """Time axis and measured input of one record.
 
     Attributes
@@ -50,14 +64,6 @@ class Record:
     def input_key(self) -> str:
         """The input's name with its unit (``force_N``)."""
         return f"{self.input_name}_{self.input_unit}" if self.input_unit else self.input_name
-
-    @property
-    def n(self) -> int:
-        return int(self.time_s.size)
-
-    @property
-    def dt_s(self) -> float:
-        return float((self.time_s[-1] - self.time_s[0]) / (self.n - 1))
 
     @property
     def sample_rate_Hz(self) -> float:
