@@ -19,7 +19,8 @@
 
 ``piezobearing hide-and-find EFFECT [--param NAME=VALUE ...] [--seed N] [--config FILE]``
     Hide a catalogue effect (a new one, while it is being written) in the
-    configured synthetic calibration record and diagnose it with the whole
+    configured synthetic calibration record (at its ``example`` size, the
+    ``--param`` values over it) and diagnose it with the whole
     catalogue: prints what came first, what was selected, the fitted
     parameters with their 95% intervals and the verdict; exit status 0 when
     the effect (or one it is declared exactly equivalent to) is ranked and
@@ -261,6 +262,9 @@ def _hide_and_find(args) -> int:
             eq = ""
         if not eq:
             return _fail(f"--param {item}: give NAME=VALUE with a number, e.g. --param delay_s=0.015 (item {i + 1})")
+    given = params
+    if args.effect in CATALOGUE:  # the effect's plausible size, the given values over it
+        params = {**CATALOGUE[args.effect].example, **given}
     hidden = [{"name": args.effect, "params": params}]
     seed = config["seed"] if args.seed is None else args.seed
     try:
@@ -277,7 +281,8 @@ def _hide_and_find(args) -> int:
     same |= {e.name for e in CATALOGUE.values() if args.effect in e.equivalent_to}
     first = d["ranking"][0] if d["ranking"] else None
     found = first is not None and first["effect"] in same and d["selected"][:1] == [first["effect"]]
-    print(f"config: {used}; seed {seed}; hidden: {args.effect} {params or '(defaults)'}")
+    source = "" if given == params else " (the effect's example" + (", --param over it)" if given else ")")
+    print(f"config: {used}; seed {seed}; hidden: {args.effect} {params or '(defaults)'}{source}")
     if first is not None:
         print(f"ranked first: {first['effect']} (delta BIC {first['delta_bic']:.4g}): {first['summary']}")
     print(f"selected: {', '.join(d['selected']) or 'nothing'}; verdict: {d['verdict']}")
@@ -410,7 +415,8 @@ def _parser() -> argparse.ArgumentParser:
         "--param",
         action="append",
         metavar="NAME=VALUE",
-        help="a hidden parameter value, e.g. delay_s=0.015 (repeat for more; others: the neutral default)",
+        help="a hidden parameter value, e.g. delay_s=0.015 (repeat for more; others: the effect's example "
+        "size, or neutral where it has none)",
     )
     h.add_argument("--seed", type=int, help="seed of the synthetic record (default: the config's seed)")
     h.add_argument(
