@@ -145,3 +145,42 @@ def test_coarse_adc_noise_is_in_the_floor(ci_config):
         noise.quantisation_step = stationary
     assert blind["noise_floor"]["voltage_noise_V"] < 0.1 * q / np.sqrt(12)
     assert blind["selected"] and blind["verdict"] == "unexplained"
+
+
+# --------------------------------------------------------------------------- drift of any shape
+
+
+@pytest.mark.slow  # two diagnoses of the CI record
+def test_wandering_drift_is_found_with_knots_chosen_by_the_evidence(ci_config, monkeypatch):
+    """A pyroelectric drift that changes course (a hand warming the fixture, then its cooling: +20 mV then
+    -12 mV, Gaussian bumps of 2 s standard deviation) on the CI record: the spline drift, its knot count chosen by BIC, finds it and
+    the record is explained; the cubic alone (the drift's form before) leaves it unexplained."""
+    from piezobearing.diagnosis.calibration.effects import ForceRecord
+    from piezobearing.diagnosis.calibration.effects import baseline_drift as bd
+    from piezobearing.diagnosis.calibration.subject import diagnose_record
+    from piezobearing.diagnosis.settings import DiagnosticsSettings
+    from piezobearing.sensor.calibration import detect_impulses
+    from piezobearing.stages.calibration import nominal_circuit
+    from piezobearing.synthesis import PressProtocol, synthesize
+
+    c = ci_config
+    m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"])
+    t = m.time_s
+    v = m.voltage_V + 0.020 * np.exp(-0.5 * ((t - 4) / 2.0) ** 2) - 0.012 * np.exp(-0.5 * ((t - 8.5) / 2.0) ** 2)
+    args = (
+        nominal_circuit(c, c["calibration"]["initial_resistance_ohm"]),
+        [],
+        DiagnosticsSettings.from_config(c["diagnostics"]),
+        detect_impulses(m.force_N, v, m.dt_s, 0.2, 0.8),
+    )
+    _, d = diagnose_record(ForceRecord(t, m.force_N), v, *args)
+    assert d["ranking"][0]["effect"] == "baseline_drift" and d["selected"] == ["baseline_drift"]
+    assert d["verdict"] == "explained"
+    knots = [k for k in d["final"]["params"] if k.startswith("drift_w")]
+    assert knots and len(knots) <= 4  # a 12 s record: knots at least 2 s apart
+    assert "knots" in d["ranking"][0]["summary"]
+
+    monkeypatch.setattr(bd, "KNOTS", (0,))
+    _, cubic = diagnose_record(ForceRecord(t, m.force_N), v, *args)
+    assert cubic["verdict"] == "unexplained"
+    assert cubic["final"]["chi2_per_sample"] > d["final"]["chi2_per_sample"]
