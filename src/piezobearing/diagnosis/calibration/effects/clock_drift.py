@@ -86,6 +86,10 @@ class ClockDrift(Effect):
     name = "clock_drift"
     title = "sample-clock rate difference force/voltage"
     order = 25
+    example = {"clock_drift_ppm": 100.0}
+    example_reason = (
+        "two DAQ quartz clocks of +-50 ppm each: 100 ppm apart, 2.5 ms after 25 s"
+    )
     physics = (
         "The force logger and the voltage DAQ sample on their own quartz clocks (+-20-50 ppm each); merged "
         "as if both ran at the nominal rate, the voltage stamped t belongs to the force at t (1 + epsilon): "
