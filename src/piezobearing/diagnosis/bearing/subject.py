@@ -20,7 +20,7 @@ from ...io import BearingRecord, read_bearing_record
 from ...sensor.calibration import SensorCircuit
 from ...signals.detection import noise_std_for_snr
 from ..effect import Catalogue, EffectError, StartContext
-from ..noise import NoiseFloor, white_level
+from ..noise import NoiseFloor, robust_diff_std, white_level
 from ..record import Segments
 from ..subject import Problem
 from . import chain
@@ -182,17 +182,15 @@ class BearingSubject:
 def quiet_level(residual_V: np.ndarray, clipped: np.ndarray | None = None) -> float:
     """The white noise level [V] of a residual that is noise plus sparse events, from its quiet samples.
 
-    The median absolute deviation of the first differences, x 1.4826 / sqrt(2) (the standard deviation of
-    white noise; the differences take out the slow misfit, the median the sparse events). A fault's
-    dips and bursts fill every bin of the spectrum but few samples: at 2550 Hz and 30 dB this gives
-    0.28 x the record's spectral floor for the inner-race and the rolling-element records of the tests,
-    0.95 for the healthy one and 0.90-5.3 for every other catalogue effect (measured, README).
+    :func:`~piezobearing.diagnosis.noise.robust_diff_std`: the median absolute deviation of the first
+    differences, x 1.4826 / sqrt(2) (the differences take out the slow misfit, the median the sparse
+    events). A fault's dips and bursts fill every bin of the spectrum but few samples: at 2550 Hz and
+    30 dB this gives 0.28 x the record's spectral floor for the inner-race and the rolling-element
+    records of the tests, 0.95 for the healthy one and 0.90-5.3 for every other catalogue effect
+    (measured, README).
     """
     r = np.asarray(residual_V, dtype=float)
-    if clipped is not None:
-        r = r[~clipped]
-    d = np.diff(r)
-    return float(1.4826 * np.median(np.abs(d - np.median(d))) / np.sqrt(2))
+    return robust_diff_std(r if clipped is None else r[~clipped])
 
 
 def floor_prepass(p: Problem, settings, clipped: np.ndarray | None, progress=None) -> Problem:
