@@ -54,9 +54,8 @@ def run(c, influence, hidden, snr_dB, seed=11, tach=False, extra=None):
 #: The 10 dB cases that run in every test run: where the evidence or the intervals are closest to failing at
 #: 10 dB (radial_load over load_share by a BIC margin of 12, load_share over clearance by 24; clearance and
 #: mains_pickup with profile-likelihood intervals, mains over the profile budget; the groove's angle the
-#: draw that misses by 2.2 half-widths): 20 s of CPU for the five (benchmarks/bench_diagnosis_bearing.py
-#: --verify-only --snr 10, this session). The other five (54 s of CPU for all ten; roller_scatter alone
-#: 19 s, and its single offset's interval wider than its bounds, so vacuous) run with PIEZOBEARING_TEST_10DB=1.
+#: draw that misses by 2.2 half-widths): 18 s of CPU for the five (benchmarks/bench_diagnosis_bearing.py
+#: --verify-only, this session). The other five (35 s of CPU for all ten) run with PIEZOBEARING_TEST_10DB=1.
 TEN_DB_ALWAYS = ("outer_race_defect", "radial_load", "clearance", "load_share", "mains_pickup")
 
 
