@@ -67,8 +67,11 @@ def separability(d: dict) -> list[str]:
             line += " This record, each fitted alone (BIC drop): " + ", ".join(
                 f"`{e}` {v:.4g}" for e, v in sorted(ev.items(), key=lambda x: -x[1])
             )
+            chosen = [e for e in ev if e in d.get("selected", [])]
             if max(ev.values()) <= 2.0:
                 line += ": none of them is needed here."
+            elif not chosen:
+                line += ": none of them was selected (alone, each stood in for what was)."
             else:
                 told = "told apart here" if n["margin_strength"] in ("decisive", "strong") else "not told apart here"
                 line += f"; the best over the next by {n['margin_bic']:.3g}: {n['margin_strength']} ({told})."
