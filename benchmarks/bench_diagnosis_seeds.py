@@ -3,9 +3,9 @@
 A study, not a timing: for each case the paper's default synthetic record
 (25 s at 1 kHz, 13 presses, 5 mN force noise, 2 mV voltage noise) is drawn
 with ``--seeds`` seeds (1 .. N; the press shapes, sizes and both noises
-change with the seed), the effects of the case are hidden in it at the
-plausible sizes of ``tests/test_diagnostics.py`` (the same values, stated
-with their reasons there; ``d33_nonlinearity_strong`` is beta = 5e-3 1/N,
+change with the seed), the effects of the case are hidden in it at their
+plausible sizes (each effect's ``example``, the values the tests hide,
+stated with their reasons in the effect's module; ``d33_nonlinearity_strong`` is beta = 5e-3 1/N,
 +10% sensitivity at 10 N, the upper end of the plausible range, where the
 carried force noise is visibly louder at the press peaks), and the whole catalogue is diagnosed with the
 default settings. Per case it records how often the verdict is
@@ -18,7 +18,10 @@ Issue 13 asks: nothing hidden -> ``explained`` in >= 95% of seeds; one
 effect hidden -> that effect first and ``explained`` in >= 90%.
 
 Writes results/benchmarks/diagnosis_seeds.json.
-Usage: python benchmarks/bench_diagnosis_seeds.py [--seeds 20] [--cases clean,d33_nonlinearity] [--out ...]
+Usage: python benchmarks/bench_diagnosis_seeds.py [--seeds 20] [--cases clean,d33_nonlinearity]
+       [--duration-s 25] [--rate-Hz 1000] [--out ...]
+(``--duration-s``/``--rate-Hz`` override the record's length and sampling rate, the presses scaled
+with the length: another rig's record.)
 """
 
 from __future__ import annotations
@@ -36,33 +39,10 @@ from piezobearing.sensor.calibration import detect_impulses
 from piezobearing.stages.calibration import nominal_circuit
 from piezobearing.synthesis import PressProtocol, synthesize
 
-#: The hidden values of tests/test_diagnostics.py (reasons there), one spec list per case.
-MAINS = {
-    "name": "mains_pickup",
-    "params": {
-        "mains_frequency_Hz": 50.03,
-        "mains_h1_cos_V": 0.012,
-        "mains_h1_sin_V": -0.016,
-        "mains_h3_cos_V": 0.003,
-        "mains_h3_sin_V": 0.004,
-    },
-}
-DRIFT = {
-    "name": "baseline_drift",
-    "params": {"drift_p0_V": 0.005, "drift_p1_V": 0.02, "drift_p2_V": -0.01, "drift_p3_V": 0.005},
-}
-SINGLE = {
-    "channel_delay": {"delay_s": 0.015},
-    "ac_coupling": {"corner_Hz": 0.5},
-    "reference_lag": {"lag_tau_s": 0.010},
-    "d33_nonlinearity": {"beta_per_N": 1.5e-3},
-    "mains_pickup": MAINS["params"],
-    "baseline_drift": DRIFT["params"],
-    "extra_capacitance": {"extra_capacitance_F": 100e-12},
-    "d33_scale": {"d33_scale_ratio": 0.85},
-    "clock_drift": {"clock_drift_ppm": 100.0},
-    "sensitivity_drift": {"sensitivity_slope_per_s": 2e-3},
-}
+#: Each effect's plausible size, its ``example`` (the one home of the hidden values; the module says why).
+SINGLE = {name: dict(e.example) for name, e in CATALOGUE.items() if e.example}
+MAINS = {"name": "mains_pickup", "params": SINGLE["mains_pickup"]}
+DRIFT = {"name": "baseline_drift", "params": SINGLE["baseline_drift"]}
 CASES: dict[str, list[dict]] = {"clean": []}
 # the cases whose noise follows the signal first (the point of the study), then the rest of the catalogue
 CASES["d33_nonlinearity_strong"] = [{"name": "d33_nonlinearity", "params": {"beta_per_N": 5e-3}}]
@@ -122,9 +102,17 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--cases", default=",".join(CASES))
+    ap.add_argument("--duration-s", type=float, default=None)
+    ap.add_argument("--rate-Hz", type=float, default=None)
     ap.add_argument("--out", default="results/benchmarks/diagnosis_seeds.json")
     args = ap.parse_args()
     config = cfg.load()
+    syn = config["synthesis"]
+    if args.duration_s is not None:  # as many presses per second as the default record
+        syn["n_impulses"] = max(2, int(round(syn["n_impulses"] * args.duration_s / syn["duration_s"])))
+        syn["duration_s"] = args.duration_s
+    if args.rate_Hz is not None:
+        syn["sample_rate_Hz"] = args.rate_Hz
     settings = DiagnosticsSettings.from_config(config["diagnostics"])
     fit_circuit = nominal_circuit(config, config["calibration"]["initial_resistance_ohm"])
     p = PressProtocol.from_config(config["synthesis"])

@@ -67,11 +67,13 @@ def test_validate_says_the_voltage_is_clipped(files, capsys):
 
 
 def test_hide_and_find_says_whether_the_diagnosis_finds_the_hidden_effect(files, capsys):
-    """A 15 ms channel delay hidden in the CI-sized record: found first, its fitted value printed beside the
-    hidden one, exit 0; an unknown effect or parameter is one line naming it (exit 1)."""
+    """A 15 ms channel delay (the effect's example size: no --param needed) hidden in the CI-sized record:
+    found first, its fitted value printed beside the hidden one, exit 0; an unknown effect or parameter is
+    one line naming it (exit 1)."""
     ci = str(files["dir"] / "ci.yaml")
-    assert main(["hide-and-find", "channel_delay", "--param", "delay_s=0.015", "--config", ci]) == 0
+    assert main(["hide-and-find", "channel_delay", "--config", ci]) == 0
     out = capsys.readouterr().out
+    assert "hidden: channel_delay {'delay_s': 0.015} (the effect's example)" in out
     assert "ranked first: channel_delay" in out and "verdict: explained" in out and out.rstrip().endswith("FOUND")
     line = [ln for ln in out.splitlines() if ln.strip().startswith("delay_s =")][0]
     assert "(hidden 0.015)" in line and abs(float(line.split("=")[1].split()[0]) - 0.015) < 1e-4

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from scipy.signal import cont2discrete, lfilter
 
-from piezobearing.diagnosis.calibration.effects import ForceRecord
+from piezobearing.diagnosis.calibration.effects import CATALOGUE, ForceRecord
 from piezobearing.diagnosis.calibration.subject import diagnose_record
 from piezobearing.diagnosis.fit import fd_weighted, whiten
 from piezobearing.diagnosis.noise import estimate_noise_floor
@@ -26,55 +26,21 @@ from piezobearing.sensor.calibration import circuit_voltage, detect_impulses
 from piezobearing.stages.calibration import nominal_circuit
 from piezobearing.synthesis import PressProtocol, press_force, synthesize
 
-#: Hidden effects: (specs, name of the main parameter, its true value).
+#: Hidden effects: (specs, name of the main parameter, its true value). The hidden sizes are each effect's
+#: ``example`` (its module states why that size is plausible: the one home of the values the tests, the
+#: error-rate study and ``piezobearing hide-and-find`` hide).
+MAIN_PARAM = {
+    "channel_delay": "delay_s",
+    "ac_coupling": "corner_Hz",
+    "reference_lag": "lag_tau_s",
+    "d33_nonlinearity": "beta_per_N",
+    "mains_pickup": "mains_h1_sin_V",
+    "baseline_drift": "drift_p1_V",
+    "extra_capacitance": "extra_capacitance_F",
+}
 HIDDEN = {
-    # two acquisition devices started by hand / over USB: offsets of a few to tens of ms are common
-    "channel_delay": ([{"name": "channel_delay", "params": {"delay_s": 0.015}}], "delay_s", 0.015),
-    # AC-coupled DAQ input: corners of 0.1-1 Hz are typical (e.g. 0.5 Hz on dynamic-signal DAQs)
-    "ac_coupling": ([{"name": "ac_coupling", "params": {"corner_Hz": 0.5}}], "corner_Hz", 0.5),
-    # a slow USB force logger with its anti-alias filter: a 10 ms lag (16 Hz corner)
-    "reference_lag": ([{"name": "reference_lag", "params": {"lag_tau_s": 0.010}}], "lag_tau_s", 0.010),
-    # +3% sensitivity at 10 N: soft PZT gains ~1%/MPa under compression and a rod tip concentrates the
-    # 0.6 MPa mean stress several-fold; FlexiForce's own linearity error (+-3% FS) looks the same
-    "d33_nonlinearity": (
-        [{"name": "d33_nonlinearity", "params": {"beta_per_N": 1.5e-3}}],
-        "beta_per_N",
-        1.5e-3,
-    ),
-    # 20 mV at 50 Hz plus 5 mV third harmonic: a high-impedance node (261 pF, 50 MOhm) near mains wiring
-    "mains_pickup": (
-        [
-            {
-                "name": "mains_pickup",
-                "params": {
-                    "mains_frequency_Hz": 50.03,
-                    "mains_h1_cos_V": 0.012,
-                    "mains_h1_sin_V": -0.016,
-                    "mains_h3_cos_V": 0.003,
-                    "mains_h3_sin_V": 0.004,
-                },
-            }
-        ],
-        "mains_h1_sin_V",
-        -0.016,
-    ),
-    # pyroelectric current p A dT/dt through R: 0.1 K/s of warming gives ~35 mV at 50 MOhm
-    "baseline_drift": (
-        [
-            {
-                "name": "baseline_drift",
-                "params": {"drift_p0_V": 0.005, "drift_p1_V": 0.02, "drift_p2_V": -0.01, "drift_p3_V": 0.005},
-            }
-        ],
-        "drift_p1_V",
-        0.02,
-    ),
-    # the DAQ input capacitance, or 1.1 m more of the 90 pF/m cable: 100 pF
-    "extra_capacitance": (
-        [{"name": "extra_capacitance", "params": {"extra_capacitance_F": 100e-12}}],
-        "extra_capacitance_F",
-        100e-12,
-    ),
+    name: ([{"name": name, "params": dict(CATALOGUE[name].example)}], p, CATALOGUE[name].example[p])
+    for name, p in MAIN_PARAM.items()
 }
 
 _CACHE: dict = {}
@@ -365,7 +331,7 @@ def test_d33_scale_is_found_as_the_same_record_as_extra_capacitance(paper_config
     diagnosis states the exact equivalence, and both fitted values map onto the hidden k."""
     from piezobearing.diagnosis.calibration.report import render
 
-    k = 0.85
+    k = CATALOGUE["d33_scale"].example["d33_scale_ratio"]  # 0.85
     d = run(paper_config, [{"name": "d33_scale", "params": {"d33_scale_ratio": k}}])
     top = {r["effect"]: r for r in d["ranking"][:2]}
     assert set(top) == {"d33_scale", "extra_capacitance"}
@@ -385,24 +351,26 @@ def test_d33_scale_is_found_as_the_same_record_as_extra_capacitance(paper_config
 
 def test_clock_drift_is_found_first_with_the_hidden_rate(paper_config):
     """Two DAQ quartz clocks 100 ppm apart (+-50 ppm each): the offset grows to 2.5 ms over 25 s."""
-    d = run(paper_config, [{"name": "clock_drift", "params": {"clock_drift_ppm": 100.0}}])
+    ppm = CATALOGUE["clock_drift"].example["clock_drift_ppm"]  # 100 ppm
+    d = run(paper_config, [{"name": "clock_drift", "params": {"clock_drift_ppm": ppm}}])
     assert d["ranking"][0]["effect"] == "clock_drift" and d["selected"][0] == "clock_drift"
     assert d["verdict"] == "explained"
     est = d["final"]["params"]["clock_drift_ppm"]
     lo, hi = d["final"]["ci95"]["clock_drift_ppm"]
-    assert est == pytest.approx(100.0, rel=0.05) and lo - 5 <= 100.0 <= hi + 5
+    assert est == pytest.approx(ppm, rel=0.05) and lo - 5 <= ppm <= hi + 5
     assert d["identifiability"]["steps"][0]["runner_up"] is not None
 
 
 def test_sensitivity_drift_is_found_first_with_the_hidden_slope(paper_config):
     """A gain rising by 5% over the 25 s record (2e-3 /s; a size chosen to be detectable at this
     noise, larger than a typical thermal drift over 25 s: say so, not tuned to pass)."""
-    d = run(paper_config, [{"name": "sensitivity_drift", "params": {"sensitivity_slope_per_s": 2e-3}}])
+    slope = CATALOGUE["sensitivity_drift"].example["sensitivity_slope_per_s"]  # 2e-3 /s
+    d = run(paper_config, [{"name": "sensitivity_drift", "params": {"sensitivity_slope_per_s": slope}}])
     assert d["ranking"][0]["effect"] == "sensitivity_drift" and d["selected"][0] == "sensitivity_drift"
     assert d["verdict"] == "explained"
     est = d["final"]["params"]["sensitivity_slope_per_s"]
     lo, hi = d["final"]["ci95"]["sensitivity_slope_per_s"]
-    assert est == pytest.approx(2e-3, rel=0.05) and lo - 1e-4 <= 2e-3 <= hi + 1e-4
+    assert est == pytest.approx(slope, rel=0.05) and lo - 1e-4 <= slope <= hi + 1e-4
 
 
 def test_noise_follows_the_signal_through_the_fitted_nonlinear_path(paper_config):

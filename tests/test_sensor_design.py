@@ -177,7 +177,9 @@ def test_a_clipped_design_is_flagged_and_its_margin_kept_apart():
 
 @pytest.mark.slow
 def test_one_sensor_design_case_on_workflow_files(tmp_path, ci_config):
-    """The study kind on synthetic workflow inputs: contract columns, the paper's stack gives the workflow's share."""
+    """The study kind on synthetic workflow inputs: contract columns, the paper's stack gives the workflow's share,
+    and the detection runs on the DAQ's clock (sampled from the 2550 Hz model step at 2000 Hz, as the noisy rule
+    does), so the noise's standard deviation is the density times sqrt(f_s / 2) of the DAQ."""
     import pandas as pd
 
     from piezobearing.plotting.studies import pareto_front
@@ -185,7 +187,7 @@ def test_one_sensor_design_case_on_workflow_files(tmp_path, ci_config):
 
     cfg = copy.deepcopy(ci_config)
     cfg["housing"].update(mesh_level=0.35)
-    cfg["signals"].update(study_n_seeds=3)
+    cfg["signals"].update(study_n_seeds=3, sample_rate_Hz=2000.0, band_Hz=[500.0, 950.0])
     res = tmp_path / "resistance.json"
     res.write_text(json.dumps({"resistance_ohm": 50.0e6}))
     v, dt, f0 = _impulse_records(n=int(0.6 * 2550))
@@ -218,6 +220,7 @@ def test_one_sensor_design_case_on_workflow_files(tmp_path, ci_config):
     assert hard["load_share"] > paper["load_share"]  # a stiffer stack takes a larger share of the roller load
     assert hard["first_resonance_short_Hz"] > paper["first_resonance_short_Hz"]
     assert hard["sensitivity_V_per_N"] < paper["sensitivity_V_per_N"]
+    assert paper["noise_std_V"] == pytest.approx(paper["noise_density_V_per_sqrtHz"] * np.sqrt(1000.0), rel=1e-9)
     assert png.stat().st_size > 0
     assert sorted(pareto_front(np.array([1.0, 2.0, 3.0]), np.array([3.0, 1.0, 2.0]))) == [0, 2]
 

@@ -19,7 +19,8 @@
 
 ``piezobearing hide-and-find EFFECT [--param NAME=VALUE ...] [--seed N] [--config FILE]``
     Hide a catalogue effect (a new one, while it is being written) in the
-    configured synthetic calibration record and diagnose it with the whole
+    configured synthetic calibration record (at its ``example`` size, the
+    ``--param`` values over it) and diagnose it with the whole
     catalogue: prints what came first, what was selected, the fitted
     parameters with their 95% intervals and the verdict; exit status 0 when
     the effect (or one it is declared exactly equivalent to) is ranked and
@@ -146,7 +147,16 @@ def _validate(args) -> int:
             f"({stuck['n_samples']} samples, the first at t = {stuck['runs'][0]['start_s']:.3f} s): "
             "clipped; widen the DAQ's input range or lower the gain"
         )
-    print(f"config: {used}")
+    if m.filled is not None:  # resampled across gaps: those samples are the interpolation's
+        from .diagnosis.record import Record
+
+        g = Record(m.time_s, filled=m.filled).filled_gaps()
+        first = g["gaps"][0]
+        print(
+            f"WARNING: {args.file}: column time_s: {g['n_samples']} samples lost in {len(g['gaps'])} gap(s) "
+            f"(the first {first['duration_s'] * 1e3:.3g} ms at t = {first['start_s']:.4g} s) were filled by "
+            "resample_to_uniform; the diagnosis leaves them out of its fit"
+        )
     return 0
 
 
@@ -218,6 +228,10 @@ def _diagnose(args) -> int:
     stuck = (d.get("outside_catalogue") or {}).get("stuck") or {}
     if stuck.get("where"):
         print(f"WARNING: {stuck['where']}")
+    if (d.get("filled_gaps") or {}).get("n_samples"):
+        from .diagnosis.report.sections import filled_gaps_line
+
+        print(f"WARNING: {filled_gaps_line(d['filled_gaps'])}")
     for f in d["unexplained"][:5]:
         print(f"  - {f['where']}")
     if len(d["unexplained"]) > 5:
@@ -248,6 +262,9 @@ def _hide_and_find(args) -> int:
             eq = ""
         if not eq:
             return _fail(f"--param {item}: give NAME=VALUE with a number, e.g. --param delay_s=0.015 (item {i + 1})")
+    given = params
+    if args.effect in CATALOGUE:  # the effect's plausible size, the given values over it
+        params = {**CATALOGUE[args.effect].example, **given}
     hidden = [{"name": args.effect, "params": params}]
     seed = config["seed"] if args.seed is None else args.seed
     try:
@@ -264,7 +281,8 @@ def _hide_and_find(args) -> int:
     same |= {e.name for e in CATALOGUE.values() if args.effect in e.equivalent_to}
     first = d["ranking"][0] if d["ranking"] else None
     found = first is not None and first["effect"] in same and d["selected"][:1] == [first["effect"]]
-    print(f"config: {used}; seed {seed}; hidden: {args.effect} {params or '(defaults)'}")
+    source = "" if given == params else " (the effect's example" + (", --param over it)" if given else ")")
+    print(f"config: {used}; seed {seed}; hidden: {args.effect} {params or '(defaults)'}{source}")
     if first is not None:
         print(f"ranked first: {first['effect']} (delta BIC {first['delta_bic']:.4g}): {first['summary']}")
     print(f"selected: {', '.join(d['selected']) or 'nothing'}; verdict: {d['verdict']}")
@@ -397,7 +415,8 @@ def _parser() -> argparse.ArgumentParser:
         "--param",
         action="append",
         metavar="NAME=VALUE",
-        help="a hidden parameter value, e.g. delay_s=0.015 (repeat for more; others: the neutral default)",
+        help="a hidden parameter value, e.g. delay_s=0.015 (repeat for more; others: the effect's example "
+        "size, or neutral where it has none)",
     )
     h.add_argument("--seed", type=int, help="seed of the synthetic record (default: the config's seed)")
     h.add_argument(

@@ -49,12 +49,17 @@ class Measurement:
         Samples [s], [N], [V].
     source : str
         Where it came from (a path or "synthetic").
+    filled : ndarray of bool or None
+        Samples :func:`read_measurement` filled by interpolation across a gap of the recorded clock
+        (``resample_to_uniform``; a step longer than ``GAP_FACTOR`` median steps): not measured, so the
+        diagnosis leaves them out of its fit and tests (None: every sample measured).
     """
 
     time_s: np.ndarray
     force_N: np.ndarray
     voltage_V: np.ndarray
     source: str
+    filled: np.ndarray | None = None
 
     @property
     def dt_s(self) -> float:
@@ -491,7 +496,9 @@ def read_measurement(
     Checks, in order: the file exists; the columns time_s, force_N, voltage_V
     are present; every cell is a finite number; at least 3 rows; time
     strictly increasing; time steps uniform within 1% of the median step
-    (or, with ``resample_to_uniform``, linear resampling onto the median step).
+    (or, with ``resample_to_uniform``, linear resampling onto the median step;
+    the samples that fall inside a gap, a recorded step over ``GAP_FACTOR``
+    median steps, are marked in ``Measurement.filled``).
     ``channels`` names the channels of a file that holds several
     (``calibration.channels``).
     """
@@ -524,10 +531,27 @@ def read_measurement(
                 f"{path}: {place(i)}, column time_s: uneven time step ({dt[i - 1]:g} s against the median "
                 f"{step:g} s, {off.size} such steps); set calibration.resample_to_uniform: true to resample"
             )
-        n = int(np.floor((t[-1] - t[0]) / step)) + 1
+        n = int(np.floor((t[-1] - t[0]) / step + 1e-6)) + 1  # the last sample too (12 s / 2 ms = 5999.99..)
         tu = t[0] + step * np.arange(n)
+        filled = gap_filled(t, tu, step)
         data = {"time_s": tu, **{c: np.interp(tu, t, data[c]) for c in COLUMNS[1:]}}
+        return Measurement(
+            data["time_s"], data["force_N"], data["voltage_V"], str(path), filled if filled.any() else None
+        )
     return Measurement(data["time_s"], data["force_N"], data["voltage_V"], str(path))
+
+
+def gap_filled(t: np.ndarray, tu: np.ndarray, step: float) -> np.ndarray:
+    """Which samples of the uniform clock ``tu`` lie strictly inside a gap of the recorded clock ``t``.
+
+    A gap is a recorded step longer than ``GAP_FACTOR`` median steps (``step``): samples were lost
+    there, and a sample of ``tu`` inside it is the interpolation's, not a measurement (jitter within
+    that factor only moves measured samples onto the grid).
+    """
+    i = np.clip(np.searchsorted(t, tu, side="right") - 1, 0, t.size - 2)  # the recorded step holding tu
+    gap = np.diff(t)[i] > GAP_FACTOR * step
+    # a grid sample within half a step of a recorded one stands for it; the rest were lost
+    return gap & (tu > t[i] + 0.5 * step) & (tu < t[i + 1] - 0.5 * step)
 
 
 #: Samples at exactly the channel's extreme value beyond which the channel counts as clipped

@@ -16,8 +16,9 @@ import pandas as pd
 
 from . import lpm as brg
 from .checks import lpm_checks
+from .housing_fem import spring_share_factor
 from .housing_mesh import HousingMesh, build_housing_mesh, mesh_quality
-from .transient import CASES, housing_geometry, is_faulty, run_lpm, transient, transient_summary
+from .transient import CASES, housing_geometry, is_faulty, make_model, run_lpm, transient, transient_summary
 
 log = logging.getLogger("piezobearing.bearing.lpm")
 
@@ -118,3 +119,30 @@ def fault_type_force(config: dict) -> pd.DataFrame:
     m = build_housing_mesh(housing_geometry(config), True, config["housing"]["mesh_level"])
     tr = transient("faulty", m, {k: run[k] for k in ("time_s", "load_N", "angle_rad")}, config)
     return pd.DataFrame({"time_s": tr["time_s"], "force_N": tr["force_N"]})
+
+
+def sensor_port(config: dict) -> dict:
+    """Rule sensor_design_housing: the housing seen by the sensor, once for the sensor_design study.
+
+    The workflow's path (the housing_mesh rule's healthy mesh at ``housing.mesh_level``, the model with the
+    configured sensor spring): its influence line's peak (the configured design's load share) and the
+    housing's flexibility at the sensor (the port compliance, which :func:`design_load_share` uses).
+    """
+    model = make_model(housing_mesh("healthy", config)[0], config)
+    return {
+        "load_share": float(model.influence_line()[2].max()),
+        "sensor_spring_N_per_m": model.sensor_stiffness_N_per_m,
+        "port_compliance_m_per_N": model.sensor_port_compliance_m_per_N(),
+        "bottom_disk_diameter_m": config["sensor_fem"]["bottom_disk_diameter_m"],
+        "n_dofs": model.n_dofs,
+        "config": {k: config[k] for k in ("sensor", "sensor_fem", "bearing", "housing")},
+    }
+
+
+def design_load_share(config: dict, port: dict, spring_N_per_m: float) -> float:
+    """A sensor design's load share [N/N]: from the housing's port compliance (:func:`sensor_port`; exact for
+    the same contact disk: the sensor is a rank-one spring on the housing), else its own housing model."""
+    if config["sensor_fem"]["bottom_disk_diameter_m"] == port["bottom_disk_diameter_m"]:
+        k_ref, a0 = port["sensor_spring_N_per_m"], port["port_compliance_m_per_N"]
+        return port["load_share"] * spring_share_factor(spring_N_per_m, k_ref, a0)
+    return float(make_model(housing_mesh("healthy", config)[0], config).influence_line()[2].max())

@@ -91,6 +91,8 @@ def _rank(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
 def trend(window_t0_s: np.ndarray, window_ratio: np.ndarray) -> dict:
     """Spearman correlation of the window energies with time, and the last third's mean over the first's."""
     t, e = np.asarray(window_t0_s, dtype=float), np.asarray(window_ratio, dtype=float)
+    ok = np.isfinite(e)  # a window of filled samples only is not judged (NaN)
+    t, e = t[ok], e[ok]
     r, p = _rank(t, e)
     k = max(e.size // 3, 1)
     ratio = float(np.mean(e[-k:]) / max(np.mean(e[:k]), 1e-300)) if e.size else float("nan")

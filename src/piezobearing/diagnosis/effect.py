@@ -68,12 +68,21 @@ class Effect:
         determines, which it cannot separate). The declaring effect yields
         the tie in the ranking to the other, and the diagnosis states the
         equivalence whenever either of the two is selected or ranked first.
+    example : dict[str, float]
+        A plausible size of the effect in a real record (parameter -> value, the others at their
+        neutral values), chosen for the physics before looking at any diagnosis: the one home of
+        the value the tests hide, the error-rate study hides (``benchmarks/bench_diagnosis_seeds.py``)
+        and ``piezobearing hide-and-find`` hides when no ``--param`` is given.
+    example_reason : str
+        Why that size is plausible (a sentence; the README's verified table quotes it).
     """
 
     name: str = ""
     title: str = ""
     physics: str = ""
     equivalent_to: dict[str, str] = {}
+    example: dict[str, float] = {}
+    example_reason: str = ""
 
     def params(self, record: Record) -> list[Param]:
         """The parameters for a record (some depend on its sampling rate); declared values are neutral."""

@@ -93,6 +93,7 @@ class Diagnosis:
             "duration_s": float(rec.time_s[-1] - rec.time_s[0]),
             "voltage_rms_V": float(np.sqrt(np.mean(self.voltage_V**2))),
             f"n_{self.segments.name}s": len(self.segments),
+            "filled_gaps": rec.filled_gaps(),
             "noise_floor": self.floor.report(),
             "noise_floor_nrmse": self.final.floor_nrmse,
             "baseline": {**self.baseline.summary(), "tests": self.tests["baseline"].summary()},
@@ -144,7 +145,9 @@ def diagnose(
     configured = current
 
     def tests_of(f: ModelFit) -> ResidualTests:
-        return residual_tests(f.whitened, record.input, record.dt_s, settings, p.segments, record.time_s)
+        return residual_tests(
+            f.whitened, record.input, record.dt_s, settings, p.segments, record.time_s, record.left_out
+        )
 
     tests = {"baseline": tests_of(baseline)}
     tests["configured"] = tests["baseline"] if configured is baseline else tests_of(configured)

@@ -16,6 +16,14 @@ low-passed at twice its band, its content untouched) and weights by the
 floor of that input, S_fit = s_v^2 + s_f^2 |G W|^2. The residual, NRMSE and
 tests reported use the measured input as it is.
 
+Samples the record leaves out (:attr:`Record.left_out
+<piezobearing.diagnosis.record.Record>`: interpolated across a gap of the
+recorded clock, not measured, and those where the model's memory still
+carries the interpolated input) count nowhere: the residual is zero there
+before it is weighted, the number of data is that of the measured samples
+(``Record.n_measured``: chi2 ~ n_measured for a correct model), and NRMSE
+and rms are taken over the measured samples.
+
 NRMSE = rms(residual) / rms(measured voltage) throughout.
 """
 
@@ -25,6 +33,7 @@ from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
+from scipy import fft as sfft
 
 from .least_squares import FitResult, fit, nrmse
 from .model import Model
@@ -40,7 +49,7 @@ def fd_weighted(residual_V: np.ndarray, s: np.ndarray) -> np.ndarray:
     squares is sum r^2 / sigma^2 for white noise of variance sigma^2 = S.
     """
     n = residual_V.size
-    r = np.fft.rfft(residual_V)
+    r = sfft.rfft(residual_V)  # scipy's: numpy's result bit for bit, 2x faster on a record's length (25001 = 23 x 1087)
     w = np.sqrt(2.0 / (n * s))
     w[0] /= np.sqrt(2.0)
     if n % 2 == 0:
@@ -51,7 +60,7 @@ def fd_weighted(residual_V: np.ndarray, s: np.ndarray) -> np.ndarray:
 
 def whiten(residual_V: np.ndarray, s: np.ndarray) -> np.ndarray:
     """The residual filtered by 1/sqrt(S) (zero-phase, circular): unit-variance white noise for a correct model."""
-    return np.fft.irfft(np.fft.rfft(residual_V) / np.sqrt(s), residual_V.size)
+    return sfft.irfft(sfft.rfft(residual_V) / np.sqrt(s), residual_V.size)
 
 
 @dataclass
@@ -144,6 +153,9 @@ def likelihood_residual(
     clean = model.fit_input(record)
     w = model.fit_weight(record)
     inv = None if scale is None else 1.0 / scale
+    kept = record.kept  # 0 at filled samples: they carry no information
+    if kept is not None:
+        inv = kept if inv is None else inv * kept
 
     def weighted(values: dict) -> np.ndarray:
         s = floor.spectrum(model.response(values, record) * w)
@@ -188,7 +200,13 @@ def fit_model(
     weighted = likelihood_residual(model, record, v, floor)
     best = None
     for extra in starts or [{}]:
-        res = fit(weighted, model.params(record, {**(start or {}), **extra}), max_nfev=max_nfev, ftol=ftol)
+        res = fit(
+            weighted,
+            model.params(record, {**(start or {}), **extra}),
+            max_nfev=max_nfev,
+            ftol=ftol,
+            n_data=record.n_measured,
+        )
         if best is None or res.chi2 < best.chi2:
             best = res
     h = noise_scale(model, best.values, record, floor)
@@ -200,8 +218,10 @@ def fit_model(
             model.params(record, best.values),
             max_nfev=max_nfev,
             ftol=ftol,
+            n_data=record.n_measured,
         )
-        res.log_det = float(np.sum(np.log(np.square(h))))
+        hk = h if record.kept is None else h[record.kept > 0]
+        res.log_det = float(np.sum(np.log(np.square(hk))))
         best = res
     out = finish(model, record, v, floor, best, h)
     model.release()
@@ -212,15 +232,18 @@ def finish(
     model: Model, record: Record, v: np.ndarray, floor: NoiseFloor, res: FitResult, scale: np.ndarray | None = None
 ) -> ModelFit:
     """The fit's model voltage, residual and whitened residual (divided by ``scale`` first), driven by the
-    measured input as it is."""
+    measured input as it is; filled samples are zero in the whitened residual and left out of the rms."""
     mv = model.simulate(res.values, record)
     g = model.response(res.values, record)
     s = floor.spectrum(g)
     r = v - mv
     floor_rms = floor.rms_V(g, record.n)
-    vrms = float(np.sqrt(np.mean(v**2)))
-    rrms = float(np.sqrt(np.mean(r**2)))
-    z = whiten(r if scale is None else r / scale, s)
+    kept = record.kept
+    rk, vk = (r, v) if kept is None else (r[kept > 0], v[kept > 0])
+    vrms = float(np.sqrt(np.mean(vk**2)))
+    rrms = float(np.sqrt(np.mean(rk**2)))
+    rs = r if scale is None else r / scale
+    z = whiten(rs, s) if kept is None else whiten(rs * kept, s) * kept
     return ModelFit(
-        model, res, mv, r, z, np.asarray(g), nrmse(r, v), floor_rms / vrms, floor_rms, rrms, scale
+        model, res, mv, r, z, np.asarray(g), nrmse(rk, vk), floor_rms / vrms, floor_rms, rrms, scale
     )

@@ -78,6 +78,7 @@ def fit(
     params: Sequence[Param],
     max_nfev: int | None = None,
     ftol: float = 1e-8,
+    n_data: int | None = None,
 ) -> FitResult:
     """Minimise sum(residual_fn(values)**2) over the free parameters.
 
@@ -87,6 +88,9 @@ def fit(
     mapped to physical units (asymmetric for ``log`` parameters); they assume
     white residuals, which the diagnostics check. ``ftol`` is the relative
     change of the sum of squares at which the fit stops (scipy's ``ftol``).
+    ``n_data`` is the number of independent data when it is not the residual's
+    size (entries of a residual that are zero by construction, e.g. samples a
+    likelihood leaves out, carry no information): the degrees of freedom and BIC use it.
     """
     free = [p for p in params if p.vary]
     fixed = {p.name: float(p.value) for p in params if not p.vary}
@@ -98,7 +102,7 @@ def fit(
 
     if not free:
         r = np.asarray(residual_fn(unpack(np.array([]))), dtype=float)
-        return FitResult(fixed, {}, {}, {}, r, r.size, 0, float(r @ r))
+        return FitResult(fixed, {}, {}, {}, r, r.size if n_data is None else n_data, 0, float(r @ r))
 
     u0 = np.array([p.to_internal(p.value) for p in free])
     lo = np.array([p.to_internal(p.lower) if np.isfinite(p.lower) else -np.inf for p in free])
@@ -108,7 +112,7 @@ def fit(
         lambda u: residual_fn(unpack(u)), u0, bounds=(lo, hi), x_scale="jac", max_nfev=max_nfev, ftol=ftol
     )
     r = sol.fun
-    n, k = r.size, len(free)
+    n, k = (r.size if n_data is None else n_data), len(free)
     dof = max(n - k, 1)
     s2 = float(r @ r) / dof
     jtj = sol.jac.T @ sol.jac

@@ -121,6 +121,11 @@ def robust_diff_std(x: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(d - np.median(d))) / np.sqrt(2))
 
 
+#: How long before an excursion of the input a stretch stops counting as quiet [s] (the fit's low-passed
+#: input spreads an excursion about this far back).
+QUIET_BEFORE_S = 0.05
+
+
 def quiet_mask(input_: np.ndarray, dt_s: float, settle_s: float, min_length_s: float = 0.2) -> np.ndarray:
     """Samples where the input rests: away from every excursion by ``settle_s`` after and 50 ms before.
 
@@ -135,7 +140,7 @@ def quiet_mask(input_: np.ndarray, dt_s: float, settle_s: float, min_length_s: f
     sigma = robust_diff_std(f) / np.sqrt(w)
     rest = np.percentile(fs, 10)
     active = np.abs(fs - rest) > max(0.01 * np.ptp(fs), 6 * sigma)
-    active = dilate(active, int(round(0.05 / dt_s)), int(round(settle_s / dt_s)))
+    active = dilate(active, int(round(QUIET_BEFORE_S / dt_s)), int(round(settle_s / dt_s)))
     quiet = ~active
     keep = np.zeros_like(quiet)
     for a, b in runs(quiet):
@@ -200,6 +205,7 @@ def estimate_noise_floor(
     Falls back on the whole record when the quiet stretches hold fewer than
     1000 samples: s_f from the input's high band, s_v from the voltage's high
     band, which then includes the carried input noise (recorded in ``method``).
+    Samples the record marks as filled (``Record.left_out``) are never used.
     The record must have an input; a subject without one measures its floor
     with :func:`white_level` on stretches of its own choosing.
     """
@@ -210,6 +216,8 @@ def estimate_noise_floor(
         else f"{record.input_name}_noise"
     )
     mask = quiet_mask(record.input, dt, settings.quiet_settle_s + settle_s)
+    if record.left_out is not None:  # filled samples hold no noise: measure on measured samples only
+        mask &= ~record.left_out
     if mask.sum() >= 1000:
         vf, _ = white_level(record.input, mask, dt)
         vv, _ = white_level(voltage_V, mask, dt)
@@ -222,7 +230,7 @@ def estimate_noise_floor(
             mask,
             key,
         )
-    whole = np.ones(record.n, dtype=bool)
+    whole = np.ones(record.n, dtype=bool) if record.left_out is None else ~record.left_out
     vf, _ = white_level(record.input, whole, dt)
     vv, _ = white_level(voltage_V, whole, dt)
     return NoiseFloor(

@@ -13,8 +13,22 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
+class UniformClock:
+    """Length and step of a uniform clock ``time_s`` (a field of the dataclass that inherits this)."""
+
+    time_s: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return int(self.time_s.size)
+
+    @property
+    def dt_s(self) -> float:
+        return float((self.time_s[-1] - self.time_s[0]) / (self.n - 1))
+
+
 @dataclass(frozen=True, eq=False)
-class Record:
+class Record(UniformClock):
     """Time axis and measured input of one record.
 
     Attributes
@@ -28,6 +42,14 @@ class Record:
         What the input is, for the report and keys (``force``).
     input_unit : str
         The input's unit suffix (``N``): keys such as ``force_N`` and ``force_noise_N``.
+    filled : ndarray of bool or None
+        Samples that were not measured but filled (interpolated across a gap of the recorded clock)
+        (None: all measured). The fit's likelihood, the noise floor and the residual tests leave them
+        out, together with the samples within ``memory_s`` of them (:attr:`kept`).
+    memory_s : (float, float)
+        How long before and after a filled sample the model's output still depends on it [s]: the
+        subject's model memory (a calibration: its fit's input filter before, the settling of the
+        circuit after), so that the interpolated input's error does not count as misfit.
     """
 
     time_s: np.ndarray
@@ -35,6 +57,8 @@ class Record:
     input_name: str = "input"
     input_unit: str = ""
     _cache: dict = field(default_factory=dict, compare=False, repr=False)
+    filled: np.ndarray | None = field(default=None, compare=False, repr=False)
+    memory_s: tuple[float, float] = (0.0, 0.0)
 
     @property
     def input_key(self) -> str:
@@ -42,16 +66,61 @@ class Record:
         return f"{self.input_name}_{self.input_unit}" if self.input_unit else self.input_name
 
     @property
-    def n(self) -> int:
-        return int(self.time_s.size)
-
-    @property
-    def dt_s(self) -> float:
-        return float((self.time_s[-1] - self.time_s[0]) / (self.n - 1))
-
-    @property
     def sample_rate_Hz(self) -> float:
         return 1.0 / self.dt_s
+
+    @property
+    def left_out(self) -> np.ndarray | None:
+        """The filled samples and those within ``memory_s`` of them (None when every sample was measured)."""
+        if self.filled is None or not np.any(self.filled):
+            return None
+        if "left_out" not in self._cache:
+            f = np.asarray(self.filled, dtype=bool)
+            before, after = (int(round(m / self.dt_s)) for m in self.memory_s)
+            d = np.diff(np.concatenate([[0], f.astype(np.int8), [0]]))
+            out = f.copy()
+            for a, b in zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1), strict=True):
+                out[max(a - before, 0) : min(b + after, f.size)] = True
+            self._cache["left_out"] = out
+        return self._cache["left_out"]
+
+    @property
+    def kept(self) -> np.ndarray | None:
+        """0.0 at the samples :attr:`left_out`, 1.0 elsewhere (None when every sample was measured) [-]."""
+        lo = self.left_out
+        return None if lo is None else (~lo).astype(float)
+
+    @property
+    def n_measured(self) -> int:
+        """Samples the likelihood counts (``n`` less those :attr:`left_out`): its number of data."""
+        lo = self.left_out
+        return self.n if lo is None else int(self.n - np.count_nonzero(lo))
+
+    def filled_gaps(self) -> dict:
+        """Where samples were filled and for how long: ``{"n_samples", "gaps": [{start_s, stop_s,
+        duration_s, samples}], "treatment"}`` (JSON and report; ``n_samples`` 0 when none were)."""
+        n = 0 if self.filled is None else int(np.count_nonzero(self.filled))
+        out: dict = {"n_samples": n, "gaps": []}
+        if n:
+            d = np.diff(np.concatenate([[0], np.asarray(self.filled, dtype=np.int8), [0]]))
+            for a, b in zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1), strict=True):
+                out["gaps"].append(
+                    {
+                        "start_s": float(self.time_s[a]),
+                        "stop_s": float(self.time_s[b - 1]),
+                        "duration_s": float((b - a) * self.dt_s),
+                        "samples": int(b - a),
+                    }
+                )
+            out["memory_s"] = list(self.memory_s)
+            out["n_left_out"] = self.n - self.n_measured
+            out["treatment"] = (
+                "filled by linear interpolation when the record was resampled to a uniform clock; left out of "
+                f"the fit's likelihood, the noise floor and the residual tests, with {self.memory_s[0] * 1e3:.3g} ms "
+                f"before and {self.memory_s[1] * 1e3:.3g} ms after each gap where the model still depends on "
+                f"the filled input ({out['n_left_out']} samples in all)"
+            )
+        return out
 
     @property
     def freq_Hz(self) -> np.ndarray:

@@ -164,6 +164,7 @@ def residual_tests(
     settings: DiagnosticsSettings,
     segments: Segments | None = None,
     time_s: np.ndarray | None = None,
+    filled: np.ndarray | None = None,
 ) -> ResidualTests:
     """The four tests of a residual whitened by the model's noise floor (unit variance if the model is right).
 
@@ -175,25 +176,33 @@ def residual_tests(
       is chi2(2K); bins above the chi2 quantile at alpha / (number of bins) are peaks;
     - time windows: the sum of squares over each window of L samples is chi2(L); windows above the
       quantile at alpha / (number of windows) are flagged, and named by the ``segments`` they fall in.
-    Each test runs at ``settings.test_alpha``.
+    Each test runs at ``settings.test_alpha``. Samples marked in ``filled`` (not measured:
+    :attr:`Record.left_out <piezobearing.diagnosis.record.Record>`) are left out: set to zero, the
+    correlations and Ljung-Box count only the measured samples, each spectrum segment is divided by
+    the share of its window's energy on measured samples, and each time window is judged on its
+    measured samples alone (a window with none is not judged: ratio NaN).
     """
+    keep = None if filled is None or not np.any(filled) else ~np.asarray(filled, dtype=bool)
     e = np.asarray(whitened, dtype=float)
-    n = e.size
+    if keep is not None:
+        e = np.where(keep, e, 0.0)
+    n_all = e.size
+    n = n_all if keep is None else int(np.count_nonzero(keep))
     alpha = settings.test_alpha
     m = int(np.clip(round(settings.max_lag_s / dt_s), 1, n // 4))
-    ec = e - e.mean()
-    full = correlate(ec, ec, mode="full", method="fft")[n - 1 :]
+    ec = e - (e.mean() if keep is None else np.where(keep, np.sum(e) / n, 0.0))
+    full = correlate(ec, ec, mode="full", method="fft")[n_all - 1 :]
     acf = full[1 : m + 1] / full[0]
     q = float(n * (n + 2) * np.sum(acf**2 / (n - np.arange(1, m + 1))))
     lb_p = float(chi2_dist.sf(q, m))
     acf_thr = float(norm.isf(alpha / (2 * m)) / np.sqrt(n))
     lags = np.arange(1, m + 1) * dt_s
 
-    xlags, xc, xc_thr, xc_p = _input_correlation(ec, input_, m, dt_s, alpha)
+    xlags, xc, xc_thr, xc_p = _input_correlation(ec, input_, m, dt_s, alpha, keep)
 
-    freq, ratio, k, spec_thr, flags = _spectrum_test(ec, dt_s, settings.spectrum_segment_s, alpha)
+    freq, ratio, k, spec_thr, flags = _spectrum_test(ec, dt_s, settings.spectrum_segment_s, alpha, keep)
     peaks = _spectral_peaks(ec, dt_s, freq, ratio, flags)
-    t0, w_ratio, w_thr, windows = _window_test(e, dt_s, settings.window_s, alpha, segments, time_s)
+    t0, w_ratio, w_thr, windows = _window_test(e, dt_s, settings.window_s, alpha, segments, time_s, keep)
 
     return ResidualTests(
         alpha=alpha,
@@ -222,18 +231,21 @@ def residual_tests(
 
 
 def _input_correlation(
-    ec: np.ndarray, input_: np.ndarray | None, m: int, dt_s: float, alpha: float
+    ec: np.ndarray, input_: np.ndarray | None, m: int, dt_s: float, alpha: float, keep: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, float, float]:
     """Lags [s], normalised cross-correlation of the residual with the input at lags -m..m, the
-    Bonferroni threshold of one lag and the family's p-value (no input: empty lags, p = 1)."""
-    n = ec.size
+    Bonferroni threshold of one lag and the family's p-value (no input: empty lags, p = 1); ``keep``
+    marks the measured samples (the others are zero in ``ec`` and left out of the input's too)."""
+    n_all = ec.size
+    n = n_all if keep is None else int(np.count_nonzero(keep))
     xlags = np.arange(-m, m + 1) * dt_s
     nl = 2 * m + 1
     xc_thr = float(norm.isf(alpha / (2 * nl)) / np.sqrt(n))
     if input_ is None:
         return np.zeros(0), np.zeros(0), xc_thr, 1.0
-    u = np.asarray(input_, dtype=float) - np.mean(input_)
-    xc = correlate(ec, u, mode="full", method="fft")[n - 1 - m : n + m] / (
+    u = np.asarray(input_, dtype=float)
+    u = u - np.mean(u) if keep is None else np.where(keep, u - np.mean(u[keep]), 0.0)
+    xc = correlate(ec, u, mode="full", method="fft")[n_all - 1 - m : n_all + m] / (
         np.linalg.norm(ec) * np.linalg.norm(u)
     )
     zmax = float(np.max(np.abs(xc)) * np.sqrt(n))
@@ -241,17 +253,25 @@ def _input_correlation(
 
 
 def _spectrum_test(
-    ec: np.ndarray, dt_s: float, segment_s: float, alpha: float
+    ec: np.ndarray, dt_s: float, segment_s: float, alpha: float, keep: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, int, float, np.ndarray]:
     """Frequencies [Hz], averaged periodogram of the whitened residual (its ratio to the floor), number
-    of segments, threshold ratio and the flags of the bins above it."""
+    of segments, threshold ratio and the flags of the bins above it (``keep``: measured samples; each
+    segment's periodogram divided by the share of the window's energy on them)."""
     n = ec.size
     seg = int(min(round(segment_s / dt_s), n))
     k = max(n // seg, 1)
     win = np.hanning(seg)
     segs = ec[: k * seg].reshape(k, seg)
-    segs = segs - segs.mean(axis=1, keepdims=True)
-    ratio = np.mean(np.abs(np.fft.rfft(segs * win, axis=1)) ** 2, axis=0) / np.sum(win**2)
+    if keep is None:
+        segs = segs - segs.mean(axis=1, keepdims=True)
+        share = np.ones((k, 1))
+    else:
+        kp = keep[: k * seg].reshape(k, seg)
+        mean = np.sum(segs, axis=1, keepdims=True) / np.maximum(kp.sum(axis=1, keepdims=True), 1)
+        segs = np.where(kp, segs - mean, 0.0)
+        share = np.maximum(np.sum(kp * win**2, axis=1, keepdims=True) / np.sum(win**2), 1e-3)
+    ratio = np.mean(np.abs(np.fft.rfft(segs * win, axis=1)) ** 2 / share, axis=0) / np.sum(win**2)
     freq = np.fft.rfftfreq(seg, dt_s)
     test_bins = np.arange(1, ratio.size - (1 if seg % 2 == 0 else 0))
     spec_thr = float(chi2_dist.isf(alpha / max(test_bins.size, 1), 2 * k) / (2 * k))
@@ -267,21 +287,32 @@ def _window_test(
     alpha: float,
     segments: Segments | None,
     time_s: np.ndarray | None,
+    keep: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, float, list[dict]]:
     """Window start times [s], mean square of the whitened residual per window, threshold, and the
-    flagged groups of windows (named by the segment holding their middle), largest first."""
+    flagged groups of windows (named by the segment holding their middle), largest first. With
+    ``keep`` (measured samples) a window's mean square and threshold are those of its measured
+    samples; a window without any has ratio NaN and is not judged."""
     n = e.size
     lw = max(int(round(window_s / dt_s)), 8)
     nw = n // lw
     t = np.arange(n) * dt_s if time_s is None else np.asarray(time_s)
     energy = np.sum(e[: nw * lw].reshape(nw, lw) ** 2, axis=1)
     w_thr = float(chi2_dist.isf(alpha / max(nw, 1), lw) / lw)
-    w_ratio = energy / lw
+    if keep is None:
+        w_ratio = energy / lw
+        flags = w_ratio > w_thr
+    else:
+        lk = np.sum(keep[: nw * lw].reshape(nw, lw), axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            w_ratio = np.where(lk > 0, energy / np.maximum(lk, 1), np.nan)
+        thr = chi2_dist.isf(alpha / max(nw, 1), np.maximum(lk, 1)) / np.maximum(lk, 1)
+        flags = (lk > 0) & (np.nan_to_num(w_ratio) > thr)
     t0 = t[: nw * lw : lw]
     windows = []
-    for a, b in _flagged_groups(w_ratio > w_thr, gap=0):
+    for a, b in _flagged_groups(flags, gap=0):
         ts, te = float(t0[a]), float(t[min((b + 1) * lw, n) - 1])
-        d = {"time_s": [ts, te], "max_ratio": float(np.max(w_ratio[a : b + 1]))}
+        d = {"time_s": [ts, te], "max_ratio": float(np.nanmax(w_ratio[a : b + 1]))}
         if segments is not None and len(segments):
             mid = int(((a + b + 1) * lw) // 2)
             for j in range(len(segments)):

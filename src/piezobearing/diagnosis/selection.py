@@ -116,7 +116,7 @@ def rank(
         f = add_effect(current, e, record, voltage_V, floor, settings)
         drop = current.chi2 - f.chi2
         explained = float(np.clip(drop / max(current.excess, drop, 1e-12), 0.0, 1.0))
-        tests = residual_tests(f.whitened, record.input, record.dt_s, settings)
+        tests = residual_tests(f.whitened, record.input, record.dt_s, settings, filled=record.left_out)
         out.append(
             Candidate(
                 e,

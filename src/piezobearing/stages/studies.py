@@ -170,34 +170,8 @@ def _fault_detection_row(cfg: dict, run: dict) -> dict:
 
 
 def sensor_design_housing(out_json: str, config: dict) -> None:
-    """The housing seen by the sensor, once for the sensor_design study: the workflow's path (healthy mesh at
-    ``housing.mesh_level``, model with the configured sensor spring), its influence line's peak (the configured
-    design's load share) and the housing's flexibility at the sensor (the port compliance)."""
-    from ..bearing import transient as brs
-
-    model = brs.make_model(bout.housing_mesh("healthy", config)[0], config)  # the housing_mesh rule's healthy mesh
-    write_json(
-        {
-            "load_share": float(model.influence_line()[2].max()),
-            "sensor_spring_N_per_m": model.sensor_stiffness_N_per_m,
-            "port_compliance_m_per_N": model.sensor_port_compliance_m_per_N(),
-            "bottom_disk_diameter_m": config["sensor_fem"]["bottom_disk_diameter_m"],
-            "n_dofs": model.n_dofs,
-            "config": {k: config[k] for k in ("sensor", "sensor_fem", "bearing", "housing")},
-        },
-        out_json,
-    )
-
-
-def _load_share(config: dict, housing: dict, spring_N_per_m: float) -> float:
-    """This design's load share: from the housing's port compliance (exact, same contact disk), else its own model."""
-    from ..bearing import transient as brs
-    from ..bearing.housing_fem import spring_share_factor
-
-    if config["sensor_fem"]["bottom_disk_diameter_m"] == housing["bottom_disk_diameter_m"]:
-        k_ref, a0 = housing["sensor_spring_N_per_m"], housing["port_compliance_m_per_N"]
-        return housing["load_share"] * spring_share_factor(spring_N_per_m, k_ref, a0)
-    return float(brs.make_model(bout.housing_mesh("healthy", config)[0], config).influence_line()[2].max())
+    """Rule sensor_design_housing: :func:`piezobearing.bearing.outputs.sensor_port`, written."""
+    write_json(bout.sensor_port(config), out_json)
 
 
 def sensor_design_case(
@@ -217,12 +191,14 @@ def sensor_design_case(
     2. The load share: the sensor force per newton of radial roller load with a roller over the sensor.
        The sensor is a rank-one spring on the housing, so its stiffness scales the whole influence line by
        one factor (:func:`piezobearing.bearing.housing_fem.spring_share_factor`, from the ``housing``
-       file of :func:`sensor_design_housing`); a design with another contact disk gets its own housing model.
+       file of :func:`sensor_design_housing`); a design with another contact disk gets its own housing model
+       (:func:`piezobearing.bearing.outputs.design_load_share`).
     3. The workflow's sensor force records (``force_healthy``/``force_faulty``, made with the configured
        design) scaled by the ratio of this design's load share to the configured one: exact for the
        quasi-static force (the dynamic part is below 1e-4 of it, README), approximate for another contact disk.
     4. Voltage through this design's RC circuit (FEM d33_eff / C and tau, exact for piecewise-linear
-       force), the first ``signals.skip_s`` dropped; the DAQ's absolute noise and ADC
+       force), the first ``signals.skip_s`` dropped, sampled by the DAQ at ``signals.sample_rate_Hz`` as the
+       noisy rule does (:func:`piezobearing.signals.daq.sample`); the DAQ's absolute noise and ADC
        (:func:`noise_settings`); the envelope indicator over ``signals.study_n_seeds`` replicates.
     """
     from ..bearing import transient as brs
@@ -231,6 +207,7 @@ def sensor_design_case(
     from ..sensor.analysis import SensorFemParams
     from ..sensor.calibration import design_resistance_ohm
     from ..sensor.mesh import stack_mesh
+    from ..signals import daq
     from ..signals import detection as sig
 
     s, f = config["sensor"], config["sensor_fem"]
@@ -250,18 +227,21 @@ def sensor_design_case(
 
     port = read_json(housing)
     spring = brs.sensor_spring(config)
-    share = _load_share(config, port, spring)
+    share = bout.design_load_share(config, port, spring)
     kin = read_kinematics(kinematics)
     sg = config["signals"]
     voltages, p2p = {}, {}
     for case, path in (("healthy", force_healthy), ("faulty", force_faulty)):
         t, force, dt = read_series(path, "force_N")
         # the sensor_voltage rule's RC step, with this design's gain and time constant
-        voltages[case] = sout.rc_record(t, force * (share / port["load_share"]), dt, figs["open_circuit_gain_V_per_N"],
-                                        figs["tau_s"], sg["skip_s"], path)[2]
-        p2p[case] = float(np.ptp(voltages[case]))
+        v = sout.rc_record(t, force * (share / port["load_share"]), dt, figs["open_circuit_gain_V_per_N"],
+                           figs["tau_s"], sg["skip_s"], path)[2]
+        p2p[case] = float(np.ptp(v))
+        # the noisy rule's DAQ: anti-alias filter and sampling at signals.sample_rate_Hz (as is on its clock)
+        smp = daq.sample(v, dt, sg["sample_rate_Hz"])
+        voltages[case], dt_daq = smp.voltage_V, smp.dt_s
     det = sd.detection_at_noise(
-        voltages, dt, kin["bpfo_Hz"], noise_settings(config), sg["study_n_seeds"], config["seed"],
+        voltages, dt_daq, kin["bpfo_Hz"], noise_settings(config), sg["study_n_seeds"], config["seed"],
         sig.EnvelopeSettings.from_config(sg), sig.IndicatorSettings.from_config(sg),
         sg["study_required_detection_rate"],
     )

@@ -40,6 +40,7 @@ from ...bearing.surrogate import (
     roller_groove_drop,
 )
 from ...sensor.calibration import rc_voltage
+from ..record import UniformClock
 
 #: Narrowest groove the fine grid must resolve (3 sub-samples across its passage) [m].
 MIN_WIDTH_M = 0.25e-3
@@ -54,7 +55,7 @@ CACHE_BYTES = 64e6
 
 
 @dataclass(frozen=True, eq=False)
-class Rig:
+class Rig(UniformClock):
     """What the chain holds fixed for one record: bearing, housing, circuit, nominal operating point, clock.
 
     Parameters
@@ -91,14 +92,6 @@ class Rig:
             object.__setattr__(self, "surrogate", Surrogate(self.geometry, self.influence))
 
     @property
-    def n(self) -> int:
-        return int(self.time_s.size)
-
-    @property
-    def dt_s(self) -> float:
-        return float((self.time_s[-1] - self.time_s[0]) / (self.n - 1))
-
-    @property
     def n_pre(self) -> int:
         """Samples simulated before the record (steady state of the circuit)."""
         return int(np.ceil(PRE_ROLL_TAU * self.tau_s / self.dt_s))
@@ -112,12 +105,8 @@ class Rig:
         return kinematic_frequencies(self.geometry, 1.0).ftf_Hz
 
     def frequencies(self, shaft_Hz: float, slip: float = 0.0) -> dict[str, float]:
-        """Kinematic frequencies at a shaft speed with cage slip (the cage and what rolls on it slow down) [Hz]."""
-        k = kinematic_frequencies(self.geometry, shaft_Hz)
-        ftf = k.ftf_Hz * (1 - slip)
-        z = self.geometry.n_rollers
-        bsf = ftf * self.geometry.outer_raceway_radius_m / (0.5 * self.geometry.roller_diameter_m)
-        return {"shaft_Hz": shaft_Hz, "ftf_Hz": ftf, "bpfo_Hz": z * ftf, "bpfi_Hz": z * (shaft_Hz - ftf), "bsf_Hz": bsf}
+        """Kinematic frequencies at a shaft speed with cage slip (``bearing.lpm.kinematic_frequencies``) [Hz]."""
+        return kinematic_frequencies(self.geometry, shaft_Hz, slip).to_dict()
 
     def substeps(self) -> int:
         """Sub-samples per sample for moving defects: 3 across the narrowest groove's passage."""

@@ -30,6 +30,7 @@ def measurement(d: dict) -> list[str]:
         "force channel's noise carried through the model, S(f) = s_v^2 + s_f^2 |G(f)|^2; for the baseline "
         f"that is {base['noise_floor_rms_V'] * 1e3:.2f} mV rms, NRMSE {s.pct(base['noise_floor_nrmse'])}.",
         "",
+        *s.filled_gaps(d),
     ]
 
 

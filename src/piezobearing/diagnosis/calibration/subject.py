@@ -15,6 +15,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Callable
 
 import numpy as np
@@ -24,7 +25,7 @@ from ...sensor.calibration import Impulse, SensorCircuit, detect_impulses
 from ...synthesis import PressProtocol, synthesize
 from ..engine import Diagnosis, diagnose
 from ..fit import ModelFit
-from ..noise import estimate_noise_floor
+from ..noise import QUIET_BEFORE_S, estimate_noise_floor
 from ..settings import DiagnosticsSettings
 from ..subject import Judgement, Problem
 from ..verdict import segment_stats
@@ -85,7 +86,12 @@ def calibration_problem(
     v = np.asarray(voltage_V, dtype=float)
     impulses = impulses or []
     r0 = circuit.resistance_ohm
-    floor = estimate_noise_floor(record, v, settings, 5 * circuit.with_resistance(r0).tau_s)
+    settle = 5 * circuit.with_resistance(r0).tau_s
+    if record.filled is not None:
+        # the circuit remembers a filled force for its settling time after a gap (the floor's settling
+        # after a press), the fit's low-passed force for its filter's length before it (50 ms, as quiet_mask)
+        record = replace(record, memory_s=(QUIET_BEFORE_S, settings.quiet_settle_s + settle), _cache={})
+    floor = estimate_noise_floor(record, v, settings, settle)
     return Problem(
         record=record,
         voltage_V=v,
@@ -156,7 +162,7 @@ class CalibrationSubject:
         """The record, voltage, nominal circuit, configured effects, settings and impulses the engine takes."""
         m, imps = observation
         return (
-            ForceRecord(m.time_s, m.force_N),
+            ForceRecord(m.time_s, m.force_N, filled=m.filled),
             m.voltage_V,
             nominal_circuit(config),
             config["model"]["effects"],

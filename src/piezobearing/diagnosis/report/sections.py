@@ -165,6 +165,28 @@ def outside(d: dict) -> list[str]:
     return out + [""]
 
 
+def filled_gaps_line(g: dict | None) -> str:
+    """One line naming the samples filled across gaps of the recorded clock (empty when none were)."""
+    if not g or not g.get("n_samples"):
+        return ""
+    gaps = g["gaps"]
+    where = ", ".join(
+        f"{x['start_s']:.4g}-{x['stop_s']:.4g} s ({x['samples']} samples, {x['duration_s'] * 1e3:.3g} ms)"
+        for x in gaps[:5]
+    )
+    more = f" and {len(gaps) - 5} more" if len(gaps) > 5 else ""
+    return (
+        f"{g['n_samples']} samples were not measured but filled across {len(gaps)} gap(s) of the recorded clock "
+        f"(at {where}{more}); {g['treatment']}."
+    )
+
+
+def filled_gaps(d: dict) -> list[str]:
+    """The paragraph on filled samples (where, how long, how they were treated), or nothing."""
+    line = filled_gaps_line(d.get("filled_gaps"))
+    return [line, ""] if line else []
+
+
 def compare(d: dict, figures: Figures, overlay_caption: str) -> list[str]:
     """Section 1: the baseline and the configured model's fitted parameters, and the overlay."""
     base, conf = d["baseline"], d["configured"]

@@ -38,6 +38,10 @@ class ACCoupling(Effect):
     name = "ac_coupling"
     title = "AC-coupled DAQ input (high-pass)"
     order = 200
+    example = {"corner_Hz": 0.5}
+    example_reason = (
+        "an AC-coupled DAQ input: corners of 0.1-1 Hz are typical (0.5 Hz on dynamic-signal DAQs)"
+    )
     physics = (
         "An AC-coupled DAQ input blocks DC with a first-order high-pass of corner f_c (typically 0.1-1 Hz), "
         "in series with the PZT's own RC high-pass. Impulses lasting about a second lose slow content and "

@@ -44,6 +44,10 @@ class BaselineDrift(Effect):
     name = "baseline_drift"
     title = "slow additive drift (pyroelectric/thermal)"
     order = 310
+    example = {"drift_p0_V": 0.005, "drift_p1_V": 0.02, "drift_p2_V": -0.01, "drift_p3_V": 0.005}
+    example_reason = (
+        "pyroelectric current p A dT/dt through R: 0.1 K/s of warming gives ~35 mV at 50 MOhm; a 20 mV linear term with offset and curvature"
+    )
     additive_only = True
     physics = (
         "PZT is pyroelectric: a hand or rod warming the disk drives a current p A dT/dt through R (about "

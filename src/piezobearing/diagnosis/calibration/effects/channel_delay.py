@@ -58,6 +58,10 @@ class ChannelDelay(Effect):
     name = "channel_delay"
     title = "time offset force/voltage channel"
     order = 20
+    example = {"delay_s": 0.015}
+    example_reason = (
+        "two acquisition devices started by hand or over USB: offsets of a few to tens of ms are common"
+    )
     physics = (
         "The reference force and the PZT voltage are recorded by two devices on their own clocks; the "
         "voltage stamped t belongs to the force stamped t - delta (delta > 0: the voltage lags). The model "

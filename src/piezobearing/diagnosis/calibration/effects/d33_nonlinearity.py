@@ -38,6 +38,10 @@ class D33Nonlinearity(Effect):
     name = "d33_nonlinearity"
     title = "stress-dependent d33"
     order = 50
+    example = {"beta_per_N": 1.5e-3}
+    example_reason = (
+        "+3% sensitivity at 10 N: soft PZT gains ~1%/MPa under compression and a rod tip concentrates the 0.6 MPa mean stress several-fold; FlexiForce's own linearity error (+-3% FS) looks the same"
+    )
     physics = (
         "Under compressive stress soft PZT gains charge constant (domain-wall motion), so the charge is "
         "d33 (F + beta F^2) and the sensitivity d33 (1 + 2 beta F) grows with the force: larger impulses "

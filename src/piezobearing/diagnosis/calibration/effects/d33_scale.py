@@ -45,6 +45,10 @@ class D33Scale(Effect):
     name = "d33_scale"
     title = "d33 off the datasheet by a factor"
     order = 110
+    example = {"d33_scale_ratio": 0.85}
+    example_reason = (
+        "d33 15% below the datasheet: batch tolerance (+-10-20%) and ageing"
+    )
     physics = (
         "The charge constant of the disk differs from the configured d33 by a factor k (batch tolerance, "
         "ageing, partial depoling): every impulse scales by k, tau = RC stays. Once R refits this is exactly "

@@ -32,6 +32,10 @@ class ExtraCapacitance(Effect):
     name = "extra_capacitance"
     title = "extra capacitance across the electrodes"
     order = 100
+    example = {"extra_capacitance_F": 100e-12}
+    example_reason = (
+        "the DAQ input capacitance, or 1.1 m more of the 90 pF/m cable: 100 pF"
+    )
     physics = (
         "Capacitance in parallel with the disk beyond Cp + the nominal cable (a longer cable, adapters, the "
         "DAQ's input capacitance) lowers the gain d33/C and lengthens tau = RC. R alone can match tau but not "

@@ -55,6 +55,16 @@ class MainsPickup(Effect):
     name = "mains_pickup"
     title = "mains interference (50/60 Hz + odd harmonics)"
     order = 300
+    example = {
+        "mains_frequency_Hz": 50.03,
+        "mains_h1_cos_V": 0.012,
+        "mains_h1_sin_V": -0.016,
+        "mains_h3_cos_V": 0.003,
+        "mains_h3_sin_V": 0.004,
+    }
+    example_reason = (
+        "20 mV at 50 Hz plus 5 mV third harmonic: a high-impedance node (261 pF, 50 MOhm) near mains wiring"
+    )
     additive_only = True
     physics = (
         "The PZT is a high-impedance source (hundreds of pF behind tens of MOhm): an unshielded lead or a "

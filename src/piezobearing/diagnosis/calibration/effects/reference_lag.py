@@ -51,6 +51,10 @@ class ReferenceLag(Effect):
     name = "reference_lag"
     title = "first-order lag of the reference sensor"
     order = 10
+    example = {"lag_tau_s": 0.010}
+    example_reason = (
+        "a slow USB force logger with its anti-alias filter: a 10 ms lag (16 Hz corner)"
+    )
     physics = (
         "The reference force sensor and its electronics read the force through a first-order lag tau_r, "
         "while the PZT responds at once: the voltage leads the recorded force. The model drives the circuit "

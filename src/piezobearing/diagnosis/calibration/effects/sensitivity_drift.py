@@ -41,6 +41,10 @@ class SensitivityDrift(Effect):
     name = "sensitivity_drift"
     title = "gain changing along the record"
     order = 30
+    example = {"sensitivity_slope_per_s": 2e-3}
+    example_reason = (
+        "a gain rising by 5% over a 25 s record: chosen detectable at the default noise, larger than a typical thermal drift over 25 s"
+    )
     physics = (
         "The sensitivity changes along the record (d33 of soft PZT rises by ~0.1-0.4 %/K; DAQ gains drift "
         "while warming up): the voltage is multiplied by 1 + s (t - t_mid), so impulses late in the record "
