@@ -20,7 +20,10 @@ Writes results/benchmarks/diagnosis_bearing.json (and diagnosis_bearing_verified
 ``--coverage N``: the 95% intervals' coverage over N noise seeds (outer groove, clearance; writes
 results/benchmarks/diagnosis_bearing_coverage.json).
 
+``--no-prepass``: the method before the noise-floor pre-pass (for ``--old``).
+
 Usage: python benchmarks/bench_diagnosis_bearing.py [--ci] [--verify] [--old FILE] [--out FILE] [--note TEXT] [--coverage N]
+       [--no-prepass] [--verify-only --snr 10 --effects NAME ...]
 """
 
 from __future__ import annotations
@@ -38,7 +41,7 @@ from piezobearing.diagnosis.bearing.subject import SUBJECT, synthesise
 from piezobearing.stages.bearing_diagnosis import influence_from_config
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from test_diagnosis_bearing import HIDDEN  # noqa: E402
+from test_diagnosis_bearing import HIDDEN, misses  # noqa: E402
 
 
 def diagnose(c, influence, hidden, snr, fs, tach=False, duration=2.0):
@@ -114,7 +117,11 @@ def main() -> None:
     ap.add_argument("--old", help="a previous run's JSON (the method before a change): CPU-time ratios old / new")
     ap.add_argument("--out", default="results/benchmarks/diagnosis_bearing.json")
     ap.add_argument("--note", default="", help="what this run measures (kept in the JSON)")
+    ap.add_argument("--no-prepass", action="store_true",
+                    help="the method before the floor pre-pass: the engine runs twice where a fault lifts the floor")
     ap.add_argument("--ratios-only", action="store_true", help="add --old's ratios to --out (no runs)")
+    ap.add_argument("--snr", type=float, nargs="+", default=[30.0, 10.0], help="--verify: the SNRs (dB)")
+    ap.add_argument("--effects", nargs="+", default=list(HIDDEN), help="--verify: the hidden effects")
     ap.add_argument("--coverage", type=int, default=0, metavar="SEEDS", help="only the 95%% intervals' coverage over SEEDS seeds")
     args = ap.parse_args()
     if args.coverage:
@@ -127,6 +134,10 @@ def main() -> None:
         ratios(out, args.old)
         Path(args.out).write_text(json.dumps(out, indent=2) + "\n")
         return
+    if args.no_prepass:  # no pre-pass: the old method (the engine's second run on the final model's residual)
+        from piezobearing.diagnosis.bearing import subject
+
+        subject.floor_prepass = lambda problem, *_args, **_kw: problem
     c = cfg.load(cfg.CONFIG_DIR / "ci.yaml") if args.ci or args.verify_only else cfg.load()
     t0 = time.perf_counter()
     influence = influence_from_config(c)
@@ -143,7 +154,9 @@ def main() -> None:
                 continue
             row = {"sample_rate_Hz": fs, "duration_s": 2.0, "hidden": label, "seconds": sec, "cpu_seconds": cpu,
                    "load_average_1min": os.getloadavg()[0], "selected": d["selected"], "verdict": d["verdict"],
-                   "floor_remeasured": "final model's residual" in d["noise_floor"]["method"]}
+                   "floor_remeasured": "final model's residual" in d["noise_floor"]["method"],
+                   "floor_prepass": "pre-pass" in d["noise_floor"]["method"], "final_nrmse": d["final"]["nrmse"],
+                   "floor_nrmse": d["noise_floor_nrmse"]}
             out["runs"].append(row)
             print(json.dumps(row), flush=True)
     if args.old:
@@ -156,9 +169,10 @@ def main() -> None:
         cv = copy.deepcopy(cfg.load(cfg.CONFIG_DIR / "ci.yaml"))
         cv["diagnostics"]["max_steps"] = 1
         infl_v = influence if args.ci or args.verify_only else influence_from_config(cv)
-        for snr in (30.0, 10.0):
-            for name, params in HIDDEN.items():
-                d, sec, _ = diagnose(cv, infl_v, [{"name": name, "params": params}], snr, 2550.0,
+        for snr in args.snr:
+            for name in args.effects:
+                params = HIDDEN[name]
+                d, sec, cpu = diagnose(cv, infl_v, [{"name": name, "params": params}], snr, 2550.0,
                                   tach=(name == "cage_slip"), duration=0.5)
                 first = d["ranking"][0]
                 rows.append({
@@ -166,9 +180,19 @@ def main() -> None:
                     "found": {k: first["params"].get(k) for k in params}, "ci95": {k: first["ci95"].get(k) for k in params},
                     "selected": d["selected"], "verdict": d["verdict"],
                     "ladder_nrmse": [s["nrmse"] for s in d["steps"]], "floor_nrmse": d["noise_floor_nrmse"], "seconds": sec,
+                    "cpu_seconds": cpu, "load_average_1min": os.getloadavg()[0],
+                    "runner_up": d["ranking"][1]["effect"] if len(d["ranking"]) > 1 else None,
+                    "margin_delta_bic": first["delta_bic"] - d["ranking"][1]["delta_bic"] if len(d["ranking"]) > 1 else None,
+                    "interval_method": {k: d["identifiability"].get("intervals", {}).get(k, {}).get("method") for k in params},
+                    "test_misses": misses(d, name), "floor_method": d["noise_floor"]["method"],
                 })
                 print(json.dumps(rows[-1]), flush=True)
-        Path("results/benchmarks/diagnosis_bearing_verified.json").write_text(json.dumps(rows, indent=2) + "\n")
+        verified = Path("results/benchmarks/diagnosis_bearing_verified.json")
+        if args.snr != [30.0, 10.0] or args.effects != list(HIDDEN):  # a part: the other rows of the last run are kept
+            keep = [r for r in json.loads(verified.read_text()) if (r["effect"], r["snr_dB"]) not in
+                    {(r["effect"], r["snr_dB"]) for r in rows}] if verified.exists() else []
+            rows = keep + rows
+        verified.write_text(json.dumps(rows, indent=2) + "\n")
 
 
 if __name__ == "__main__":

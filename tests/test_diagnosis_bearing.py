@@ -51,35 +51,73 @@ def run(c, influence, hidden, snr_dB, seed=11, tach=False, extra=None):
     return SUBJECT.diagnose((rec, influence), c)[1]
 
 
-#: The 10 dB half passed with the engine's Jacobian intervals (all ten found first and alone, README); with
-#: its profile-likelihood check of the final intervals its cost (roller_scatter profiles up to four of its
-#: offsets) is not measured yet: it runs when PIEZOBEARING_TEST_10DB=1 is set.
-TEN_DB = pytest.param(
-    10.0,
-    marks=pytest.mark.skipif(not os.environ.get("PIEZOBEARING_TEST_10DB"), reason="10 dB set: set PIEZOBEARING_TEST_10DB=1"),
-)
+#: The 10 dB cases that run in every test run: where the evidence or the intervals are closest to failing at
+#: 10 dB (radial_load over load_share by a BIC margin of 12, load_share over clearance by 24; clearance and
+#: mains_pickup with profile-likelihood intervals, mains over the profile budget; the groove's angle the
+#: draw that misses by 2.2 half-widths): 18 s of CPU for the five (benchmarks/bench_diagnosis_bearing.py
+#: --verify-only, this session). The other five (35 s of CPU for all ten) run with PIEZOBEARING_TEST_10DB=1.
+TEN_DB_ALWAYS = ("outer_race_defect", "radial_load", "clearance", "load_share", "mains_pickup")
+
+
+def cases():
+    out = []
+    for name in HIDDEN:
+        out.append(pytest.param(name, 30.0, id=f"{name}-30dB"))
+        skip = name not in TEN_DB_ALWAYS and not os.environ.get("PIEZOBEARING_TEST_10DB")
+        marks = pytest.mark.skipif(skip, reason="10 dB case: set PIEZOBEARING_TEST_10DB=1") if skip else ()
+        out.append(pytest.param(name, 10.0, id=f"{name}-10dB", marks=marks))
+    return out
+
+
+def misses(d: dict, name: str) -> list[str]:
+    """What the hide-and-find check finds wrong in diagnosis ``d`` of a record with ``name`` hidden (empty: passes).
+
+    ``name`` must be ranked first and be the only effect selected, each hidden value inside the 95% interval
+    widened to 99.9% (20 such checks at 95% would miss about one by chance; the README's verified table gives
+    each 95% interval as it is), a defect's fault type named. The benchmark's --verify table uses it too.
+    """
+    first, out = d["ranking"][0], []
+    if first["effect"] != name:
+        return [f"ranked first: {[(r['effect'], r['delta_bic']) for r in d['ranking'][:3]]}"]
+    if d["selected"] != [name]:
+        out.append(f"selected {d['selected']}")
+    for k, v in HIDDEN[name].items():
+        if k == "roller_defect_index":
+            if first["params"][k] != v:
+                out.append(f"{k} {first['params'][k]} != {v}")
+            continue
+        lo, hi = first["ci95"][k]
+        mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo) * WIDEN
+        if not mid - half <= v <= mid + half:
+            out.append(f"{k}: hidden {v}, found {first['params'][k]} [{lo}, {hi}] (95%)")
+    if name in ("outer_race_defect", "inner_race_defect", "rolling_element_defect"):
+        if d["fault"]["type"] != name.replace("_defect", ""):
+            out.append(f"fault type {d['fault']['type']}")
+    return out
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("snr_dB", [30.0, TEN_DB])
-@pytest.mark.parametrize("name", list(HIDDEN))
+@pytest.mark.parametrize(("name", "snr_dB"), cases())
 def test_hidden_effect_is_found_first_with_its_value_in_the_interval(setup, name, snr_dB):
     c, influence = setup
     d = run(c, influence, [{"name": name, "params": HIDDEN[name]}], snr_dB, tach=(name == "cage_slip"))
-    first = d["ranking"][0]
-    assert first["effect"] == name, [(r["effect"], r["delta_bic"]) for r in d["ranking"][:3]]
-    assert d["selected"] == [name]
-    for k, v in HIDDEN[name].items():
-        if k == "roller_defect_index":
-            assert first["params"][k] == v
-            continue
-        lo, hi = first["ci95"][k]
-        # 20 such checks at 95% would miss about one by chance: the 95% interval widened to 99.9% (x 3.29/1.96);
-        # the README's verified table gives each 95% interval as it is
-        mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo) * WIDEN
-        assert mid - half <= v <= mid + half, (k, v, first["params"][k], lo, hi)
-    if name in ("outer_race_defect", "inner_race_defect", "rolling_element_defect"):
-        assert d["fault"]["type"] == name.replace("_defect", "")
+    assert not misses(d, name), misses(d, name)
+    if snr_dB == 30.0 and name in ("inner_race_defect", "rolling_element_defect"):
+        # their lines fill the spectrum and lift the record's floor 3.5x: the pre-pass measures it on the
+        # fault's residual, so the engine runs once, and the final model leaves about that floor
+        method = d["noise_floor"]["method"]
+        assert "pre-pass" in method and "final model's residual" not in method, method
+        assert 0.9 < d["final"]["nrmse"] / d["noise_floor_nrmse"] < 1.1
+    if name in ("radial_load", "clearance", "load_share"):
+        # the load/clearance/share look-alikes: this record's evidence puts the hidden one first, and the
+        # report's section 6 says so and how its interval was found
+        ns = next(n for n in d["fault"]["non_separable"] if "radial_clearance_m" in n["set"])
+        assert max(ns["evidence"], key=ns["evidence"].get) == name
+        key = next(iter(HIDDEN[name]))
+        assert d["fault"]["ci_method"][key] == d["identifiability"]["intervals"][key]["method"]
+        text = SUBJECT.report({**d, "source": "synthetic"}, {})
+        assert "### What this record cannot tell apart" in text
+        assert f"| `{key}` |" in text.split("### How each interval of the answer was found")[1]
 
 
 def test_healthy_record_selects_nothing(setup):
@@ -89,6 +127,9 @@ def test_healthy_record_selects_nothing(setup):
     assert d["verdict"] == "explained"
     assert d["fault"]["type"] == "none"
     assert d["baseline"]["nrmse"] < 1.2 * d["baseline"]["noise_floor_nrmse"]
+    how = d["fault"]["ci_method"]
+    assert how["radial_load_N"] == "nominal, not fitted"
+    assert how["shaft_speed_Hz"] == d["identifiability"]["intervals"]["shaft_speed_Hz"]["method"]
 
 
 def loose_part(t, f_shaft=1000 / 60, amp=25.0, f_ring=600.0, decay_s=4e-3, t0=0.011):
@@ -131,3 +172,26 @@ def test_cli_bad_record_is_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "column 'voltage_V' missing" in err[0]
     assert not isinstance(MeasurementError, type(None))
+
+
+def test_roller_scatter_sine_pattern_is_invisible(setup):
+    """Roller diameter deficits b sin(2 pi k / Z) over the roller index are the inner ring displaced
+    perpendicular to roller 0: every roller's gap and load is the same, so is the sensor voltage (why
+    roller_scatter holds roller Z-1 as a second reference); a cos(2 pi k / Z) - 1 or a second-harmonic
+    pattern of the same size is seen."""
+    from piezobearing.diagnosis.bearing import chain
+    from piezobearing.diagnosis.bearing.subject import rig_from_config
+
+    c, influence = setup
+    rig = rig_from_config(c, influence, np.arange(1275) / 2550.0)
+    z = rig.geometry.n_rollers
+    base = {"start_phase_rad": 0.1, "shaft_speed_Hz": rig.shaft_speed_Hz, "dc_offset_V": 0.0}
+    v0 = chain.voltage(rig, base)
+
+    def change(pattern):
+        offsets = {f"roller_{k}_offset_m": 2e-6 * pattern(2 * np.pi * k / z) for k in range(1, z)}
+        return float(np.sqrt(np.mean((chain.voltage(rig, {**base, **offsets}) - v0) ** 2)))
+
+    seen = min(change(lambda a: np.cos(a) - 1), change(lambda a: np.sin(2 * a)))
+    assert seen > 1.0  # V: 4.5 and 10.7 V rms against a 35 V rms record (measured)
+    assert change(np.sin) < 2e-3 * seen  # 0.005 V rms: the surrogate's numerics

