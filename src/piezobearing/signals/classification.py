@@ -10,16 +10,58 @@ record).
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
+from . import baseline as B
 from . import daq
 from . import detection as det
 from . import detector as D
 
+#: signals.detector.statistic: the detectors one record can go through.
+STATISTICS = ("baseline", "envelope")
 
-def classify_seeds(records: dict, kinematics: dict, envelope_settings: det.EnvelopeSettings,
-                   settings: D.DetectorSettings, noise: daq.NoiseSettings,
+
+@dataclass(frozen=True)
+class Analyser:
+    """One record through the configured detector (``signals.detector.statistic``).
+
+    ``envelope``: the search detector on the band's envelope spectrum
+    (:func:`.detector.analyse_record`); ``baseline``: the roller-passage part
+    removed and the record tested against the healthy ``baseline``
+    (:func:`.baseline.detect`).
+    """
+
+    statistic: str
+    envelope_settings: det.EnvelopeSettings
+    settings: D.DetectorSettings
+    baseline_settings: B.BaselineSettings
+    baseline: B.Baseline | None = None
+
+    def __call__(self, x: np.ndarray, dt_s: float, kinematics: dict):
+        """The detection (``fault_type``, ``per_type``, ``to_dict()``) of record ``x`` [V] at step ``dt_s`` [s]."""
+        if self.statistic == "envelope":
+            return D.analyse_record(x, dt_s, kinematics, self.envelope_settings, self.settings)[1]
+        if self.baseline is None:
+            raise ValueError("signals.detector.statistic = baseline needs the healthy record; none was given")
+        return B.detect(x, dt_s, kinematics, self.baseline, self.baseline_settings)
+
+
+def analyser(sig: dict, kinematics: dict, healthy: tuple[np.ndarray, float] | None) -> Analyser:
+    """The detector of ``signals`` config ``sig``; ``healthy``: the healthy bearing's noiseless record on the
+    DAQ clock (v [V], dt [s]), the baseline of statistic ``baseline``."""
+    stat = sig["detector"].get("statistic", "envelope")
+    if stat not in STATISTICS:
+        raise ValueError(f"signals.detector.statistic: unknown '{stat}'; use {' or '.join(STATISTICS)}")
+    bs = B.BaselineSettings.from_config(sig)
+    base = None
+    if stat == "baseline" and healthy is not None:
+        base = B.Baseline.from_record(healthy[0], healthy[1], kinematics, bs)
+    return Analyser(stat, det.EnvelopeSettings.from_config(sig), D.DetectorSettings.from_config(sig), bs, base)
+
+
+def classify_seeds(records: dict, kinematics: dict, analyse: Analyser, noise: daq.NoiseSettings,
                    rng: Callable[[str, int], np.random.Generator], n_seeds: int) -> tuple[dict, list[dict]]:
     """Classify every case over ``n_seeds`` noise replicates.
 
@@ -29,8 +71,10 @@ def classify_seeds(records: dict, kinematics: dict, envelope_settings: det.Envel
         case -> (true_type, noiseless voltage on the DAQ clock [V], step [s]).
     kinematics : dict
         No-slip kinematic frequencies [Hz].
-    envelope_settings, settings, noise
-        Band rule, detector and DAQ noise.
+    analyse : Analyser
+        The detector.
+    noise : NoiseSettings
+        The DAQ noise.
     rng : callable
         (case, replicate) -> the replicate's generator.
     n_seeds : int
@@ -46,7 +90,7 @@ def classify_seeds(records: dict, kinematics: dict, envelope_settings: det.Envel
     for case, (true_type, v, dt) in records.items():
         for j in range(n_seeds):
             acq = daq.add_noise(v, dt, noise, rng(case, j))
-            _, d = D.analyse_record(acq.voltage_V, dt, kinematics, envelope_settings, settings)
+            d = analyse(acq.voltage_V, dt, kinematics)
             row = {"case": case, "true_type": true_type, "seed": j, "fault_type": d.fault_type,
                    "clipped_fraction": acq.clipped_fraction}
             for t, r in d.per_type.items():
@@ -58,7 +102,7 @@ def classify_seeds(records: dict, kinematics: dict, envelope_settings: det.Envel
 
 
 def roc_over_snr(faulty: tuple[str, np.ndarray], healthy: np.ndarray, dt_s: float, kinematics: dict,
-                 envelope_settings: det.EnvelopeSettings, settings: D.DetectorSettings, snr_dB: list[float],
+                 analyse: Analyser, snr_dB: list[float],
                  rng: Callable[[str, int], np.random.Generator], n_seeds: int) -> list[dict]:
     """ROC of the true type's test (score I / threshold) at each SNR, faulty against healthy.
 
@@ -80,8 +124,7 @@ def roc_over_snr(faulty: tuple[str, np.ndarray], healthy: np.ndarray, dt_s: floa
         for c, x in (("faulty", vf), ("healthy", healthy)):
             sig = float(np.sqrt(np.mean(x * x) / 10.0 ** (s / 10.0)))
             scores[c] = np.array([
-                D.analyse_record(x + sig * z, dt_s, kinematics, envelope_settings, settings)[1]
-                .per_type[true_type]["margin"] for z in shapes[c]
+                analyse(x + sig * z, dt_s, kinematics).per_type[true_type]["margin"] for z in shapes[c]
             ])
         pfa, pd_ = D.roc_points(scores["faulty"], scores["healthy"])
         out.append({"snr_dB": float(s), "fault_type": true_type, "auc": D.roc_auc(pfa, pd_),

@@ -11,12 +11,14 @@ Warnings go to stderr (the rule's log).
 from __future__ import annotations
 
 import sys
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 
 from ..io import SignalFileError
 from ..sensor.calibration import SensorCircuit, design_resistance_ohm, frequency_response, rc_voltage
+from . import baseline as sbase
 from . import classification as sclass
 from . import daq
 from . import detection as sig
@@ -141,22 +143,24 @@ def spectrum(table: pd.DataFrame, record: dict, column: str = "amplitude_V") -> 
     )
 
 
-def fault_indicator(envelopes: dict, kinematics: dict, noisy_records: dict, config: dict) -> dict:
+def fault_indicator(envelopes: dict, kinematics: dict, noisy_records: dict, config: dict,
+                    healthy: tuple[np.ndarray, float] | None = None) -> dict:
     """Rule fault_indicator: envelope amplitudes at k BPFO over the local floor, indicator, threshold.
 
     ``envelopes`` maps each case to its envelope (table, record); ``noisy_records`` each case to its noisy
-    record (y [V], dt [s], record). Per case also the search detector (:mod:`..detector`) on the noisy record
-    in the envelope's band: ``fault_type`` (the classification) and ``fault_types``, per type its indicator,
-    threshold and ``detected``.
+    record (y [V], dt [s], record). Per case also the detector of signals.detector.statistic: ``envelope``, the
+    search detector (:mod:`..detector`) on the noisy record in the envelope's band; ``baseline``
+    (:mod:`..baseline`) against the ``healthy`` noiseless record on the DAQ clock (v [V], dt [s]): ``fault_type``
+    (the classification) and ``fault_types``, per type its indicator, threshold and ``detected``.
     """
     s = config["signals"]
     ins = sig.IndicatorSettings.from_config(s)
-    ds = sdet.DetectorSettings.from_config(s)
+    base = sclass.analyser(s, kinematics, healthy)
     out = {}
     for case, (table, meta) in envelopes.items():
         y, dt, nrec = noisy_records[case]
         es = sig.EnvelopeSettings(band_rule="fixed", band_Hz=tuple(meta["band_Hz"]), filter_order=s["filter_order"])
-        found = sdet.analyse_record(y, dt, kinematics, es, ds)[1].to_dict()
+        found = replace(base, envelope_settings=es)(y, dt, kinematics).to_dict()
         r = sig.fault_indicator(spectrum(table, meta), kinematics["bpfo_Hz"], ins)
         r["noiseless"] = sig.fault_indicator(spectrum(table, meta, "noiseless_amplitude_V"), kinematics["bpfo_Hz"],
                                              ins)
@@ -167,7 +171,8 @@ def fault_indicator(envelopes: dict, kinematics: dict, noisy_records: dict, conf
         r["fault_type"] = found["fault_type"]
         r["fault_types"] = {t: dict(v, lines=found["lines"][t]) for t, v in found["per_type"].items()}
         out[case] = r
-    out["definition"] = INDICATOR_DEFINITION + "; " + sdet.DEFINITION
+    out["definition"] = INDICATOR_DEFINITION + "; " + (sdet.DEFINITION if base.statistic == "envelope"
+                                                       else sbase.DEFINITION)
     out["kinematics"] = kinematics
     out["config"] = {"seed": config["seed"], "signals": s}
     return out
@@ -225,16 +230,17 @@ def fault_classification(voltages: dict, kinematics: dict, config: dict,
     for case, (v, dt) in {**voltages, **(type_voltages or {})}.items():
         smp = daq.sample(v, dt, s["sample_rate_Hz"])
         records[case] = (truth[case], smp.voltage_V, smp.dt_s)
-    es, ds, ns = sig.EnvelopeSettings.from_config(s), sdet.DetectorSettings.from_config(s), daq.NoiseSettings.from_config(s)
+    ns = daq.NoiseSettings.from_config(s)
+    analyse = sclass.analyser(s, kinematics, records["healthy"][1:])
     n = s["study_n_seeds"]
     rng = lambda case, j: sig.noise_rng(config["seed"], case, j)  # noqa: E731
     print(f"classification: {len(records)} cases x {n} seeds", file=sys.stderr, flush=True)
-    cm, rows = sclass.classify_seeds(records, kinematics, es, ds, ns, rng, n)
+    cm, rows = sclass.classify_seeds(records, kinematics, analyse, ns, rng, n)
     roc = []
     if truth["faulty"] != "none":
         print(f"classification: ROC at {len(s['detector']['roc_snr_dB'])} SNRs", file=sys.stderr, flush=True)
         roc = sclass.roc_over_snr((truth["faulty"], records["faulty"][1]), records["healthy"][1],
-                                  records["faulty"][2], kinematics, es, ds, s["detector"]["roc_snr_dB"], rng, n)
+                                  records["faulty"][2], kinematics, analyse, s["detector"]["roc_snr_dB"], rng, n)
     roc_table = pd.DataFrame([{"snr_dB": r["snr_dB"], "pfa": p, "pd": d} for r in roc
                               for p, d in zip(r["pfa"], r["pd"], strict=True)])
     record = {
@@ -243,7 +249,8 @@ def fault_classification(voltages: dict, kinematics: dict, config: dict,
         "noise_model": ns.model,
         "snr_dB": s["snr_dB"] if ns.model == "relative" else None,
         "sample_rate_Hz": 1.0 / records["faulty"][2],
-        "false_alarm_probability": ds.false_alarm_probability,
+        "false_alarm_probability": s["false_alarm_probability"],
+        "statistic": analyse.statistic,
         "true_types": truth,
         "roc": [{k: r[k] for k in ("snr_dB", "fault_type", "auc", "detection_rate", "false_alarm_rate")}
                 for r in roc],

@@ -101,13 +101,15 @@ def indicator(envelopes: dict, kinematics_json: str, noisy_jsons: dict, out_json
     ``envelopes`` maps each case to its (csv, json) pair; the noisy records are ``noisy_csvs``, default beside
     ``noisy_jsons``.
     """
-    spectra, records = {}, {}
+    spectra, records, healthy = {}, {}, None
     for case, (csv, js) in envelopes.items():
         ncsv = noisy_csvs[case] if noisy_csvs else str(Path(noisy_jsons[case]).with_suffix(".csv"))
         _, y, dt = read_series(ncsv, "voltage_V")
+        if case == "healthy":  # the baseline detector's healthy record: the sampled noiseless one
+            healthy = read_series(ncsv, "noiseless_V")[1:]
         spectra[case] = (pd.read_csv(csv), read_json(js))
         records[case] = (y, dt, read_json(noisy_jsons[case]))
-    write_json(outputs.fault_indicator(spectra, kinematics(kinematics_json), records, config), out_json)
+    write_json(outputs.fault_indicator(spectra, kinematics(kinematics_json), records, config, healthy), out_json)
 
 
 # --------------------------------------------------------------------------- SNR study

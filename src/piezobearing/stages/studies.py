@@ -92,9 +92,12 @@ def workflow_chain(config: dict, resistance: dict, harmonic=None, resistance_sou
         _, y, dt = table_series(table, "voltage_V", f"noisy_{c}.csv")
         _, v, _ = table_series(table, "noiseless_V", f"noisy_{c}.csv")
         out["noisy"][c] = (y, dt, json_as_read(record))
+        if c == "healthy":
+            out["baseline"] = (v, dt)  # the baseline detector's healthy record
         env, env_record = sout.envelope(y, v, dt, kin, config)
         out["envelope"][c] = (as_read(env), json_as_read(env_record))
-    out["indicator"] = json_as_read(sout.fault_indicator(out["envelope"], kin, out["noisy"], config))
+    out["indicator"] = json_as_read(sout.fault_indicator(out["envelope"], kin, out["noisy"], config,
+                                                         out.get("baseline")))
     return out
 
 
