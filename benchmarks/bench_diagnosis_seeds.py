@@ -91,6 +91,9 @@ def judge(hidden: list[dict], d: dict) -> dict:
         "selected": d["selected"],
         "verdict": d["verdict"],
         "final_chi2_per_sample": d["final"]["chi2_per_sample"],
+        # the first step's margin over its runner-up (none when nothing was added)
+        "margin_bic": (d["identifiability"]["steps"] or [{}])[0].get("margin_bic"),
+        "runner_up": (d["identifiability"]["steps"] or [{}])[0].get("runner_up"),
         "findings": [
             {k: f.get(k) for k in ("test", "kind", "where", "frequency_Hz", "t0_s", "lag_s") if k in f}
             for f in d["unexplained"]
@@ -144,7 +147,9 @@ def main() -> None:
             "found_rate": sum(r["found"] for r in rows.values()) / n,
             "found_and_explained_rate": sum(ok) / n,
             "failed_seeds": {s: r for s, r in rows.items() if not (r["found"] and r["explained"])},
-            "per_seed": {s: {k: r[k] for k in ("first", "selected", "verdict")} for s, r in rows.items()},
+            "per_seed": {
+                s: {k: r[k] for k in ("first", "selected", "verdict", "runner_up", "margin_bic")} for s, r in rows.items()
+            },
         }
         c = out["cases"][case]
         Path(args.out).parent.mkdir(parents=True, exist_ok=True)

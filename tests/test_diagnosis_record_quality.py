@@ -86,3 +86,101 @@ def test_validate_names_the_filled_gap(gapped, capsys):
     assert len(warn) == 1, warn
     assert f"{lost.size} samples lost in 1 gap(s)" in warn[0] and "60 ms" in warn[0]
     assert f"t = {m.time_s[lost[0]]:.4g} s" in warn[0] and "leaves them out" in warn[0]
+
+
+# --------------------------------------------------------------------------- quantisation
+
+
+def test_quantisation_step_is_found_in_the_distinct_levels():
+    """A 12-bit +-10 V converter's codes (offset, written to 10 significant digits) give its step; a channel of
+    floating-point values, or of too few levels, gives 0."""
+    from piezobearing.diagnosis.noise import quantisation_step
+
+    q = 20.0 / 4096
+    rng = np.random.default_rng(1)
+    x = np.sin(np.linspace(0, 20, 5000)) * 0.8 + rng.normal(0, 3e-3, 5000)
+    codes = np.round((x + 0.0011) / q) * q - 0.0011
+    assert quantisation_step(np.array([float(f"{c:.10g}") for c in codes])) == pytest.approx(q, rel=1e-6)
+    assert quantisation_step(x) == 0.0
+    assert quantisation_step(np.array([0.0, 1.0, 0.0])) == 0.0
+    assert quantisation_step(None) == 0.0
+
+
+@pytest.mark.slow  # two diagnoses of the CI record
+def test_coarse_adc_noise_is_in_the_floor(ci_config):
+    """The CI record with little analog noise (0.3 mV, 0.5 mN) read by a 12-bit +-10 V converter (LSB 4.88 mV,
+    quantisation noise 1.41 mV rms): between presses the voltage rests on one code (the quiet stretches show
+    almost no noise), during them it moves over many and carries the LSB^2/12. With the ADC's floor the clean
+    record is explained with nothing added; with the quiet stretches' level alone the search adds effects to
+    fit quantisation noise and the verdict is unexplained."""
+    from piezobearing.diagnosis import noise
+    from piezobearing.diagnosis.calibration.effects import ForceRecord
+    from piezobearing.diagnosis.calibration.subject import diagnose_record
+    from piezobearing.diagnosis.settings import DiagnosticsSettings
+    from piezobearing.sensor.calibration import detect_impulses
+    from piezobearing.stages.calibration import nominal_circuit
+    from piezobearing.synthesis import PressProtocol, synthesize
+
+    c = {**ci_config, "synthesis": {**ci_config["synthesis"], "voltage_noise_V": 0.3e-3, "force_noise_N": 0.5e-3}}
+    m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"])
+    q = 20.0 / 4096
+    v = np.round(m.voltage_V / q) * q
+    args = (
+        nominal_circuit(c, c["calibration"]["initial_resistance_ohm"]),
+        [],
+        DiagnosticsSettings.from_config(c["diagnostics"]),
+        detect_impulses(m.force_N, v, m.dt_s, 0.2, 0.8),
+    )
+    _, d = diagnose_record(ForceRecord(m.time_s, m.force_N), v, *args)
+    fl = d["noise_floor"]
+    assert fl["voltage_step_V"] == pytest.approx(q)
+    assert fl["voltage_noise_V"] == pytest.approx(q / np.sqrt(12), rel=1e-6) and "ADC floor" in fl["method"]
+    assert d["selected"] == [] and d["verdict"] == "explained"
+
+    stationary = noise.quantisation_step
+    try:  # the same record with the floor measured in the quiet stretches alone
+        noise.quantisation_step = lambda x, tolerance=0.05: 0.0
+        _, blind = diagnose_record(ForceRecord(m.time_s, m.force_N), v, *args)
+    finally:
+        noise.quantisation_step = stationary
+    assert blind["noise_floor"]["voltage_noise_V"] < 0.1 * q / np.sqrt(12)
+    assert blind["selected"] and blind["verdict"] == "unexplained"
+
+
+# --------------------------------------------------------------------------- drift of any shape
+
+
+@pytest.mark.slow  # two diagnoses of the CI record
+def test_wandering_drift_is_found_with_knots_chosen_by_the_evidence(ci_config, monkeypatch):
+    """A pyroelectric drift that changes course (a hand warming the fixture, then its cooling: +20 mV then
+    -12 mV, Gaussian bumps of 2 s standard deviation) on the CI record: the spline drift, its knot count chosen by BIC, finds it and
+    the record is explained; the cubic alone (the drift's form before) leaves it unexplained."""
+    from piezobearing.diagnosis.calibration.effects import ForceRecord
+    from piezobearing.diagnosis.calibration.effects import baseline_drift as bd
+    from piezobearing.diagnosis.calibration.subject import diagnose_record
+    from piezobearing.diagnosis.settings import DiagnosticsSettings
+    from piezobearing.sensor.calibration import detect_impulses
+    from piezobearing.stages.calibration import nominal_circuit
+    from piezobearing.synthesis import PressProtocol, synthesize
+
+    c = ci_config
+    m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"])
+    t = m.time_s
+    v = m.voltage_V + 0.020 * np.exp(-0.5 * ((t - 4) / 2.0) ** 2) - 0.012 * np.exp(-0.5 * ((t - 8.5) / 2.0) ** 2)
+    args = (
+        nominal_circuit(c, c["calibration"]["initial_resistance_ohm"]),
+        [],
+        DiagnosticsSettings.from_config(c["diagnostics"]),
+        detect_impulses(m.force_N, v, m.dt_s, 0.2, 0.8),
+    )
+    _, d = diagnose_record(ForceRecord(t, m.force_N), v, *args)
+    assert d["ranking"][0]["effect"] == "baseline_drift" and d["selected"] == ["baseline_drift"]
+    assert d["verdict"] == "explained"
+    knots = [k for k in d["final"]["params"] if k.startswith("drift_w")]
+    assert knots and len(knots) <= 4  # a 12 s record: knots at least 2 s apart
+    assert "knots" in d["ranking"][0]["summary"]
+
+    monkeypatch.setattr(bd, "KNOTS", (0,))
+    _, cubic = diagnose_record(ForceRecord(t, m.force_N), v, *args)
+    assert cubic["verdict"] == "unexplained"
+    assert cubic["final"]["chi2_per_sample"] > d["final"]["chi2_per_sample"]

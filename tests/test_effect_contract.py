@@ -11,11 +11,11 @@ from piezobearing.diagnosis.units import UNITS
 PROBE = ForceRecord(np.arange(2000) / 1000.0, np.zeros(2000))
 
 
-@pytest.mark.parametrize("name", list(CATALOGUE))
+@pytest.mark.parametrize("name", [*CATALOGUE, "_template"])
 def test_every_effect_has_a_plausible_example_within_its_bounds(name):
     """Each effect's ``example`` (the one home of the size the tests, the error-rate study and hide-and-find
     hide) names its own parameters, lies within their bounds, is not the neutral value, and says why."""
-    e = CATALOGUE[name]
+    e = _effects()[name]
     params = {p.name: p for p in e.params(PROBE)}
     assert e.example and set(e.example) <= set(params)
     assert len(e.example_reason) > 20
@@ -24,3 +24,58 @@ def test_every_effect_has_a_plausible_example_within_its_bounds(name):
         assert p.lower <= v <= p.upper, (k, v)
         assert any(k.endswith(u.suffix) for u in UNITS), k
     assert any(v != params[k].value for k, v in e.example.items())
+
+
+def _effects():
+    from piezobearing.diagnosis.calibration.effects import _template
+
+    return {**dict(CATALOGUE), "_template": _template.EFFECT}
+
+
+@pytest.fixture(scope="module")
+def press_record(ci_config):
+    from piezobearing.stages.calibration import nominal_circuit
+    from piezobearing.synthesis import PressProtocol, synthesize
+
+    m = synthesize(PressProtocol.from_config(ci_config["synthesis"]), nominal_circuit(ci_config), ci_config["seed"])
+    return ForceRecord(m.time_s, m.force_N), nominal_circuit(ci_config)
+
+
+def test_the_template_is_a_complete_effect_left_out_of_the_catalogue():
+    """CONTRIBUTING points to effects/_template.py: a working effect (fixture_mode) not in the catalogue."""
+    from pathlib import Path
+
+    from piezobearing.diagnosis.calibration.effects import _template
+
+    assert _template.EFFECT.name == "fixture_mode" and "fixture_mode" not in CATALOGUE
+    assert "_template.py" in Path(__file__).resolve().parents[1].joinpath("CONTRIBUTING.md").read_text()
+    for part in ("Physics", "Model", "Parameters"):
+        assert part in _template.__doc__
+
+
+@pytest.mark.parametrize("key", list(_effects()))
+def test_effect_hooks_keep_the_contract(key, press_record):
+    """Every effect (the template too): neutral at its declared values (the model's voltage unchanged), a force
+    hook that keeps the padded size, a noise-path factor that is a scalar or one per DFT bin (0 .. Nyquist),
+    an example that changes the voltage, and starts of at most three dicts naming its own parameters."""
+    from piezobearing.diagnosis.calibration.effects.base import StartContext
+    from piezobearing.diagnosis.calibration.model import PAD, ForwardModel
+
+    e = _effects()[key]
+    record, circuit = press_record
+    base = ForwardModel(circuit)
+    model = base.with_effect(e)
+    v0 = base.simulate(base.defaults(record), record)
+    neutral = model.defaults(record)
+    # neutral to 1e-4 of the peak: a log parameter declares its lower bound (a 10 us lag: 7e-5, a 1 uHz corner)
+    assert np.allclose(model.simulate(neutral, record), v0, rtol=0, atol=1e-4 * np.max(np.abs(v0)))
+    values = {**neutral, **e.example}
+    assert not np.allclose(model.simulate(values, record), v0, rtol=0, atol=1e-3 * np.max(np.abs(v0)))
+    f = np.concatenate([np.full(PAD, record.force_N[0]), record.force_N])
+    assert e.force(f, values, record).shape == f.shape
+    g = np.asarray(e.response(values, record))
+    assert g.ndim == 0 or g.shape == record.freq_Hz.shape
+    names = {p.name for p in e.params(record)}
+    assert all(any(n.endswith(u.suffix) for u in UNITS) for n in names)
+    starts = e.starts(StartContext(record, v0 + 1e-3 * np.sin(np.arange(record.n)), v0, neutral))
+    assert 1 <= len(starts) <= 3 and all(set(s) <= names for s in starts)

@@ -95,6 +95,14 @@ class Effect:
         """Start values for this effect's parameters (each dict one start; {} = defaults)."""
         return [{}]
 
+    def variants(self, ctx: StartContext) -> list["Effect"]:
+        """The forms of this effect the search fits in turn, keeping the one of lowest BIC (default: itself).
+
+        For an effect with a structural choice the evidence should make (the knot count of a spline
+        drift): each variant has the same ``name`` and its own parameters.
+        """
+        return [self]
+
     def summary(self, values: dict) -> str:
         """One line with the fitted parameters in readable units."""
         return ", ".join(f"{p} = {values[p]:.4g}" for p in values)

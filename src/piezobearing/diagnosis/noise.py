@@ -10,6 +10,12 @@ rests (:func:`quiet_mask`), as a line-free trimmed mean of the periodogram
 between 5% and 45% of the sampling rate (:func:`white_level`), so that drift,
 decaying tails and mains lines do not inflate them.
 
+A channel recorded by a coarse ADC sits on one code where it rests: its
+quiet stretches then show less noise than the converter adds where the
+signal moves (the quantisation error, uniform over one step q, variance
+q^2/12). Each level is therefore at least its channel's q^2/12, with q
+the step found in the channel's distinct levels (:func:`quantisation_step`).
+
 Where the model's gain from input to output changes along the record (a
 force-dependent sensitivity, a drifting gain), the carried input noise is
 louder where the gain is higher: the model says so with its noise envelope
@@ -49,6 +55,10 @@ class NoiseFloor:
         Samples the levels were measured on.
     input_noise_key : str
         Key of ``input_noise`` in :meth:`report`, with the input's unit (``force_noise_N``).
+    voltage_step_V, input_step : float
+        The converters' steps (LSB) found in the record's distinct levels
+        (:func:`quantisation_step`; 0: no grid) [V], [unit of the input]. A level is
+        never below its channel's quantisation noise LSB^2/12.
     """
 
     voltage_noise_V: float
@@ -58,6 +68,8 @@ class NoiseFloor:
     method: str
     quiet_mask: np.ndarray = field(repr=False, default=None)
     input_noise_key: str = "input_noise"
+    voltage_step_V: float = 0.0
+    input_step: float = 0.0
 
     def spectrum(self, response: np.ndarray) -> np.ndarray:
         """S(f) = s_v^2 + s_f^2 |G(f)|^2: variance per sample of the residual noise at each bin [V^2]."""
@@ -98,6 +110,8 @@ class NoiseFloor:
             "quiet_s": self.quiet_s,
             "n_stretches": self.n_stretches,
             "method": self.method,
+            "voltage_step_V": self.voltage_step_V,
+            self.input_noise_key.replace("_noise", "_step"): self.input_step,
         }
 
 
@@ -185,6 +199,9 @@ def white_level(
     if not spectra:
         return float("nan"), 0
     level0 = float(np.median(np.concatenate(spectra)) / np.log(2))
+    if level0 <= 0.0:  # mostly flat (a coarse ADC resting on one code): the plain mean, no line or trim rule
+        allp = np.concatenate(spectra)
+        return float(np.mean(allp)), int(allp.size)
     kept = []
     for p in spectra:
         line = dilate(p > line_factor * level0, 4, 4)
@@ -215,6 +232,7 @@ def estimate_noise_floor(
         if record.input_unit
         else f"{record.input_name}_noise"
     )
+    qv, qf = quantisation_step(voltage_V), quantisation_step(record.input)
     mask = quiet_mask(record.input, dt, settings.quiet_settle_s + settle_s)
     if record.left_out is not None:  # filled samples hold no noise: measure on measured samples only
         mask &= ~record.left_out
@@ -222,23 +240,62 @@ def estimate_noise_floor(
         vf, _ = white_level(record.input, mask, dt)
         vv, _ = white_level(voltage_V, mask, dt)
         return NoiseFloor(
-            float(np.sqrt(vv)),
-            float(np.sqrt(vf)),
+            float(np.sqrt(max(vv, qv**2 / 12))),
+            float(np.sqrt(max(vf, qf**2 / 12))),
             float(mask.sum() * dt),
             len(runs(mask)),
-            "quiet stretches: line-free trimmed mean of the periodogram, 5-45% of fs",
+            "quiet stretches: line-free trimmed mean of the periodogram, 5-45% of fs"
+            + _quantisation_note(vv, qv, vf, qf, record.input_unit),
             mask,
             key,
+            qv,
+            qf,
         )
     whole = np.ones(record.n, dtype=bool) if record.left_out is None else ~record.left_out
     vf, _ = white_level(record.input, whole, dt)
     vv, _ = white_level(voltage_V, whole, dt)
     return NoiseFloor(
-        float(np.sqrt(vv)),
-        float(np.sqrt(vf)),
+        float(np.sqrt(max(vv, qv**2 / 12))),
+        float(np.sqrt(max(vf, qf**2 / 12))),
         0.0,
         0,
-        f"whole record (no quiet stretches): voltage level includes carried {record.input_name} noise",
+        f"whole record (no quiet stretches): voltage level includes carried {record.input_name} noise"
+        + _quantisation_note(vv, qv, vf, qf, record.input_unit),
         mask,
         key,
+        qv,
+        qf,
     )
+
+
+def quantisation_step(x: np.ndarray | None, tolerance: float = 0.05) -> float:
+    """The converter's step (LSB) of a recorded channel, from its distinct levels [unit]; 0.0 if none.
+
+    A channel recorded by an ADC takes values on a grid of codes: every
+    spacing between its distinct sorted values is a whole multiple of the
+    step (the smallest spacing), within ``tolerance`` of a step (a CSV's
+    rounding). A channel of floating-point values (a synthetic record, a
+    DAQ's scaled and filtered output) has no such grid: 0.0. At least 3
+    distinct levels are needed.
+    """
+    if x is None:
+        return 0.0
+    u = np.unique(np.asarray(x, dtype=float))
+    if u.size < 3:
+        return 0.0
+    d = np.diff(u)
+    q = float(d.min())
+    if q <= 0 or q < 1e-9 * float(np.ptp(u)):  # below a CSV's 10 significant digits: not a converter's grid
+        return 0.0
+    k = d / q
+    return q if float(np.max(np.abs(k - np.round(k)))) <= tolerance else 0.0
+
+
+def _quantisation_note(vv: float, qv: float, vf: float, qf: float, input_unit: str) -> str:
+    """The method's words on the quantisation floors that raised a measured level (empty if none did)."""
+    notes = []
+    if qv and qv**2 / 12 > vv:
+        notes.append(f"voltage raised to its ADC floor LSB/sqrt(12), LSB {qv:.4g} V")
+    if qf and qf**2 / 12 > vf:
+        notes.append(f"input raised to its ADC floor LSB/sqrt(12), LSB {qf:.4g} {input_unit}")
+    return "; " + "; ".join(notes) if notes else ""

@@ -80,19 +80,30 @@ def add_effect(
     floor: NoiseFloor,
     settings: DiagnosticsSettings,
 ) -> ModelFit:
-    """Fit current model + effect, warm-started from the current values and the effect's starts."""
-    model = current.model.with_effect(effect)
+    """Fit current model + effect, warm-started from the current values and the effect's starts.
+
+    An effect whose shape has a structural choice (the knot count of a spline drift) offers its
+    :meth:`~piezobearing.diagnosis.effect.Effect.variants`, simplest first: they are fitted in turn and
+    the one of lowest BIC kept, stopping at the first that does not lower it (a greedy search: a clean
+    record costs two fits, not one per variant).
+    """
     ctx = StartContext(record, voltage_V, current.model_V, current.values)
-    return fit_model(
-        model,
-        record,
-        voltage_V,
-        floor,
-        start=dict(current.values),
-        starts=effect.starts(ctx),
-        max_nfev=settings.max_nfev,
-        ftol=settings.ftol,
-    )
+    best = None
+    for variant in effect.variants(ctx):
+        f = fit_model(
+            current.model.with_effect(variant),
+            record,
+            voltage_V,
+            floor,
+            start=dict(current.values),
+            starts=variant.starts(ctx),
+            max_nfev=settings.max_nfev,
+            ftol=settings.ftol,
+        )
+        if best is not None and f.bic >= best.bic:
+            break
+        best = f
+    return best
 
 
 def rank(
@@ -124,7 +135,7 @@ def rank(
                 current.bic - f.bic,
                 explained,
                 tests,
-                tuple(p.name for p in e.params(record)),
+                tuple(k for k in f.values if k not in current.values),  # the chosen variant's parameters
                 baseline_names,
             )
         )
@@ -250,7 +261,7 @@ def stepwise(
         remaining = [
             e
             for e in catalogue
-            if e not in current.model.effects and not equivalent_in(e, current.model.effects)
+            if e.name not in current.model.names and not equivalent_in(e, current.model.effects)
         ]
         if not remaining:
             break

@@ -1,4 +1,4 @@
-"""``baseline_drift``: a slow additive drift of the voltage.
+"""``baseline_drift``: a slow additive drift of the voltage, its shape chosen by the evidence.
 
 Physics
 -------
@@ -7,19 +7,35 @@ warming the disk drives a current p A dT/dt through R, i.e. a voltage
 R p A dT/dt. With A = 17.3 mm^2 and R = 50 MOhm, a warming of 0.1 K/s gives
 about 35 mV that follows the slow temperature history. Amplifier offsets
 and thermal EMFs add a constant or slowly varying term. Against the
-impulses (about a second) these are smooth over the whole record.
+impulses (about a second) these are smooth, but a temperature history need
+not be a cubic: a hand resting on the fixture, then taken away, draws a
+drift that changes course within the record (piecewise over seconds to
+tens of seconds).
 
 Model
 -----
-A Legendre series of degree 3 over the record (x from -1 at its start to
-+1 at its end):
+A cubic spline over the record (x from -1 at its start to +1 at its end)
+with K interior knots spaced evenly, written as the Legendre cubic plus
+K wandering terms:
 
-.. math::  V_{drift}(t) = \\sum_{k=0}^{3} c_k P_k(x(t)).
+.. math::  V_{drift}(t) = \\sum_{k=0}^{3} c_k P_k(x) + \\sum_{j=1}^{K} w_j b_j(x),
+
+b_j the truncated powers (x - x_j)_+^3 at the knots made orthogonal to the
+cubic and to each other over the record's samples and scaled to rms 1: the
+``drift_p{k}_V`` keep their meaning (the Legendre coefficients of the
+drift's cubic part; with K = 0 the model is the cubic of earlier
+versions) and ``drift_w{j}_V`` is the rms of the j-th wandering term. K is
+chosen by the evidence: the search fits every K of :data:`KNOTS` that keeps
+the knots at least :data:`MIN_KNOT_SPACING_S` apart (:meth:`variants`) and
+keeps the one of lowest BIC (each knot costs ln n). The spacing floor keeps
+the drift slower than a press (about a second), so that it cannot take the
+shape of the force's response.
 
 Additive: it does not change the response. Start values: linear least
 squares of the current residual.
 
-Parameters: ``drift_p0_V`` ... ``drift_p3_V`` in [-10, 10] V.
+Parameters: ``drift_p0_V`` ... ``drift_p3_V`` and ``drift_w1_V`` ...
+``drift_wK_V``, each in [-10, 10] V.
 """
 
 from __future__ import annotations
@@ -31,13 +47,28 @@ from ...params import Param
 from .base import Effect, ForceRecord, StartContext
 
 DEGREE = 3
+#: Interior knot counts the evidence chooses from (0: the Legendre cubic alone).
+KNOTS = (0, 1, 2, 4, 8)
+#: Closest spacing of the knots [s]: a drift stays slower than a press (rise and fall ~1 s).
+MIN_KNOT_SPACING_S = 2.0
 
 
-def basis(record: ForceRecord) -> np.ndarray:
-    """Legendre polynomials P_0..P_3 over the record [-]."""
-    t = record.time_s
-    x = 2 * (t - t[0]) / (t[-1] - t[0]) - 1
-    return legendre.legvander(x, DEGREE)
+def basis(record: ForceRecord, knots: int = 0) -> np.ndarray:
+    """Legendre polynomials P_0..P_3 over the record and ``knots`` wandering terms (module docstring) [-]."""
+    key = ("drift_basis", knots)
+    if key not in record._cache:
+        t = record.time_s
+        x = 2 * (t - t[0]) / (t[-1] - t[0]) - 1
+        cubic = legendre.legvander(x, DEGREE)
+        if knots == 0:
+            record._cache[key] = cubic
+        else:
+            xj = -1 + 2 * np.arange(1, knots + 1) / (knots + 1)
+            tp = np.clip(x[:, None] - xj[None, :], 0.0, None) ** 3
+            q, _ = np.linalg.qr(np.hstack([cubic, tp]))
+            w = q[:, DEGREE + 1 :] * np.sqrt(x.size)  # orthonormal to the cubic and each other, rms 1
+            record._cache[key] = np.hstack([cubic, w])
+    return record._cache[key]
 
 
 class BaselineDrift(Effect):
@@ -46,41 +77,59 @@ class BaselineDrift(Effect):
     order = 310
     example = {"drift_p0_V": 0.005, "drift_p1_V": 0.02, "drift_p2_V": -0.01, "drift_p3_V": 0.005}
     example_reason = (
-        "pyroelectric current p A dT/dt through R: 0.1 K/s of warming gives ~35 mV at 50 MOhm; a 20 mV linear term with offset and curvature"
+        "pyroelectric current p A dT/dt through R: 0.1 K/s of warming gives ~35 mV at 50 MOhm; "
+        "a 20 mV linear term with offset and curvature"
     )
     additive_only = True
     physics = (
         "PZT is pyroelectric: a hand or rod warming the disk drives a current p A dT/dt through R (about "
         "35 mV for 0.1 K/s at R = 50 MOhm), and offsets and thermal EMFs add to it. The model adds a smooth "
-        "curve (Legendre polynomials to degree 3 over the record) to the voltage."
+        "curve to the voltage: a cubic spline over the record (the Legendre cubic plus wandering terms at "
+        "knots at least 2 s apart), its number of knots chosen by the evidence (BIC)."
     )
 
+    def __init__(self, knots: int = 0) -> None:
+        self.knots = int(knots)
+
     def params(self, record: ForceRecord) -> list[Param]:
-        return [
-            Param(
-                f"drift_p{k}_V",
-                0.0,
-                -10.0,
-                10.0,
-                scale=1e-3,
-                description=f"Legendre coefficient {k} of the drift [V]",
-            )
+        cubic = [
+            Param(f"drift_p{k}_V", 0.0, -10.0, 10.0, scale=1e-3, description=f"Legendre coefficient {k} of the drift [V]")
             for k in range(DEGREE + 1)
         ]
+        wander = [
+            Param(f"drift_w{j}_V", 0.0, -10.0, 10.0, scale=1e-3, description=f"rms of wandering term {j} of the drift [V]")
+            for j in range(1, self.knots + 1)
+        ]
+        return cubic + wander
+
+    def variants(self, ctx: StartContext) -> list["BaselineDrift"]:
+        """The drift with each knot count of :data:`KNOTS` the record's length allows (the search keeps the
+        one of lowest BIC)."""
+        d = float(ctx.record.time_s[-1] - ctx.record.time_s[0])
+        return [self if k == self.knots else BaselineDrift(k) for k in KNOTS if d / (k + 1) >= MIN_KNOT_SPACING_S]
+
+    def _coef(self, values: dict) -> np.ndarray:
+        return np.array(
+            [values[f"drift_p{k}_V"] for k in range(DEGREE + 1)]
+            + [values[f"drift_w{j}_V"] for j in range(1, self.knots + 1)]
+        )
 
     def additive(self, values, record):
-        c = np.array([values[f"drift_p{k}_V"] for k in range(DEGREE + 1)])
-        return basis(record) @ c
+        return basis(record, self.knots) @ self._coef(values)
 
     def starts(self, ctx: StartContext) -> list[dict[str, float]]:
-        coef, *_ = np.linalg.lstsq(basis(ctx.record), ctx.residual_V, rcond=None)
-        return [{f"drift_p{k}_V": float(np.clip(c, -10, 10)) for k, c in enumerate(coef)}]
+        coef, *_ = np.linalg.lstsq(basis(ctx.record, self.knots), ctx.residual_V, rcond=None)
+        names = [p.name for p in self.params(ctx.record)]
+        return [{n: float(np.clip(c, -10, 10)) for n, c in zip(names, coef, strict=True)}]
 
     def summary(self, values):
         import math
 
         span = 2 * math.sqrt(sum(values[f"drift_p{k}_V"] ** 2 for k in range(1, DEGREE + 1)))
-        return f"offset = {values['drift_p0_V'] * 1e3:.2f} mV, drift of the order of {span * 1e3:.2f} mV"
+        knots = sum(1 for k in values if k.startswith("drift_w"))
+        wander = math.sqrt(sum(v**2 for k, v in values.items() if k.startswith("drift_w")))
+        more = f"; {knots} knots, wandering {wander * 1e3:.2f} mV rms" if knots else ""
+        return f"offset = {values['drift_p0_V'] * 1e3:.2f} mV, drift of the order of {span * 1e3:.2f} mV{more}"
 
 
 EFFECT = BaselineDrift()
