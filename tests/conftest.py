@@ -29,14 +29,19 @@ def pytest_collection_modifyitems(config, items):
     """Group the tests for pytest-xdist's ``--dist loadgroup`` and put the long ones first.
 
     Every test that uses a CI workflow run (:data:`WORKFLOW_FIXTURES`, directly or through another fixture) is in
-    one group, ``ci_workflow``, so the session runs the workflow once on one worker, not once on each; a test
-    that uses a module- or class-scoped fixture is grouped with its module, so the fixture is built once; every
-    other test goes to whichever worker is free. The workflow group, then the rerun test's scratch workflow, go
+    one group, ``ci_workflow``, so the session runs the workflow once on one worker, not once on each; tests
+    marked ``@pytest.mark.xdist_group("name")`` (xdist's own mark) share a group of their module (they share a
+    computation cached in the module, such as one diagnosis asserted by several tests); a test that uses a
+    module- or class-scoped fixture is grouped with its module, so the fixture is built once; every other test
+    goes to whichever worker is free. The workflow group, then the rerun test's scratch workflow, go
     first: the other worker takes the rest meanwhile. Without xdist only the order changes.
     """
     def group(item) -> str:
         if any(f in getattr(item, "fixturenames", ()) for f in WORKFLOW_FIXTURES):
             return "ci_workflow"
+        mark = item.get_closest_marker("xdist_group")  # tests sharing a cached computation: one worker computes it
+        if mark is not None:
+            return f"{item.nodeid.split('::')[0]}::{mark.kwargs.get('name', mark.args[0] if mark.args else '')}"
         info = getattr(item, "_fixtureinfo", None)
         defs = info.name2fixturedefs.values() if info is not None else ()
         module = item.nodeid.split("::")[0]

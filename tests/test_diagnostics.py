@@ -121,6 +121,7 @@ def test_residual_tests_pass_white_noise_and_name_a_tone():
 # --------------------------------------------------------------------------- the loop
 
 
+@pytest.mark.xdist_group("clean")  # the same diagnosis as another test: one worker computes it
 def test_clean_measurement_selects_nothing(paper_config):
     """The baseline already fits to the noise floor: no false discovery, verdict explained."""
     d = run(paper_config, [])
@@ -138,7 +139,7 @@ def test_clean_measurement_selects_nothing_other_seeds(paper_config, seed):
     assert d["selected"] == [] and d["verdict"] == "explained"
 
 
-@pytest.mark.parametrize("name", list(HIDDEN))
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xdist_group(n)) for n in HIDDEN])
 def test_hidden_effect_is_ranked_first_selected_and_explains_the_misfit(paper_config, name):
     hidden, pname, truth = HIDDEN[name]
     d = run(paper_config, hidden)
@@ -213,6 +214,7 @@ def test_effect_outside_the_catalogue_is_unexplained_at_its_frequency(paper_conf
     assert "reference_lag" not in d["selected"] or d["verdict"] == "unexplained"
 
 
+@pytest.mark.xdist_group("mains_pickup")  # the same diagnosis as another test: one worker computes it
 def test_diagnosis_json_interface(paper_config):
     d = run(paper_config, HIDDEN["mains_pickup"][0])
     assert {"nrmse", "params"} <= set(d["baseline"])
@@ -293,6 +295,7 @@ def test_strength_follows_kass_and_raftery():
     assert strength(-3.0) == "weak" and strength(None) is None
 
 
+@pytest.mark.xdist_group("extra_capacitance")  # the same diagnosis as another test: one worker computes it
 def test_every_step_names_its_runner_up_and_margin(paper_config):
     """Hidden 100 pF: the step that adds it names the second-best candidate and the margin over it,
     the margin is the difference of the two BIC drops of the first ranking, and the final fit's
@@ -316,6 +319,7 @@ def test_every_step_names_its_runner_up_and_margin(paper_config):
     assert "How firmly the record decides" in text and f"`{st['runner_up']}`" in text
 
 
+@pytest.mark.xdist_group("clean")  # the same diagnosis as another test: one worker computes it
 def test_clean_record_says_how_strongly_it_speaks_against_the_best_candidate(paper_config):
     d = run(paper_config, [])
     idf = d["identifiability"]
