@@ -6,7 +6,9 @@ slipped outer-race impulse train; the band 500-1250 Hz. Times: today's
 detector ``detector.analyse_record`` (three fault types, windows, computed
 null distributions) with its null distributions cached (the usual case: one
 record length per run) and cold (first record), and the DAQ's ``sample``
-from 51.2 kHz to 10.24 kHz. Writes results/benchmarks/detector.json.
+from 51.2 kHz to 10.24 kHz; the baseline detector ``baseline.detect`` (slip, roller-passage fit,
+harmonic and fold tests) at 2550 Hz and 25.6 kHz with the fit to f_s and to Nyquist (CPU seconds: one BLAS
+thread). Writes results/benchmarks/detector.json.
 Usage: python benchmarks/bench_detector.py
 """
 
@@ -19,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from piezobearing.signals import baseline as B
 from piezobearing.signals import daq
 from piezobearing.signals import detection as det
 from piezobearing.signals import detector as D
@@ -40,7 +43,7 @@ def main() -> None:
     env = det.EnvelopeSettings(band_rule="fixed", band_Hz=(500.0, 1250.0))
     st = D.DetectorSettings()
     out = {"cpu_count": os.cpu_count(), "record_s": 1.0}
-    for fs in (2550.0, 51200.0):
+    for fs in (2550.0, 25600.0, 51200.0):
         n = int(fs)
         t = np.arange(n) / fs
         x = rng.standard_normal(n) + 3.0 * (np.mod(t * 0.985 * KIN["bpfo_Hz"], 1.0) < 2.0 / fs)
@@ -54,6 +57,17 @@ def main() -> None:
         }
         out[f"{int(fs)}_Hz"]["search_over_exact"] = (out[f"{int(fs)}_Hz"]["search_cached_s"]
                                                     / out[f"{int(fs)}_Hz"]["exact_bin_s"])
+    for fs in (2550.0, 25600.0):
+        n = int(fs)
+        t = np.arange(n) / fs
+        v = 96.0 * np.exp(10.0 * (np.cos(2 * np.pi * 0.985 * KIN["bpfo_Hz"] * t) - 1.0))
+        x = v + 11.0 * rng.standard_normal(n)
+        for folds in (1.0, 0.5):
+            bs = B.BaselineSettings(alias_folds=folds)
+            base = B.Baseline.from_record(v, 1 / fs, KIN, bs)
+            c0 = time.process_time()
+            B.detect(x, 1 / fs, KIN, base, bs)
+            out[f"{int(fs)}_Hz"][f"baseline_cpu_s_alias_folds_{folds:g}"] = time.process_time() - c0
     x = rng.standard_normal(51200)
     out["daq_sample_51200_to_10240_s"] = timed(lambda: daq.sample(x, 1 / 51200.0, 10240.0), 5)
     path = Path("results/benchmarks/detector.json")
