@@ -100,27 +100,17 @@ def test_bad_config_and_inputs_name_the_key_or_file(ci_config, sensor_run, tmp_p
         st.SensorFemParams.from_config(bad)
     (tmp_path / "r.json").write_text(json.dumps({"R": 1}))
     ritz = str(sensor_run / "ritz_model.npz")
+
+    def harmonic(ritz_path):
+        return st.sensor_harmonic(ritz_path, str(sensor_run / "modal.json"), str(tmp_path / "r.json"),
+                                  str(sensor_run / "lowfreq.json"), str(tmp_path / "h.csv"),
+                                  str(tmp_path / "b.json"), ci_config)
+
     with pytest.raises(st.SensorFemError, match="resistance_ohm"):
-        st.sensor_harmonic(
-            ritz,
-            str(sensor_run / "modal.json"),
-            str(tmp_path / "r.json"),
-            str(sensor_run / "lowfreq.json"),
-            str(tmp_path / "h.csv"),
-            str(tmp_path / "b.json"),
-            ci_config,
-        )
+        harmonic(ritz)
     (tmp_path / "r.json").write_text(json.dumps({"resistance_ohm": 50e6}))
     with pytest.raises(st.SensorFemError, match="none.npz: file not found; run the rule sensor_modal"):
-        st.sensor_harmonic(
-            str(tmp_path / "none.npz"),
-            str(sensor_run / "modal.json"),
-            str(tmp_path / "r.json"),
-            str(sensor_run / "lowfreq.json"),
-            str(tmp_path / "h.csv"),
-            str(tmp_path / "b.json"),
-            ci_config,
-        )
+        harmonic(str(tmp_path / "none.npz"))
     (tmp_path / "row.json").write_text(json.dumps({"row": {"level": 1, "multiplier": 0.5}}))
     meshes = [str(sensor_run.root / f"results/sensor/mesh/stack_L{k}.vtk") for k in (1, 2, 3)]
     with pytest.raises(st.SensorFemError, match="row.json: the row of level 1 is not this config's sensor_fem.mesh_level"):
