@@ -75,6 +75,8 @@ rule housing_transient:
         modes=f"{RESULTS}/bearing/housing_modes_{{case}}.json",
         json=f"{RESULTS}/bearing/housing_transient_{{case}}.json",
         influence=f"{RESULTS}/bearing/influence_line_{{case}}.csv",
+        # the quasi-static force on this mesh: housing_convergence's row of housing.mesh_level
+        quasi_static=f"{RESULTS}/bearing/quasi_static_{{case}}.npz",
     log:
         f"{RESULTS}/logs/housing_transient_{{case}}.log",
     benchmark:
@@ -97,6 +99,8 @@ rule housing_transient:
 rule housing_convergence:
     input:
         contact=f"{RESULTS}/bearing/contact_forces_healthy.npz",
+        # the level housing.mesh_level, solved by housing_transient_healthy (not factorised twice)
+        quasi_static=f"{RESULTS}/bearing/quasi_static_healthy.npz",
     output:
         json=f"{RESULTS}/bearing/mesh_convergence.json",
         csv=f"{RESULTS}/bearing/mesh_convergence.csv",
