@@ -132,7 +132,7 @@ READS: dict[str, list[str]] = {
     # calibration.smk
     "synthesize_calibration": ["seed", "synthesis", *_CIRCUIT],
     "extract_sensitivity": ["calibration", *_CIRCUIT],
-    "fit_resistance": ["sensor", "calibration", "synthesis.resistance_ohm"],
+    "fit_resistance": ["sensor", "calibration", "synthesis.resistance_ohm", "diagnostics.quiet_settle_s"],
     "lowfreq_sensitivity": ["sensor", "lowfreq"],
     "scorecard_calibration": ["calibration.measurement", *_CIRCUIT],
     # sensor_fem.smk

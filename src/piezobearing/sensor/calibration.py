@@ -273,17 +273,27 @@ def resistance_param(initial_ohm: float) -> Param:
 
 
 def fit_resistance(
-    force_N: np.ndarray, voltage_V: np.ndarray, dt_s: float, circuit: SensorCircuit, initial_ohm: float
+    force_N: np.ndarray,
+    voltage_V: np.ndarray,
+    dt_s: float,
+    circuit: SensorCircuit,
+    initial_ohm: float,
+    left_out: np.ndarray | None = None,
 ) -> FitResult:
     """Fit R of Eq. 6 to a measured voltage by nonlinear least squares.
 
     The voltage is simulated from the measured force with
     :func:`circuit_voltage` (all other constants fixed at ``circuit``) and R
-    is varied on a log scale. Returns a :class:`piezobearing.diagnosis.least_squares.FitResult`.
+    is varied on a log scale. Samples marked in ``left_out`` (bool, one per
+    sample: filled across a gap of the recorded clock, or within the model's
+    memory of one) are not in the residual, so the fit, its ``n_data`` and
+    its intervals count measured samples only. Returns a
+    :class:`piezobearing.diagnosis.least_squares.FitResult`.
     """
     v = np.asarray(voltage_V, dtype=float)
+    keep = slice(None) if left_out is None else ~np.asarray(left_out, dtype=bool)
 
     def residual(p: dict) -> np.ndarray:
-        return circuit_voltage(force_N, dt_s, circuit.with_resistance(p["resistance_ohm"])) - v
+        return (circuit_voltage(force_N, dt_s, circuit.with_resistance(p["resistance_ohm"])) - v)[keep]
 
     return fit(residual, [resistance_param(initial_ohm)])
