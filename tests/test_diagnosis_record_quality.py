@@ -138,6 +138,26 @@ def test_quantisation_step_is_found_in_the_distinct_levels():
     assert quantisation_step(None) == 0.0
 
 
+def test_quantisation_floor_is_per_channel(ci_config):
+    """Each channel has its own converter: the voltage on a 12-bit +-10 V grid (LSB 4.88 mV) and the force
+    on a 14-bit +-50 N grid (LSB 6.10 mN), both coarser than the analog noise (0.3 mV, 0.5 mN). Each step
+    is found in its own channel and raises only its own channel's level to LSB/sqrt(12); a channel read
+    without a grid keeps its measured level."""
+    c = {**ci_config, "synthesis": {**ci_config["synthesis"], "voltage_noise_V": 0.3e-3, "force_noise_N": 0.5e-3}}
+    m, imps = SUBJECT.synthesise(c, c["seed"], [])
+    qv, qf = 20.0 / 2**12, 100.0 / 2**14
+    vq, fq = np.round(m.voltage_V / qv) * qv, np.round(m.force_N / qf) * qf
+    both = SUBJECT.problem((replace(m, voltage_V=vq, force_N=fq), imps), c).floor.report()
+    assert both["voltage_step_V"] == pytest.approx(qv) and both["force_step_N"] == pytest.approx(qf)
+    assert both["voltage_noise_V"] == pytest.approx(qv / np.sqrt(12), rel=1e-9)
+    assert both["force_noise_N"] == pytest.approx(qf / np.sqrt(12), rel=1e-9)
+    volt_only = SUBJECT.problem((replace(m, voltage_V=vq), imps), c).floor.report()
+    assert volt_only["voltage_noise_V"] == pytest.approx(qv / np.sqrt(12), rel=1e-9)
+    assert volt_only["force_step_N"] == 0.0
+    assert volt_only["force_noise_N"] == pytest.approx(0.5e-3, rel=0.15)  # measured, not raised
+    assert "input raised" not in volt_only["method"] and "voltage raised" in volt_only["method"]
+
+
 @pytest.mark.slow  # two diagnoses of the CI record
 def test_coarse_adc_noise_is_in_the_floor(ci_config):
     """The CI record with little analog noise (0.3 mV, 0.5 mN) read by a 12-bit +-10 V converter (LSB 4.88 mV,
@@ -216,3 +236,41 @@ def test_wandering_drift_is_found_with_knots_chosen_by_the_evidence(ci_config, m
     _, cubic = diagnose_record(ForceRecord(t, m.force_N), v, *args)
     assert cubic["verdict"] == "unexplained"
     assert cubic["final"]["chi2_per_sample"] > d["final"]["chi2_per_sample"]
+
+
+def test_kinked_drift_is_found_with_its_kink_time(ci_config, monkeypatch):
+    """Heat switched on abruptly at t = 3.3 s, reaching the disk through thermal lags of 4 s and 8 s: the
+    pyroelectric voltage R p A dT/dt rises from zero with a kink (a jump of slope) and peaks 20 mV 5.5 s
+    later. The spline with fixed knots (the drift before) leaves it ``unexplained``; the drift's kink
+    refinement (a free kink time on the chosen spline, kept by BIC) finds the time and explains the record."""
+    from piezobearing.diagnosis.calibration.effects import ForceRecord
+    from piezobearing.diagnosis.calibration.effects import baseline_drift as bd
+    from piezobearing.diagnosis.calibration.subject import diagnose_record
+    from piezobearing.diagnosis.settings import DiagnosticsSettings
+    from piezobearing.sensor.calibration import detect_impulses
+    from piezobearing.stages.calibration import nominal_circuit
+    from piezobearing.synthesis import PressProtocol, synthesize
+
+    c = ci_config
+    m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"])
+    t, t_on = m.time_s, 3.3
+    s = np.clip(t - t_on, 0.0, None)
+    v = m.voltage_V + 0.08 * (np.exp(-s / 8.0) - np.exp(-s / 4.0))  # peak 0.08 / 4 = 20 mV at s = 8 ln 2
+    args = (
+        nominal_circuit(c, c["calibration"]["initial_resistance_ohm"]),
+        [],
+        DiagnosticsSettings.from_config(c["diagnostics"]),
+        detect_impulses(m.force_N, v, m.dt_s, 0.2, 0.8),
+    )
+    _, d = diagnose_record(ForceRecord(t, m.force_N), v, *args)
+    assert d["ranking"][0]["effect"] == "baseline_drift" and d["selected"] == ["baseline_drift"]
+    assert d["verdict"] == "explained"
+    assert d["final"]["params"]["drift_kink_s"] == pytest.approx(t_on, abs=0.1)
+    lo, hi = d["final"]["ci95"]["drift_kink_s"]
+    assert lo <= t_on <= hi  # measured: 3.323 s, ...
+    assert "kink at t = 3.3" in d["ranking"][0]["summary"]
+
+    monkeypatch.setattr(bd.BaselineDrift, "refinements", lambda self, ctx: [])  # fixed knots only
+    _, fixed = diagnose_record(ForceRecord(t, m.force_N), v, *args)
+    assert fixed["verdict"] == "unexplained"
+    assert fixed["final"]["chi2_per_sample"] > d["final"]["chi2_per_sample"] + 0.1  # measured 1.179 vs 1.009

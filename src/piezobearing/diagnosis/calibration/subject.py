@@ -117,13 +117,18 @@ def diagnose_record(
 ) -> tuple[Diagnosis, dict]:
     """The engine on one calibration record (arguments of :func:`calibration_problem`); returns the
     diagnosis and its JSON-ready dict with the subject's answer."""
+    from threadpoolctl import threadpool_limits
+
     settings = settings or DiagnosticsSettings()
-    d = diagnose(
-        calibration_problem(record, voltage_V, circuit, configured_effects, settings, impulses),
-        settings,
-        progress,
-    )
-    return d, d.to_dict(winner(d))
+    # the fits' linear algebra is on n x (a few) matrices: a second BLAS thread only waits and spins (the
+    # clean default record's diagnosis took 2x the CPU with OpenBLAS's threads on the loaded 2-core machine)
+    with threadpool_limits(limits=1, user_api="blas"):
+        d = diagnose(
+            calibration_problem(record, voltage_V, circuit, configured_effects, settings, impulses),
+            settings,
+            progress,
+        )
+        return d, d.to_dict(winner(d))
 
 
 def winner(d: Diagnosis) -> dict:
