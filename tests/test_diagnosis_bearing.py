@@ -12,22 +12,13 @@ import os
 import numpy as np
 import pytest
 
+from piezobearing.diagnosis.bearing.effects import CATALOGUE
 from piezobearing.diagnosis.bearing.subject import SUBJECT, synthesise
 from piezobearing.io import BearingRecord, MeasurementError
 from piezobearing.stages.bearing_diagnosis import influence_from_config
 
-HIDDEN = {
-    "outer_race_defect": {"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.15},
-    "inner_race_defect": {"inner_defect_width_m": 0.8e-3, "inner_defect_angle_rad": 0.7},
-    "rolling_element_defect": {"roller_defect_width_m": 0.8e-3, "roller_defect_spin_rad": 1.0, "roller_defect_index": 3.0},
-    "cage_slip": {"cage_slip_ratio": 0.015},
-    "shaft_speed": {"speed_deviation_ratio": 0.05},
-    "radial_load": {"radial_load_N": 800.0},
-    "clearance": {"radial_clearance_m": 35e-6},
-    "load_share": {"load_share_ratio": 0.5},
-    "roller_scatter": {"roller_4_offset_m": 2e-6},
-    "mains_pickup": {"mains_frequency_Hz": 50.02, "mains_h1_cos_V": 3.0, "mains_h1_sin_V": 3.0},
-}
+#: Each effect's plausible size, its ``example`` (the one home of the hidden values; its module says why).
+HIDDEN = {name: dict(e.example) for name, e in CATALOGUE.items()}
 
 
 #: The 95% interval's half-width to the 99.9% one (normal quantiles 3.29 / 1.96).

@@ -79,3 +79,47 @@ def test_effect_hooks_keep_the_contract(key, press_record):
     assert all(any(n.endswith(u.suffix) for u in UNITS) for n in names)
     starts = e.starts(StartContext(record, v0 + 1e-3 * np.sin(np.arange(record.n)), v0, neutral))
     assert 1 <= len(starts) <= 3 and all(set(s) <= names for s in starts)
+
+
+# --------------------------------------------------------------------------- the running bearing's effects
+
+
+@pytest.fixture(scope="module")
+def rig_record(ci_config):
+    """A 0.5 s healthy running-bearing record of the CI rig (its influence line solved once) as the engine sees it."""
+    import copy
+
+    from piezobearing.diagnosis.bearing.subject import SUBJECT, synthesise
+    from piezobearing.stages.bearing_diagnosis import influence_from_config
+
+    c = copy.deepcopy(ci_config)
+    c["bearing_diagnosis"].update(synthetic_duration_s=0.5, synthetic_sample_rate_Hz=2550.0)
+    influence = influence_from_config(c)
+    return SUBJECT.problem((synthesise(c, 11, [], influence), influence), c)
+
+
+def _bearing_effects():
+    from piezobearing.diagnosis.bearing.effects import CATALOGUE as BEARING
+
+    return dict(BEARING)
+
+
+@pytest.mark.parametrize("name", list(_bearing_effects()))
+def test_every_bearing_effect_has_a_plausible_example_that_changes_the_record(name, rig_record):
+    """The running bearing's effects keep the same part of the contract: an ``example`` naming their own
+    parameters within bounds, not neutral, with its reason, that changes the model's voltage (the values
+    tests/test_diagnosis_bearing.py hides)."""
+    e = _bearing_effects()[name]
+    record = rig_record.record
+    params = {p.name: p for p in e.params(record)}
+    assert e.example and set(e.example) <= set(params)
+    assert len(e.example_reason) > 20
+    for k, v in e.example.items():
+        assert params[k].lower <= v <= params[k].upper, (k, v)
+        assert any(k.endswith(u.suffix) for u in UNITS), k
+    assert any(v != params[k].value for k, v in e.example.items())
+    model = rig_record.baseline.with_effect(e)
+    neutral = {**rig_record.baseline_start, **model.defaults(record)}
+    v0 = model.simulate(neutral, record)
+    v1 = model.simulate({**neutral, **e.example}, record)
+    assert np.sqrt(np.mean((v1 - v0) ** 2)) > 1e-3 * np.sqrt(np.mean(v0**2))

@@ -103,6 +103,16 @@ class Effect:
         """
         return [self]
 
+    def refinements(self, ctx: StartContext) -> list["Effect"]:
+        """Forms built on this one (the variant the search kept), tried in turn once :meth:`variants` has
+        chosen, each kept while it lowers BIC (default: none).
+
+        For a second structural choice that is not a step of the first (a spline drift's knot count,
+        then a kink at a fitted time on the chosen spline): the greedy search over the variants stops at
+        the first that does not lower BIC and would never reach it.
+        """
+        return []
+
     def summary(self, values: dict) -> str:
         """One line with the fitted parameters in readable units."""
         return ", ".join(f"{p} = {values[p]:.4g}" for p in values)

@@ -85,22 +85,33 @@ def add_effect(
     An effect whose shape has a structural choice (the knot count of a spline drift) offers its
     :meth:`~piezobearing.diagnosis.effect.Effect.variants`, simplest first: they are fitted in turn and
     the one of lowest BIC kept, stopping at the first that does not lower it (a greedy search: a clean
-    record costs two fits, not one per variant).
+    record costs two fits, not one per variant). Then the kept variant's
+    :meth:`~piezobearing.diagnosis.effect.Effect.refinements` (a kink on the chosen spline) are fitted the
+    same way, each kept while it lowers BIC.
     """
     ctx = StartContext(record, voltage_V, current.model_V, current.values)
-    best = None
-    for variant in effect.variants(ctx):
-        f = fit_model(
-            current.model.with_effect(variant),
+
+    def fit_form(form: Effect) -> ModelFit:
+        return fit_model(
+            current.model.with_effect(form),
             record,
             voltage_V,
             floor,
             start=dict(current.values),
-            starts=variant.starts(ctx),
+            starts=form.starts(ctx),
             max_nfev=settings.max_nfev,
             ftol=settings.ftol,
         )
+
+    best, kept = None, effect
+    for variant in effect.variants(ctx):
+        f = fit_form(variant)
         if best is not None and f.bic >= best.bic:
+            break
+        best, kept = f, variant
+    for form in kept.refinements(ctx):
+        f = fit_form(form)
+        if f.bic >= best.bic:
             break
         best = f
     return best

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from ..diagnosis.calibration.record import left_out_samples
 from ..diagnosis.least_squares import nrmse
 from ..io import Measurement
 from ..synthesis import PressProtocol, synthesize
@@ -35,7 +36,21 @@ def synthesize_calibration(config: dict) -> Measurement:
 def extract_sensitivity(m: Measurement, imps: list[cal.Impulse], config: dict) -> dict:
     """Rule extract_sensitivity: peak voltage over peak force per impulse (sensitivity.json) of the record ``m``
     and its impulses ``imps`` (the calibration subject's reader)."""
+    # a press whose top was filled across a gap of the clock has the interpolation's peak, not the
+    # sensor's: that impulse is left out of the sensitivity (and named), as the diagnosis leaves the samples out
+    # (all kept, each flagged, should every peak be filled: a sensitivity needs one impulse)
+    lost = [imp for imp in imps if _peak_filled(m, imp)]
+    every = len(lost) == len(imps)
+    imps = [imp for imp in imps if not _peak_filled(m, imp)] or imps
     out = cal.sensitivity_summary(imps, m.time_s)
+    if lost:
+        out["impulses_left_out"] = [
+            {
+                "time_force_peak_s": float(m.time_s[imp.force_peak_index]),
+                "reason": "filled samples in the top half of the press" + (" (kept: every peak is)" if every else ""),
+            }
+            for imp in lost
+        ]
     for d, imp in zip(out["impulses"], imps, strict=True):
         d.update(
             time_voltage_peak_s=float(m.time_s[imp.voltage_peak_index]),
@@ -47,22 +62,39 @@ def extract_sensitivity(m: Measurement, imps: list[cal.Impulse], config: dict) -
     return out
 
 
+def _peak_filled(m: Measurement, imp: cal.Impulse) -> bool:
+    """Whether a sample filled across a gap of the clock (or a measured one at a gap's edge) lies in the top half
+    of the impulse's force or voltage swing: the true peak may then lie in the gap, and the recorded maximum
+    is the interpolation's (or a flank's)."""
+    if m.filled is None:
+        return False
+    w = slice(imp.start, imp.stop)
+    near = np.convolve(m.filled[w].astype(float), np.ones(3), mode="same") > 0  # a gap and its edges
+    top = np.zeros_like(near)
+    for x in (m.force_N[w], m.voltage_V[w]):
+        top |= x >= x.min() + 0.5 * (x.max() - x.min())
+    return bool(np.any(near & top))
+
+
 def fit_resistance(m: Measurement, config: dict) -> tuple[dict, pd.DataFrame]:
     """Rule fit_resistance: R of Eq. 6 fitted to the record ``m`` (resistance.json) and the simulated voltage
     beside the record (fit.csv)."""
     circuit = nominal_circuit(config)
-    res = cal.fit_resistance(
-        m.force_N, m.voltage_V, m.dt_s, circuit, config["calibration"]["initial_resistance_ohm"]
-    )
+    r0 = config["calibration"]["initial_resistance_ohm"]
+    # samples filled across gaps of the clock, and the circuit's memory of them: the diagnosis's mask
+    left_out = left_out_samples(m, config["diagnostics"]["quiet_settle_s"], circuit.with_resistance(r0).tau_s)
+    res = cal.fit_resistance(m.force_N, m.voltage_V, m.dt_s, circuit, r0, left_out)
     r = res.values["resistance_ohm"]
     fitted = circuit.with_resistance(r)
     sim = cal.circuit_voltage(m.force_N, m.dt_s, fitted)
+    measured = m.voltage_V if left_out is None else m.voltage_V[~left_out]
     record = {
         "resistance_ohm": r,
         "resistance_ci95_ohm": res.ci95["resistance_ohm"],
         "resistance_stderr_ohm": res.stderr["resistance_ohm"],
-        "nrmse": nrmse(res.residual, m.voltage_V),
+        "nrmse": nrmse(res.residual, measured),
         "residual_rms_V": float(np.sqrt(np.mean(res.residual**2))),
+        "samples_left_out": 0 if left_out is None else int(np.count_nonzero(left_out)),
         "pzt_capacitance_F": fitted.pzt_capacitance_F,
         "cable_capacitance_F": fitted.cable_capacitance_F,
         "capacitance_F": fitted.capacitance_F,
@@ -70,7 +102,11 @@ def fit_resistance(m: Measurement, config: dict) -> tuple[dict, pd.DataFrame]:
         "open_circuit_gain_V_per_N": fitted.open_circuit_gain_V_per_N,
         "fit": res.report(),
         "source": m.source,
-        "config": {"sensor": config["sensor"], "calibration": config["calibration"]},
+        "config": {
+            "sensor": config["sensor"],
+            "calibration": config["calibration"],
+            "diagnostics": {"quiet_settle_s": config["diagnostics"]["quiet_settle_s"]},
+        },
     }
     table = pd.DataFrame(
         {"time_s": m.time_s, "force_N": m.force_N, "voltage_V": m.voltage_V, "simulated_voltage_V": sim}

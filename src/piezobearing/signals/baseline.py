@@ -67,11 +67,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import stats
-from scipy.linalg import lstsq
-from scipy.optimize import minimize_scalar
-from scipy.signal import CZT
-from scipy.special import gammaln
 from threadpoolctl import threadpool_limits
 
 from .detector import CLASSIFIED_TYPES
@@ -148,6 +143,8 @@ def estimate_slip(x: np.ndarray, dt_s: float, bpfo0_Hz: float, slip_max: float, 
     keeps the highest line's phase drift over the record below 0.1 cycle
     between nodes; the best node is refined by a bounded scalar search.
     """
+    from scipy.optimize import minimize_scalar
+
     x = np.asarray(x, float)
     n = x.size
     t = np.arange(n) * dt_s
@@ -240,6 +237,8 @@ def harmonic_fit(x: np.ndarray, dt_s: float, f0_Hz: float, n_harmonics: int) -> 
     below Nyquist (:func:`below_nyquist`) keep A^T A well conditioned; the
     result equals the QR solution to rounding (test).
     """
+    from scipy.signal import CZT
+
     x = np.asarray(x, float)
     n, kk = x.size, n_harmonics
     theta = 2.0 * np.pi * f0_Hz * dt_s
@@ -287,6 +286,8 @@ def one_blas_thread(fn):
 
 def _lstsq(a: np.ndarray, x: np.ndarray) -> np.ndarray:
     """Least squares by pivoted QR (rank-revealing: coincident folded harmonics get the minimum-norm split)."""
+    from scipy.linalg import lstsq
+
     return lstsq(a, x, cond=1e-10, lapack_driver="gelsy", check_finite=False)[0]
 
 
@@ -334,6 +335,9 @@ class Baseline:
 
 def log_chi2_sf(q, dof):
     """ln P(chi^2_dof > q), with the leading asymptotic term where scipy underflows [-] (arrays too)."""
+    from scipy import stats
+    from scipy.special import gammaln
+
     q, dof = np.broadcast_arrays(np.asarray(q, float), np.asarray(dof, float))
     v = np.asarray(stats.chi2.logsf(q, dof), float)
     bad = ~np.isfinite(v)
@@ -383,6 +387,8 @@ def _phase_search(c: np.ndarray, cb: np.ndarray, info: np.ndarray, gain_toleranc
     by one FFT (its maximum is the best phase either way); the best phase is
     then refined on the exact q.
     """
+    from scipy.optimize import minimize_scalar
+
     kk = (c.size - 1) // 2
 
     def q(phi) -> np.ndarray:
@@ -473,6 +479,8 @@ def harmonic_test(x: np.ndarray, dt_s: float, f0_Hz: float, baseline: Baseline, 
 
 def _frequency_search(x, dt_s, f0_Hz, f_range_Hz, k, cb, sigma, tolerance, exact, gain_tolerance=0.0, n_refine=3):
     """The healthy model's fundamental in ``f_range_Hz``, argmin RSS(f) + q(f): (f, q, phi) (:func:`harmonic_test`)."""
+    from scipy.optimize import minimize_scalar
+
     n = x.size
     lo, hi = f_range_Hz
     h = 0.25 / (k * n * dt_s)

@@ -48,6 +48,29 @@ class ForceRecord(Record):
         return self.input
 
 
+def gap_memory_s(quiet_settle_s: float, tau_s: float) -> tuple[float, float]:
+    """How long before and after a filled sample a calibration model still depends on it [s].
+
+    Before: the fit's low-passed force spreads an interpolated force over its filter's length (50 ms,
+    :data:`piezobearing.diagnosis.noise.QUIET_BEFORE_S`, as the floor's quiet mask); after: the circuit
+    remembers it for ``quiet_settle_s`` + 5 RC time constants ``tau_s`` (the floor's settling after a press).
+    """
+    from ..noise import QUIET_BEFORE_S
+
+    return (QUIET_BEFORE_S, quiet_settle_s + 5.0 * tau_s)
+
+
+def left_out_samples(
+    m: Measurement, quiet_settle_s: float, tau_s: float
+) -> np.ndarray | None:
+    """The samples of ``m`` that no fit of it counts: those filled across gaps of its clock and those within
+    :func:`gap_memory_s` of them (the diagnosis's ``Record.left_out``); None when every sample was measured."""
+    if m.filled is None:
+        return None
+    rec = ForceRecord(m.time_s, m.force_N, filled=m.filled, memory_s=gap_memory_s(quiet_settle_s, tau_s))
+    return rec.left_out
+
+
 def read_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]]:
     """Read and check a calibration record and detect its impulses (one-line MeasurementError otherwise).
 

@@ -25,14 +25,14 @@ from ...sensor.calibration import Impulse, SensorCircuit, detect_impulses
 from ...synthesis import PressProtocol, synthesize
 from ..engine import Diagnosis, diagnose
 from ..fit import ModelFit
-from ..noise import QUIET_BEFORE_S, estimate_noise_floor
+from ..noise import estimate_noise_floor
 from ..settings import DiagnosticsSettings
 from ..subject import Judgement, Problem
 from ..verdict import segment_stats
 from . import report
 from .effects import CATALOGUE, resolve
 from .model import ForwardModel, model_from_specs
-from .record import ForceRecord, impulse_segments, read_record
+from .record import ForceRecord, gap_memory_s, impulse_segments, read_record
 
 
 class PerImpulse:
@@ -88,9 +88,9 @@ def calibration_problem(
     r0 = circuit.resistance_ohm
     settle = 5 * circuit.with_resistance(r0).tau_s
     if record.filled is not None:
-        # the circuit remembers a filled force for its settling time after a gap (the floor's settling
-        # after a press), the fit's low-passed force for its filter's length before it (50 ms, as quiet_mask)
-        record = replace(record, memory_s=(QUIET_BEFORE_S, settings.quiet_settle_s + settle), _cache={})
+        # the fit's low-passed force before a gap, the circuit's settling after it (gap_memory_s)
+        tau = circuit.with_resistance(r0).tau_s
+        record = replace(record, memory_s=gap_memory_s(settings.quiet_settle_s, tau), _cache={})
     floor = estimate_noise_floor(record, v, settings, settle)
     return Problem(
         record=record,
@@ -117,13 +117,18 @@ def diagnose_record(
 ) -> tuple[Diagnosis, dict]:
     """The engine on one calibration record (arguments of :func:`calibration_problem`); returns the
     diagnosis and its JSON-ready dict with the subject's answer."""
+    from threadpoolctl import threadpool_limits
+
     settings = settings or DiagnosticsSettings()
-    d = diagnose(
-        calibration_problem(record, voltage_V, circuit, configured_effects, settings, impulses),
-        settings,
-        progress,
-    )
-    return d, d.to_dict(winner(d))
+    # the fits' linear algebra is on n x (a few) matrices: a second BLAS thread only waits and spins (the
+    # clean default record's diagnosis took 2x the CPU with OpenBLAS's threads on the loaded 2-core machine)
+    with threadpool_limits(limits=1, user_api="blas"):
+        d = diagnose(
+            calibration_problem(record, voltage_V, circuit, configured_effects, settings, impulses),
+            settings,
+            progress,
+        )
+        return d, d.to_dict(winner(d))
 
 
 def winner(d: Diagnosis) -> dict:

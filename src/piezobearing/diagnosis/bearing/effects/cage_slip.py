@@ -28,6 +28,11 @@ from .base import Effect
 class CageSlip(Effect):
     name = "cage_slip"
     title = "cage slip"
+    example = {"cage_slip_ratio": 0.015}
+    example_reason = (
+        "1.5% slip: the cage of a rolling bearing typically lags its kinematic speed by 1-2% (Randall and Antoni "
+        "2011), more when lightly loaded"
+    )
     physics = (
         "The cage lags the kinematic speed (rollers outside the load zone lose traction): FTF, BPFO and BSF "
         "fall by the slip, so the roller passages drift against the kinematic prediction."

@@ -38,6 +38,11 @@ from .base import Effect
 class Clearance(Effect):
     name = "clearance"
     title = "radial internal clearance"
+    example = {"radial_clearance_m": 35e-6}
+    example_reason = (
+        "35 um where 20 um is configured: both within ISO 5753-1 Normal for a 24-30 mm bore (20-45 um), the "
+        "bearing fitted sits elsewhere in its class than believed"
+    )
     physics = (
         "The operating clearance differs from the catalogue's (fits, temperatures): a few micrometres against "
         "micrometre roller deflections change the load zone's width and the bumps' height by up to ~3x."

@@ -33,6 +33,11 @@ from .outer_race_defect import TRIAL_WIDTH_M, _width_start
 class InnerRaceDefect(Effect):
     name = "inner_race_defect"
     title = "inner-race defect (groove)"
+    example = {"inner_defect_width_m": 0.8e-3, "inner_defect_angle_rad": 0.7}
+    example_reason = (
+        "a groove of about the paper's seeded size (0.9 mm wide) on the rotating inner race; its angle at the "
+        "record's start (0.7 rad) is arbitrary, since it turns with the shaft"
+    )
     physics = (
         "A groove or spall on the rotating inner raceway: it meets a roller at BPFI and dips the load only "
         "while it passes through the load zone, so its dips come in bursts once per shaft turn (sidebands "

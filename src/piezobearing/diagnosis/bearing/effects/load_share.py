@@ -27,6 +27,11 @@ from .base import Effect
 class LoadShare(Effect):
     name = "load_share"
     title = "sensor mounting's load share"
+    example = {"load_share_ratio": 0.5}
+    example_reason = (
+        "half of the housing's force through the PZT: a thread preload lost or a gap beside the sensor that lets "
+        "force pass around it"
+    )
     physics = (
         "How much of the housing's force passes through the PZT (thread preload, tip contact, gaps): a gain on "
         "the sensor force, one number with d33, C and any circuit gain for a single record."

@@ -28,6 +28,11 @@ def _calib():
 class MainsPickup(Effect):
     name = "mains_pickup"
     title = "mains interference (50/60 Hz + odd harmonics)"
+    example = {"mains_frequency_Hz": 50.02, "mains_h1_cos_V": 3.0, "mains_h1_sin_V": 3.0}
+    example_reason = (
+        "4.2 V at 50.02 Hz: a high-impedance PZT beside the motor and its drive picks up volts of mains field, "
+        "beside a rig voltage that swings tens of volts"
+    )
     physics = (
         "The PZT is a high-impedance source next to the motor and its drive: the mains field at 50 or 60 Hz "
         "and its odd harmonics add to the voltage, whatever the bearing does."

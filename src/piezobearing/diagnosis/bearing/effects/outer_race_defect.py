@@ -37,6 +37,11 @@ TRIAL_WIDTH_M = 0.5e-3
 class OuterRaceDefect(Effect):
     name = "outer_race_defect"
     title = "outer-race defect (groove)"
+    example = {"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.15}
+    example_reason = (
+        "an early spall, narrower than the paper's seeded 0.9 mm groove, in the load zone 0.15 rad (8.6 deg) from "
+        "the sensor, where the paper puts its defect"
+    )
     physics = (
         "A groove or spall on the stationary outer raceway: each roller sinks into it as it passes, its load "
         "drops and its neighbours take the load over; the sensor sees a dip once per roller passage (BPFO), "

@@ -28,6 +28,11 @@ from .base import Effect
 class RadialLoad(Effect):
     name = "radial_load"
     title = "radial load"
+    example = {"radial_load_N": 800.0}
+    example_reason = (
+        "800 N where 500 N (the paper's case) is believed: a belt tensioned harder or a misaligned coupling, "
+        "well within an N305's rating"
+    )
     physics = (
         "The radial load is rarely measured on a rig (weight, belt tension, misalignment): it sets the "
         "rollers' deflection and the width of the load zone, so the bumps' height and shape."

@@ -44,6 +44,11 @@ from .base import Effect
 class RollerScatter(Effect):
     name = "roller_scatter"
     title = "roller diameter scatter"
+    example = {"roller_4_offset_m": 2e-6}
+    example_reason = (
+        "roller 4 2 um smaller than the rest: the diameter scatter within a roller set is of the order of "
+        "micrometres (sorting lots, wear)"
+    )
     physics = (
         "Rollers differ by micrometres (sorting lots, wear): a larger roller carries more load, so the roller "
         "passages differ roller by roller, repeating once per cage turn (FTF sidebands of BPFO)."

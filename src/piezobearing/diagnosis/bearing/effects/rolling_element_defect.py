@@ -35,6 +35,11 @@ from .outer_race_defect import TRIAL_WIDTH_M, _width_start
 class RollingElementDefect(Effect):
     name = "rolling_element_defect"
     title = "rolling-element defect (pit on a roller)"
+    example = {"roller_defect_width_m": 0.8e-3, "roller_defect_spin_rad": 1.0, "roller_defect_index": 3.0}
+    example_reason = (
+        "a pit of about the paper's seeded defect size (0.9 mm) on roller 3 of the 11; its spin angle at the "
+        "record's start (1 rad) is arbitrary"
+    )
     physics = (
         "A pit on one roller meets the outer and the inner raceway once each per spin turn (2 x BSF), and "
         "dips the load only while that roller is in the load zone: bursts once per cage turn (FTF)."

@@ -41,6 +41,11 @@ def roller_pass_line_Hz(v: np.ndarray, dt_s: float, bpfo_Hz: float, half_width: 
 class ShaftSpeed(Effect):
     name = "shaft_speed"
     title = "shaft speed outside its tolerance"
+    example = {"speed_deviation_ratio": 0.05}
+    example_reason = (
+        "5% off the nominal speed: an induction motor's slip under load is a few percent, or the drive runs at "
+        "another set point than believed"
+    )
     physics = (
         "The shaft turns at another speed than believed (motor slip, belt ratio, a miscounted tachometer): "
         "every bearing frequency scales with it."
