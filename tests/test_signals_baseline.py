@@ -171,6 +171,16 @@ def test_tolerance_absorbs_a_baseline_off_by_its_size():
     assert not d.per_type["outer_race"]["detected"] and d.fault_type == "none"
 
 
+def test_baseline_tolerances_from_config(paper_config):
+    """signals.detector.baseline_tolerance and baseline_gain_tolerance reach the detector's settings (defaults 0:
+    the workflow's baseline is the model's own noiseless healthy record)."""
+    assert B.BaselineSettings.from_config(paper_config["signals"]) == B.BaselineSettings()
+    sig = {**paper_config["signals"], "detector": {**paper_config["signals"]["detector"], "baseline_tolerance": 0.1,
+                                                   "baseline_gain_tolerance": 0.05}}
+    st = B.BaselineSettings.from_config(sig)
+    assert (st.tolerance, st.gain_tolerance) == (0.1, 0.05)
+
+
 def test_gain_tolerance_absorbs_a_level_off_but_not_the_fault():
     """A healthy bearing 10% stronger than its baseline (a load share off by 10%) at 0.01 V noise: outer race
     'detected' with g = 1, absorbed with a 10% gain tolerance; a synthetic outer-race fault at 10 dB stays

@@ -130,7 +130,9 @@ class BaselineSettings:
 
     @classmethod
     def from_config(cls, sig: dict) -> "BaselineSettings":
-        return cls(slip_max=sig["detector"]["slip_max"], false_alarm_probability=sig["false_alarm_probability"])
+        d = sig["detector"]
+        return cls(slip_max=d["slip_max"], false_alarm_probability=sig["false_alarm_probability"],
+                   tolerance=d["baseline_tolerance"], gain_tolerance=d["baseline_gain_tolerance"])
 
 
 # --------------------------------------------------------------------------- the roller-passage part
