@@ -62,10 +62,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import stats
-from scipy.linalg import lstsq
-from scipy.optimize import minimize_scalar
-from scipy.special import gammaln
 from threadpoolctl import threadpool_limits
 
 from .detector import CLASSIFIED_TYPES
@@ -133,6 +129,8 @@ def estimate_slip(x: np.ndarray, dt_s: float, bpfo0_Hz: float, slip_max: float, 
     keeps the highest line's phase drift over the record below 0.1 cycle
     between nodes; the best node is refined by a bounded scalar search.
     """
+    from scipy.optimize import minimize_scalar
+
     x = np.asarray(x, float)
     n = x.size
     t = np.arange(n) * dt_s
@@ -229,6 +227,8 @@ def one_blas_thread(fn):
 
 def _lstsq(a: np.ndarray, x: np.ndarray) -> np.ndarray:
     """Least squares by pivoted QR (rank-revealing: coincident folded harmonics get the minimum-norm split)."""
+    from scipy.linalg import lstsq
+
     return lstsq(a, x, cond=1e-10, lapack_driver="gelsy", check_finite=False)[0]
 
 
@@ -276,6 +276,9 @@ class Baseline:
 
 def log_chi2_sf(q, dof):
     """ln P(chi^2_dof > q), with the leading asymptotic term where scipy underflows [-] (arrays too)."""
+    from scipy import stats
+    from scipy.special import gammaln
+
     q, dof = np.broadcast_arrays(np.asarray(q, float), np.asarray(dof, float))
     v = np.asarray(stats.chi2.logsf(q, dof), float)
     bad = ~np.isfinite(v)
@@ -317,6 +320,8 @@ def harmonic_test(x: np.ndarray, dt_s: float, f0_Hz: float, baseline: Baseline, 
     dict
         statistic q, dof, log10_p, phase_rad, n_harmonics K.
     """
+    from scipy.optimize import minimize_scalar
+
     x = np.asarray(x, float)
     k = min(below_nyquist(dt_s, f0_Hz), (baseline.coefficients.size - 1) // 2)
     a = harmonic_matrix(x.size, dt_s, f0_Hz, k)
