@@ -121,12 +121,14 @@ def main() -> None:
     if a.what == "rerun":
         record["rerun"] = rerun(tmp)
     else:
-        s = record.setdefault("suite", {})
         for side in ("old", "new"):
             if a.which in ("both", side):
-                s[side] = suite(a.old if side == "old" else a.new, tmp)
+                result = suite(a.old if side == "old" else a.new, tmp)
+                record = json.loads(OUT.read_text()) if OUT.exists() else {}  # another side may have finished
+                record.setdefault("suite", {})[side] = result
                 OUT.parent.mkdir(parents=True, exist_ok=True)
                 OUT.write_text(json.dumps(record, indent=2) + "\n")
+        s = record.setdefault("suite", {})
         if "old" in s and "new" in s:
             s["cpu_ratio_old_over_new"] = round(s["old"]["cpu_s"] / s["new"]["cpu_s"], 2)
             s["wall_ratio_old_over_new"] = round(s["old"]["wall_s"] / s["new"]["wall_s"], 2)
