@@ -140,13 +140,17 @@ def run_workflow(
     warm_jobs: bool = False,
 ) -> subprocess.CompletedProcess:
     """Run snakemake (from this interpreter's environment) in ``workdir`` with the CI config; ``warm_jobs``: its
-    Python script jobs forked from a server with the imports done (tests/warm_jobs.py), not fresh processes."""
-    exe = [sys.executable, str(Path(__file__).with_name("warm_jobs.py"))] if warm_jobs else [
-        str(Path(sys.executable).with_name("snakemake"))
-    ]
+    Python script jobs forked from a server with the imports done (tests/warm_jobs.py), not fresh processes.
+
+    The environment's bin folder is left out of PATH, as for a user who calls ``.venv/bin/snakemake`` without
+    activating the venv: the workflow must find its own tools (papermill, the notebooks' kernel)."""
+    bindir = Path(sys.executable).parent
+    exe = [sys.executable, str(Path(__file__).with_name("warm_jobs.py"))] if warm_jobs else [str(bindir / "snakemake")]
+    path = [p for p in os.environ.get("PATH", "").split(os.pathsep) if p and Path(p) != bindir]
     return subprocess.run(
         [*exe, "--cores", "2", *args, "--configfile", *configfiles],
         cwd=workdir,
+        env={**os.environ, "PATH": os.pathsep.join(path)},
         capture_output=True,
         text=True,
         timeout=timeout,

@@ -27,6 +27,17 @@ except ConfigError as e:
     sys.exit(1)
 validate(config, schema="../../config/schema.yaml")
 
+
+# Jobs find the tools of the Python that runs Snakemake first (papermill; jupyter_client then starts the
+# notebooks' kernel with that Python too), so `.venv/bin/snakemake` works without activating the venv.
+envvars:
+    "PATH",
+
+
+os.environ["PATH"] = os.pathsep.join(
+    [os.path.dirname(sys.executable), os.environ["PATH"]]
+)
+
 RESULTS = "results"
 FIGURES = []  # results/figures/*.png
 SCORECARD_PARTS = []  # results/scorecard/<stage>.csv fragments
