@@ -8,7 +8,9 @@ null distributions) with its null distributions cached (the usual case: one
 record length per run) and cold (first record), and the DAQ's ``sample``
 from 51.2 kHz to 10.24 kHz; the baseline detector ``baseline.detect`` (slip, roller-passage fit,
 harmonic and fold tests) at 2550 Hz and 25.6 kHz with the fit to f_s and to Nyquist (CPU seconds: one BLAS
-thread). Writes results/benchmarks/detector.json.
+thread); the outer-race test alone (``baseline.harmonic_test``) at the free fit's fundamental (the method
+until 2026-11-22) and with the healthy model's fundamental fitted over the slip window (since 2026-11-23),
+CPU seconds and their ratio. Writes results/benchmarks/detector.json.
 Usage: python benchmarks/bench_detector.py
 """
 
@@ -68,6 +70,14 @@ def main() -> None:
             c0 = time.process_time()
             B.detect(x, 1 / fs, KIN, base, bs)
             out[f"{int(fs)}_Hz"][f"baseline_cpu_s_alias_folds_{folds:g}"] = time.process_time() - c0
+        f0, window = 0.985 * KIN["bpfo_Hz"], (0.97 * KIN["bpfo_Hz"], KIN["bpfo_Hz"])
+        for name, rng_ in (("fixed_f", None), ("slip_window", window)):
+            c0 = time.process_time()
+            B.one_blas_thread(B.harmonic_test)(x, 1 / fs, f0, base, 11.0, 0.0, rng_)
+            out[f"{int(fs)}_Hz"][f"outer_race_test_cpu_s_{name}"] = time.process_time() - c0
+        r = out[f"{int(fs)}_Hz"]
+        r["outer_race_test_slip_window_over_fixed_f"] = r["outer_race_test_cpu_s_slip_window"] / r[
+            "outer_race_test_cpu_s_fixed_f"]
     x = rng.standard_normal(51200)
     out["daq_sample_51200_to_10240_s"] = timed(lambda: daq.sample(x, 1 / 51200.0, 10240.0), 5)
     path = Path("results/benchmarks/detector.json")

@@ -133,25 +133,54 @@ def _copy_repo(dest: Path) -> Path:
 
 
 def run_workflow(
-    workdir: Path, *args: str, configfiles: tuple[str, ...] = ("config/ci.yaml",), timeout: int = 1200
+    workdir: Path,
+    *args: str,
+    configfiles: tuple[str, ...] = ("config/ci.yaml",),
+    timeout: int = 1200,
+    warm_jobs: bool = False,
 ) -> subprocess.CompletedProcess:
-    """Run snakemake (from this interpreter's environment) in ``workdir`` with the CI config."""
-    exe = Path(sys.executable).with_name("snakemake")
+    """Run snakemake (from this interpreter's environment) in ``workdir`` with the CI config; ``warm_jobs``: its
+    Python script jobs forked from a server with the imports done (tests/warm_jobs.py), not fresh processes.
+
+    The environment's bin folder is left out of PATH, as for a user who calls ``.venv/bin/snakemake`` without
+    activating the venv: the workflow must find its own tools (papermill, the notebooks' kernel)."""
+    bindir = Path(sys.executable).parent
+    exe = [sys.executable, str(Path(__file__).with_name("warm_jobs.py"))] if warm_jobs else [str(bindir / "snakemake")]
+    path = [p for p in os.environ.get("PATH", "").split(os.pathsep) if p and Path(p) != bindir]
     return subprocess.run(
-        [str(exe), "--cores", "2", *args, "--configfile", *configfiles],
+        [*exe, "--cores", "2", *args, "--configfile", *configfiles],
         cwd=workdir,
+        env={**os.environ, "PATH": os.pathsep.join(path)},
         capture_output=True,
         text=True,
         timeout=timeout,
     )
 
 
+_WARM = None
+
+
+def snakemake_warm(*args: str, cwd: Path = REPO) -> subprocess.CompletedProcess:
+    """``snakemake ARGS`` in ``cwd`` (a dry run, a lint, a report, a run refused before any job) as a child forked
+    from this test process's warm server (tests/warm_snakemake.py, started at the first call: about 1.1 CPU s a
+    call instead of 3.5; the child parses the Snakefile, validates the config and hashes the code as a fresh
+    process does)."""
+    global _WARM
+    if _WARM is None:
+        from warm_snakemake import WarmSnakemake
+
+        _WARM = WarmSnakemake()
+    return _WARM.run(list(args), cwd)
+
+
+def pytest_sessionfinish(session):
+    if _WARM is not None:
+        _WARM.close()
+
+
 def dry_run_errors(configfile: Path) -> tuple[subprocess.CompletedProcess, list[str]]:
     """`snakemake -n --configfile FILE` in the repository; its result and its `piezobearing:` error lines."""
-    exe = Path(sys.executable).with_name("snakemake")
-    out = subprocess.run(
-        [str(exe), "-n", "--configfile", str(configfile)], cwd=REPO, capture_output=True, text=True, timeout=120
-    )
+    out = snakemake_warm("-n", "--configfile", str(configfile))
     return out, [line for line in out.stderr.splitlines() if line.startswith("piezobearing:")]
 
 
@@ -186,10 +215,13 @@ def ci_run(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="session")
 def ci_rerun(tmp_path_factory, ci_run) -> Path:
-    """A second, independent clean run in a fresh copy, for reproducibility checks: it builds every number
-    file of the first run (and everything they need) from nothing; the figures, which the check does not
-    compare, are not drawn again."""
+    """A second, independent clean run in a fresh copy, for reproducibility checks: a Snakemake run of its own
+    (its own DAG, params, code hashes and job scripts) that builds every number file of the first run (and every
+    job they need) from nothing; the figures, which the check does not compare, are not drawn again. Its Python
+    script jobs run warm (tests/warm_jobs.py: each the job's own script, forked from a server with the imports
+    done, 45 against 93 CPU s for the whole rerun): the first run's jobs are fresh processes, so each number is
+    compared between a job started fresh and the same job started warm, with another hash seed."""
     work = _copy_repo(tmp_path_factory.mktemp("ci_rerun"))
-    out = run_workflow(work, *(ci_run / NUMBERS_LIST).read_text().split("\n"))
+    out = run_workflow(work, *(ci_run / NUMBERS_LIST).read_text().split("\n"), warm_jobs=True)
     assert out.returncode == 0, out.stderr[-4000:]
     return work

@@ -243,14 +243,9 @@ def run_case(case: Case, monkeypatch, capsys) -> tuple[int, str]:
         conf = target if target.suffix == ".yaml" else w / f"measurement_{target.stem}.yaml"
         if conf != target:
             conf.write_text(f"calibration:\n  measurement: {target}\n")
-        exe = Path(sys.executable).with_name("snakemake")
-        out = subprocess.run(
-            [str(exe), "-n", "--configfile", "config/ci.yaml", str(conf)],
-            cwd=REPO,
-            capture_output=True,
-            text=True,
-            timeout=300,
-        )
+        from conftest import snakemake_warm
+
+        out = snakemake_warm("-n", "--configfile", "config/ci.yaml", str(conf))
         assert "Traceback" not in out.stderr + out.stdout
         lines = [ln for ln in out.stderr.splitlines() if ln.startswith("piezobearing:")]
         assert len(lines) == 1, out.stderr[-3000:]
@@ -359,29 +354,21 @@ def test_second_run_while_one_is_active_is_stopped(tmp_path):
 
 
 def test_workflow_refuses_a_second_run(tmp_path):
-    from conftest import _copy_repo
+    from conftest import _copy_repo, snakemake_warm
 
     work = _copy_repo(tmp_path)
     sleeper = _fake_snakemake(300)
     try:
         (work / runlock.PID_FILE).parent.mkdir(exist_ok=True)
         (work / runlock.PID_FILE).write_text(f"{sleeper.pid}\n")
-        exe = Path(sys.executable).with_name("snakemake")
-        run = [
-            str(exe),
-            "--cores",
-            "1",
-            "results/calibration/measurement.csv",
-            "--configfile",
-            "config/ci.yaml",
-        ]
-        out = subprocess.run(run, cwd=work, capture_output=True, text=True, timeout=300)
+        run = ["--cores", "1", "results/calibration/measurement.csv", "--configfile", "config/ci.yaml"]
+        out = snakemake_warm(*run, cwd=work)
         lines = [ln for ln in out.stderr.splitlines() if ln.startswith("piezobearing:")]
         assert out.returncode == 1 and len(lines) == 1, out.stderr[-2000:]
         assert f"another snakemake run is active in this folder (pid {sleeper.pid})" in lines[0]
         assert "rerun-incomplete" not in out.stderr.replace(lines[0], "")
         assert not (work / "results/calibration/measurement.csv").exists()
-        dry = subprocess.run([*run, "-n"], cwd=work, capture_output=True, text=True, timeout=300)
+        dry = snakemake_warm(*run, "-n", cwd=work)
         assert dry.returncode == 0 and "piezobearing: note: another snakemake run" in dry.stderr
     finally:
         sleeper.kill()

@@ -190,9 +190,15 @@ def test_coarse_adc_noise_is_in_the_floor(ci_config):
     assert d["selected"] == [] and d["verdict"] == "explained"
 
     stationary = noise.quantisation_step
-    try:  # the same record with the floor measured in the quiet stretches alone
+    # The same record with the floor measured in the quiet stretches alone, searched one step deep: that floor is
+    # below a tenth of the ADC's, so the first step's addition already shows the false discovery and every model
+    # stays above it (unexplained); the whole search only adds a second effect (extra_capacitance after
+    # sensitivity_drift, also unexplained) at 141 against 19 s of CPU: its fits weigh the residual by the too-low
+    # floor and run to their evaluation limit.
+    blind_args = (*args[:2], replace(args[2], max_steps=1), args[3])
+    try:
         noise.quantisation_step = lambda x, tolerance=0.05: 0.0
-        _, blind = diagnose_record(ForceRecord(m.time_s, m.force_N), v, *args)
+        _, blind = diagnose_record(ForceRecord(m.time_s, m.force_N), v, *blind_args)
     finally:
         noise.quantisation_step = stationary
     assert blind["noise_floor"]["voltage_noise_V"] < 0.1 * q / np.sqrt(12)

@@ -89,8 +89,15 @@ def test_scorecard_rows(sensor_run):
 
 
 def test_convergence_csv(sensor_run):
+    """The configured refinement levels (CI's 0.5, 0.75, 1.0): the first axial frequency changes by < 1% between
+    the two finest, and falls monotonically (a conforming displacement model is too stiff). Until issue 14 a test
+    of its own computed the paper config's levels (1.0, 1.5, 2.0) for this (about 15 CPU s); the whole-paper run
+    writes their table (README, "Mesh convergence of the first axial frequency")."""
     conv = pd.read_csv(sensor_run / "convergence.csv")
     assert len(conv) == 3 and conv["n_dof"].is_monotonic_increasing
+    assert abs(conv["change_short_percent"].iloc[-1]) < 1.0
+    assert abs(conv["change_open_percent"].iloc[-1]) < 1.0
+    assert np.all(np.diff(conv["first_axial_short_Hz"]) < 0)
 
 
 def test_bad_config_and_inputs_name_the_key_or_file(ci_config, sensor_run, tmp_path):

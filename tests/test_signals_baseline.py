@@ -124,6 +124,41 @@ def test_harmonic_test_is_chi_square_under_noise():
     assert lo <= np.mean(np.array(qs) > chi2.ppf(0.95, dof)) <= hi
 
 
+def test_harmonic_fit_in_closed_form_equals_the_qr_solution():
+    """The normal equations with A^T A from geometric sums and A^T x from the DTFT (or the chirp z-transform
+    for long records) give the pivoted-QR least squares to 1e-9 of the coefficients."""
+    rng = np.random.default_rng(4)
+    for n, fs in ((2295, FS), (6000, 25600.0)):
+        f0 = slipped_frequencies(KIN, SLIP)["bpfo_Hz"]
+        k = B.below_nyquist(1 / fs, f0)
+        x = healthy(n, fs=fs) + rng.standard_normal(n)
+        c, gram, _ = B.harmonic_fit(x, 1 / fs, f0, k)
+        a = B.harmonic_matrix(n, 1 / fs, f0, k)
+        assert np.allclose(gram, a.T @ a, rtol=0, atol=1e-9 * n)
+        assert np.allclose(c, B._lstsq(a, x), rtol=0, atol=1e-9 * np.abs(c).max())
+
+
+def test_slip_searched_harmonic_test_threshold_by_monte_carlo():
+    """The outer-race test at the fundamental of the healthy model (the baseline's waveform fitted over the slip
+    window, 0-3%): q below the likelihood ratio with f fitted in both models, chi^2 with 2K - 1 degrees of freedom
+    (Wilks): with the roller train far above the noise per coefficient (96 V bumps, 2 V noise, sigma known) and
+    buried in it (-10 dB relative), the rate above the chi^2_{2K-1} 95% quantile within the binomial 99.9% interval
+    of 5% (300 records each) and the mean of q within 4 standard errors of 2K - 1."""
+    n, m, dt = 640, 300, 1 / FS
+    base = B.Baseline.from_record(healthy(n), dt, KIN, B.BaselineSettings())
+    f_true = slipped_frequencies(KIN, SLIP)["bpfo_Hz"]
+    window = (KIN["bpfo_Hz"] * 0.97, KIN["bpfo_Hz"])
+    rng = np.random.default_rng(12)
+    lo, hi = binom.ppf([0.0005, 0.9995], m, 0.05) / m
+    for noise in (2.0, np.sqrt(10.0 * np.mean(healthy(n) ** 2))):
+        res = B.one_blas_thread(lambda s: [B.harmonic_test(healthy(n) + s * rng.standard_normal(n), dt, f_true,
+                                                           base, s, 0.0, window) for _ in range(m)])(noise)
+        q, dof = np.array([r["statistic"] for r in res]), res[0]["dof"]
+        assert dof == 2 * B.below_nyquist(dt, window[1]) - 1
+        assert lo <= np.mean(q > chi2.ppf(0.95, dof)) <= hi, (noise, np.mean(q > chi2.ppf(0.95, dof)))
+        assert abs(q.mean() - dof) < 4.0 * np.sqrt(2.0 * dof / m), (noise, q.mean())
+
+
 def test_tolerance_absorbs_a_baseline_off_by_its_size():
     """A healthy bearing 1% stronger than its baseline at micro-volt noise: exact baseline -> outer race
     'detected'; a 2% tolerance -> not."""
@@ -134,6 +169,32 @@ def test_tolerance_absorbs_a_baseline_off_by_its_size():
     assert B.detect(x, dt, KIN, base, st).per_type["outer_race"]["detected"]
     d = B.detect(x, dt, KIN, base, B.BaselineSettings(tolerance=0.02))
     assert not d.per_type["outer_race"]["detected"] and d.fault_type == "none"
+
+
+def test_baseline_tolerances_from_config(paper_config):
+    """signals.detector.baseline_tolerance and baseline_gain_tolerance reach the detector's settings (defaults 0:
+    the workflow's baseline is the model's own noiseless healthy record)."""
+    assert B.BaselineSettings.from_config(paper_config["signals"]) == B.BaselineSettings()
+    sig = {**paper_config["signals"], "detector": {**paper_config["signals"]["detector"], "baseline_tolerance": 0.1,
+                                                   "baseline_gain_tolerance": 0.05}}
+    st = B.BaselineSettings.from_config(sig)
+    assert (st.tolerance, st.gain_tolerance) == (0.1, 0.05)
+
+
+def test_gain_tolerance_absorbs_a_level_off_but_not_the_fault():
+    """A healthy bearing 10% stronger than its baseline (a load share off by 10%) at 0.01 V noise: outer race
+    'detected' with g = 1, absorbed with a 10% gain tolerance; a synthetic outer-race fault at 10 dB stays
+    detected with it (its impacts are not a change of level)."""
+    n, dt = 2295, 1 / FS
+    rng = np.random.default_rng(2)
+    fixed, loose = B.BaselineSettings(), B.BaselineSettings(gain_tolerance=0.1)
+    base = B.Baseline.from_record(healthy(n), dt, KIN, fixed)
+    x = 1.1 * healthy(n) + 1e-2 * rng.standard_normal(n)
+    assert B.detect(x, dt, KIN, base, fixed).per_type["outer_race"]["detected"]
+    assert B.detect(x, dt, KIN, base, loose).fault_type == "none"
+    v = healthy(n) + impacts("outer_race", n)
+    d = B.detect(v + np.sqrt(np.mean(v**2) / 10.0) * rng.standard_normal(n), dt, KIN, base, loose)
+    assert d.fault_type == "outer_race"
 
 
 @pytest.mark.parametrize("noise", ["relative_10dB", "absolute_1uV"])

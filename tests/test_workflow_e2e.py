@@ -5,13 +5,11 @@ fixture (tests/conftest.py), so the workflow runs once per test session.
 """
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pandas as pd
 import pytest
-from conftest import result_numbers
+from conftest import result_numbers, snakemake_warm
 
 pytestmark = pytest.mark.slow
 
@@ -48,14 +46,7 @@ def test_calibration_outputs_exist_and_hold_sane_values(ci_run: Path):
 
 
 def test_nothing_left_to_do_after_a_run(ci_run: Path):
-    exe = Path(sys.executable).with_name("snakemake")
-    out = subprocess.run(
-        [str(exe), "-n", "--configfile", "config/ci.yaml"],
-        cwd=ci_run,
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    out = snakemake_warm("-n", "--configfile", "config/ci.yaml", cwd=ci_run)
     assert out.returncode == 0, out.stderr[-2000:]
     assert "Nothing to be done" in out.stdout + out.stderr
 

@@ -67,6 +67,29 @@ def _child(request: dict) -> None:
         os._exit(code)
 
 
+def _remember_parsed_imports() -> None:
+    """Parse every package module's imports once here, keyed by the module's text: a child hashes the package code
+    from the files on disk as before (every file read again), and parses only a file whose text is not one of
+    these (an edited module), instead of all of them (0.3 of its 1.1 CPU s)."""
+    try:
+        from piezobearing import registry
+    except ImportError:
+        return
+    parse = registry._imports
+    memo: dict = {}
+
+    def _imports(source: str, module, is_package: bool) -> set[str]:
+        key = (source, module, is_package)
+        if key not in memo:
+            memo[key] = frozenset(parse(source, module, is_package))
+        return set(memo[key])
+
+    registry._imports = _imports
+    for f in sorted(registry.PACKAGE_DIR.rglob("*.py")):
+        registry._module_imports(f)
+    registry._module_imports.cache_clear()  # path-keyed: a child must read the files again
+
+
 def serve() -> None:
     """Read one JSON request a line ({"args", "cwd", "stdout", "stderr"}), answer {"returncode"} a line."""
     import importlib
@@ -76,6 +99,7 @@ def serve() -> None:
             importlib.import_module(name)
         except ImportError:  # a module another branch does not have: the child imports what it needs
             pass
+    _remember_parsed_imports()
     print(json.dumps({"ready": True}), flush=True)
     for line in sys.stdin:
         request = json.loads(line)

@@ -244,10 +244,25 @@ def _module_name(path: Path) -> str:
     return ".".join(parts)
 
 
+#: The fields of a statement that hold statements (an import is a statement: it is never inside an expression).
+_BODIES = ("body", "orelse", "finalbody", "handlers", "cases")
+
+
+def _statements(tree: ast.AST):
+    """Every statement of ``tree`` at any depth (function, class, if, try, with, loop and match bodies), without
+    visiting expressions: the same imports as ``ast.walk`` finds, at a tenth of the nodes visited."""
+    todo = [tree]
+    while todo:
+        node = todo.pop()
+        yield node
+        for field in _BODIES:
+            todo.extend(getattr(node, field, ()))
+
+
 def _imports(source: str, module: str | None, is_package: bool) -> set[str]:
     """Absolute names of the modules ``source`` imports (relative imports resolved against ``module``)."""
     out = set()
-    for node in ast.walk(ast.parse(source)):
+    for node in _statements(ast.parse(source)):
         if isinstance(node, ast.Import):
             out.update(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom):

@@ -29,6 +29,7 @@ rule bearing_lpm:
         f"{RESULTS}/logs/bearing_lpm.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/bearing_lpm.tsv"
+    priority: PRIORITY["bearing_lpm"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -52,6 +53,7 @@ rule housing_mesh:
         f"{RESULTS}/benchmarks/rules/housing_mesh_{{case}}.tsv"
     wildcard_constraints:
         case="healthy|faulty",
+    priority: PRIORITY["housing_mesh"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -73,12 +75,15 @@ rule housing_transient:
         modes=f"{RESULTS}/bearing/housing_modes_{{case}}.json",
         json=f"{RESULTS}/bearing/housing_transient_{{case}}.json",
         influence=f"{RESULTS}/bearing/influence_line_{{case}}.csv",
+        # the quasi-static force on this mesh: housing_convergence's row of housing.mesh_level
+        quasi_static=f"{RESULTS}/bearing/quasi_static_{{case}}.npz",
     log:
         f"{RESULTS}/logs/housing_transient_{{case}}.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/housing_transient_{{case}}.tsv"
     wildcard_constraints:
         case="healthy|faulty",
+    priority: PRIORITY["housing_transient"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -94,6 +99,8 @@ rule housing_transient:
 rule housing_convergence:
     input:
         contact=f"{RESULTS}/bearing/contact_forces_healthy.npz",
+        # the level housing.mesh_level, solved by housing_transient_healthy (not factorised twice)
+        quasi_static=f"{RESULTS}/bearing/quasi_static_healthy.npz",
     output:
         json=f"{RESULTS}/bearing/mesh_convergence.json",
         csv=f"{RESULTS}/bearing/mesh_convergence.csv",
@@ -101,6 +108,7 @@ rule housing_convergence:
         f"{RESULTS}/logs/housing_convergence.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/housing_convergence.tsv"
+    priority: PRIORITY["housing_convergence"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -123,6 +131,7 @@ rule bearing_sampling:
         f"{RESULTS}/logs/bearing_sampling.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/bearing_sampling.tsv"
+    priority: PRIORITY["bearing_sampling"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1

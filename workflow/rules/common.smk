@@ -27,10 +27,56 @@ except ConfigError as e:
     sys.exit(1)
 validate(config, schema="../../config/schema.yaml")
 
+
+# Jobs find the tools of the Python that runs Snakemake first (papermill; jupyter_client then starts the
+# notebooks' kernel with that Python too), so `.venv/bin/snakemake` works without activating the venv.
+envvars:
+    "PATH",
+
+
+os.environ["PATH"] = os.pathsep.join(
+    [os.path.dirname(sys.executable), os.environ["PATH"]]
+)
+
 RESULTS = "results"
 FIGURES = []  # results/figures/*.png
 SCORECARD_PARTS = []  # results/scorecard/<stage>.csv fragments
 TARGETS = []  # other final outputs
+
+# Job order (issue 14). Among the jobs that are ready, Snakemake starts those of the highest `priority:`
+# first; a rule's priority here is the CPU seconds on its longest path to the end of the whole paper
+# (job CPU times of a default-config run, 2026-11-23, results/benchmarks/rules/*.tsv; critical-path list
+# scheduling), so the long chains (sensor_mesh -> sensor_modal -> ..., bearing_lpm -> housing_*) start
+# first and neither core waits at the end for one of them. Rules not listed: 0. The order of jobs changes
+# no result.
+PRIORITY = {
+    "sensor_mesh": 73,
+    "sensor_modal": 71,
+    "bearing_lpm": 58,
+    "housing_mesh": 50,
+    "housing_transient": 49,
+    "synthesize_calibration": 43,
+    "fit_resistance": 40,
+    "lowfreq_sensitivity": 39,
+    "sensor_harmonic": 37,
+    "fault_type_voltage": 35,
+    "sensor_voltage": 31,
+    "fault_classification": 29,
+    "housing_convergence": 27,
+    "diagnose": 15,
+    "synthesize_bearing_record": 12,
+    "sensor_convergence": 10,
+    "diagnose_bearing": 10,
+    "snr_study": 9,
+    "noisy": 8,
+    "diagnosis_notebook": 7,
+    "envelope": 7,
+    "diagnosis_bearing_notebook": 6,
+    "extract_sensitivity": 5,
+    "fault_indicator": 5,
+    "bearing_sampling": 5,
+    "defect_events": 5,
+}
 
 
 def measurement_csv():

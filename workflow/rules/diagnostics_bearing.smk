@@ -31,6 +31,7 @@ rule synthesize_bearing_record:
         f"{RESULTS}/logs/synthesize_bearing_record.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/synthesize_bearing_record.tsv"
+    priority: PRIORITY["synthesize_bearing_record"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -66,6 +67,7 @@ rule diagnose_bearing:
         f"{RESULTS}/logs/diagnose_bearing.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/diagnose_bearing.tsv"
+    priority: PRIORITY["diagnose_bearing"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -94,6 +96,7 @@ rule diagnosis_bearing_notebook:
         f"{RESULTS}/logs/diagnosis_bearing_notebook.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/diagnosis_bearing_notebook.tsv"
+    priority: PRIORITY["diagnosis_bearing_notebook"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1

@@ -33,6 +33,7 @@ rule sensor_voltage:
         f"{RESULTS}/benchmarks/rules/sensor_voltage_{{case}}.tsv"
     wildcard_constraints:
         case="healthy|faulty",
+    priority: PRIORITY["sensor_voltage"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -57,6 +58,7 @@ rule noisy:
         f"{RESULTS}/benchmarks/rules/noisy_{{case}}.tsv"
     wildcard_constraints:
         case="healthy|faulty",
+    priority: PRIORITY["noisy"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -83,6 +85,7 @@ rule envelope:
         f"{RESULTS}/benchmarks/rules/envelope_{{case}}.tsv"
     wildcard_constraints:
         case="healthy|faulty",
+    priority: PRIORITY["envelope"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -112,6 +115,7 @@ rule fault_indicator:
         f"{RESULTS}/logs/fault_indicator.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/fault_indicator.tsv"
+    priority: PRIORITY["fault_indicator"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -137,6 +141,7 @@ rule snr_study:
         f"{RESULTS}/logs/snr_study.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/snr_study.tsv"
+    priority: PRIORITY["snr_study"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -186,6 +191,7 @@ rule defect_events:
         f"{RESULTS}/logs/defect_events.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/defect_events.tsv"
+    priority: PRIORITY["defect_events"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -303,6 +309,7 @@ rule fault_type_voltage:
         f"{RESULTS}/benchmarks/rules/fault_type_voltage_{{fault_type}}.tsv"
     wildcard_constraints:
         fault_type="outer_race|inner_race|rolling_element",
+    priority: PRIORITY["fault_type_voltage"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -334,6 +341,7 @@ rule fault_classification:
         f"{RESULTS}/logs/fault_classification.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/fault_classification.tsv"
+    priority: PRIORITY["fault_classification"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1

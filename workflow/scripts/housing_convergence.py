@@ -7,4 +7,5 @@ from piezobearing.stages.bearing import mesh_convergence
 
 config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
 
-mesh_convergence(snakemake.input.contact, snakemake.output.json, snakemake.output.csv, config)
+i, o = snakemake.input, snakemake.output
+mesh_convergence(i.contact, o.json, o.csv, config, i.quasi_static)

@@ -8,4 +8,6 @@ from piezobearing.stages.bearing import housing_transient
 config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
 
 i, o = snakemake.input, snakemake.output
-housing_transient(snakemake.wildcards.case, i.mesh, i.contact, o.csv, o.modes, o.json, o.influence, config)
+housing_transient(
+    snakemake.wildcards.case, i.mesh, i.contact, o.csv, o.modes, o.json, o.influence, config, o.quasi_static
+)

@@ -99,11 +99,18 @@ def housing_transient(case: str, m: HousingMesh, contact: dict, config: dict) ->
 
     ``contact``: the case's arrays of :func:`bearing_lpm` (contact_forces_{case}.npz). Returns ``force``
     (sensor_force_{case}.csv: time_s, force_N), ``influence`` (influence_line_{case}.csv), ``modes``
-    (housing_modes_{case}.json) and ``summary`` (housing_transient_{case}.json).
+    (housing_modes_{case}.json), ``summary`` (housing_transient_{case}.json) and ``quasi_static``
+    (quasi_static_{case}.npz: the mesh's level, its DOFs and the quasi-static sensor force g(t) [N], which
+    the convergence study takes as its row of ``housing.mesh_level`` instead of factorising that mesh again).
     """
     run = transient(case, m, contact, config)
     influence, modes, summary = transient_summary(case, m, run, config)
     return {
+        "quasi_static": {
+            "level": float(m.level),
+            "n_dofs": run["model"].n_dofs,
+            "quasi_static_N": run["reduced"]["quasi_static_N"],
+        },
         "force": pd.DataFrame({"time_s": run["time_s"], "force_N": run["force_N"]}),
         "influence": pd.DataFrame(influence),
         "modes": {**modes, "config": {"housing": config["housing"]}},

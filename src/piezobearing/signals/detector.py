@@ -51,9 +51,6 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
-from scipy.signal import fftconvolve
-from scipy.special import roots_legendre
-from scipy.stats import gamma as gamma_dist
 
 from . import detection as det
 from .fault_bands import FaultLine, fault_bands, fault_lines, window_bins
@@ -154,6 +151,9 @@ def _gamma_nodes(n_floor_bins: float) -> tuple[np.ndarray, np.ndarray]:
     generalised Laguerre rule overflows beyond M_f ~ 150), and its nodes
     crowd towards u = 0, the small floors that make the tail of R.
     """
+    from scipy.special import roots_legendre
+    from scipy.stats import gamma as gamma_dist
+
     u, w = roots_legendre(_N_QUAD)
     return gamma_dist.ppf(0.5 * (u + 1.0), n_floor_bins, scale=1.0 / n_floor_bins), 0.5 * w
 
@@ -215,6 +215,8 @@ def null_distribution(groups: tuple[tuple[tuple[int, ...], float], ...]) -> Null
     groups : tuple
         Per harmonic: (window sizes M_l of its lines, floor bins M_f).
     """
+    from scipy.signal import fftconvolve
+
     n_lines = sum(len(ms) for ms, _ in groups)
     xmax = 40.0 + 30.0 * n_lines
     x = np.linspace(0.0, xmax, _N_GRID)

@@ -27,11 +27,14 @@ for the N 305), so in the shaft-angle domain the lines stay sharp:
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.interpolate import CubicSpline, PchipInterpolator
 
 from . import detection as det
+
+if TYPE_CHECKING:  # scipy.interpolate is imported where it is used (issue 14: every job's start)
+    from scipy.interpolate import CubicSpline, PchipInterpolator
 
 
 def tachometer_signal(angle_rad: np.ndarray, pulses_per_rev: int, high_V: float = 5.0, duty: float = 0.5) -> np.ndarray:
@@ -68,6 +71,8 @@ def shaft_angle(pulse_times_s: np.ndarray, pulses_per_rev: int) -> CubicSpline |
     tachometer's sampling: a square wave's edge is known to about half a
     sample, an angle error of up to pi f_r dt.
     """
+    from scipy.interpolate import CubicSpline, PchipInterpolator
+
     tp = np.asarray(pulse_times_s, dtype=float)
     if tp.size < 4:
         raise ValueError(f"only {tp.size} tachometer pulses; the record needs at least 4 to track the speed")
@@ -110,6 +115,8 @@ def angular_resample(x: np.ndarray, dt_s: float, angle: CubicSpline | PchipInter
     table of theta and linear interpolation of its inverse, then one Newton
     step on the PCHIP); x is interpolated there by a cubic spline.
     """
+    from scipy.interpolate import CubicSpline
+
     x = np.asarray(x, dtype=float)
     t = t0_s + np.arange(x.size) * dt_s
     ta, tb = max(angle.x[0], t[0]), min(angle.x[-1], t[-1])

@@ -58,20 +58,40 @@ def housing_transient(
     out_json: str,
     out_influence: str,
     config: dict,
+    out_quasi_static: str | None = None,
 ) -> None:
-    """Stage housing_transient_{case}: the sensor force over time, the modes, the method check."""
+    """Stage housing_transient_{case}: the sensor force over time, the modes, the method check; and
+    (``out_quasi_static``) the quasi-static force on this mesh for the convergence study (NPZ)."""
     log_progress()
     r = outputs.housing_transient(case, read_housing_mesh(mesh_npz), read_npz(contact_npz), config)
+    if out_quasi_static is not None:
+        write_npz(out_quasi_static, **r["quasi_static"])
     write_csv(r["force"], out_csv, FORCE_CSV_FORMAT)
     write_csv(r["influence"], out_influence, FORCE_CSV_FORMAT)
     write_json(r["modes"], out_modes)
     write_json(r["summary"], out_json)
 
 
-def mesh_convergence(contact_npz: str, out_json: str, out_csv: str, config: dict) -> None:
-    """Stage housing_convergence: the sensor force amplitude on the convergence levels (bearing.checks)."""
+def mesh_convergence(
+    contact_npz: str, out_json: str, out_csv: str, config: dict, quasi_static_npz: str | None = None
+) -> None:
+    """Stage housing_convergence: the sensor force amplitude on the convergence levels (bearing.checks).
+
+    ``quasi_static_npz``: housing_transient_healthy's quasi-static force on the mesh of ``housing.mesh_level``,
+    that level's row (its mesh is not factorised a second time).
+    """
     log_progress()
-    df, record = _mesh_convergence(read_npz(contact_npz), config)
+    known = None
+    if quasi_static_npz is not None:
+        qs = read_npz(quasi_static_npz)
+        level = float(qs["level"])
+        if level != float(config["housing"]["mesh_level"]):
+            raise ValueError(
+                f"{quasi_static_npz}: level {level} is not this config's housing.mesh_level "
+                f"{config['housing']['mesh_level']}; rerun the rule housing_transient"
+            )
+        known = {level: (int(qs["n_dofs"]), qs["quasi_static_N"])}
+    df, record = _mesh_convergence(read_npz(contact_npz), config, known)
     write_csv(df, out_csv, None)
     write_json({**record, "config": {"housing": config["housing"]}}, out_json)
 

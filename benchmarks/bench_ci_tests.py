@@ -1,0 +1,141 @@
+"""The CI test suite's cost (issue 14: `.ci/run` within 3 min), one revision beside another, and its parts.
+
+``suite``: ``CI=true pytest -n 2 --dist loadgroup -q --durations=0`` in a detached git worktree of each revision
+(the package imported from that worktree's ``src``), one after the other; for each its wall seconds, its CPU
+seconds (user + system of pytest and every process it waited for: the xdist workers, the Snakemake runs and their
+jobs, the warm servers), the pass/fail line and the per-file sums of the ``--durations`` lines (setup + call +
+teardown, wall seconds of each worker). ``--which old|new`` runs one side and keeps the other's entry, so the two
+can run at different times (say so; compare CPU seconds, which a shared machine inflates far less than wall).
+
+``rerun``: the reproducibility rerun (``ci_rerun``) both ways in fresh copies of this checkout: ``snakemake``
+with every script job a fresh process, and ``tests/warm_jobs.py`` (script jobs forked warm); CPU seconds of each
+and whether the two runs' number files are byte-identical.
+
+Writes ``results/benchmarks/ci_tests.json``. Usage:
+``python benchmarks/bench_ci_tests.py suite --old REV [--new HEAD] [--which both|old|new]``,
+``python benchmarks/bench_ci_tests.py rerun``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from collections import defaultdict
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "results/benchmarks/ci_tests.json"
+BIN = Path(sys.executable).parent
+
+
+def _cpu_children() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def timed(cmd: list[str], cwd: Path, env: dict | None = None) -> tuple[subprocess.CompletedProcess, float, float]:
+    """Run ``cmd``; (its result, CPU seconds of it and its waited-for descendants, wall seconds)."""
+    c0, t0 = _cpu_children(), time.perf_counter()
+    out = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True)
+    return out, _cpu_children() - c0, time.perf_counter() - t0
+
+
+def per_file(durations: str) -> dict[str, float]:
+    """Sums of the ``--durations=0`` lines per test file (setup + call + teardown)."""
+    out: dict[str, float] = defaultdict(float)
+    for m in re.finditer(r"^([\d.]+)s (?:call|setup|teardown)\s+(\S+?)::", durations, re.M):
+        out[m.group(2)] += float(m.group(1))
+    return dict(sorted(out.items(), key=lambda kv: -kv[1]))
+
+
+def suite(rev: str, tmp: Path) -> dict:
+    """The CI test command in a detached worktree of ``rev``."""
+    sha = subprocess.run(["git", "rev-parse", rev], cwd=ROOT, capture_output=True, text=True, check=True).stdout.strip()
+    wt = tmp / sha[:10]
+    subprocess.run(["git", "worktree", "add", "--detach", str(wt), sha], cwd=ROOT, capture_output=True, check=True)
+    try:
+        env = {**os.environ, "CI": "true", "PYTHONPATH": str(wt / "src")}
+        cmd = [str(BIN / "pytest"), "-n", "2", "--dist", "loadgroup", "-q", "--durations=0", "-p", "no:cacheprovider"]
+        out, cpu, wall = timed(cmd, wt, env)
+    finally:
+        subprocess.run(["git", "worktree", "remove", "--force", str(wt)], cwd=ROOT, capture_output=True)
+    summary = [ln for ln in out.stdout.splitlines() if re.search(r"\d+ (passed|failed)", ln)]
+    return {
+        "revision": sha,
+        "returncode": out.returncode,
+        "summary": summary[-1] if summary else out.stdout[-500:],
+        "wall_s": round(wall, 1),
+        "cpu_s": round(cpu, 1),
+        "load_average_after": os.getloadavg(),
+        "per_file_worker_s": {k: round(v, 1) for k, v in per_file(out.stdout).items()},
+        "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
+    }
+
+
+def rerun(tmp: Path) -> dict:
+    """The reproducibility rerun, cold and warm, in fresh copies of this checkout, over the first run's targets."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    from conftest import _copy_repo, result_numbers
+
+    first = _copy_repo(tmp / "first")
+    out, cpu_first, _ = timed([str(BIN / "snakemake"), "--cores", "2", "all", "--configfile", "config/ci.yaml"], first)
+    assert out.returncode == 0, out.stderr[-3000:]
+    targets = result_numbers(first)
+    runs = {}
+    for name, exe in (("cold", [str(BIN / "snakemake")]), ("warm", [sys.executable, str(ROOT / "tests/warm_jobs.py")])):
+        work = _copy_repo(tmp / name)
+        out, cpu, wall = timed([*exe, "--cores", "2", *targets, "--configfile", "config/ci.yaml"], work)
+        assert out.returncode == 0, out.stderr[-3000:]
+        runs[name] = {"cpu_s": round(cpu, 1), "wall_s": round(wall, 1), "folder": work}
+    differ = [t for t in targets if (runs["cold"]["folder"] / t).read_bytes() != (runs["warm"]["folder"] / t).read_bytes()]
+    differ_first = [t for t in targets if (first / t).read_bytes() != (runs["warm"]["folder"] / t).read_bytes()]
+    return {
+        "first_run_all_cpu_s": round(cpu_first, 1),
+        "number_files": len(targets),
+        "cold": {k: v for k, v in runs["cold"].items() if k != "folder"},
+        "warm": {k: v for k, v in runs["warm"].items() if k != "folder"},
+        "cpu_ratio_cold_over_warm": round(runs["cold"]["cpu_s"] / runs["warm"]["cpu_s"], 2),
+        "files_differing_cold_vs_warm": differ,
+        "files_differing_first_vs_warm": differ_first,
+        "load_average_after": os.getloadavg(),
+        "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
+    }
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("what", choices=("suite", "rerun"))
+    ap.add_argument("--old", default="main")
+    ap.add_argument("--new", default="HEAD")
+    ap.add_argument("--which", choices=("both", "old", "new"), default="both")
+    a = ap.parse_args()
+    record = json.loads(OUT.read_text()) if OUT.exists() else {}
+    tmp = Path(tempfile.mkdtemp(prefix="bench_ci_tests_"))
+    if a.what == "rerun":
+        record["rerun"] = rerun(tmp)
+    else:
+        for side in ("old", "new"):
+            if a.which in ("both", side):
+                result = suite(a.old if side == "old" else a.new, tmp)
+                record = json.loads(OUT.read_text()) if OUT.exists() else {}  # another side may have finished
+                record.setdefault("suite", {})[side] = result
+                OUT.parent.mkdir(parents=True, exist_ok=True)
+                OUT.write_text(json.dumps(record, indent=2) + "\n")
+        s = record.setdefault("suite", {})
+        if "old" in s and "new" in s:
+            s["cpu_ratio_old_over_new"] = round(s["old"]["cpu_s"] / s["new"]["cpu_s"], 2)
+            s["wall_ratio_old_over_new"] = round(s["old"]["wall_s"] / s["new"]["wall_s"], 2)
+    OUT.parent.mkdir(parents=True, exist_ok=True)
+    OUT.write_text(json.dumps(record, indent=2) + "\n")
+    print(json.dumps(record, indent=2))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,206 @@
+"""A real Snakemake run whose Python script jobs start warm: ``python tests/warm_jobs.py ARGS`` is ``snakemake ARGS``
+(the same DAG, scheduling, job scripts, logs and outputs) except that each ``script:`` job, instead of a fresh
+``python .snakemake/scripts/tmpXXXX.<rule>.py`` process, runs that same generated script in a child forked from a
+server that has NumPy, SciPy, pandas, Snakemake's script preamble modules and every package module the workflow's
+scripts import already imported. A job of this workflow spends most of its CPU time on those imports (0.5-1.4 s
+each: benchmarks/bench_ci_tests.py); the forked child pays only the job's own work.
+
+The child is the job as Snakemake would run it: the job's script file (preamble with its pickled ``snakemake``
+object, then the rule's script), run as ``__main__`` in the job's working directory, with the thread variables
+Snakemake sets for the job's ``threads`` (``OMP_NUM_THREADS``, ``MKL_NUM_THREADS``, ...; and a threadpoolctl limit
+for the BLAS libraries the server loaded before them); an uncaught exception goes to the job's log as the real
+process's would, and a non-zero exit fails the job. Every child starts from the same server state (one job cannot
+leak into the next), and the server's hash seed differs from that of every process of another run.
+
+Not the same as a fresh process: a module the job's script does not import itself but the server preloaded is
+there anyway, so a job that forgot an import would pass here; the session's first CI run (``ci_run``) runs every
+job as a fresh process, which catches that. The reproducibility rerun (``ci_rerun``, tests/conftest.py) uses this.
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import itertools
+import json
+import os
+import runpy
+import select
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+#: What every job of this workflow imports, besides the package modules its script names.
+PRELOAD = (
+    "numpy",
+    "scipy.sparse.linalg",
+    "pandas",
+    "threadpoolctl",
+    "snakemake.iocontainers",
+    "snakemake.logging",
+)
+#: The variables Snakemake's shell() sets to a job's thread count (snakemake/shell.py).
+THREAD_VARIABLES = (
+    "OMP_NUM_THREADS",
+    "GOTO_NUM_THREADS",
+    "OPENBLAS_NUM_THREADS",
+    "MKL_NUM_THREADS",
+    "VECLIB_MAXIMUM_THREADS",
+    "NUMEXPR_NUM_THREADS",
+)
+
+
+def script_imports(scripts: Path) -> list[str]:
+    """The package modules the workflow's scripts import (``from piezobearing.x import y`` gives both names)."""
+    out: set[str] = set()
+    for s in sorted(scripts.glob("*.py")):
+        for node in ast.walk(ast.parse(s.read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("piezobearing"):
+                out.add(node.module)
+            elif isinstance(node, ast.Import):
+                out.update(a.name for a in node.names if a.name.startswith("piezobearing"))
+    return sorted(out)
+
+
+def _child(request: dict) -> None:
+    """In the forked child: run the job's script as ``python SCRIPT`` would, in the job's folder; never return."""
+    code = 1
+    try:
+        os.chdir(request["cwd"])
+        threads = str(request["threads"])
+        for name in THREAD_VARIABLES:
+            os.environ[name] = threads
+        devnull = os.open(os.devnull, os.O_RDWR)
+        for fd in (0, 1):  # the job's stdout as Snakemake leaves it (not captured); stderr stays the server's
+            os.dup2(devnull, fd)
+        from threadpoolctl import threadpool_limits
+
+        threadpool_limits(int(threads))  # libraries loaded before the variables were set
+        sys.argv = [request["script"]]
+        runpy.run_path(request["script"], run_name="__main__")
+        code = 0
+    except SystemExit as e:
+        code = e.code if isinstance(e.code, int) else (0 if e.code is None else 1)
+    except BaseException:  # noqa: BLE001 - to sys.stderr, which the job's script pointed at its log
+        import traceback
+
+        traceback.print_exc()
+    finally:
+        try:
+            sys.stdout.flush()
+            sys.stderr.flush()
+        finally:
+            os._exit(code)
+
+
+def serve() -> None:
+    """Read one JSON request a line ({"id", "script", "cwd", "threads"}) and fork a child for it at once; answer
+    {"id", "returncode", "cpu_s"} a line as each child ends (children run side by side)."""
+    for name in [*PRELOAD, *script_imports(Path(sys.argv[2]))]:
+        try:
+            importlib.import_module(name)
+        except ImportError:  # a module another branch does not have: the job imports what it needs
+            pass
+    print(json.dumps({"ready": True}), flush=True)
+    running: dict[int, int] = {}
+    pending, open_ = b"", True
+    while open_ or running:
+        if open_ and select.select([0], [], [], 0.02)[0]:
+            chunk = os.read(0, 65536)
+            open_ = bool(chunk)
+            pending += chunk
+            *lines, pending = pending.split(b"\n")
+            for line in lines:
+                request = json.loads(line)
+                pid = os.fork()
+                if pid == 0:
+                    _child(request)
+                running[pid] = request["id"]
+        elif not open_:
+            select.select([], [], [], 0.02)
+        while running:
+            pid, status, usage = os.wait4(-1, os.WNOHANG)
+            if pid == 0:
+                break
+            answer = {"id": running.pop(pid), "returncode": os.waitstatus_to_exitcode(status),
+                      "cpu_s": usage.ru_utime + usage.ru_stime, "max_rss_MB": usage.ru_maxrss / 1024}
+            print(json.dumps(answer), flush=True)
+
+
+class JobServer:
+    """The client: ``run(script, cwd, threads)`` blocks until the forked job ends and returns its exit status;
+    safe to call from Snakemake's job threads at once."""
+
+    def __init__(self, scripts: Path):
+        self._proc = subprocess.Popen(
+            [sys.executable, __file__, "--serve", str(scripts)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+            text=True,
+        )
+        assert json.loads(self._proc.stdout.readline()).get("ready"), "the warm job server did not start"
+        self._ids = itertools.count()
+        self._lock = threading.Lock()
+        self._done: dict[int, dict] = {}
+        self._events: dict[int, threading.Event] = {}
+        self.cpu_s = 0.0  # the jobs' CPU seconds so far
+        threading.Thread(target=self._read, daemon=True).start()
+
+    def _read(self) -> None:
+        for line in self._proc.stdout:
+            answer = json.loads(line)
+            with self._lock:
+                self._done[answer["id"]] = answer
+                self.cpu_s += answer["cpu_s"]
+                self._events.pop(answer["id"]).set()
+
+    def run(self, script: str, cwd: str, threads: int) -> dict:
+        """Run the job; {"returncode", "cpu_s", "max_rss_MB"} of its child."""
+        event = threading.Event()
+        with self._lock:
+            i = next(self._ids)
+            self._events[i] = event
+            self._proc.stdin.write(json.dumps({"id": i, "script": script, "cwd": cwd, "threads": threads}) + "\n")
+            self._proc.stdin.flush()
+        event.wait()
+        with self._lock:
+            return self._done.pop(i)
+
+    def close(self) -> None:
+        self._proc.stdin.close()
+        self._proc.wait(timeout=60)
+
+
+def main(args: list[str]) -> int:
+    """``snakemake ARGS`` in the current folder with warm script jobs; its exit status."""
+    from snakemake.cli import main as snakemake_main
+    from snakemake.script import PythonScript
+
+    server = JobServer(Path("workflow/scripts").resolve())
+
+    def execute_script(self, fname, edit=False):
+        start = time.time()
+        done = server.run(os.path.abspath(fname), os.getcwd(), self.threads)
+        if self.bench_record is not None:  # the rule's benchmark: file, from the child's resource usage
+            b = self.bench_record
+            b.running_time, b.cpu_time, b.max_rss = time.time() - start, done["cpu_s"], done["max_rss_MB"]
+            b.cpu_usage, b.data_collected = done["cpu_s"], True
+        if done["returncode"]:
+            raise subprocess.CalledProcessError(done["returncode"], f"python {fname} (warm job)")
+
+    PythonScript.execute_script = execute_script
+    try:
+        snakemake_main(args)
+        return 0
+    except SystemExit as e:
+        return e.code if isinstance(e.code, int) else (0 if e.code is None else 1)
+    finally:
+        server.close()
+        print(f"warm jobs: {server.cpu_s:.2f} s of CPU in the jobs", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    if sys.argv[1:2] == ["--serve"]:
+        serve()
+    else:
+        sys.exit(main(sys.argv[1:]))
