@@ -158,6 +158,22 @@ def test_quantisation_floor_is_per_channel(ci_config):
     assert "input raised" not in volt_only["method"] and "voltage raised" in volt_only["method"]
 
 
+def _nominal_args(c: dict, m, v: np.ndarray) -> tuple:
+    """``diagnose_record``'s arguments after the record for config ``c``'s record ``m`` with voltage ``v``: the
+    nominal model (the calibration's initial R, no effect), the diagnostics settings, the impulses found in
+    ``v``."""
+    from piezobearing.diagnosis.settings import DiagnosticsSettings
+    from piezobearing.sensor.calibration import detect_impulses
+    from piezobearing.stages.calibration import nominal_circuit
+
+    return (
+        nominal_circuit(c, c["calibration"]["initial_resistance_ohm"]),
+        [],
+        DiagnosticsSettings.from_config(c["diagnostics"]),
+        detect_impulses(m.force_N, v, m.dt_s, 0.2, 0.8),
+    )
+
+
 @pytest.mark.slow  # two diagnoses of the CI record
 def test_coarse_adc_noise_is_in_the_floor(ci_config):
     """The CI record with little analog noise (0.3 mV, 0.5 mN) read by a 12-bit +-10 V converter (LSB 4.88 mV,
@@ -168,8 +184,6 @@ def test_coarse_adc_noise_is_in_the_floor(ci_config):
     from piezobearing.diagnosis import noise
     from piezobearing.diagnosis.calibration.effects import ForceRecord
     from piezobearing.diagnosis.calibration.subject import diagnose_record
-    from piezobearing.diagnosis.settings import DiagnosticsSettings
-    from piezobearing.sensor.calibration import detect_impulses
     from piezobearing.stages.calibration import nominal_circuit
     from piezobearing.synthesis import PressProtocol, synthesize
 
@@ -177,12 +191,7 @@ def test_coarse_adc_noise_is_in_the_floor(ci_config):
     m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"])
     q = 20.0 / 4096
     v = np.round(m.voltage_V / q) * q
-    args = (
-        nominal_circuit(c, c["calibration"]["initial_resistance_ohm"]),
-        [],
-        DiagnosticsSettings.from_config(c["diagnostics"]),
-        detect_impulses(m.force_N, v, m.dt_s, 0.2, 0.8),
-    )
+    args = _nominal_args(c, m, v)
     _, d = diagnose_record(ForceRecord(m.time_s, m.force_N), v, *args)
     fl = d["noise_floor"]
     assert fl["voltage_step_V"] == pytest.approx(q)
@@ -216,8 +225,6 @@ def test_wandering_drift_is_found_with_knots_chosen_by_the_evidence(ci_config, m
     from piezobearing.diagnosis.calibration.effects import ForceRecord
     from piezobearing.diagnosis.calibration.effects import baseline_drift as bd
     from piezobearing.diagnosis.calibration.subject import diagnose_record
-    from piezobearing.diagnosis.settings import DiagnosticsSettings
-    from piezobearing.sensor.calibration import detect_impulses
     from piezobearing.stages.calibration import nominal_circuit
     from piezobearing.synthesis import PressProtocol, synthesize
 
@@ -225,12 +232,7 @@ def test_wandering_drift_is_found_with_knots_chosen_by_the_evidence(ci_config, m
     m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"])
     t = m.time_s
     v = m.voltage_V + 0.020 * np.exp(-0.5 * ((t - 4) / 2.0) ** 2) - 0.012 * np.exp(-0.5 * ((t - 8.5) / 2.0) ** 2)
-    args = (
-        nominal_circuit(c, c["calibration"]["initial_resistance_ohm"]),
-        [],
-        DiagnosticsSettings.from_config(c["diagnostics"]),
-        detect_impulses(m.force_N, v, m.dt_s, 0.2, 0.8),
-    )
+    args = _nominal_args(c, m, v)
     _, d = diagnose_record(ForceRecord(t, m.force_N), v, *args)
     assert d["ranking"][0]["effect"] == "baseline_drift" and d["selected"] == ["baseline_drift"]
     assert d["verdict"] == "explained"
@@ -252,8 +254,6 @@ def test_kinked_drift_is_found_with_its_kink_time(ci_config, monkeypatch):
     from piezobearing.diagnosis.calibration.effects import ForceRecord
     from piezobearing.diagnosis.calibration.effects import baseline_drift as bd
     from piezobearing.diagnosis.calibration.subject import diagnose_record
-    from piezobearing.diagnosis.settings import DiagnosticsSettings
-    from piezobearing.sensor.calibration import detect_impulses
     from piezobearing.stages.calibration import nominal_circuit
     from piezobearing.synthesis import PressProtocol, synthesize
 
@@ -262,12 +262,7 @@ def test_kinked_drift_is_found_with_its_kink_time(ci_config, monkeypatch):
     t, t_on = m.time_s, 3.3
     s = np.clip(t - t_on, 0.0, None)
     v = m.voltage_V + 0.08 * (np.exp(-s / 8.0) - np.exp(-s / 4.0))  # peak 0.08 / 4 = 20 mV at s = 8 ln 2
-    args = (
-        nominal_circuit(c, c["calibration"]["initial_resistance_ohm"]),
-        [],
-        DiagnosticsSettings.from_config(c["diagnostics"]),
-        detect_impulses(m.force_N, v, m.dt_s, 0.2, 0.8),
-    )
+    args = _nominal_args(c, m, v)
     _, d = diagnose_record(ForceRecord(t, m.force_N), v, *args)
     assert d["ranking"][0]["effect"] == "baseline_drift" and d["selected"] == ["baseline_drift"]
     assert d["verdict"] == "explained"
