@@ -28,14 +28,15 @@ except ConfigError as e:
 validate(config, schema="../../config/schema.yaml")
 
 
-# Jobs find the tools of the Python that runs Snakemake first (papermill; jupyter_client then starts the
-# notebooks' kernel with that Python too), so `.venv/bin/snakemake` works without activating the venv.
+# Jobs find the tools of the Python that runs Snakemake (papermill; jupyter_client then starts the notebooks'
+# kernel with that Python too) after those already on PATH, so `.venv/bin/snakemake` works without activating
+# the venv, and a tool put first on PATH (an activated environment, the tests' stand-ins) still wins.
 envvars:
     "PATH",
 
 
 os.environ["PATH"] = os.pathsep.join(
-    [os.path.dirname(sys.executable), os.environ["PATH"]]
+    [os.environ["PATH"], os.path.dirname(sys.executable)]
 )
 
 RESULTS = "results"
