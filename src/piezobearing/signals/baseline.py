@@ -64,11 +64,11 @@ then adds to the harmonic test's variance: give a ``tolerance``).
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..threads import one_blas_thread
 from .detector import CLASSIFIED_TYPES
 from .fault_bands import slipped_frequencies
 
@@ -271,28 +271,6 @@ def harmonic_fit(x: np.ndarray, dt_s: float, f0_Hz: float, n_harmonics: int) -> 
     xt = np.empty(2 * kk + 1)
     xt[0], xt[1::2], xt[2::2] = x.sum(), d.real, -d.imag
     return np.linalg.solve(g, xt), g, xt
-
-
-@functools.lru_cache(maxsize=1)
-def _blas_pools():
-    """The BLAS thread pools of this process, found once: finding them (threadpoolctl walks every loaded
-    library) cost about 3 ms a call, a tenth of the classification rule's 800 detections (issue 14)."""
-    import scipy.linalg  # noqa: F401  (loads SciPy's BLAS, the one _lstsq uses, before the pools are listed)
-    from threadpoolctl import ThreadpoolController
-
-    return ThreadpoolController()
-
-
-def one_blas_thread(fn):
-    """Run ``fn`` on one BLAS thread: its small least-squares problems ran 50-200 times slower with
-    OpenBLAS's threads on a loaded machine (measured, 2 cores at load 17)."""
-
-    @functools.wraps(fn)
-    def wrapped(*args, **kwargs):
-        with _blas_pools().limit(limits=1, user_api="blas"):
-            return fn(*args, **kwargs)
-
-    return wrapped
 
 
 def _lstsq(a: np.ndarray, x: np.ndarray) -> np.ndarray:

@@ -19,6 +19,7 @@ from ...bearing.surrogate import InfluenceLine, cage_phase
 from ...io import BearingRecord, read_bearing_record
 from ...sensor.calibration import SensorCircuit
 from ...signals.detection import noise_std_for_snr
+from ...threads import single_blas_thread
 from ..effect import Catalogue, EffectError, StartContext
 from ..noise import NoiseFloor, robust_diff_std, white_level
 from ..record import Segments
@@ -159,15 +160,13 @@ class BearingSubject:
         """
         from dataclasses import replace
 
-        from threadpoolctl import threadpool_limits
-
         from ..engine import diagnose
         from ..settings import DiagnosticsSettings
 
         settings = DiagnosticsSettings.from_config(config.get("diagnostics"))
         # the fits' linear algebra is on matrices of n x (a few) values: a second BLAS thread only waits
         # (each SVD of the trust-region step 70x slower on a loaded 2-core machine, benchmarks/bench_diagnosis_bearing.py)
-        with threadpool_limits(limits=1, user_api="blas"):
+        with single_blas_thread():
             rec = obs[0]
             problem = floor_prepass(self.problem(obs, config), settings, rec.clipped, progress)
             d = diagnose(problem, settings, progress)

@@ -23,6 +23,7 @@ import numpy as np
 from ...io import Measurement
 from ...sensor.calibration import Impulse, SensorCircuit, detect_impulses
 from ...synthesis import PressProtocol, synthesize
+from ...threads import single_blas_thread
 from ..engine import Diagnosis, diagnose
 from ..fit import ModelFit
 from ..noise import estimate_noise_floor
@@ -117,12 +118,10 @@ def diagnose_record(
 ) -> tuple[Diagnosis, dict]:
     """The engine on one calibration record (arguments of :func:`calibration_problem`); returns the
     diagnosis and its JSON-ready dict with the subject's answer."""
-    from threadpoolctl import threadpool_limits
-
     settings = settings or DiagnosticsSettings()
     # the fits' linear algebra is on n x (a few) matrices: a second BLAS thread only waits and spins (the
     # clean default record's diagnosis took 2x the CPU with OpenBLAS's threads on the loaded 2-core machine)
-    with threadpool_limits(limits=1, user_api="blas"):
+    with single_blas_thread():
         d = diagnose(
             calibration_problem(record, voltage_V, circuit, configured_effects, settings, impulses),
             settings,
