@@ -127,3 +127,38 @@ def test_fault_type_records_and_their_confusion_rows(tmp_path, inputs, ci_config
     cm = json.loads((out / "cls.json").read_text())
     assert cm["true_types"]["inner_race"] == "inner_race"
     assert sum(cm["counts"][cm["classes"].index("inner_race")]) == 4
+
+
+def test_healthy_stays_healthy_at_a_daq_noise(tmp_path, inputs, paper_config, monkeypatch):  # noqa: F811
+    """Hide-and-find on the stage chain at a real DAQ's noise (absolute, 1e-5 V/sqrt(Hz): 0.36 mV rms against the
+    stand-in's 44 V swing), the stand-in's roller over the sensor at t = 0 as in the LPM (bearing.start_angle_deg 0):
+    the healthy bearing is classified none over 10 seeds and the fault outer_race. The sensor circuit starts in its
+    periodic steady state; started at rest (the code before 2026-11-23) the free decay left after signals.skip_s
+    (7.6 tau: 10 mV of 22 V) is what the folds call a fault (the healthy record: a rolling-element fault, 4.9 > 3.5)."""
+    import numpy as np
+    from test_signals import DT, bearing_force
+
+    from piezobearing.signals import outputs as sout
+
+    n, shift = 2600, 14  # the stand-in's bump is centred at 0.4 of a roller passage (36 steps): 14 steps earlier
+    for case, imp in (("healthy", 0.0), ("faulty", 10.0)):
+        pd.DataFrame({"time_s": np.arange(n) * DT, "force_N": bearing_force(n + shift, imp)[shift:]}).to_csv(
+            inputs[case], index=False, float_format="%.10g")
+    cfg = copy.deepcopy(paper_config)
+    cfg["signals"]["noise"].update(model="absolute", noise_density_V_per_sqrtHz=1.0e-5)
+    cfg["signals"]["study_n_seeds"] = 10
+    cfg["signals"]["detector"]["roc_snr_dB"] = []
+    out = run_chain(tmp_path, inputs, cfg, harmonic=False)
+    ind = json.loads((out / "fault_indicator.json").read_text())
+    assert (ind["healthy"]["fault_type"], ind["faulty"]["fault_type"]) == ("none", "outer_race")
+    assert max(r["indicator"] for r in ind["healthy"]["fault_types"].values()) < 0.1
+    volt = {c: str(out / f"voltage_{c}.csv") for c in CASES}
+    st.classification(volt, inputs["kinematics"], out / "cls.json", out / "cls.csv", out / "roc.csv", cfg)
+    seeds = pd.read_csv(out / "cls.csv")
+    assert (seeds[seeds["case"] == "healthy"]["fault_type"] == "none").all()
+    assert (seeds[seeds["case"] == "faulty"]["fault_type"] == "outer_race").all()
+
+    rest = sout.rc_voltage
+    monkeypatch.setattr(sout, "rc_voltage", lambda f, dt, g, tau, period_s: rest(f, dt, g, tau))
+    old = run_chain(tmp_path / "rest", inputs, cfg, harmonic=False)
+    assert json.loads((old / "fault_indicator.json").read_text())["healthy"]["fault_type"] != "none"
