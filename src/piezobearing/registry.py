@@ -126,8 +126,8 @@ _BEARING = [
     "bearing.substeps",
     "bearing.resample",
 ]
-#: The roller-passage period (signals.outputs.roller_passage_period_s: the bearing's geometry, speed and
-#: mean slip), at which the sensor circuit starts in its periodic steady state.
+#: The sensor force's period (signals.outputs.sensor_force_period_s: the bearing's geometry, speed, mean slip and
+#: whether the rollers differ), for which the sensor circuit starts in its periodic steady state.
 _PASSAGE = [
     "bearing.n_rollers",
     "bearing.roller_diameter_m",
@@ -139,6 +139,7 @@ _PASSAGE = [
     "bearing.contact_angle_deg",
     "bearing.shaft_speed_rpm",
     "bearing.cage_slip",
+    "bearing.roller_diameter_scatter_m",
 ]
 
 #: Config keys each rule's stage reads, by rule.

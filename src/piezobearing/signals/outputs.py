@@ -35,12 +35,18 @@ def sensor_circuit(config: dict, resistance: dict, source: str = "resistance.jso
     return SensorCircuit.from_config(config["sensor"], design_resistance_ohm(config["sensor"], resistance["resistance_ohm"]))
 
 
-def roller_passage_period_s(bearing: dict) -> float:
-    """The period with which the rollers pass the sensor, 1 / BPFO with the mean cage slip at the record's
-    start (``bearing``: the config section) [s]: the period of the healthy bearing's sensor force and of an
-    outer-race defect's impacts."""
+def sensor_force_period_s(bearing: dict) -> float:
+    """The period of the sensor force of a running bearing (``bearing``: the config section) [s].
+
+    The rollers pass the sensor at BPFO (at the mean cage slip, the record's starting speed): with equal rollers
+    the force repeats every passage, 1/BPFO (an outer-race defect's impacts too); with a scatter of the roller
+    diameters (``bearing.roller_diameter_scatter_m`` > 0) each roller loads the sensor differently and the force
+    repeats once the cage has turned once, Z passages (1/FTF). Slip jitter, a speed ramp, an inner-race or a
+    rolling-element defect make the force not quite periodic; the period is then the roller passage's.
+    """
     geo = BearingGeometry.from_config(bearing)
-    return 1.0 / kinematic_frequencies(geo, bearing["shaft_speed_rpm"] / 60.0, bearing["cage_slip"]).bpfo_Hz
+    bpfo = kinematic_frequencies(geo, bearing["shaft_speed_rpm"] / 60.0, bearing["cage_slip"]).bpfo_Hz
+    return (geo.n_rollers if bearing["roller_diameter_scatter_m"] > 0 else 1) / bpfo
 
 
 def rc_record(t: np.ndarray, force: np.ndarray, dt: float, gain_V_per_N: float, tau_s: float, skip_s: float,
@@ -49,8 +55,8 @@ def rc_record(t: np.ndarray, force: np.ndarray, dt: float, gain_V_per_N: float, 
     piecewise-linear force), the first ``skip_s`` dropped. Returns time [s], force [N], voltage [V] after the
     skip and the samples dropped.
 
-    The circuit starts in its periodic steady state for the force's first ``period_s`` (the roller-passage
-    period, :func:`roller_passage_period_s`): the sensor of a running bearing has run for a long time, it
+    The circuit starts in its periodic steady state for the force's first ``period_s`` (the roller passage or
+    the cage revolution, :func:`sensor_force_period_s`): the sensor of a running bearing has run for a long time, it
     does not start at rest (:func:`~piezobearing.sensor.calibration.rc_voltage`). What the skip then drops
     is the start of the force model and the start's error where the force is not exactly periodic (slip
     jitter, a defect of another period, a speed ramp), which decays as exp(-t / tau).
@@ -59,8 +65,8 @@ def rc_record(t: np.ndarray, force: np.ndarray, dt: float, gain_V_per_N: float, 
     if skip >= t.size - 8:
         raise SignalFileError(f"{source}: signals.skip_s = {skip_s} s leaves no record; lower it")
     if period_s > (t.size - 1) * dt:
-        raise SignalFileError(f"{source}: the record ({t.size * dt:.4g} s) is shorter than one roller passage "
-                              f"({period_s:.4g} s); lengthen bearing.duration_s")
+        raise SignalFileError(f"{source}: the record ({t.size * dt:.4g} s) is shorter than one period of the "
+                              f"sensor force ({period_s:.4g} s); lengthen bearing.duration_s")
     print(f"sensor_voltage: {t.size} samples, dt = {dt:.6g} s, {skip} dropped; the circuit starts in its "
           f"periodic steady state for the first {period_s:.6g} s", file=sys.stderr)
     v = rc_voltage(force, dt, gain_V_per_N, tau_s, period_s)
@@ -72,14 +78,14 @@ def sensor_voltage(t: np.ndarray, force: np.ndarray, dt: float, circuit: SensorC
     """Rule sensor_voltage_{case}: the sensor force through the calibrated sensor model.
 
     The RC model of Eq. 6 (``circuit``: the fitted or the DAQ's R, the cable) by :func:`rc_record`, started in
-    its periodic steady state for the roller passage (``bearing``), the first ``signals.skip_s`` dropped. ``harmonic``: the sensor FEM's (frequency [Hz], |V/F| [V/N]) where
+    its periodic steady state for the sensor force's period (:func:`sensor_force_period_s`), the first ``signals.skip_s`` dropped. ``harmonic``: the sensor FEM's (frequency [Hz], |V/F| [V/N]) where
     ``signals.sensor_fem_correction``, else None; the voltage is then scaled by the median |H_FEM| / |H_RC|
     below the Nyquist frequency (the FEM is flat there: its first resonance is near 100 kHz). Returns the
     table (time_s, force_N, voltage_V) and the record (voltage_{case}.json without ``source``).
     """
     s = config["signals"]
     t, force, v, skip = rc_record(t, force, dt, circuit.open_circuit_gain_V_per_N, circuit.tau_s, s["skip_s"],
-                                  roller_passage_period_s(config["bearing"]), source)
+                                  sensor_force_period_s(config["bearing"]), source)
     corr = None
     if harmonic is not None:
         f_fem, h_fem = harmonic
