@@ -7,8 +7,12 @@ detector ``detector.analyse_record`` (three fault types, windows, computed
 null distributions) with its null distributions cached (the usual case: one
 record length per run) and cold (first record), and the DAQ's ``sample``
 from 51.2 kHz to 10.24 kHz; the baseline detector ``baseline.detect`` (slip, roller-passage fit,
-harmonic and fold tests) at 2550 Hz and 25.6 kHz with the fit to f_s and to Nyquist (CPU seconds: one BLAS
-thread); the outer-race test alone (``baseline.harmonic_test``) at the free fit's fundamental (the method
+harmonic and fold tests) and ``Baseline.from_record`` at 2550 Hz, 25.6 kHz and 51.2 kHz with the fit to f_s and
+to Nyquist (CPU seconds: one BLAS thread), with today's least squares (``signals/harmonics.py``: the normal
+equations in closed form, Bluestein transforms, Cholesky; since 2026-11-23) and the method before it
+(``old_*``: explicit matrices and pivoted QR, ``harmonics.refine_period_qr``; scipy's CZT and two inverses in
+the outer-race test; kept here for the comparison), their ratio and the indicators' largest relative
+difference; the outer-race test alone (``baseline.harmonic_test``) at the free fit's fundamental (the method
 until 2026-11-22) and with the healthy model's fundamental fitted over the slip window (since 2026-11-23),
 CPU seconds and their ratio. Writes results/benchmarks/detector.json.
 Usage: python benchmarks/bench_detector.py
@@ -27,6 +31,8 @@ from piezobearing.signals import baseline as B
 from piezobearing.signals import daq
 from piezobearing.signals import detection as det
 from piezobearing.signals import detector as D
+from piezobearing.signals import harmonics as H
+from piezobearing.signals.fault_bands import slipped_frequencies
 
 KIN = {"shaft_Hz": 1000 / 60, "ftf_Hz": 0.5 * 1000 / 60 * (1 - 10 / 44)}
 KIN.update(bpfo_Hz=11 * KIN["ftf_Hz"], bpfi_Hz=11 * (KIN["shaft_Hz"] - KIN["ftf_Hz"]),
@@ -38,6 +44,103 @@ def timed(fn, repeat: int) -> float:
     for _ in range(repeat):
         fn()
     return (time.perf_counter() - t0) / repeat
+
+
+def old_harmonic_fit(x, dt_s, f0_Hz, n_harmonics):
+    """``baseline.harmonic_fit`` until 2026-11-23: geometric sums with w ** n, scipy's CZT, LU solve."""
+    from scipy.signal import CZT
+
+    x = np.asarray(x, float)
+    n, kk = x.size, n_harmonics
+    theta = 2.0 * np.pi * f0_Hz * dt_s
+    m = np.arange(0, 2 * kk + 1)
+    w = np.exp(1j * m * theta)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        geo = np.where(np.abs(1.0 - w) > 1e-12, (1.0 - w**n) / (1.0 - w), float(n))
+    sc, ss = geo.real, geo.imag  # sum_i cos(m theta i), sum_i sin(m theta i)
+    k = np.arange(1, kk + 1)
+    km, kp = np.abs(k[:, None] - k[None, :]), k[:, None] + k[None, :]
+    dm = np.sign(k[:, None] - k[None, :])
+    g = np.empty((2 * kk + 1, 2 * kk + 1))
+    g[0, 0] = n
+    g[0, 1::2], g[0, 2::2] = sc[k], ss[k]
+    g[1::2, 0], g[2::2, 0] = sc[k], ss[k]
+    g[1::2, 1::2] = 0.5 * (sc[km] + sc[kp])  # cos_j cos_l
+    g[2::2, 2::2] = 0.5 * (sc[km] - sc[kp])  # sin_j sin_l
+    g[1::2, 2::2] = 0.5 * (ss[kp] - dm * ss[km])  # cos_j sin_l = (sin((j+l)) - sin((j-l)))/2
+    g[2::2, 1::2] = g[1::2, 2::2].T
+    if n * kk > 200_000:  # the chirp z-transform on the lines k f0: O((n + K) log(n + K))
+        d = CZT(n, kk, np.exp(-1j * theta), np.exp(1j * theta))(x)
+    else:  # few lines: K products
+        z = np.exp(-1j * theta * np.arange(n))
+        zk, d = np.ones(n, complex), np.empty(kk, complex)
+        for j in range(kk):
+            zk = zk * z
+            d[j] = zk @ x
+    xt = np.empty(2 * kk + 1)
+    xt[0], xt[1::2], xt[2::2] = x.sum(), d.real, -d.imag
+    return np.linalg.solve(g, xt), g, xt
+
+
+def old_information(gram, sigma, cb, tolerance):
+    """``baseline._information`` until 2026-11-23: two inverses."""
+    cov = sigma**2 * np.linalg.inv(gram)[1:, 1:]
+    if tolerance > 0:
+        cov = cov + np.diag(tolerance**2 * np.repeat(cb[1::2] ** 2 + cb[2::2] ** 2, 2))
+    return np.linalg.inv(cov)
+
+
+@B.one_blas_thread
+def old_from_record(v, dt_s, kinematics, settings):
+    """``Baseline.from_record`` until 2026-11-23 (explicit matrices, pivoted QR)."""
+    s = B.estimate_slip(v, dt_s, kinematics["bpfo_Hz"], settings.slip_max, settings.slip_harmonics)
+    f0, _ = H.refine_period_qr(v, dt_s, slipped_frequencies(kinematics, s)["bpfo_Hz"], settings.alias_folds)
+    a = H.harmonic_matrix(np.size(v), dt_s, f0, H.below_nyquist(dt_s, f0))
+    return B.Baseline(B.slip_of(kinematics, f0), H.lstsq_qr(a, np.asarray(v, float)), dt_s)
+
+
+def old_detect(x, dt_s, kinematics, base, settings):
+    """``baseline.detect`` with the least squares until 2026-11-23 (the module's functions swapped in)."""
+    saved = B.refine_period, B.harmonic_fit, B._information
+    B.refine_period, B.harmonic_fit, B._information = H.refine_period_qr, old_harmonic_fit, old_information
+    try:
+        return B.detect(x, dt_s, kinematics, base, settings)
+    finally:
+        B.refine_period, B.harmonic_fit, B._information = saved
+
+
+def cpu(fn):
+    """(fn's result, its CPU seconds)"""
+    c0 = time.process_time()
+    out = fn()
+    return out, time.process_time() - c0
+
+
+def baseline_rows(fs: float, rng) -> tuple:
+    """The baseline detector old vs new on a 1 s record at ``fs`` (a von Mises roller train, 1.5% slip, 10 dB)."""
+    n = int(fs)
+    t = np.arange(n) / fs
+    v = 96.0 * np.exp(10.0 * (np.cos(2 * np.pi * 0.985 * KIN["bpfo_Hz"] * t) - 1.0))
+    x = v + 11.0 * rng.standard_normal(n)
+    out = {}
+    for folds in (1.0, 0.5):
+        bs = B.BaselineSettings(alias_folds=folds)
+        base, new_b = cpu(lambda bs=bs: B.Baseline.from_record(v, 1 / fs, KIN, bs))
+        _, old_b = cpu(lambda bs=bs: old_from_record(v, 1 / fs, KIN, bs))
+        new, new_s = cpu(lambda bs=bs, base=base: B.detect(x, 1 / fs, KIN, base, bs))
+        old, old_s = cpu(lambda bs=bs, base=base: old_detect(x, 1 / fs, KIN, base, bs))
+        tag = f"alias_folds_{folds:g}"
+        out[f"baseline_cpu_s_{tag}"] = new_s
+        out[f"old_baseline_cpu_s_{tag}"] = old_s
+        out[f"baseline_old_over_new_{tag}"] = old_s / new_s
+        out[f"from_record_cpu_s_{tag}"] = new_b
+        out[f"old_from_record_cpu_s_{tag}"] = old_b
+        out[f"from_record_old_over_new_{tag}"] = old_b / new_b
+        out[f"indicators_{tag}"] = {t: new.per_type[t]["indicator"] for t in new.per_type}
+        out[f"indicators_max_rel_diff_{tag}"] = max(
+            abs(new.per_type[t]["indicator"] - old.per_type[t]["indicator"]) / max(abs(old.per_type[t]["indicator"]), 1.0)
+            for t in new.per_type)
+    return out, x, base
 
 
 def main() -> None:
@@ -59,17 +162,9 @@ def main() -> None:
         }
         out[f"{int(fs)}_Hz"]["search_over_exact"] = (out[f"{int(fs)}_Hz"]["search_cached_s"]
                                                     / out[f"{int(fs)}_Hz"]["exact_bin_s"])
-    for fs in (2550.0, 25600.0):
-        n = int(fs)
-        t = np.arange(n) / fs
-        v = 96.0 * np.exp(10.0 * (np.cos(2 * np.pi * 0.985 * KIN["bpfo_Hz"] * t) - 1.0))
-        x = v + 11.0 * rng.standard_normal(n)
-        for folds in (1.0, 0.5):
-            bs = B.BaselineSettings(alias_folds=folds)
-            base = B.Baseline.from_record(v, 1 / fs, KIN, bs)
-            c0 = time.process_time()
-            B.detect(x, 1 / fs, KIN, base, bs)
-            out[f"{int(fs)}_Hz"][f"baseline_cpu_s_alias_folds_{folds:g}"] = time.process_time() - c0
+    for fs in (2550.0, 25600.0, 51200.0):
+        rows, x, base = baseline_rows(fs, rng)
+        out[f"{int(fs)}_Hz"].update(rows)
         f0, window = 0.985 * KIN["bpfo_Hz"], (0.97 * KIN["bpfo_Hz"], KIN["bpfo_Hz"])
         for name, rng_ in (("fixed_f", None), ("slip_window", window)):
             c0 = time.process_time()

@@ -1,12 +1,14 @@
 """The model-versus-measurement loop on synthetic records with known hidden effects.
 
-Every record is the paper's default synthetic calibration (25 s at 1 kHz,
-13 presses, R = 50 MOhm, 5 mN force noise, 2 mV voltage noise) with effects
-injected through ``synthesis.hidden_effects``. Each hidden value is a
-plausible size for the experiment of Sec. III-B, chosen before looking at
-the diagnosis and stated with its reason below; detection must come from the
-evidence (BIC with the measured noise), with the same settings for every
-effect.
+The record is the CI configuration's synthetic calibration (``config/ci.yaml``: 12 s at 500 Hz, 6 presses,
+seed 7, R = 50 MOhm, 5 mN force noise, 2 mV voltage noise) with effects injected through
+``synthesis.hidden_effects``; three tests keep the paper's default record (25 s at 1 kHz, 13 presses), each
+saying why. Each hidden value is a plausible size for the experiment of Sec. III-B, chosen before looking
+at the diagnosis and stated with its reason below; detection must come from the evidence (BIC with the
+measured noise), with the same settings for every effect. The hidden sizes and every assertion are those
+the tests had on the paper's record (issue 14 moved them to the CI record, about a quarter of the CPU): on
+the CI record each effect is still ranked first and selected, its value within 2.1% (clock drift; the
+others within 0.3%) and inside its interval.
 """
 
 from __future__ import annotations
@@ -48,7 +50,7 @@ _CACHE: dict = {}
 
 def run(config: dict, hidden: list[dict], effects: tuple = (), seed: int | None = None, record=None) -> dict:
     """Synthesize (or take ``record`` = (time, force, voltage)) and diagnose; cached by key."""
-    key = (repr(hidden), effects, seed, None if record is None else id(record))
+    key = (id(config), repr(hidden), effects, seed, None if record is None else id(record))
     if key not in _CACHE:
         c = config
         if record is None:
@@ -88,7 +90,10 @@ def test_fd_weighting_is_parseval():
 
 
 def test_noise_floor_is_measured_in_quiet_stretches(paper_config):
-    """Both channels' white-noise levels within 3% of the truth, also with strong mains lines in the voltage."""
+    """Both channels' white-noise levels within 3% of the truth, also with strong mains lines in the voltage.
+
+    The paper's record (no diagnosis here, 0.04 s): its quiet stretches (over 8 s) hold the 3%; the CI
+    record's (fewer, shorter) give the force's level 4.7% low."""
     c = paper_config
     for hidden in ([], HIDDEN["mains_pickup"][0]):
         m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"], hidden)
@@ -122,27 +127,27 @@ def test_residual_tests_pass_white_noise_and_name_a_tone():
 
 
 @pytest.mark.xdist_group("clean")  # the same diagnosis as another test: one worker computes it
-def test_clean_measurement_selects_nothing(paper_config):
+def test_clean_measurement_selects_nothing(ci_config):
     """The baseline already fits to the noise floor: no false discovery, verdict explained."""
-    d = run(paper_config, [])
+    d = run(ci_config, [])
     assert d["selected"] == []
     assert d["winner"] is None
     assert d["verdict"] == "explained" and d["unexplained"] == []
     assert d["baseline"]["nrmse"] < 1.1 * d["noise_floor_nrmse"]
     assert d["baseline"]["params"]["resistance_ohm"] == pytest.approx(50e6, rel=0.01)
-    assert all(r["delta_bic"] < paper_config["diagnostics"]["min_delta_bic"] for r in d["ranking"])
+    assert all(r["delta_bic"] < ci_config["diagnostics"]["min_delta_bic"] for r in d["ranking"])
 
 
 @pytest.mark.parametrize("seed", [1, 2])
-def test_clean_measurement_selects_nothing_other_seeds(paper_config, seed):
-    d = run(paper_config, [], seed=seed)
+def test_clean_measurement_selects_nothing_other_seeds(ci_config, seed):
+    d = run(ci_config, [], seed=seed)
     assert d["selected"] == [] and d["verdict"] == "explained"
 
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xdist_group(n)) for n in HIDDEN])
-def test_hidden_effect_is_ranked_first_selected_and_explains_the_misfit(paper_config, name):
+def test_hidden_effect_is_ranked_first_selected_and_explains_the_misfit(ci_config, name):
     hidden, pname, truth = HIDDEN[name]
-    d = run(paper_config, hidden)
+    d = run(ci_config, hidden)
     assert d["ranking"][0]["effect"] == name
     assert d["selected"] == [name]
     assert d["winner"]["effect"] == name and d["winner"]["physics"]
@@ -161,19 +166,19 @@ def test_hidden_effect_is_ranked_first_selected_and_explains_the_misfit(paper_co
     assert final["params"]["resistance_ohm"] == pytest.approx(50e6, rel=0.02)
 
 
-def test_two_hidden_effects_are_both_found(paper_config):
+def test_two_hidden_effects_are_both_found(ci_config):
     """A clock offset and a ground loop together (two acquisition devices)."""
     hidden = HIDDEN["channel_delay"][0] + HIDDEN["mains_pickup"][0]
-    d = run(paper_config, hidden)
+    d = run(ci_config, hidden)
     assert set(d["selected"]) == {"channel_delay", "mains_pickup"}
     assert d["verdict"] == "explained"
     assert d["final"]["nrmse"] <= 1.5 * d["final"]["noise_floor_nrmse"]
     assert [s["nrmse"] for s in d["steps"]] == sorted((s["nrmse"] for s in d["steps"]), reverse=True)
 
 
-def test_configured_effect_is_fitted_beside_the_baseline(paper_config):
+def test_configured_effect_is_fitted_beside_the_baseline(ci_config):
     """model.effects = [channel_delay] on a record with that delay: the configured model is at the floor."""
-    d = run(paper_config, HIDDEN["channel_delay"][0], effects=("channel_delay",))
+    d = run(ci_config, HIDDEN["channel_delay"][0], effects=("channel_delay",))
     assert d["configured"]["effects"] == ["channel_delay"]
     assert d["configured"]["nrmse"] <= 1.5 * d["configured"]["noise_floor_nrmse"] < d["baseline"]["nrmse"]
     assert "channel_delay" not in [r["effect"] for r in d["ranking"]]
@@ -203,6 +208,8 @@ _RING: dict = {}
 
 
 def test_effect_outside_the_catalogue_is_unexplained_at_its_frequency(paper_config):
+    """The paper's 25 s record: its spectrum resolves the 35 Hz mode to the "35." the report is asserted to
+    name; on the CI record (12 s, 6 spectral segments) the peak reads 34.19 Hz."""
     rec = _RING.setdefault("r", ringing_record(paper_config))
     d = run(paper_config, [], record=rec)
     assert d["verdict"] == "unexplained"
@@ -215,8 +222,8 @@ def test_effect_outside_the_catalogue_is_unexplained_at_its_frequency(paper_conf
 
 
 @pytest.mark.xdist_group("mains_pickup")  # the same diagnosis as another test: one worker computes it
-def test_diagnosis_json_interface(paper_config):
-    d = run(paper_config, HIDDEN["mains_pickup"][0])
+def test_diagnosis_json_interface(ci_config):
+    d = run(ci_config, HIDDEN["mains_pickup"][0])
     assert {"nrmse", "params"} <= set(d["baseline"])
     assert d["noise_floor_nrmse"] > 0
     for r in d["ranking"]:
@@ -296,13 +303,13 @@ def test_strength_follows_kass_and_raftery():
 
 
 @pytest.mark.xdist_group("extra_capacitance")  # the same diagnosis as another test: one worker computes it
-def test_every_step_names_its_runner_up_and_margin(paper_config):
+def test_every_step_names_its_runner_up_and_margin(ci_config):
     """Hidden 100 pF: the step that adds it names the second-best candidate and the margin over it,
     the margin is the difference of the two BIC drops of the first ranking, and the final fit's
     correlations come from the Jacobian (symmetric, unit diagonal, R and C strongly tied)."""
     from piezobearing.diagnosis.calibration.report import render
 
-    d = run(paper_config, HIDDEN["extra_capacitance"][0])
+    d = run(ci_config, HIDDEN["extra_capacitance"][0])
     idf = d["identifiability"]
     st = idf["steps"][0]
     assert st["added"] == "extra_capacitance" and st["runner_up"] == d["ranking"][1]["effect"]
@@ -320,8 +327,8 @@ def test_every_step_names_its_runner_up_and_margin(paper_config):
 
 
 @pytest.mark.xdist_group("clean")  # the same diagnosis as another test: one worker computes it
-def test_clean_record_says_how_strongly_it_speaks_against_the_best_candidate(paper_config):
-    d = run(paper_config, [])
+def test_clean_record_says_how_strongly_it_speaks_against_the_best_candidate(ci_config):
+    d = run(ci_config, [])
     idf = d["identifiability"]
     assert idf["steps"] == []
     assert idf["stop"]["best"] == d["ranking"][0]["effect"]
@@ -329,14 +336,14 @@ def test_clean_record_says_how_strongly_it_speaks_against_the_best_candidate(pap
     assert list(idf["correlation"]) == ["resistance_ohm"] and idf["correlated_pairs"] == []
 
 
-def test_d33_scale_is_found_as_the_same_record_as_extra_capacitance(paper_config):
+def test_d33_scale_is_found_as_the_same_record_as_extra_capacitance(ci_config):
     """d33 15% below the datasheet (batch tolerance, ageing): the record cannot tell it from 46 pF of
     extra capacitance (C (1/k - 1) at C = 261 pF), so the two tie at the top of the ranking, the
     diagnosis states the exact equivalence, and both fitted values map onto the hidden k."""
     from piezobearing.diagnosis.calibration.report import render
 
     k = CATALOGUE["d33_scale"].example["d33_scale_ratio"]  # 0.85
-    d = run(paper_config, [{"name": "d33_scale", "params": {"d33_scale_ratio": k}}])
+    d = run(ci_config, [{"name": "d33_scale", "params": {"d33_scale_ratio": k}}])
     top = {r["effect"]: r for r in d["ranking"][:2]}
     assert set(top) == {"d33_scale", "extra_capacitance"}
     assert abs(top["d33_scale"]["delta_bic"] - top["extra_capacitance"]["delta_bic"]) < 2.0
@@ -346,17 +353,18 @@ def test_d33_scale_is_found_as_the_same_record_as_extra_capacitance(paper_config
     fit_k = top["d33_scale"]["params"]["d33_scale_ratio"]
     lo, hi = top["d33_scale"]["ci95"]["d33_scale_ratio"]
     assert fit_k == pytest.approx(k, rel=0.01) and lo <= k <= hi
-    c0 = nominal_circuit(paper_config).capacitance_F
+    c0 = nominal_circuit(ci_config).capacitance_F
     assert top["extra_capacitance"]["params"]["extra_capacitance_F"] == pytest.approx(c0 * (1 / k - 1), rel=0.03)
     eq = d["identifiability"]["equivalences"]
     assert eq and set(eq[0]["effects"]) == {"d33_scale", "extra_capacitance"}
     assert "R d33 and d33/C" in eq[0]["statement"] and "R d33 and d33/C" in render(d)
 
 
-def test_clock_drift_is_found_first_with_the_hidden_rate(paper_config):
-    """Two DAQ quartz clocks 100 ppm apart (+-50 ppm each): the offset grows to 2.5 ms over 25 s."""
+def test_clock_drift_is_found_first_with_the_hidden_rate(ci_config):
+    """Two DAQ quartz clocks 100 ppm apart (+-50 ppm each): the offset grows to 1.2 ms over the 12 s record
+    (2.5 ms over the paper's 25 s). Measured on the CI record: 97.9 ppm, interval -6% / +1.8% of the truth."""
     ppm = CATALOGUE["clock_drift"].example["clock_drift_ppm"]  # 100 ppm
-    d = run(paper_config, [{"name": "clock_drift", "params": {"clock_drift_ppm": ppm}}])
+    d = run(ci_config, [{"name": "clock_drift", "params": {"clock_drift_ppm": ppm}}])
     assert d["ranking"][0]["effect"] == "clock_drift" and d["selected"][0] == "clock_drift"
     assert d["verdict"] == "explained"
     est = d["final"]["params"]["clock_drift_ppm"]
@@ -365,11 +373,12 @@ def test_clock_drift_is_found_first_with_the_hidden_rate(paper_config):
     assert d["identifiability"]["steps"][0]["runner_up"] is not None
 
 
-def test_sensitivity_drift_is_found_first_with_the_hidden_slope(paper_config):
-    """A gain rising by 5% over the 25 s record (2e-3 /s; a size chosen to be detectable at this
-    noise, larger than a typical thermal drift over 25 s: say so, not tuned to pass)."""
+def test_sensitivity_drift_is_found_first_with_the_hidden_slope(ci_config):
+    """A gain rising by 2e-3 /s: 2.4% over the 12 s record (5% over the paper's 25 s; a size chosen to be
+    detectable at this noise on the paper's record, larger than a typical thermal drift: say so, not tuned to
+    pass). Measured on the CI record: +1.4% off the truth, interval -1.3% / +4.1%."""
     slope = CATALOGUE["sensitivity_drift"].example["sensitivity_slope_per_s"]  # 2e-3 /s
-    d = run(paper_config, [{"name": "sensitivity_drift", "params": {"sensitivity_slope_per_s": slope}}])
+    d = run(ci_config, [{"name": "sensitivity_drift", "params": {"sensitivity_slope_per_s": slope}}])
     assert d["ranking"][0]["effect"] == "sensitivity_drift" and d["selected"][0] == "sensitivity_drift"
     assert d["verdict"] == "explained"
     est = d["final"]["params"]["sensitivity_slope_per_s"]
@@ -381,7 +390,9 @@ def test_noise_follows_the_signal_through_the_fitted_nonlinear_path(paper_config
     """beta = 5e-3 1/N hidden (+10% sensitivity at 10 N, seed 3): the correct model carries the force noise with
     the gain 1 + 2 beta F(t), so the residual is louder at the press peaks. Whitened with a stationary floor its
     energy in one window on a press's flank is 1.8x the floor and the window test fails (the correct model would
-    be `unexplained`); with the model's noise envelope h(t) (rms 1, largest at the peaks) every test passes."""
+    be `unexplained`); with the model's noise envelope h(t) (rms 1, largest at the peaks) every test passes.
+    The paper's record (one fit, 0.1 s): on the CI record the stationary floor's windows pass too, so the
+    record would not show the envelope's point."""
     from piezobearing.diagnosis.calibration.effects import CATALOGUE
     from piezobearing.diagnosis.calibration.subject import calibration_problem
     from piezobearing.diagnosis.fit import finish, fit_model

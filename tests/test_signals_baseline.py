@@ -225,3 +225,61 @@ def test_detect_reports_per_type_keys_and_refuses_another_clock():
         assert r["threshold"] == pytest.approx(-np.log10(1e-3 / 3))
     with pytest.raises(ValueError, match="step"):
         B.detect(healthy(n), 0.5 * dt, KIN, base, st)
+
+
+def test_fast_roller_passage_fit_equals_the_qr_method():
+    """The normal equations in closed form (signals/harmonics.py) against the explicit matrix and pivoted QR
+    (the method until 2026-11-23), every harmonic to f_s at 25.6 kHz (K = 365, 731 columns): the same
+    Gauss-Newton f0 to 1e-9 Hz and the same periodic part to 1e-10 of the 96 V train; at an f0 with f_s
+    exactly 36 f0 (the paper's 2550 Hz without slip: folded harmonics coincide) the fit is the QR's."""
+    from piezobearing.signals import harmonics as H
+
+    rng = np.random.default_rng(5)
+    for fs, n, slip in ((25600.0, 6000, SLIP), (FS, 2295, 0.0)):
+        v = healthy(n, slip=slip, fs=fs) + 1e-3 * rng.standard_normal(n)
+        f0 = slipped_frequencies(KIN, slip)["bpfo_Hz"] * (1 + 1e-6)
+        fa, pa = H.refine_period(v, 1 / fs, f0)
+        fb, pb = H.refine_period_qr(v, 1 / fs, f0)
+        assert fa == pytest.approx(fb, abs=1e-9)
+        assert np.abs(pa - pb).max() < 1e-10 * 96.0
+    assert H.Harmonics(2295, 1 / FS, FS / 36, H.n_fitted(1 / FS, FS / 36, 1.0)).by_qr
+    assert not H.Harmonics(6000, 1 / 25600.0, 70.0, H.n_fitted(1 / 25600.0, 70.0, 1.0)).by_qr
+
+
+def test_chirp_sum_is_the_dtft():
+    """Bluestein's sum_j u_j exp(2 pi i nu j m) equals the direct sum to 1e-12 of its size."""
+    from piezobearing.signals import harmonics as H
+
+    rng = np.random.default_rng(6)
+    u = rng.standard_normal(3000) + 1j * rng.standard_normal(3000)
+    nu = 0.0027671234
+    m = np.arange(400)
+    direct = np.exp(2j * np.pi * nu * np.outer(m, np.arange(u.size))) @ u
+    assert np.abs(H.chirp_sum(u, nu, m.size) - direct).max() < 1e-12 * np.abs(direct).max()
+
+
+@pytest.mark.parametrize("noise", ["relative_10dB", "daq_3.6e-4V"])
+def test_fast_detector_gives_the_qr_methods_indicators(monkeypatch, noise):
+    """detect with the fast least squares and with the pivoted-QR roller-passage fit (refine_period_qr) and
+    the two-inverse information matrix (until 2026-11-23), on an inner-race record at 25.6 kHz (0.25 s):
+    every type's indicator the same to 1e-6 (relative, or absolute below 1)."""
+    from piezobearing.signals import harmonics as H
+
+    fs, n = 25600.0, 6400
+    dt = 1 / fs
+    st = B.BaselineSettings()
+    h = healthy(n, fs=fs)
+    base = B.Baseline.from_record(h, dt, KIN, st)
+    v = h + impacts("inner_race", n, fs=fs)
+    sigma = np.sqrt(np.mean(h**2) / 10.0) if noise == "relative_10dB" else 3.6e-4
+    x = v + sigma * np.random.default_rng(8).standard_normal(n)
+    new = B.detect(x, dt, KIN, base, st).per_type
+
+    def old_information(gram, sigma, cb, tolerance):
+        return np.linalg.inv(sigma**2 * np.linalg.inv(gram)[1:, 1:])
+
+    monkeypatch.setattr(B, "refine_period", H.refine_period_qr)
+    monkeypatch.setattr(B, "_information", old_information)
+    old = B.detect(x, dt, KIN, base, st).per_type
+    for t in new:
+        assert new[t]["indicator"] == pytest.approx(old[t]["indicator"], rel=1e-6, abs=1e-6), t

@@ -71,6 +71,16 @@ import numpy as np
 from ..threads import one_blas_thread
 from .detector import CLASSIFIED_TYPES
 from .fault_bands import slipped_frequencies
+from .harmonics import (  # noqa: F401 (API)
+    Harmonics,
+    below_nyquist,
+    harmonic_fit,
+    harmonic_matrix,
+    n_fitted,
+    periodic_part,
+    refine_period,
+)
+from .harmonics import lstsq_qr as _lstsq  # noqa: F401 (the tests' reference)
 from .passage import on_passage_clock
 
 #: What fault_indicator.json's detector entries mean with signals.detector.statistic = baseline.
@@ -182,111 +192,6 @@ def estimate_slip(x: np.ndarray, dt_s: float, bpfo0_Hz: float, slip_max: float, 
     return float(r.x) if -r.fun >= best else float(grid[i])
 
 
-def harmonic_matrix(n: int, dt_s: float, f0_Hz: float, n_harmonics: int) -> np.ndarray:
-    """Columns 1, cos(2 pi k f0 t), sin(2 pi k f0 t), k = 1..K, at t = i dt [-]."""
-    t = np.arange(n) * dt_s
-    ph = 2.0 * np.pi * f0_Hz * np.outer(t, np.arange(1, n_harmonics + 1))
-    a = np.empty((n, 2 * n_harmonics + 1))
-    a[:, 0] = 1.0
-    a[:, 1::2] = np.cos(ph)
-    a[:, 2::2] = np.sin(ph)
-    return a
-
-
-def below_nyquist(dt_s: float, f0_Hz: float) -> int:
-    """Harmonics of f0 below 0.999 x the Nyquist frequency [-]."""
-    return max(int(np.floor(0.5 / dt_s / f0_Hz * 0.999)), 1)
-
-
-def periodic_part(x: np.ndarray, dt_s: float, f0_Hz: float, alias_folds: float = 1.0) -> np.ndarray:
-    """The record's f0-periodic part [V]: least squares on every harmonic of f0 up to alias_folds / dt.
-
-    On the sample grid a harmonic above Nyquist is a folded line in the
-    band; near-coincident folds make the matrix ill-conditioned, which the
-    pivoted QR (:func:`_lstsq`) absorbs.
-    """
-    x = np.asarray(x, float)
-    k = max(int(np.floor(alias_folds / dt_s / f0_Hz)), below_nyquist(dt_s, f0_Hz))
-    a = harmonic_matrix(x.size, dt_s, f0_Hz, k)
-    c = _lstsq(a, x)
-    return a @ c
-
-
-def refine_period(x: np.ndarray, dt_s: float, f0_Hz: float, alias_folds: float = 1.0) -> tuple[float, np.ndarray]:
-    """One Gauss-Newton step on f0 of the periodic fit, then the fit: (f0 [Hz], the periodic part [V]).
-
-    The DTFT peak of a few lines is biased by their windows' leakage (a
-    slip error of about 4e-9 leaves 1e-4 V of a 96 V roller train in the
-    residual: structure a DAQ's micro-volt noise does not hide). The
-    periodic model p = A c has dp/df0 = sum_k 2 pi k t (-a_k sin + b_k cos);
-    least squares on [A, dp/df0] gives the frequency step.
-    """
-    x = np.asarray(x, float)
-    k = max(int(np.floor(alias_folds / dt_s / f0_Hz)), below_nyquist(dt_s, f0_Hz))
-    a = harmonic_matrix(x.size, dt_s, f0_Hz, k)
-    c = _lstsq(a, x)
-    t = np.arange(x.size) * dt_s
-    w = 2.0 * np.pi * np.arange(1, k + 1)
-    deriv = t * ((-c[1::2] * w) * a[:, 2::2] + (c[2::2] * w) * a[:, 1::2]).sum(axis=1)
-    step = float(_lstsq(np.column_stack([a, deriv]), x)[-1])
-    if abs(step) < 0.5 / (x.size * dt_s * k):  # within the linear range (half a cycle of the top harmonic over the record)
-        f0_Hz += step
-    a = harmonic_matrix(x.size, dt_s, f0_Hz, k)
-    return f0_Hz, a @ _lstsq(a, x)
-
-
-def harmonic_fit(x: np.ndarray, dt_s: float, f0_Hz: float, n_harmonics: int) -> np.ndarray:
-    """Least squares of ``x`` [V] on :func:`harmonic_matrix`'s columns by the normal equations in closed form:
-    (coefficients c [V], A^T A [-], A^T x [V]); the residual sum of squares is x^T x - c^T A^T x.
-
-    A^T x is the record's DTFT at k f0 (K products of n samples, or a chirp z-transform) and A^T A is
-    made of the sums sum_i cos(m theta i), sum_i sin(m theta i), theta = 2 pi f0 dt, m = 0..2K (geometric
-    sums): O(n K + K^3) instead of the O(n K^2) of a QR of A, so that the
-    outer-race test can evaluate its statistic at many trial f0. Harmonics
-    below Nyquist (:func:`below_nyquist`) keep A^T A well conditioned; the
-    result equals the QR solution to rounding (test).
-    """
-    from scipy.signal import CZT
-
-    x = np.asarray(x, float)
-    n, kk = x.size, n_harmonics
-    theta = 2.0 * np.pi * f0_Hz * dt_s
-    m = np.arange(0, 2 * kk + 1)
-    w = np.exp(1j * m * theta)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        geo = np.where(np.abs(1.0 - w) > 1e-12, (1.0 - w**n) / (1.0 - w), float(n))
-    sc, ss = geo.real, geo.imag  # sum_i cos(m theta i), sum_i sin(m theta i)
-    k = np.arange(1, kk + 1)
-    km, kp = np.abs(k[:, None] - k[None, :]), k[:, None] + k[None, :]
-    dm = np.sign(k[:, None] - k[None, :])
-    g = np.empty((2 * kk + 1, 2 * kk + 1))
-    g[0, 0] = n
-    g[0, 1::2], g[0, 2::2] = sc[k], ss[k]
-    g[1::2, 0], g[2::2, 0] = sc[k], ss[k]
-    g[1::2, 1::2] = 0.5 * (sc[km] + sc[kp])  # cos_j cos_l
-    g[2::2, 2::2] = 0.5 * (sc[km] - sc[kp])  # sin_j sin_l
-    g[1::2, 2::2] = 0.5 * (ss[kp] - dm * ss[km])  # cos_j sin_l = (sin((j+l)) - sin((j-l)))/2
-    g[2::2, 1::2] = g[1::2, 2::2].T
-    if n * kk > 200_000:  # the chirp z-transform on the lines k f0: O((n + K) log(n + K))
-        d = CZT(n, kk, np.exp(-1j * theta), np.exp(1j * theta))(x)
-    else:  # few lines: K products
-        z = np.exp(-1j * theta * np.arange(n))
-        zk, d = np.ones(n, complex), np.empty(kk, complex)
-        for j in range(kk):
-            zk = zk * z
-            d[j] = zk @ x
-    xt = np.empty(2 * kk + 1)
-    xt[0], xt[1::2], xt[2::2] = x.sum(), d.real, -d.imag
-    return np.linalg.solve(g, xt), g, xt
-
-
-def _lstsq(a: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Least squares by pivoted QR (rank-revealing: coincident folded harmonics get the minimum-norm split)."""
-    from scipy.linalg import lstsq
-
-    return lstsq(a, x, cond=1e-10, lapack_driver="gelsy", check_finite=False)[0]
-
-
 def slip_of(kinematics: dict, bpfo_Hz: float) -> float:
     """The cage slip [-] at which BPFO = ``bpfo_Hz`` (clipped to [0, 0.999])."""
     return float(np.clip(1.0 - bpfo_Hz / kinematics["bpfo_Hz"], 0.0, 0.999))
@@ -321,8 +226,7 @@ class Baseline:
         s = estimate_slip(v, dt_s, kinematics["bpfo_Hz"], settings.slip_max, settings.slip_harmonics)
         f0, _ = refine_period(v, dt_s, slipped_frequencies(kinematics, s)["bpfo_Hz"], settings.alias_folds)
         s = slip_of(kinematics, f0)
-        a = harmonic_matrix(np.size(v), dt_s, f0, below_nyquist(dt_s, f0))
-        c = _lstsq(a, np.asarray(v, float))
+        c, _ = Harmonics(np.size(v), dt_s, f0, below_nyquist(dt_s, f0)).fit(np.asarray(v, float))
         return cls(s, c, dt_s)
 
 
@@ -364,10 +268,15 @@ def _rotate(c: np.ndarray, phi) -> np.ndarray:
 
 def _information(gram: np.ndarray, sigma: float, cb: np.ndarray, tolerance: float) -> np.ndarray:
     """Inverse covariance of the harmonic coefficients (the mean marginalised) [1/V^2]:
-    (sigma^2 [(A^T A)^-1]_harmonics + diag(tolerance^2 |c_b,k|^2))^-1."""
-    cov = sigma**2 * np.linalg.inv(gram)[1:, 1:]
-    if tolerance > 0:
-        cov = cov + np.diag(tolerance**2 * np.repeat(cb[1::2] ** 2 + cb[2::2] ** 2, 2))
+    (sigma^2 [(A^T A)^-1]_harmonics + diag(tolerance^2 |c_b,k|^2))^-1.
+
+    [(A^T A)^-1]_hh^-1 is the Schur complement S = G_hh - G_h0 G_0h / G_00 of the mean (no inverse; two
+    inverses of (2K) x (2K) matrices were 1.0 s of the 1.85 s outer-race test at 25.6 kHz); with a
+    ``tolerance``, (sigma^2 S^-1 + D)^-1."""
+    s = gram[1:, 1:] - np.outer(gram[1:, 0], gram[0, 1:]) / gram[0, 0]
+    if tolerance <= 0:
+        return s / sigma**2
+    cov = sigma**2 * np.linalg.inv(s) + np.diag(tolerance**2 * np.repeat(cb[1::2] ** 2 + cb[2::2] ** 2, 2))
     return np.linalg.inv(cov)
 
 
@@ -519,7 +428,7 @@ def _frequency_search(x, dt_s, f0_Hz, f_range_Hz, k, cb, sigma, tolerance, exact
 def _noise_scale(r: np.ndarray, dt_s: float, f0_Hz: float, alias_folds: float) -> float:
     """sigma [V] of the residual ``r`` of the roller-passage fit: 1.4826 MAD x sqrt(n / (n - n_p)) (the residual
     of a least-squares fit of n_p parameters keeps (n - n_p) / n of white noise's variance)."""
-    n_p = 2 * max(int(np.floor(alias_folds / dt_s / f0_Hz)), below_nyquist(dt_s, f0_Hz)) + 1
+    n_p = 2 * n_fitted(dt_s, f0_Hz, alias_folds) + 1
     sigma = robust_sigma(r) * np.sqrt(r.size / max(r.size - n_p, 1))
     if not sigma > 0:
         raise ValueError("the record without its roller-passage part is constant: no noise to scale by")

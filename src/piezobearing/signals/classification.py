@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import baseline as B
+from . import clipped as CL
 from . import daq
 from . import detection as det
 from . import detector as D
@@ -30,7 +31,8 @@ class Analyser:
     ``envelope``: the search detector on the band's envelope spectrum
     (:func:`.detector.analyse_record`); ``baseline``: the roller-passage part
     removed and the record tested against the healthy ``baseline``
-    (:func:`.baseline.detect`).
+    (:func:`.clipped.detect`: :func:`.baseline.detect`, or on a record the ADC clipped, against the clipped
+    healthy record's expectation).
     """
 
     statistic: str
@@ -45,7 +47,7 @@ class Analyser:
             return D.analyse_record(x, dt_s, kinematics, self.envelope_settings, self.settings)[1]
         if self.baseline is None:
             raise ValueError("signals.detector.statistic = baseline needs the healthy record; none was given")
-        return B.detect(x, dt_s, kinematics, self.baseline, self.baseline_settings)
+        return CL.detect(x, dt_s, kinematics, self.baseline, self.baseline_settings)
 
 
 def analyser(sig: dict, kinematics: dict, healthy: tuple[np.ndarray, float] | None) -> Analyser:

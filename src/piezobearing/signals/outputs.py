@@ -20,6 +20,7 @@ from ..io import SignalFileError
 from ..sensor.calibration import SensorCircuit, design_resistance_ohm, frequency_response, rc_voltage
 from . import baseline as sbase
 from . import classification as sclass
+from . import clipped as sclip
 from . import daq
 from . import detection as sig
 from . import detector as sdet
@@ -172,7 +173,7 @@ def fault_indicator(envelopes: dict, kinematics: dict, noisy_records: dict, conf
         r["fault_types"] = {t: dict(v, lines=found["lines"][t]) for t, v in found["per_type"].items()}
         out[case] = r
     out["definition"] = INDICATOR_DEFINITION + "; " + (sdet.DEFINITION if base.statistic == "envelope"
-                                                       else sbase.DEFINITION)
+                                                       else sbase.DEFINITION + "; " + sclip.DEFINITION)
     out["kinematics"] = kinematics
     out["config"] = {"seed": config["seed"], "signals": s}
     return out

@@ -1,0 +1,130 @@
+"""The baseline detector on clipped records (signals/clipped.py).
+
+The clipped normal's mean and variance in closed form against Monte Carlo;
+the noise before the ADC recovered from a clipped record; hide-and-find on
+records the ADC clipped (the healthy bumps of test_signals_baseline, 96 V
+peak to peak, plus 36 V rms of noise over a +-60 V input: about a quarter of
+the samples clipped, the daq_noise study's 1 V/sqrt(Hz) at 2550 Hz), where
+the unclipped detector calls the healthy bearing an outer-race fault; and the
+false-alarm rate of every type's test on clipped healthy records by Monte
+Carlo within its binomial bound.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.stats import binom
+from test_signals_baseline import FS, KIN, healthy, impacts
+
+from piezobearing.signals import baseline as B
+from piezobearing.signals import clipped as CL
+from piezobearing.signals.daq import quantise
+
+SIGMA = 36.0  # V: 1 V/sqrt(Hz) over the 1275 Hz of a 2550 Hz DAQ (35.7 V)
+
+
+def adc(v: np.ndarray, sigma: float, rng: np.random.Generator) -> np.ndarray:
+    """The record through a 24-bit +-60 V ADC after white noise of ``sigma``."""
+    return quantise(v + sigma * rng.standard_normal(v.size), 24, 60.0)[0]
+
+
+@pytest.mark.parametrize("mu", [-80.0, -45.0, 0.0, 30.0, 59.0, 75.0])
+@pytest.mark.parametrize("sigma", [0.0, 5.0, 36.0, 120.0])
+def test_clipped_normal_moments_against_monte_carlo(mu, sigma):
+    """Mean and variance of clip(mu + sigma Z, -60, 60) within 4 standard errors of 400 000 draws (sigma = 0:
+    clip(mu) and 0 exactly); a side left open (hi = inf) is the one-sided clip."""
+    z = np.random.default_rng(3).standard_normal(400_000)
+    for lo, hi in ((-60.0, 60.0), (-60.0, np.inf)):
+        y = np.clip(mu + sigma * z, lo, hi)
+        m, v = CL.clipped_normal_moments(mu, sigma, lo, hi)
+        if sigma == 0:
+            assert m == np.clip(mu, lo, hi) and v == 0.0
+            continue
+        se = np.sqrt(y.var() / y.size)
+        assert abs(m - y.mean()) < 4 * se + 1e-12, (lo, hi)
+        se_v = np.sqrt(np.var((y - y.mean()) ** 2) / y.size)
+        assert abs(v - y.var()) < 4 * se_v + 1e-12, (lo, hi)
+
+
+def test_clip_levels_counts_the_end_codes_only():
+    rng = np.random.default_rng(1)
+    x = rng.standard_normal(5000)
+    assert CL.clip_levels(x) == (-np.inf, np.inf, 0.0)
+    y = adc(40.0 * np.sin(np.arange(5000) * 0.01), 36.0, rng)
+    lo, hi, frac = CL.clip_levels(y)
+    assert lo == pytest.approx(-60.0) and hi == pytest.approx(60.0, abs=1e-5)
+    assert frac == pytest.approx(np.mean((y <= lo) | (y >= hi)))
+    assert 0.1 < frac < 0.4
+
+
+def test_noise_before_the_adc_from_the_clipped_residual():
+    """sigma from the residual's mean square against the clipped normal's variance: within 6% of the true 36 V
+    on five records with a quarter of their samples clipped, where the clipped residual's own rms is lower."""
+    n, dt = 2295, 1 / FS
+    h = healthy(n)
+    st = B.BaselineSettings()
+    base = B.Baseline.from_record(h, dt, KIN, st)
+    rng = np.random.default_rng(11)
+    for _ in range(5):
+        x = adc(h, SIGMA, rng)
+        d = CL.detect(x, dt, KIN, base, st)
+        p = d.per_type["outer_race"]
+        assert 0.15 < p["clipped_fraction"] < 0.35
+        assert p["noise_sigma_V"] == pytest.approx(SIGMA, rel=0.06)
+        assert p["sigma_V"] < 0.9 * SIGMA  # the clipped residual's rms: what the unclipped model would take
+
+
+def test_hide_and_find_on_clipped_records():
+    """A clipped healthy record -> none in 8 of 8 seeds (the unclipped detector: outer race in most of them);
+    a clipped outer-race fault (100 V impacts every passage) -> outer race in 8 of 8."""
+    n, dt = 2295, 1 / FS
+    st = B.BaselineSettings()
+    h = healthy(n)
+    base = B.Baseline.from_record(h, dt, KIN, st)
+    rng = np.random.default_rng(5)
+    got, old = [], []
+    for _ in range(8):
+        x = adc(h, SIGMA, rng)
+        got.append(CL.detect(x, dt, KIN, base, st).fault_type)
+        old.append(B.detect(x, dt, KIN, base, st).fault_type)
+    assert got == ["none"] * 8, got
+    assert old.count("outer_race") >= 6, old  # the bug the clipped model fixes
+    faulty = [CL.detect(adc(h + impacts("outer_race", n), SIGMA, rng), dt, KIN, base, st).fault_type
+              for _ in range(8)]
+    assert faulty == ["outer_race"] * 8, faulty
+
+
+def test_unclipped_records_go_through_the_baseline_detector_unchanged():
+    n, dt = 1200, 1 / FS
+    st = B.BaselineSettings()
+    h = healthy(n)
+    base = B.Baseline.from_record(h, dt, KIN, st)
+    x = h + 3.0 * np.random.default_rng(2).standard_normal(n)
+    a, b = CL.detect(x, dt, KIN, base, st), B.detect(x, dt, KIN, base, st)
+    assert a.fault_type == b.fault_type
+    for t in st.fault_types:
+        assert a.per_type[t]["indicator"] == b.per_type[t]["indicator"]
+        assert a.per_type[t]["clipped_fraction"] == 0.0
+
+
+@pytest.mark.slow
+def test_clipped_false_alarm_rate_by_monte_carlo():
+    """Clipped healthy records (a quarter of the samples clipped): each type's rate of p < 5% within the binomial
+    99.9% interval of 5% (400 records, 1 s at 2550 Hz), and no record called faulty more often than the
+    configured 1e-3 allows (at most the binomial 99.9% quantile)."""
+    n, dt, m = 2550, 1 / FS, 400
+    st = B.BaselineSettings()
+    h = healthy(n)
+    base = B.Baseline.from_record(h, dt, KIN, st)
+    rng = np.random.default_rng(17)
+    p, called = {t: [] for t in st.fault_types}, 0
+    for _ in range(m):
+        d = CL.detect(adc(h, SIGMA, rng), dt, KIN, base, st)
+        called += d.fault_type != "none"
+        for t in st.fault_types:
+            p[t].append(d.per_type[t]["p_value"])
+    lo, hi = binom.ppf([0.0005, 0.9995], m, 0.05) / m
+    for t, v in p.items():
+        assert lo <= np.mean(np.array(v) < 0.05) <= hi, (t, np.mean(np.array(v) < 0.05))
+    assert called <= binom.ppf(0.9995, m, st.false_alarm_probability)
