@@ -90,8 +90,9 @@ DEFINITION = (
     "rest; outer_race: the roller-passage harmonics below Nyquist against the healthy baseline's, aligned in "
     "phase, at the fundamental of the baseline's waveform fitted to the record over the slip window, chi^2 with "
     "2K-1 degrees of freedom; inner_race, rolling_element: the rest over sigma, squared and "
-    "folded on 1/BPFI and 1/(2 BSF), one cell per sample, the smallest cell chi^2 p-value corrected for the "
-    "search over the cells; indicator = -log10 p, threshold = -log10(pfa / n_types), detected = indicator > "
+    "folded on 1/BPFI and 1/(2 BSF), one cell per sample (follow_passage_phase: on the record resampled where its "
+    "roller-passage phase theta is uniform, the inner race on Z f_shaft t - theta), the smallest cell chi^2 "
+    "p-value corrected for the search over the cells; indicator = -log10 p, threshold = -log10(pfa / n_types), detected = indicator > "
     "threshold; fault_type: none if no type is detected, else the detected type of smallest p"
 )
 _FOLD_CARRIER = {"inner_race": "bpfi_Hz", "rolling_element": "2bsf_Hz"}

@@ -9,13 +9,15 @@ longer falls in the same cell of the fold (README, "Slip jitter": the limit lay 
 What. The sensor sees every roller pass, so the record carries its own tachometer: the roller train's
 fundamental. :func:`passage_phase` demodulates the record at the mean BPFO and smooths the product over one
 period twice (a triangle two periods wide: it suppresses the train's harmonics, which land on multiples of
-BPFO); the unwrapped angle is the passage phase theta(t) [cycles] up to a constant. :func:`on_passage_clock`
+BPFO); the unwrapped angle, refined by Gauss-Newton steps on the whole waveform, is the passage phase theta(t)
+[cycles] up to a constant. :func:`on_passage_clock`
 resamples the record at the instants where theta is uniform (the order-tracking step, with the record's own
-phase instead of a shaft encoder's) by a Kaiser-windowed sinc, which keeps white noise white with its variance
-(the sum of the squared weights is 1 to 1e-3 at every fractional position: test). On that clock the roller train
-is periodic again; the outer-race test, the roller-passage fit and the rolling-element fold (2 BSF turns with the
-cage: a fixed multiple of theta) run unchanged, and the inner-race fold follows its own phase, Z f_shaft t -
-theta (the defect turns with the shaft, at constant speed on the record's clock).
+phase instead of a shaft encoder's) by a Kaiser-windowed sinc, which keeps white noise nearly white with its variance (the sum of the squared weights is 1 on the grid and 0.938 half-way between samples: test). On that clock
+the roller train is periodic again: the baseline detector's roller-passage fit and rolling-element fold (2 BSF
+turns with the cage: a fixed multiple of theta) run unchanged, and the inner-race fold follows its own phase,
+Z f_shaft t - theta (the defect turns with the shaft, at constant speed on the record's clock). The outer-race
+test stays on the record's clock (the phase's own noise smears the resampled train: README, "Following the
+passages").
 """
 
 from __future__ import annotations
@@ -47,9 +49,8 @@ def passage_phase(x: np.ndarray, dt_s: float, f0_Hz: float, n_refine: int = 3) -
     First the fundamental's phase: f0 t plus the unwrapped angle of the record demodulated at f0 and smoothed
     over one period twice, over 2 pi. Then ``n_refine`` Gauss-Newton steps with the whole waveform: the train's
     shape w(theta) (least squares on the harmonics of theta below Nyquist, the record's own) and the local
-    shift d theta = S(r w') / S(w'^2), r = x - w(theta), S the same smoothing. The fundamental alone leaves a
-    phase error of 0.01 cycle at the paper's 10 dB, 17 V of a sharp 96 V roller bump at its flanks, twice the
-    noise; the waveform's steep flanks fix the phase about ten times better.
+    shift d theta = S(r w') / S(w'^2), r = x - w(theta), S the same smoothing. On the synthetic 96 V roller
+    bumps at the paper's 10 dB the fundamental alone leaves 0.0105 cycle rms, the waveform 0.0045.
 
     Raises
     ------
