@@ -14,7 +14,9 @@ equations in closed form, Bluestein transforms, Cholesky; since 2026-11-23) and 
 the outer-race test; kept here for the comparison), their ratio and the indicators' largest relative
 difference; the outer-race test alone (``baseline.harmonic_test``) at the free fit's fundamental (the method
 until 2026-11-22) and with the healthy model's fundamental fitted over the slip window (since 2026-11-23),
-CPU seconds and their ratio. Writes results/benchmarks/detector.json.
+CPU seconds and their ratio; a record the +-60 V ADC clips (36 V rms of noise) at 2550 and 10240 Hz through
+``baseline.detect`` and ``clipped.detect`` (the clipped-noise model), CPU seconds and their ratio.
+Writes results/benchmarks/detector.json.
 Usage: python benchmarks/bench_detector.py
 """
 
@@ -28,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from piezobearing.signals import baseline as B
+from piezobearing.signals import clipped as CL
 from piezobearing.signals import daq
 from piezobearing.signals import detection as det
 from piezobearing.signals import detector as D
@@ -173,6 +176,20 @@ def main() -> None:
         r = out[f"{int(fs)}_Hz"]
         r["outer_race_test_slip_window_over_fixed_f"] = r["outer_race_test_cpu_s_slip_window"] / r[
             "outer_race_test_cpu_s_fixed_f"]
+    for fs in (2550.0, 10240.0):  # a record the +-60 V ADC clips (36 V rms of noise): the clipped model's cost
+        n = int(fs)
+        t = np.arange(n) / fs
+        v = 96.0 * np.exp(10.0 * (np.cos(2 * np.pi * 0.985 * KIN["bpfo_Hz"] * t) - 1.0))
+        x = daq.quantise(v - v.mean() + 36.0 * rng.standard_normal(n), 24, 60.0)[0]
+        bs = B.BaselineSettings()
+        base = B.Baseline.from_record(v - v.mean(), 1 / fs, KIN, bs)
+        r = out.setdefault(f"{int(fs)}_Hz", {})
+        for name, fn in (("unclipped_model", B.detect), ("clipped_model", CL.detect)):
+            c0 = time.process_time()
+            fn(x, 1 / fs, KIN, base, bs)
+            r[f"baseline_clipped_record_cpu_s_{name}"] = time.process_time() - c0
+        r["baseline_clipped_record_clipped_over_unclipped_model"] = (
+            r["baseline_clipped_record_cpu_s_clipped_model"] / r["baseline_clipped_record_cpu_s_unclipped_model"])
     x = rng.standard_normal(51200)
     out["daq_sample_51200_to_10240_s"] = timed(lambda: daq.sample(x, 1 / 51200.0, 10240.0), 5)
     path = Path("results/benchmarks/detector.json")

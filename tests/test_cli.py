@@ -149,19 +149,24 @@ def test_diagnose_writes_json_report_and_figures(files, capsys):
         ("missing.yaml", "config file not found"),
     ],
 )
-def test_diagnose_user_errors_are_one_line(files, config, message):
-    r = run_cli(
-        "diagnose",
-        str(files["record"]),
-        "--out",
-        str(files["dir"] / "x"),
-        "--config",
-        str(files["dir"] / config),
-        "--quiet",
+def test_diagnose_user_errors_are_one_line(files, config, message, capsys):
+    """In this process (``main``, as the console script calls it: an exception would fail the test with its
+    traceback); the console script's own process is test_validate_bad_file_is_one_line_without_traceback's."""
+    rc = main(
+        [
+            "diagnose",
+            str(files["record"]),
+            "--out",
+            str(files["dir"] / "x"),
+            "--config",
+            str(files["dir"] / config),
+            "--quiet",
+        ]
     )
-    assert r.returncode == 1
-    assert "Traceback" not in r.stderr
-    assert len(r.stderr.strip().splitlines()) == 1 and message in r.stderr
+    err = capsys.readouterr().err
+    assert rc == 1
+    assert "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1 and message in err
     assert not (files["dir"] / "x" / "diagnosis.json").exists()
 
 

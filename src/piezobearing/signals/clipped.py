@@ -210,7 +210,7 @@ def detect(x: np.ndarray, dt_s: float, kinematics: dict, baseline: B.Baseline,
     s = B.slip_of(kinematics, f0)
     f = slipped_frequencies(kinematics, s)
     r = x - p
-    n_p = 2 * max(int(np.floor(settings.alias_folds / dt_s / f0)), B.below_nyquist(dt_s, f0)) + 1
+    n_p = 2 * B.n_fitted(dt_s, f0, settings.alias_folds) + 1
     scale = np.sqrt(x.size / max(x.size - n_p, 1))
     th = _phase_grid((baseline.coefficients.size - 1) // 2)
     sigma = noise_sigma(float(np.mean(r * r)) * scale**2, waveform(baseline.coefficients, th), lo, hi)
