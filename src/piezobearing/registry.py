@@ -126,6 +126,21 @@ _BEARING = [
     "bearing.substeps",
     "bearing.resample",
 ]
+#: The sensor force's period (signals.outputs.sensor_force_period_s: the bearing's geometry, speed, mean slip and
+#: whether the rollers differ), for which the sensor circuit starts in its periodic steady state.
+_PASSAGE = [
+    "bearing.n_rollers",
+    "bearing.roller_diameter_m",
+    "bearing.pitch_diameter_m",
+    "bearing.roller_length_m",
+    "bearing.radial_clearance_m",
+    "bearing.outer_diameter_m",
+    "bearing.width_m",
+    "bearing.contact_angle_deg",
+    "bearing.shaft_speed_rpm",
+    "bearing.cage_slip",
+    "bearing.roller_diameter_scatter_m",
+]
 
 #: Config keys each rule's stage reads, by rule.
 READS: dict[str, list[str]] = {
@@ -152,7 +167,7 @@ READS: dict[str, list[str]] = {
     "bearing_sampling": ["seed", *_BEARING],
     "scorecard_bearing": _BEARING,
     # signals.smk
-    "sensor_voltage": ["signals.skip_s", "signals.sensor_fem_correction", *_CIRCUIT],
+    "sensor_voltage": ["signals.skip_s", "signals.sensor_fem_correction", *_CIRCUIT, *_PASSAGE],
     "noisy": ["seed", "signals"],  # the DAQ model: sampling, noise (relative at snr_dB, or absolute), ADC
     "envelope": ["signals"],
     "fault_indicator": ["seed", "signals"],

@@ -117,7 +117,8 @@ def design_resistance_ohm(sensor: dict, fitted_ohm: float) -> float:
     return float(fitted_ohm) if r is None else float(r)
 
 
-def rc_voltage(force_N: np.ndarray, dt_s: float, gain_V_per_N: float, tau_s: float) -> np.ndarray:
+def rc_voltage(force_N: np.ndarray, dt_s: float, gain_V_per_N: float, tau_s: float,
+               period_s: float | None = None) -> np.ndarray:
     """Voltage of the first-order high-pass tau dV/dt + V = gain tau dF/dt.
 
     Exact for a force that is piecewise linear between samples: on each step
@@ -125,7 +126,23 @@ def rc_voltage(force_N: np.ndarray, dt_s: float, gain_V_per_N: float, tau_s: flo
 
     .. math::  V_{k+1} = a V_k + g\\,\\frac{\\tau}{h}(1 - a)(F_{k+1} - F_k),\\quad a = e^{-h/\\tau}.
 
-    The system starts at rest (V_0 = 0) with the force at F_0.
+    Parameters
+    ----------
+    force_N : numpy.ndarray
+        Force at the instants k dt [N].
+    dt_s, gain_V_per_N, tau_s : float
+        Step [s], open-circuit gain [V/N] and time constant [s].
+    period_s : float or None
+        None: the circuit starts at rest (V_0 = 0) with the force at F_0, as a
+        circuit switched on with the record (the calibration's hammer records).
+        A period T [s] (at most the record's span (n - 1) dt): the circuit
+        starts in its periodic steady state for the force's first period
+        repeated, as the sensor of a machine that has run for a long time (a
+        running bearing, T its roller-passage period): see
+        :func:`periodic_start_V`. The start is exact for a force of period T;
+        for a nearly periodic one it is wrong by the change of the force's
+        exponentially weighted mean over one period, and that error decays as
+        exp(-t / tau).
     """
     from scipy.signal import lfilter  # here, not at the top: scipy.signal costs 0.6 s of every job's start
 
@@ -133,7 +150,40 @@ def rc_voltage(force_N: np.ndarray, dt_s: float, gain_V_per_N: float, tau_s: flo
     a = np.exp(-dt_s / tau_s)
     b = gain_V_per_N * (tau_s / dt_s) * (-np.expm1(-dt_s / tau_s))
     df = np.diff(f, prepend=f[0])
-    return lfilter([b], [1.0, -a], df)
+    v = lfilter([b], [1.0, -a], df)
+    if period_s is not None:
+        v = v + periodic_start_V(f, v, dt_s, gain_V_per_N, tau_s, period_s) * np.exp(-dt_s * np.arange(f.size) / tau_s)
+    return v
+
+
+def periodic_start_V(force_N: np.ndarray, v_rest_V: np.ndarray, dt_s: float, gain_V_per_N: float, tau_s: float,
+                     period_s: float) -> float:
+    """The voltage V_0 [V] at which the RC circuit starts in its periodic steady state for the force's first period.
+
+    Write V = g (F - u) with tau du/dt + u = F: u is the circuit's state (the
+    charge the resistor has not yet drained, in newtons of force). The response
+    started at rest, ``v_rest_V`` (u(0) = F_0), plus the free decay
+    c exp(-t/tau) is the response from u(0) = F_0 - c/g. The state repeats after
+    one period, u(T) = u(0), when
+
+    .. math::  c = g\\,\\frac{F_0 - u_{rest}(T)}{1 - e^{-T/\\tau}},\\quad u_{rest}(T) = F(T) - V_{rest}(T)/g,
+
+    with V_rest(T) and F(T) evaluated exactly inside the step that holds T (the
+    force is linear there). It is the state, not the voltage, that must repeat:
+    where the force does not repeat exactly (slip jitter, another defect's
+    period, a speed ramp) F(T) differs from F_0 and V jumps with it, u does not.
+    """
+    n = force_N.size
+    if not 0.0 < period_s <= (n - 1) * dt_s * (1 + 1e-12):
+        raise ValueError(f"rc_voltage: period_s = {period_s} s must lie in (0, {(n - 1) * dt_s:.6g}] s (the "
+                         "record's span); lengthen the record or start at rest (period_s None)")
+    m = min(int(np.floor(period_s / dt_s + 1e-9)), n - 1)
+    phi = max(period_s / dt_s - m, 0.0)
+    slope = force_N[m + 1] - force_N[m] if m < n - 1 else 0.0  # F rises by `slope` over the step after t_m
+    q = np.exp(-phi * dt_s / tau_s)
+    v_t = v_rest_V[m] * q + gain_V_per_N * (tau_s / dt_s) * (-np.expm1(-phi * dt_s / tau_s)) * slope
+    u_t = force_N[m] + phi * slope - v_t / gain_V_per_N
+    return float(gain_V_per_N * (force_N[0] - u_t) / -np.expm1(-period_s / tau_s))
 
 
 def circuit_voltage(force_N: np.ndarray, dt_s: float, circuit: SensorCircuit) -> np.ndarray:

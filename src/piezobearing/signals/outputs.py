@@ -16,6 +16,7 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 
+from ..bearing.lpm import BearingGeometry, kinematic_frequencies
 from ..io import SignalFileError
 from ..sensor.calibration import SensorCircuit, design_resistance_ohm, frequency_response, rc_voltage
 from . import baseline as sbase
@@ -35,20 +36,41 @@ def sensor_circuit(config: dict, resistance: dict, source: str = "resistance.jso
     return SensorCircuit.from_config(config["sensor"], design_resistance_ohm(config["sensor"], resistance["resistance_ohm"]))
 
 
+def sensor_force_period_s(bearing: dict) -> float:
+    """The period of the sensor force of a running bearing (``bearing``: the config section) [s].
+
+    The rollers pass the sensor at BPFO (at the mean cage slip, the record's starting speed): with equal rollers
+    the force repeats every passage, 1/BPFO (an outer-race defect's impacts too); with a scatter of the roller
+    diameters (``bearing.roller_diameter_scatter_m`` > 0) each roller loads the sensor differently and the force
+    repeats once the cage has turned once, Z passages (1/FTF). Slip jitter, a speed ramp, an inner-race or a
+    rolling-element defect make the force not quite periodic; the period is then the roller passage's.
+    """
+    geo = BearingGeometry.from_config(bearing)
+    bpfo = kinematic_frequencies(geo, bearing["shaft_speed_rpm"] / 60.0, bearing["cage_slip"]).bpfo_Hz
+    return (geo.n_rollers if bearing["roller_diameter_scatter_m"] > 0 else 1) / bpfo
+
+
 def rc_record(t: np.ndarray, force: np.ndarray, dt: float, gain_V_per_N: float, tau_s: float, skip_s: float,
-              source: str = "the force record") -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+              period_s: float, source: str = "the force record") -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """The force [N] through the RC high-pass of gain ``gain_V_per_N`` and time constant ``tau_s`` (exact for a
-    piecewise-linear force, starting at rest with the force at its first value), the first ``skip_s`` (the
-    circuit's settling) dropped. Returns time [s], force [N], voltage [V] after the skip and the samples dropped.
+    piecewise-linear force), the first ``skip_s`` dropped. Returns time [s], force [N], voltage [V] after the
+    skip and the samples dropped.
+
+    The circuit starts in its periodic steady state for the force's first ``period_s`` (the roller passage or
+    the cage revolution, :func:`sensor_force_period_s`): the sensor of a running bearing has run for a long time, it
+    does not start at rest (:func:`~piezobearing.sensor.calibration.rc_voltage`). What the skip then drops
+    is the start of the force model and the start's error where the force is not exactly periodic (slip
+    jitter, a defect of another period, a speed ramp), which decays as exp(-t / tau).
     """
     skip = int(round(skip_s / dt))
     if skip >= t.size - 8:
         raise SignalFileError(f"{source}: signals.skip_s = {skip_s} s leaves no record; lower it")
-    print(f"sensor_voltage: {t.size} samples, dt = {dt:.6g} s, {skip} dropped", file=sys.stderr)
-    v = rc_voltage(force, dt, gain_V_per_N, tau_s)
-    if skip_s < 5 * tau_s:
-        print(f"sensor_voltage: warning: skip_s = {skip_s} s < 5 tau = {5 * tau_s:.3g} s; "
-              "the circuit's settling stays in the record", file=sys.stderr)
+    if period_s > (t.size - 1) * dt:
+        raise SignalFileError(f"{source}: the record ({t.size * dt:.4g} s) is shorter than one period of the "
+                              f"sensor force ({period_s:.4g} s); lengthen bearing.duration_s")
+    print(f"sensor_voltage: {t.size} samples, dt = {dt:.6g} s, {skip} dropped; the circuit starts in its "
+          f"periodic steady state for the first {period_s:.6g} s", file=sys.stderr)
+    v = rc_voltage(force, dt, gain_V_per_N, tau_s, period_s)
     return t[skip:], force[skip:], v[skip:], skip
 
 
@@ -56,15 +78,15 @@ def sensor_voltage(t: np.ndarray, force: np.ndarray, dt: float, circuit: SensorC
                    source: str = "the force record") -> tuple[pd.DataFrame, dict]:
     """Rule sensor_voltage_{case}: the sensor force through the calibrated sensor model.
 
-    The RC model of Eq. 6 (``circuit``: the fitted or the DAQ's R, the cable) by :func:`rc_record`, the first
-    ``signals.skip_s`` dropped. ``harmonic``: the sensor FEM's (frequency [Hz], |V/F| [V/N]) where
+    The RC model of Eq. 6 (``circuit``: the fitted or the DAQ's R, the cable) by :func:`rc_record`, started in
+    its periodic steady state for the sensor force's period (:func:`sensor_force_period_s`), the first ``signals.skip_s`` dropped. ``harmonic``: the sensor FEM's (frequency [Hz], |V/F| [V/N]) where
     ``signals.sensor_fem_correction``, else None; the voltage is then scaled by the median |H_FEM| / |H_RC|
     below the Nyquist frequency (the FEM is flat there: its first resonance is near 100 kHz). Returns the
     table (time_s, force_N, voltage_V) and the record (voltage_{case}.json without ``source``).
     """
     s = config["signals"]
     t, force, v, skip = rc_record(t, force, dt, circuit.open_circuit_gain_V_per_N, circuit.tau_s, s["skip_s"],
-                                  source)
+                                  sensor_force_period_s(config["bearing"]), source)
     corr = None
     if harmonic is not None:
         f_fem, h_fem = harmonic

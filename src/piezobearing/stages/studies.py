@@ -197,8 +197,8 @@ def sensor_design_case(
        design) scaled by the ratio of this design's load share to the configured one: exact for the
        quasi-static force (the dynamic part is below 1e-4 of it, README), approximate for another contact disk.
     4. Voltage through this design's RC circuit (FEM d33_eff / C and tau, exact for piecewise-linear
-       force), the first ``signals.skip_s`` dropped, sampled by the DAQ at ``signals.sample_rate_Hz`` as the
-       noisy rule does (:func:`piezobearing.signals.daq.sample`); the DAQ's absolute noise and ADC
+       force, started in its periodic steady state for the force's period), the first ``signals.skip_s``
+       dropped, sampled by the DAQ at ``signals.sample_rate_Hz`` as the noisy rule does (:func:`piezobearing.signals.daq.sample`); the DAQ's absolute noise and ADC
        (:func:`noise_settings`); the envelope indicator over ``signals.study_n_seeds`` replicates.
     """
     from ..bearing import transient as brs
@@ -235,7 +235,7 @@ def sensor_design_case(
         t, force, dt = read_series(path, "force_N")
         # the sensor_voltage rule's RC step, with this design's gain and time constant
         v = sout.rc_record(t, force * (share / port["load_share"]), dt, figs["open_circuit_gain_V_per_N"],
-                           figs["tau_s"], sg["skip_s"], path)[2]
+                           figs["tau_s"], sg["skip_s"], sout.sensor_force_period_s(config["bearing"]), path)[2]
         p2p[case] = float(np.ptp(v))
         # the noisy rule's DAQ: anti-alias filter and sampling at signals.sample_rate_Hz (as is on its clock)
         smp = daq.sample(v, dt, sg["sample_rate_Hz"])
