@@ -76,6 +76,8 @@ def test_noise_before_the_adc_from_the_clipped_residual():
         assert p["gain_tolerance_applied"]  # baseline_gain_tolerance 0: gain 1 either way
     loose = B.BaselineSettings(gain_tolerance=0.1)
     assert not CL.detect(x, dt, KIN, base, loose).per_type["outer_race"]["gain_tolerance_applied"]
+    passage = B.BaselineSettings(follow_passage_phase=True)
+    assert not CL.detect(x, dt, KIN, base, passage).per_type["inner_race"]["follow_passage_phase_applied"]
 
 
 def test_hide_and_find_on_clipped_records():
