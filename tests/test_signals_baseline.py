@@ -231,7 +231,7 @@ def test_fast_roller_passage_fit_equals_the_qr_method():
     """The normal equations in closed form (signals/harmonics.py) against the explicit matrix and pivoted QR
     (the method until 2026-11-23), every harmonic to f_s at 25.6 kHz (K = 365, 731 columns): the same
     Gauss-Newton f0 to 1e-9 Hz and the same periodic part to 1e-10 of the 96 V train; at an f0 with f_s
-    exactly 36 f0 (the paper's 2550 Hz without slip: folded harmonics coincide) the fit is the QR's."""
+    exactly 36 f0 (the paper's 2550 Hz without slip: folded harmonics coincide) the fit and step are the QR's."""
     from piezobearing.signals import harmonics as H
 
     rng = np.random.default_rng(5)
@@ -243,6 +243,11 @@ def test_fast_roller_passage_fit_equals_the_qr_method():
         assert fa == pytest.approx(fb, abs=1e-9)
         assert np.abs(pa - pb).max() < 1e-10 * 96.0
     assert H.Harmonics(2295, 1 / FS, FS / 36, H.n_fitted(1 / FS, FS / 36, 1.0)).by_qr
+    # started exactly at f_s / 36 at a DAQ's noise: the QR method's step (the FWL step there was +-3e-3 Hz of noise)
+    f0 = slipped_frequencies(KIN, 0.0)["bpfo_Hz"]
+    for _ in range(5):
+        v = healthy(2295, slip=0.0) + 3.6e-4 * rng.standard_normal(2295)
+        assert H.refine_period(v, 1 / FS, f0)[0] == H.refine_period_qr(v, 1 / FS, f0)[0]
     assert not H.Harmonics(6000, 1 / 25600.0, 70.0, H.n_fitted(1 / 25600.0, 70.0, 1.0)).by_qr
 
 

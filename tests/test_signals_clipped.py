@@ -73,6 +73,11 @@ def test_noise_before_the_adc_from_the_clipped_residual():
         assert 0.15 < p["clipped_fraction"] < 0.35
         assert p["noise_sigma_V"] == pytest.approx(SIGMA, rel=0.06)
         assert p["sigma_V"] < 0.9 * SIGMA  # the clipped residual's rms: what the unclipped model would take
+        assert p["gain_tolerance_applied"]  # baseline_gain_tolerance 0: gain 1 either way
+    loose = B.BaselineSettings(gain_tolerance=0.1)
+    assert not CL.detect(x, dt, KIN, base, loose).per_type["outer_race"]["gain_tolerance_applied"]
+    passage = B.BaselineSettings(follow_passage_phase=True)
+    assert not CL.detect(x, dt, KIN, base, passage).per_type["inner_race"]["follow_passage_phase_applied"]
 
 
 def test_hide_and_find_on_clipped_records():

@@ -159,10 +159,12 @@ def test_healthy_stays_healthy_at_a_daq_noise(tmp_path, inputs, paper_config, mo
     st.classification(volt, inputs["kinematics"], out / "cls.json", out / "cls.csv", out / "roc.csv", cfg)
     seeds = pd.read_csv(out / "cls.csv")
     healthy = seeds[seeds["case"] == "healthy"]
-    # the start's leftover shows in the folds (its cells at phase 0); the outer-race harmonic test is asserted on
-    # seed 0 above only: since 2ddf851 (the closed-form fit) it calls 3 of these 10 healthy records an outer-race
-    # fault (indicator 5-460) at f_s = 36 BPFO exactly; before it, 0 of 10 (reported, not this test's subject)
+    # the start's leftover shows in the folds (its cells at phase 0); the outer-race harmonic test: from 2ddf851
+    # (the closed-form fit) to its fix (refine_period's Gauss-Newton step by QR where the folds coincide, f_s = 36
+    # BPFO exactly) it called 3 of these 10 healthy records an outer-race fault (indicator 5-460); 0 of 10 before
+    # and after
     assert not healthy["inner_race_detected"].any() and not healthy["rolling_element_detected"].any()
+    assert (healthy["fault_type"] == "none").all()
     assert (seeds[seeds["case"] == "faulty"]["fault_type"] == "outer_race").all()
 
     def leftover(d):  # the kept voltage's change over one roller passage (36 steps) at its start [V]

@@ -81,6 +81,7 @@ from .harmonics import (  # noqa: F401 (API)
     refine_period,
 )
 from .harmonics import lstsq_qr as _lstsq  # noqa: F401 (the tests' reference)
+from .passage import on_passage_clock
 
 #: What fault_indicator.json's detector entries mean with signals.detector.statistic = baseline.
 DEFINITION = (
@@ -89,8 +90,9 @@ DEFINITION = (
     "rest; outer_race: the roller-passage harmonics below Nyquist against the healthy baseline's, aligned in "
     "phase, at the fundamental of the baseline's waveform fitted to the record over the slip window, chi^2 with "
     "2K-1 degrees of freedom; inner_race, rolling_element: the rest over sigma, squared and "
-    "folded on 1/BPFI and 1/(2 BSF), one cell per sample, the smallest cell chi^2 p-value corrected for the "
-    "search over the cells; indicator = -log10 p, threshold = -log10(pfa / n_types), detected = indicator > "
+    "folded on 1/BPFI and 1/(2 BSF), one cell per sample (follow_passage_phase: on the record resampled where its "
+    "roller-passage phase theta is uniform, the inner race on Z f_shaft t - theta), the smallest cell chi^2 "
+    "p-value corrected for the search over the cells; indicator = -log10 p, threshold = -log10(pfa / n_types), detected = indicator > "
     "threshold; fault_type: none if no type is detected, else the detected type of smallest p"
 )
 _FOLD_CARRIER = {"inner_race": "bpfi_Hz", "rolling_element": "2bsf_Hz"}
@@ -123,6 +125,10 @@ class BaselineSettings:
         is not. A free gain (tau = inf) was tried and dropped: with the fundamental searched too, a gain below 1
         pays for the drift that attenuates an off-frequency fit, and the search then averages the fault's high
         harmonics away (a synthetic outer-race fault at 10 dB went from q = 921 to 40, 33 degrees of freedom).
+    follow_passage_phase : bool
+        Move the record to its roller-passage clock first (:func:`.passage.on_passage_clock`): for a cage
+        whose slip jitters from passage to passage (README, "Slip jitter"). False: the passages are taken as
+        periodic over the record.
     """
 
     slip_max: float = 0.03
@@ -132,6 +138,7 @@ class BaselineSettings:
     slip_harmonics: int = 3
     tolerance: float = 0.0
     gain_tolerance: float = 0.0
+    follow_passage_phase: bool = False
 
     @property
     def alpha_per_type(self) -> float:
@@ -142,7 +149,8 @@ class BaselineSettings:
     def from_config(cls, sig: dict) -> "BaselineSettings":
         d = sig["detector"]
         return cls(slip_max=d["slip_max"], false_alarm_probability=sig["false_alarm_probability"],
-                   tolerance=d["baseline_tolerance"], gain_tolerance=d["baseline_gain_tolerance"])
+                   tolerance=d["baseline_tolerance"], gain_tolerance=d["baseline_gain_tolerance"],
+                   follow_passage_phase=d["follow_passage_phase"])
 
 
 # --------------------------------------------------------------------------- the roller-passage part
@@ -418,13 +426,25 @@ def _frequency_search(x, dt_s, f0_Hz, f_range_Hz, k, cb, sigma, tolerance, exact
     return f, q, phi
 
 
-def fold_test(z: np.ndarray, dt_s: float, period_s: float) -> dict:
+def _noise_scale(r: np.ndarray, dt_s: float, f0_Hz: float, alias_folds: float) -> float:
+    """sigma [V] of the residual ``r`` of the roller-passage fit: 1.4826 MAD x sqrt(n / (n - n_p)) (the residual
+    of a least-squares fit of n_p parameters keeps (n - n_p) / n of white noise's variance)."""
+    n_p = 2 * n_fitted(dt_s, f0_Hz, alias_folds) + 1
+    sigma = robust_sigma(r) * np.sqrt(r.size / max(r.size - n_p, 1))
+    if not sigma > 0:
+        raise ValueError("the record without its roller-passage part is constant: no noise to scale by")
+    return sigma
+
+
+def fold_test(z: np.ndarray, dt_s: float, period_s: float, phase: np.ndarray | None = None) -> dict:
     """Standardised residual ``z`` folded on ``period_s``: the cell whose sum of z^2 is least likely.
 
     Cell j of the n_c = round(period / dt) cells of the period holds the
-    samples whose phase (i dt / period mod 1) falls in [j, j+1) / n_c; its
-    sum of z^2 is chi^2 with m_j degrees of freedom under white noise. The
-    smallest p-value is corrected for the search over the cells.
+    samples whose phase (i dt / period mod 1, or ``phase`` [cycles] of each
+    sample where given: a fault whose rate is not constant on the record's
+    clock) falls in [j, j+1) / n_c; its sum of z^2 is chi^2 with m_j degrees
+    of freedom under white noise. The smallest p-value is corrected for the
+    search over the cells.
 
     Returns
     -------
@@ -433,7 +453,7 @@ def fold_test(z: np.ndarray, dt_s: float, period_s: float) -> dict:
     """
     z = np.asarray(z, float)
     nc = max(int(round(period_s / dt_s)), 2)
-    phase = np.mod(np.arange(z.size) * (dt_s / period_s), 1.0)
+    phase = np.mod(np.arange(z.size) * (dt_s / period_s) if phase is None else np.asarray(phase, float), 1.0)
     cell = np.minimum((phase * nc).astype(int), nc - 1)
     s = np.bincount(cell, z * z, nc)
     m = np.bincount(cell, None, nc)
@@ -482,21 +502,26 @@ def detect(x: np.ndarray, dt_s: float, kinematics: dict, baseline: Baseline,
     f0, p = refine_period(x, dt_s, slipped_frequencies(kinematics, s)["bpfo_Hz"], settings.alias_folds)
     s = slip_of(kinematics, f0)
     f = slipped_frequencies(kinematics, s)
-    r = x - p
-    # the residual of a least-squares fit of n_p parameters has variance sigma^2 (n - n_p) / n (white noise)
-    n_p = 2 * n_fitted(dt_s, f0, settings.alias_folds) + 1
-    sigma = robust_sigma(r) * np.sqrt(x.size / max(x.size - n_p, 1))
-    if not sigma > 0:
-        raise ValueError("the record without its roller-passage part is constant: no noise to scale by")
-    alpha = settings.alpha_per_type
+    sigma = _noise_scale(x - p, dt_s, f0, settings.alias_folds)
+    z, t_of, f_fold = (x - p) / sigma, None, f
+    if settings.follow_passage_phase:  # the folds on the record's roller-passage clock (module passage)
+        clock = on_passage_clock(x, dt_s, f0)
+        f0_fold, p_fold = refine_period(clock.voltage_V, dt_s, clock.f0_Hz, settings.alias_folds)
+        r = clock.voltage_V - p_fold
+        z, t_of = r / _noise_scale(r, dt_s, f0_fold, settings.alias_folds), clock.time_s
+        f_fold = slipped_frequencies(kinematics, slip_of(kinematics, f0_fold))
     details = {}
     for t in settings.fault_types:
         if t == "outer_race":
             window = (kinematics["bpfo_Hz"] * (1.0 - settings.slip_max), kinematics["bpfo_Hz"])
             details[t] = harmonic_test(x, dt_s, f["bpfo_Hz"], baseline, sigma, settings.tolerance, window,
                                        settings.gain_tolerance)
+        elif t == "inner_race" and t_of is not None:  # the defect turns with the shaft: Z f_shaft t - theta
+            phase = f_fold["bpfo_Hz"] / f_fold["ftf_Hz"] * f["shaft_Hz"] * t_of - f_fold["bpfo_Hz"] * dt_s * np.arange(z.size)
+            details[t] = fold_test(z, dt_s, 1.0 / f_fold["bpfi_Hz"], phase)
         else:
-            details[t] = fold_test(r / sigma, dt_s, 1.0 / f[_FOLD_CARRIER[t]])
+            details[t] = fold_test(z, dt_s, 1.0 / f_fold[_FOLD_CARRIER[t]])
+    alpha = settings.alpha_per_type
     thr = -np.log10(alpha)
     per_type = {}
     for t, d in details.items():

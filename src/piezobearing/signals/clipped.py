@@ -60,7 +60,9 @@ DEFINITION = (
     "normal's variance; outer_race against E[clip(baseline + noise)] (the clipped normal's mean, closed form) with the "
     "harmonics' covariance under the clipped noise's periodic variance, chi^2 with 2K-1 degrees of freedom; "
     "inner_race, rolling_element: the residual over the clipped noise's standard deviation at each sample's "
-    "phase, folded as above; sigma_V: the clipped residual's rms"
+    "phase, folded as above; sigma_V: the clipped residual's rms; the outer-race test's gain is 1 there "
+    "(gain_tolerance_applied false where baseline_gain_tolerance > 0) and the folds on the record's own clock "
+    "(follow_passage_phase_applied false where follow_passage_phase is set)"
 )
 #: Phases per period on which the clipped baseline is evaluated [-] (times the harmonics kept, at least).
 _GRID_PER_HARMONIC = 32
@@ -96,8 +98,11 @@ def clipped_normal_moments(mu, sigma: float, lo: float, hi: float) -> tuple[np.n
 def clip_levels(x: np.ndarray) -> tuple[float, float, float]:
     """The record's clip levels and clipped fraction: (lo [V], hi [V], fraction [-]).
 
-    An extreme counts as an end code when at least two samples sit on it;
-    a side that is not clipped gets -inf (lo) or +inf (hi).
+    An extreme counts as an end code when at least two samples sit on it; a
+    side that is not clipped gets -inf (lo) or +inf (hi). A coarse ADC may
+    repeat an unclipped extreme: the model then clips at a level almost no
+    sample passes, E[clip(b + n)] differs from b by E[(b + n - hi)+], and the
+    tests reduce to the unclipped ones (sigma from the mean square, not the MAD).
     """
     x = np.asarray(x, float)
     lo, hi = float(x.min()), float(x.max())
@@ -194,7 +199,9 @@ def detect(x: np.ndarray, dt_s: float, kinematics: dict, baseline: B.Baseline,
     """:func:`.baseline.detect`, and on a record with clipped samples the clipped-noise model above.
 
     Parameters as :func:`.baseline.detect`. Every type's entry reports ``clipped_fraction`` [-] and, where
-    clipped, ``noise_sigma_V`` (the noise before the ADC) [V] and ``clip_levels_V``.
+    clipped, ``noise_sigma_V`` (the noise before the ADC) [V] and ``clip_levels_V``. A clipped record's folds
+    stay on the record's clock and its outer-race gain at 1: ``follow_passage_phase_applied`` and
+    ``gain_tolerance_applied`` are false where the settings ask for them (not modelled under clipping).
     """
     x = np.asarray(x, float)
     lo, hi, frac = clip_levels(x)
@@ -229,7 +236,8 @@ def detect(x: np.ndarray, dt_s: float, kinematics: dict, baseline: B.Baseline,
         per_type[t] = {"indicator": ind, "threshold": thr, "detected": bool(ind > thr),
                        "p_value": float(10.0 ** -ind), "margin": ind / thr, "slip": s,
                        "sigma_V": outer["residual_sigma_V"], "clipped_fraction": frac, "noise_sigma_V": sigma,
-                       "clip_levels_V": [lo, hi]}
+                       "clip_levels_V": [lo, hi], "gain_tolerance_applied": settings.gain_tolerance == 0,
+                       "follow_passage_phase_applied": not settings.follow_passage_phase}
     hits = [t for t in per_type if per_type[t]["detected"]]
     kind = max(hits, key=lambda t: per_type[t]["indicator"]) if hits else "none"
     return B.BaselineDetection(kind, per_type, details)

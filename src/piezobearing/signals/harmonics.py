@@ -233,16 +233,28 @@ def refine_period(x: np.ndarray, dt_s: float, f0_Hz: float, alias_folds: float =
     periodic model p = A c has d = dp/df0 = sum_k 2 pi k t (-a_k sin + b_k cos);
     the step is the coefficient of d in the least squares on [A, d]:
     <M d, r> / <M d, M d> (Frisch-Waugh-Lovell; M d = d less its own fit).
+    Where the start's fit is ill-posed (:class:`Harmonics` falls back to QR)
+    or |M d|^2 < 1e-6 |d|^2, the whole step is :func:`refine_period_qr`'s:
+    at f_s = 36 f0 exactly (the paper's clock without slip) the FWL step on
+    the minimum-norm split of coincident harmonics was noise (+-0.003 Hz
+    where the QR method's is 2e-8 Hz) and called healthy records at a DAQ's
+    micro-volt noise outer-race faults (3 of 10 seeds,
+    ``tests/test_signals_detector_stages.py``; found by another session on
+    merged main, fixed the same day).
     """
     x = np.asarray(x, float)
     k = n_fitted(dt_s, f0_Hz, alias_folds)
     h = Harmonics(x.size, dt_s, f0_Hz, k)
+    if h.by_qr:  # near-coincident folds: the QR method throughout (its rank cut also decides the step)
+        return refine_period_qr(x, dt_s, f0_Hz, alias_folds)
     c, _ = h.fit(x)
     r = x - h.synth(c)
     d = h.synth_derivative(c)
     md = d - h.synth(h.fit(d)[0])
     den = float(md @ md)
-    step = float(md @ r) / den if den > 0 else 0.0
+    if not den > 1e-6 * float(d @ d):  # d almost in the harmonics' span: the step is ill-posed, as above
+        return refine_period_qr(x, dt_s, f0_Hz, alias_folds)
+    step = float(md @ r) / den
     if abs(step) < 0.5 / (x.size * dt_s * k):  # within the linear range (half a cycle of the top harmonic over the record)
         f0_Hz += step
     h = Harmonics(x.size, dt_s, f0_Hz, k)
