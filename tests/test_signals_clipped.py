@@ -19,6 +19,7 @@ from test_signals_baseline import FS, KIN, healthy, impacts
 
 from piezobearing.signals import baseline as B
 from piezobearing.signals import clipped as CL
+from piezobearing.signals import daq
 from piezobearing.signals.daq import quantise
 
 SIGMA = 36.0  # V: 1 V/sqrt(Hz) over the 1275 Hz of a 2550 Hz DAQ (35.7 V)
@@ -56,6 +57,25 @@ def test_clip_levels_counts_the_end_codes_only():
     assert lo == pytest.approx(-60.0) and hi == pytest.approx(60.0, abs=1e-5)
     assert frac == pytest.approx(np.mean((y <= lo) | (y >= hi)))
     assert 0.1 < frac < 0.4
+
+
+def test_a_known_adc_reads_clipping_at_its_end_codes_only():
+    """At 24 bits over +-60 V (step 7.2 uV) and 0.36 mV of noise, a record whose extreme code two samples share by
+    chance (40 V bumps, far inside the range; 9 of 200 such records) is clipped by the two-samples rule and not at the ADC's end codes; a record
+    that reaches the end codes is clipped by both, with the same fraction."""
+    ends = daq.end_codes_V(daq.NoiseSettings(model="absolute", adc_bits=24, range_V=60.0))
+    assert ends == (-60.0, 60.0 - 120.0 / 2**24, 60.0 / 2**24)
+    rng = np.random.default_rng(2)
+    for _ in range(200):  # a record whose extreme code repeats (9 of these 200 do)
+        y = quantise(healthy(2295, peak_V=40.0) + 3.6e-4 * rng.standard_normal(2295), 24, 60.0)[0]
+        if CL.clip_levels(y)[2] > 0:
+            break
+    else:
+        pytest.fail("no record of 200 repeated an extreme code")
+    assert CL.clip_levels(y)[2] > 0 and CL.clip_levels(y, ends) == (-np.inf, np.inf, 0.0)
+    z = adc(40.0 * np.sin(np.arange(5000) * 0.01), 36.0, rng)
+    assert CL.clip_levels(z, ends)[2] == pytest.approx(CL.clip_levels(z)[2]) and CL.clip_levels(z, ends)[2] > 0.1
+    assert daq.end_codes_V(daq.NoiseSettings()) is None  # the relative model has no ADC
 
 
 def test_noise_before_the_adc_from_the_clipped_residual():

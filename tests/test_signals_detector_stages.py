@@ -147,9 +147,10 @@ def test_healthy_stays_healthy_at_a_daq_noise(tmp_path, inputs, paper_config, mo
         pd.DataFrame({"time_s": np.arange(n) * DT, "force_N": bearing_force(n + shift, imp)[shift:]}).to_csv(
             inputs[case], index=False, float_format="%.10g")
     cfg = copy.deepcopy(paper_config)
-    # 32 bits: no two samples share the record's extreme code by chance, which signals.clipped.clip_levels reads
-    # as clipping (with 24 bits it did so for one healthy seed in ten, and called it an outer-race fault)
-    cfg["signals"]["noise"].update(model="absolute", noise_density_V_per_sqrtHz=1.0e-5, adc_bits=32)
+    # 24 bits (the default): the detector reads clipping at the ADC's end codes (signals.daq.end_codes_V); by the
+    # rule "two samples on the record's extreme" alone, one healthy seed in ten here shared its top code by chance,
+    # was read as clipped and called an outer-race fault
+    cfg["signals"]["noise"].update(model="absolute", noise_density_V_per_sqrtHz=1.0e-5, adc_bits=24)
     cfg["signals"]["study_n_seeds"] = 10
     cfg["signals"]["detector"]["roc_snr_dB"] = []
     out = run_chain(tmp_path, inputs, cfg, harmonic=False)

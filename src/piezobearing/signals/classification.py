@@ -40,6 +40,7 @@ class Analyser:
     settings: D.DetectorSettings
     baseline_settings: B.BaselineSettings
     baseline: B.Baseline | None = None
+    end_codes: tuple[float, float, float] | None = None  # the DAQ's ADC end codes (:func:`.daq.end_codes_V`)
 
     def __call__(self, x: np.ndarray, dt_s: float, kinematics: dict):
         """The detection (``fault_type``, ``per_type``, ``to_dict()``) of record ``x`` [V] at step ``dt_s`` [s]."""
@@ -47,7 +48,7 @@ class Analyser:
             return D.analyse_record(x, dt_s, kinematics, self.envelope_settings, self.settings)[1]
         if self.baseline is None:
             raise ValueError("signals.detector.statistic = baseline needs the healthy record; none was given")
-        return CL.detect(x, dt_s, kinematics, self.baseline, self.baseline_settings)
+        return CL.detect(x, dt_s, kinematics, self.baseline, self.baseline_settings, self.end_codes)
 
 
 def analyser(sig: dict, kinematics: dict, healthy: tuple[np.ndarray, float] | None) -> Analyser:
@@ -60,7 +61,9 @@ def analyser(sig: dict, kinematics: dict, healthy: tuple[np.ndarray, float] | No
     base = None
     if stat == "baseline" and healthy is not None:
         base = B.Baseline.from_record(healthy[0], healthy[1], kinematics, bs)
-    return Analyser(stat, det.EnvelopeSettings.from_config(sig), D.DetectorSettings.from_config(sig), bs, base)
+    ends = daq.end_codes_V(daq.NoiseSettings.from_config(sig)) if "noise" in sig else None
+    return Analyser(stat, det.EnvelopeSettings.from_config(sig), D.DetectorSettings.from_config(sig), bs, base,
+                    ends)
 
 
 def classify_seeds(records: dict, kinematics: dict, analyse: Analyser, noise: daq.NoiseSettings,

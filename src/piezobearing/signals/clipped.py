@@ -95,16 +95,25 @@ def clipped_normal_moments(mu, sigma: float, lo: float, hi: float) -> tuple[np.n
     return m1, np.maximum(m2 - m1 * m1, 0.0)
 
 
-def clip_levels(x: np.ndarray) -> tuple[float, float, float]:
+def clip_levels(x: np.ndarray, end_codes: tuple[float, float, float] | None = None) -> tuple[float, float, float]:
     """The record's clip levels and clipped fraction: (lo [V], hi [V], fraction [-]).
 
-    An extreme counts as an end code when at least two samples sit on it; a
-    side that is not clipped gets -inf (lo) or +inf (hi). A coarse ADC may
-    repeat an unclipped extreme: the model then clips at a level almost no
-    sample passes, E[clip(b + n)] differs from b by E[(b + n - hi)+], and the
-    tests reduce to the unclipped ones (sigma from the mean square, not the MAD).
+    ``end_codes``: the ADC's end codes and half its step, (lo [V], hi [V], q/2 [V]) (:func:`.daq.end_codes_V`),
+    where the DAQ is known: a sample within q/2 of an end code is clipped. Without them an extreme counts as
+    an end code when at least two samples sit on it. That rule misreads a fine ADC: at 24 bits over +-60 V
+    (step 7.2 uV) and 0.36 mV of noise two samples share the record's extreme code in 9 of 200 records of
+    40 V bumps (``tests/test_signals_clipped.py``), and the clipped model called one such healthy record of
+    the stage test an outer-race fault; the workflow passes its ADC's end codes. A side that is not clipped
+    gets -inf (lo) or +inf (hi). A coarse ADC may repeat an unclipped extreme: the model then clips at a
+    level almost no sample passes, E[clip(b + n)] differs from b by E[(b + n - hi)+], and the tests reduce
+    to the unclipped ones (sigma from the mean square, not the MAD).
     """
     x = np.asarray(x, float)
+    if end_codes is not None:
+        e_lo, e_hi, half = end_codes
+        n_lo, n_hi = int(np.count_nonzero(x <= e_lo + half)), int(np.count_nonzero(x >= e_hi - half))
+        lo, hi = (e_lo if n_lo else -np.inf), (e_hi if n_hi else np.inf)
+        return lo, hi, (n_lo + n_hi) / x.size
     lo, hi = float(x.min()), float(x.max())
     n_lo, n_hi = int(np.count_nonzero(x == lo)), int(np.count_nonzero(x == hi))
     lo, n_lo = (lo, n_lo) if n_lo >= 2 else (-np.inf, 0)
@@ -195,16 +204,16 @@ def harmonic_test(x: np.ndarray, dt_s: float, f0_Hz: float, baseline: B.Baseline
 
 @one_blas_thread
 def detect(x: np.ndarray, dt_s: float, kinematics: dict, baseline: B.Baseline,
-           settings: B.BaselineSettings) -> B.BaselineDetection:
+           settings: B.BaselineSettings, end_codes: tuple[float, float, float] | None = None) -> B.BaselineDetection:
     """:func:`.baseline.detect`, and on a record with clipped samples the clipped-noise model above.
 
-    Parameters as :func:`.baseline.detect`. Every type's entry reports ``clipped_fraction`` [-] and, where
+    Parameters as :func:`.baseline.detect`; ``end_codes``: the ADC's, where known (:func:`clip_levels`). Every type's entry reports ``clipped_fraction`` [-] and, where
     clipped, ``noise_sigma_V`` (the noise before the ADC) [V] and ``clip_levels_V``. A clipped record's folds
     stay on the record's clock and its outer-race gain at 1: ``follow_passage_phase_applied`` and
     ``gain_tolerance_applied`` are false where the settings ask for them (not modelled under clipping).
     """
     x = np.asarray(x, float)
-    lo, hi, frac = clip_levels(x)
+    lo, hi, frac = clip_levels(x, end_codes)
     if frac == 0.0:
         d = B.detect(x, dt_s, kinematics, baseline, settings)
         for p in d.per_type.values():

@@ -205,6 +205,15 @@ def quantise(x: np.ndarray, bits: int, range_V: float) -> tuple[np.ndarray, int]
     return np.clip(codes, lo, hi) * q, n_clipped
 
 
+def end_codes_V(settings: NoiseSettings) -> tuple[float, float, float] | None:
+    """The ADC's end codes where a clipped sample sits, and half its step: (lo [V], hi [V], q/2 [V]) of
+    :func:`quantise` for the absolute model; None for the relative model (no ADC: nothing clips)."""
+    if settings.model != "absolute":
+        return None
+    q = 2.0 * settings.range_V / 2.0**settings.adc_bits
+    return -(2 ** (settings.adc_bits - 1)) * q, (2 ** (settings.adc_bits - 1) - 1) * q, 0.5 * q
+
+
 @dataclass(frozen=True)
 class Acquired:
     """A DAQ record and what the DAQ did to it.
