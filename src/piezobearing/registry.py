@@ -95,9 +95,8 @@ _HOUSING_GEOMETRY = [
     "sensor_fem.bottom_disk_diameter_m",
 ]
 
-#: The bearing model (geometry, operation, LPM and its record), without the running-bearing record's keys
-#: (bearing.measurement, channels, wav_full_scale_V: the diagnosis reads those).
-_BEARING = [
+#: The bearing's geometry (BearingGeometry.from_config).
+_GEOMETRY = [
     "bearing.n_rollers",
     "bearing.roller_diameter_m",
     "bearing.pitch_diameter_m",
@@ -106,6 +105,11 @@ _BEARING = [
     "bearing.outer_diameter_m",
     "bearing.width_m",
     "bearing.contact_angle_deg",
+]
+#: The bearing model (geometry, operation, LPM and its record), without the running-bearing record's keys
+#: (bearing.measurement, channels, wav_full_scale_V: the diagnosis reads those).
+_BEARING = [
+    *_GEOMETRY,
     "bearing.shaft_speed_rpm",
     "bearing.radial_load_N",
     "bearing.shaft_mass_kg",
@@ -129,14 +133,7 @@ _BEARING = [
 #: The sensor force's period (signals.outputs.sensor_force_period_s: the bearing's geometry, speed, mean slip and
 #: whether the rollers differ), for which the sensor circuit starts in its periodic steady state.
 _PASSAGE = [
-    "bearing.n_rollers",
-    "bearing.roller_diameter_m",
-    "bearing.pitch_diameter_m",
-    "bearing.roller_length_m",
-    "bearing.radial_clearance_m",
-    "bearing.outer_diameter_m",
-    "bearing.width_m",
-    "bearing.contact_angle_deg",
+    *_GEOMETRY,
     "bearing.shaft_speed_rpm",
     "bearing.cage_slip",
     "bearing.roller_diameter_scatter_m",
