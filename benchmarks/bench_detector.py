@@ -60,18 +60,7 @@ def old_harmonic_fit(x, dt_s, f0_Hz, n_harmonics):
     w = np.exp(1j * m * theta)
     with np.errstate(divide="ignore", invalid="ignore"):
         geo = np.where(np.abs(1.0 - w) > 1e-12, (1.0 - w**n) / (1.0 - w), float(n))
-    sc, ss = geo.real, geo.imag  # sum_i cos(m theta i), sum_i sin(m theta i)
-    k = np.arange(1, kk + 1)
-    km, kp = np.abs(k[:, None] - k[None, :]), k[:, None] + k[None, :]
-    dm = np.sign(k[:, None] - k[None, :])
-    g = np.empty((2 * kk + 1, 2 * kk + 1))
-    g[0, 0] = n
-    g[0, 1::2], g[0, 2::2] = sc[k], ss[k]
-    g[1::2, 0], g[2::2, 0] = sc[k], ss[k]
-    g[1::2, 1::2] = 0.5 * (sc[km] + sc[kp])  # cos_j cos_l
-    g[2::2, 2::2] = 0.5 * (sc[km] - sc[kp])  # sin_j sin_l
-    g[1::2, 2::2] = 0.5 * (ss[kp] - dm * ss[km])  # cos_j sin_l = (sin((j+l)) - sin((j-l)))/2
-    g[2::2, 1::2] = g[1::2, 2::2].T
+    g = H.gram_from_sums(n, geo.real, geo.imag)  # the same assembly; the old sums: w ** n, not reduced
     if n * kk > 200_000:  # the chirp z-transform on the lines k f0: O((n + K) log(n + K))
         d = CZT(n, kk, np.exp(-1j * theta), np.exp(1j * theta))(x)
     else:  # few lines: K products

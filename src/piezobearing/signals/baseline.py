@@ -426,11 +426,44 @@ def _frequency_search(x, dt_s, f0_Hz, f_range_Hz, k, cb, sigma, tolerance, exact
     return f, q, phi
 
 
-def _noise_scale(r: np.ndarray, dt_s: float, f0_Hz: float, alias_folds: float) -> float:
-    """sigma [V] of the residual ``r`` of the roller-passage fit: 1.4826 MAD x sqrt(n / (n - n_p)) (the residual
-    of a least-squares fit of n_p parameters keeps (n - n_p) / n of white noise's variance)."""
+def roller_passage(x: np.ndarray, dt_s: float, kinematics: dict, baseline: Baseline,
+                   settings: BaselineSettings) -> tuple[float, float, np.ndarray, dict]:
+    """Both detectors' first steps on the record ``x`` [V] (:func:`detect`, :func:`.clipped.detect`): its clock
+    checked against the baseline's, the slip from the roller-passage lines, one Gauss-Newton step on BPFO and
+    the periodic part. Returns the slip [-], BPFO [Hz], the periodic part [V] and the fault frequencies at
+    that slip [Hz]."""
+    if abs(dt_s - baseline.dt_s) > 1e-9 * dt_s:
+        raise ValueError(f"the record's step {dt_s:g} s differs from the baseline's {baseline.dt_s:g} s")
+    s = estimate_slip(x, dt_s, kinematics["bpfo_Hz"], settings.slip_max, settings.slip_harmonics)
+    f0, p = refine_period(x, dt_s, slipped_frequencies(kinematics, s)["bpfo_Hz"], settings.alias_folds)
+    s = slip_of(kinematics, f0)
+    return s, f0, p, slipped_frequencies(kinematics, s)
+
+
+def fit_variance_scale(n: int, dt_s: float, f0_Hz: float, alias_folds: float) -> float:
+    """sqrt(n / (n - n_p)) [-]: the residual of a least-squares fit of n_p parameters (the roller-passage
+    fit's) keeps (n - n_p) / n of white noise's variance."""
     n_p = 2 * n_fitted(dt_s, f0_Hz, alias_folds) + 1
-    sigma = robust_sigma(r) * np.sqrt(r.size / max(r.size - n_p, 1))
+    return float(np.sqrt(n / max(n - n_p, 1)))
+
+
+def decide(details: dict, settings: BaselineSettings, common: dict) -> BaselineDetection:
+    """Each type's test result in ``details`` (its ``log10_p``) at alpha = pfa / n_types, with the entries of
+    ``common`` added to each type's; the fault type: the detected type of smallest p, else none."""
+    thr = -np.log10(settings.alpha_per_type)
+    per_type = {}
+    for t, d in details.items():
+        ind = -d["log10_p"]
+        per_type[t] = {"indicator": ind, "threshold": thr, "detected": bool(ind > thr),
+                       "p_value": float(10.0 ** -ind), "margin": ind / thr, **common}
+    hits = [t for t in per_type if per_type[t]["detected"]]
+    kind = max(hits, key=lambda t: per_type[t]["indicator"]) if hits else "none"
+    return BaselineDetection(kind, per_type, details)
+
+
+def _noise_scale(r: np.ndarray, dt_s: float, f0_Hz: float, alias_folds: float) -> float:
+    """sigma [V] of the residual ``r`` of the roller-passage fit: 1.4826 MAD x :func:`fit_variance_scale`."""
+    sigma = robust_sigma(r) * fit_variance_scale(r.size, dt_s, f0_Hz, alias_folds)
     if not sigma > 0:
         raise ValueError("the record without its roller-passage part is constant: no noise to scale by")
     return sigma
@@ -496,12 +529,7 @@ def detect(x: np.ndarray, dt_s: float, kinematics: dict, baseline: Baseline,
     settings : BaselineSettings
     """
     x = np.asarray(x, float)
-    if abs(dt_s - baseline.dt_s) > 1e-9 * dt_s:
-        raise ValueError(f"the record's step {dt_s:g} s differs from the baseline's {baseline.dt_s:g} s")
-    s = estimate_slip(x, dt_s, kinematics["bpfo_Hz"], settings.slip_max, settings.slip_harmonics)
-    f0, p = refine_period(x, dt_s, slipped_frequencies(kinematics, s)["bpfo_Hz"], settings.alias_folds)
-    s = slip_of(kinematics, f0)
-    f = slipped_frequencies(kinematics, s)
+    s, f0, p, f = roller_passage(x, dt_s, kinematics, baseline, settings)
     sigma = _noise_scale(x - p, dt_s, f0, settings.alias_folds)
     z, t_of, f_fold = (x - p) / sigma, None, f
     if settings.follow_passage_phase:  # the folds on the record's roller-passage clock (module passage)
@@ -521,13 +549,4 @@ def detect(x: np.ndarray, dt_s: float, kinematics: dict, baseline: Baseline,
             details[t] = fold_test(z, dt_s, 1.0 / f_fold["bpfi_Hz"], phase)
         else:
             details[t] = fold_test(z, dt_s, 1.0 / f_fold[_FOLD_CARRIER[t]])
-    alpha = settings.alpha_per_type
-    thr = -np.log10(alpha)
-    per_type = {}
-    for t, d in details.items():
-        ind = -d["log10_p"]
-        per_type[t] = {"indicator": ind, "threshold": thr, "detected": bool(ind > thr),
-                       "p_value": float(10.0 ** -ind), "margin": ind / thr, "slip": s, "sigma_V": sigma}
-    hits = [t for t in per_type if per_type[t]["detected"]]
-    kind = max(hits, key=lambda t: per_type[t]["indicator"]) if hits else "none"
-    return BaselineDetection(kind, per_type, details)
+    return decide(details, settings, {"slip": s, "sigma_V": sigma})

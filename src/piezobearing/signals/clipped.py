@@ -51,7 +51,6 @@ import numpy as np
 
 from ..threads import one_blas_thread
 from . import baseline as B
-from .fault_bands import slipped_frequencies
 
 #: What fault_indicator.json's baseline entries add on a clipped record.
 DEFINITION = (
@@ -219,15 +218,9 @@ def detect(x: np.ndarray, dt_s: float, kinematics: dict, baseline: B.Baseline,
         for p in d.per_type.values():
             p["clipped_fraction"] = 0.0
         return d
-    if abs(dt_s - baseline.dt_s) > 1e-9 * dt_s:
-        raise ValueError(f"the record's step {dt_s:g} s differs from the baseline's {baseline.dt_s:g} s")
-    s = B.estimate_slip(x, dt_s, kinematics["bpfo_Hz"], settings.slip_max, settings.slip_harmonics)
-    f0, p = B.refine_period(x, dt_s, slipped_frequencies(kinematics, s)["bpfo_Hz"], settings.alias_folds)
-    s = B.slip_of(kinematics, f0)
-    f = slipped_frequencies(kinematics, s)
+    s, f0, p, f = B.roller_passage(x, dt_s, kinematics, baseline, settings)
     r = x - p
-    n_p = 2 * B.n_fitted(dt_s, f0, settings.alias_folds) + 1
-    scale = np.sqrt(x.size / max(x.size - n_p, 1))
+    scale = B.fit_variance_scale(x.size, dt_s, f0, settings.alias_folds)
     th = _phase_grid((baseline.coefficients.size - 1) // 2)
     sigma = noise_sigma(float(np.mean(r * r)) * scale**2, waveform(baseline.coefficients, th), lo, hi)
     window = (kinematics["bpfo_Hz"] * (1.0 - settings.slip_max), kinematics["bpfo_Hz"])
@@ -238,15 +231,7 @@ def detect(x: np.ndarray, dt_s: float, kinematics: dict, baseline: B.Baseline,
     z = r / np.sqrt(np.maximum(v, 1e-6 * np.mean(v)))  # as the unclipped detector's r / sigma
     details = {t: outer if t == "outer_race" else B.fold_test(z, dt_s, 1.0 / f[B._FOLD_CARRIER[t]])
                for t in settings.fault_types}
-    thr = -np.log10(settings.alpha_per_type)
-    per_type = {}
-    for t, dt_ in details.items():
-        ind = -dt_["log10_p"]
-        per_type[t] = {"indicator": ind, "threshold": thr, "detected": bool(ind > thr),
-                       "p_value": float(10.0 ** -ind), "margin": ind / thr, "slip": s,
-                       "sigma_V": outer["residual_sigma_V"], "clipped_fraction": frac, "noise_sigma_V": sigma,
-                       "clip_levels_V": [lo, hi], "gain_tolerance_applied": settings.gain_tolerance == 0,
-                       "follow_passage_phase_applied": not settings.follow_passage_phase}
-    hits = [t for t in per_type if per_type[t]["detected"]]
-    kind = max(hits, key=lambda t: per_type[t]["indicator"]) if hits else "none"
-    return B.BaselineDetection(kind, per_type, details)
+    return B.decide(details, settings, {
+        "slip": s, "sigma_V": outer["residual_sigma_V"], "clipped_fraction": frac, "noise_sigma_V": sigma,
+        "clip_levels_V": [lo, hi], "gain_tolerance_applied": settings.gain_tolerance == 0,
+        "follow_passage_phase_applied": not settings.follow_passage_phase})

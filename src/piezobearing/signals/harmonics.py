@@ -115,7 +115,13 @@ def gram(n: int, nu: float, n_harmonics: int) -> np.ndarray:
     a, b = frac_cycles(nu, m), frac_cycles(nu, m * n)
     with np.errstate(divide="ignore", invalid="ignore"):
         geo = np.where(a == 0.0, float(n), np.sin(np.pi * b) / np.sin(np.pi * a) * np.exp(1j * np.pi * (b - a)))
-    sc, ss = geo.real, geo.imag  # sum_i cos(2 pi m nu i), sum_i sin(2 pi m nu i)
+    return gram_from_sums(n, geo.real, geo.imag)  # sum_i cos(2 pi m nu i), sum_i sin(2 pi m nu i)
+
+
+def gram_from_sums(n: int, sc: np.ndarray, ss: np.ndarray) -> np.ndarray:
+    """A^T A of :func:`harmonic_matrix` (K harmonics) from the sums sc_m = sum_i cos(m theta i) and
+    ss_m = sum_i sin(m theta i), m = 0..2K, by the product-to-sum identities [-]."""
+    kk = (np.size(sc) - 1) // 2
     k = np.arange(1, kk + 1)
     km, kp = np.abs(k[:, None] - k[None, :]), k[:, None] + k[None, :]
     dm = np.sign(k[:, None] - k[None, :])
