@@ -13,8 +13,10 @@ process's would, and a non-zero exit fails the job. Every child starts from the 
 leak into the next), and the server's hash seed differs from that of every process of another run.
 
 Not the same as a fresh process: a module the job's script does not import itself but the server preloaded is
-there anyway, so a job that forgot an import would pass here; the session's first CI run (``ci_run``) runs every
-job as a fresh process, which catches that. The reproducibility rerun (``ci_rerun``, tests/conftest.py) uses this.
+there anyway, so a job that forgot such an import (an attribute of a package whose submodule it never imported;
+a missing ``import`` of a name fails here as anywhere) would pass here. The README's first command (the whole
+paper) runs every job as a fresh process. The CI workflow run and the reproducibility rerun (``ci_run``,
+``ci_rerun``, tests/conftest.py) use this; the bad-input workflow cases (tests/test_bad_inputs.py) run theirs fresh.
 """
 
 from __future__ import annotations
