@@ -194,6 +194,12 @@ def test_trapezoidal_rule_agrees_with_radau(bcfg):
 
     At the default step (T/36 = 10.9 us) the largest load error, at the
     defect's exit, is below 2% of the peak load, and it falls as h^2.
+
+    The reference at rtol 1e-7, atol 1e-13 m (12k right-hand sides; rtol 1e-9,
+    atol 1e-15 m until 2026-11-23: 36k, 3x the CPU) is within 1.9e-5 N of the
+    rtol-1e-9 one, 1.5e-5 of the smallest error measured here (1.3 N at h/2):
+    both give errors[0] = 1.06% of the peak and the ratio 4.0146, so the check
+    is as strict as before.
     """
     p = _params(bcfg, faulty=True, start_angle_rad=-0.012)
     h = bcfg["time_step_s"] / bcfg["substeps"]
@@ -210,8 +216,8 @@ def test_trapezoidal_rule_agrees_with_radau(bcfg):
                 y0,
                 method="Radau",
                 jac=jac,
-                rtol=1e-9,
-                atol=1e-15,
+                rtol=1e-7,
+                atol=1e-13,
                 t_eval=res.time_s,
                 max_step=h,
             )

@@ -118,6 +118,7 @@ def quasi_static_loads(
     tol_N: float = 1e-9,
     e0_m: np.ndarray | None = None,
     return_offset: bool = False,
+    normals: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> np.ndarray:
     """Roller loads Q (n, Z) [N] of the quasi-static equilibrium at every row of roller angles.
 
@@ -148,24 +149,26 @@ def quasi_static_loads(
         Start offsets (e.g. the healthy equilibrium next to a defect's) [m].
     return_offset : bool
         Also return the shaft offsets e (n, 2) [m].
+    normals : (ndarray, ndarray), optional
+        sin psi and -cos psi when the caller holds them (a table's fixed grid).
     """
     psi = np.atleast_2d(psi_rad)
     drop = np.broadcast_to(drop_m, psi.shape)
-    s, c = _normals(psi)
+    s, c = _normals(psi) if normals is None else normals
     load = np.array([0.0, -radial_load_N])
     n = psi.shape[0]
     e = np.zeros((n, 2))
     e[:, 1] = -(gap_m + drop.max(axis=1) + (radial_load_N / k_contact) ** 0.9)
     if e0_m is not None:
         e = np.array(e0_m, dtype=float).reshape(n, 2)
-    idx = np.arange(n)
-    f, q, dq, pot = _state(e, idx, s, c, drop, gap_m, k_contact, load)
+    f, q, dq, pot = _state(e, ALL, s, c, drop, gap_m, k_contact, load)
     for _ in range(200):
         norm = np.hypot(f[:, 0], f[:, 1])
         active = norm > tol_N * radial_load_N
-        if not active.any():
+        n_active = int(np.count_nonzero(active))
+        if not n_active:
             return (q, e) if return_offset else q
-        idx = np.flatnonzero(active)
+        idx = ALL if n_active == n else np.flatnonzero(active)  # all rows: views, not copies (the same numbers)
         si, ci = s[idx], c[idx]
         a = np.sum(dq[idx] * si * si, 1)
         b = np.sum(dq[idx] * si * ci, 1)
@@ -176,7 +179,7 @@ def quasi_static_loads(
         fy, fz = f[idx, 0], f[idx, 1]
         step = -np.stack([(d * fy - b * fz) / det, (-b * fy + a * fz) / det], 1)
         slope = np.sum(f[idx] * step, 1)  # directional derivative of Pi, < 0
-        lam = np.ones(idx.size)
+        lam = np.ones(n_active)
         for _ in range(60):
             trial = e[idx] + lam[:, None] * step
             ft, qt, dqt, pt = _state(trial, idx, s, c, drop, gap_m, k_contact, load)
@@ -199,8 +202,13 @@ def quasi_static_loads(
     )
 
 
+#: Every row (an index of :func:`_state` and the Newton loop that takes views, not copies).
+ALL = slice(None)
+
+
 def _state(e, idx, s, c, drop, gap_m, k_contact, load):
-    """Force residual, loads, slopes and potential of the rows ``idx`` at offsets e (n_idx, 2)."""
+    """Force residual, loads, slopes and potential of the rows ``idx`` (indices or :data:`ALL`) at offsets e
+    (n_idx, 2)."""
     si, ci = s[idx], c[idx]
     delta = e[:, :1] * si + e[:, 1:] * ci - gap_m - drop[idx]
     q, dq = contact_law(delta, k_contact)
@@ -254,6 +262,9 @@ class Surrogate:
     influence: InfluenceLine
     table_points: int = TABLE_POINTS
     _cache: dict = field(default_factory=dict, compare=False, repr=False, hash=False)
+    #: The healthy table's phase grid: phases, roller angles, their normals and influence (the same at every
+    #: operating point).
+    _grid: dict = field(default_factory=dict, compare=False, repr=False, hash=False)
 
     @property
     def k_contact(self) -> float:
@@ -313,23 +324,33 @@ class Surrogate:
             self._cache.pop(next(iter(self._cache)))
         return out
 
+    def _healthy_grid(self, period: float, m: int) -> tuple:
+        """Phases (m + 1), roller angles, their normals and the influence line at them, kept per grid."""
+        key = (period, m)
+        hit = self._grid.get(key)
+        if hit is None:
+            phi = np.linspace(0.0, period, m + 1)
+            psi = self.roller_angles(phi)
+            hit = (phi, psi, _normals(psi), self.influence(psi))
+            self._grid[key] = hit
+        return hit
+
     def _healthy_table(self, op: Operating, offsets: tuple | None) -> Table:
         z = self.geometry.n_rollers
         period = self.geometry.roller_pitch_rad if offsets is None else 2 * np.pi
         base = np.zeros(z) if offsets is None else np.asarray(offsets)
         # with scatter the table spans a cage turn: a coarser grid, the loads smooth without a groove
         m = self.table_points if offsets is None else SCATTER_POINTS * z
-        phi = np.linspace(0.0, period, m + 1)
-        psi = self.roller_angles(phi)
+        phi, psi, normals, g = self._healthy_grid(period, m)
         e0 = None
         if offsets is not None:  # start from the equal rollers' equilibrium
             ft = self.table(op)
             e0 = np.stack([np.interp(np.mod(phi, ft.period), ft.phase, ft.offset[:, i]) for i in (0, 1)], 1)
         q, e = quasi_static_loads(
             psi, np.broadcast_to(base, psi.shape), op.radial_load_N, 0.5 * op.radial_clearance_m,
-            self.k_contact, e0_m=e0, return_offset=True,
+            self.k_contact, e0_m=e0, return_offset=True, normals=normals,
         )
-        f = np.sum(q * self.influence(psi), axis=1)
+        f = np.sum(q * g, axis=1)
         f[-1] = f[0]
         return Table(f, running_integral(phi, f), period, phi, q > 0, e)
 

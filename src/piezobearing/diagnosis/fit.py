@@ -54,8 +54,8 @@ def fd_weighted(residual_V: np.ndarray, s: np.ndarray) -> np.ndarray:
     w[0] /= np.sqrt(2.0)
     if n % 2 == 0:
         w[-1] /= np.sqrt(2.0)
-        return np.concatenate([(r * w).real, (r[1:-1] * w[1:-1]).imag])
-    return np.concatenate([(r * w).real, (r[1:] * w[1:]).imag])
+    r *= w  # one complex product for the real and the imaginary parts (the same numbers as two)
+    return np.concatenate([r.real, r[1:-1].imag if n % 2 == 0 else r[1:].imag])
 
 
 def whiten(residual_V: np.ndarray, s: np.ndarray) -> np.ndarray:

@@ -54,11 +54,19 @@ def synthesize_bearing_record(influence_csv: str, out_csv: str, config: dict) ->
 
 
 def run(
-    record_path: str, influence: InfluenceLine, config: dict, progress: Callable[[str], None] | None = None
+    record_path: str,
+    influence: InfluenceLine | Callable[[], InfluenceLine],
+    config: dict,
+    progress: Callable[[str], None] | None = None,
 ) -> tuple[dict, dict]:
-    """Diagnose one running-bearing record; returns (JSON-ready dict, arrays)."""
+    """Diagnose one running-bearing record; returns (JSON-ready dict, arrays).
+
+    ``influence`` may be a function that gives the line: it is called after the config and the record
+    were checked, so a bad record or key is reported before the housing is solved (seconds of FEM)."""
     SUBJECT.check_config(config)
     rec = SUBJECT.read(record_path, config)
+    if not isinstance(influence, InfluenceLine):
+        influence = influence()
     d, diag = SUBJECT.diagnose((rec, influence), config, progress)
     out = {"source": rec.source, "record_warnings": list(rec.warnings), **diag}
     used = {k: config[k] for k in CONFIG_KEYS if k in config}
@@ -91,7 +99,7 @@ def diagnose_bearing(
     """Write diagnosis.json, diagnosis.npz, figures/ and report.md into ``out_dir``; returns the dict."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    influence = read_influence(influence_csv) if influence_csv else influence_from_config(config)
+    influence = read_influence(influence_csv) if influence_csv else (lambda: influence_from_config(config))
     diag, arrays = run(record_path, influence, config, progress)
     write_json(diag, out_dir / "diagnosis.json")
     np.savez_compressed(out_dir / "diagnosis.npz", **arrays)
