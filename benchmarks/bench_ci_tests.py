@@ -11,6 +11,12 @@ can run at different times (say so; compare CPU seconds, which a shared machine 
 with every script job a fresh process, and ``tests/warm_jobs.py`` (script jobs forked warm); CPU seconds of each
 and whether the two runs' number files are byte-identical.
 
+``clone``: what CI runs, for each revision: a fresh ``git clone`` of it, then its own ``.ci/run`` (venv, install,
+tests) with ``CI=true``, one revision after the other; ``PYTEST_ADDOPTS`` adds ``--durations=0`` for the per-file
+sums. For each its wall and CPU seconds (the install's and the tests' together, every process waited for), the
+largest process's peak RSS, pytest's own line and seconds, and the per-file sums. Both sides install from the same
+pip cache; run it on an otherwise idle machine (the wall seconds are the target's unit).
+
 ``files``: some test files (default: the tests that start Snakemake besides the CI workflow runs, :data:`FILES`)
 in a detached worktree of each revision, old and new in turn, ``-n`` pairs (default 3; the first pair compiles
 the worktrees' bytecode and is kept apart as the warm-up); CPU and wall seconds of each run, the median of the
@@ -18,7 +24,7 @@ pairs' CPU ratios, each side's pass/fail line, and each test's seconds (setup + 
 
 Writes ``results/benchmarks/ci_tests.json``. Usage:
 ``python benchmarks/bench_ci_tests.py suite --old REV [--new HEAD] [--which both|old|new]``,
-``python benchmarks/bench_ci_tests.py rerun``,
+``python benchmarks/bench_ci_tests.py rerun``, ``python benchmarks/bench_ci_tests.py clone --old REV [--new HEAD]``,
 ``python benchmarks/bench_ci_tests.py files --old REV [--new HEAD] [-n 3] [TEST ...]``.
 """
 
@@ -153,6 +159,33 @@ def files(old: str, new: str, tests: list[str], n: int, tmp: Path) -> dict:
     }
 
 
+def clone(rev: str, tmp: Path) -> dict:
+    """``.ci/run`` with ``CI=true`` in a fresh clone of ``rev``."""
+    sha = subprocess.run(["git", "rev-parse", rev], cwd=ROOT, capture_output=True, text=True, check=True).stdout.strip()
+    work = tmp / f"clone_{sha[:10]}"
+    subprocess.run(["git", "clone", "-q", str(ROOT), str(work)], check=True)
+    subprocess.run(["git", "checkout", "-q", sha], cwd=work, check=True)
+    env = {k: v for k, v in os.environ.items() if k != "VIRTUAL_ENV"}
+    env["PATH"] = os.pathsep.join(p for p in env.get("PATH", "").split(os.pathsep) if Path(p) != BIN)
+    env.update(CI="true", PYTEST_ADDOPTS="--durations=0 -p no:cacheprovider")
+    out, cpu, wall = timed(["/usr/bin/time", "-f", "largest process %M kB", "bash", ".ci/run"], work, env)
+    rss = re.findall(r"largest process (\d+) kB", out.stderr)
+    summary = [ln for ln in out.stdout.splitlines() if re.search(r"\d+ (passed|failed)", ln)]
+    tests_s = re.search(r" in ([\d.]+)s", summary[-1]) if summary else None
+    return {
+        "revision": sha,
+        "returncode": out.returncode,
+        "summary": summary[-1] if summary else out.stdout[-500:] + out.stderr[-1500:],
+        "wall_s": round(wall, 1),
+        "tests_wall_s": float(tests_s.group(1)) if tests_s else None,
+        "cpu_s": round(cpu, 1),
+        "largest_process_GB": round(int(rss[-1]) / 1e6, 2) if rss else None,  # GNU time: the largest of the tree
+        "load_average_after": os.getloadavg(),
+        "per_file_worker_s": {k: round(v, 1) for k, v in per_file(out.stdout).items()},
+        "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
+    }
+
+
 def rerun(tmp: Path) -> dict:
     """The reproducibility rerun, cold and warm, in fresh copies of this checkout, over the first run's targets."""
     sys.path.insert(0, str(ROOT / "tests"))
@@ -185,7 +218,7 @@ def rerun(tmp: Path) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("what", choices=("suite", "rerun", "files"))
+    ap.add_argument("what", choices=("suite", "clone", "rerun", "files"))
     ap.add_argument("tests", nargs="*", help="files: the tests (default: FILES)")
     ap.add_argument("-n", type=int, default=3, help="files: pairs of runs (the first a warm-up)")
     ap.add_argument("--old", default="main")
@@ -201,12 +234,12 @@ def main() -> None:
     else:
         for side in ("old", "new"):
             if a.which in ("both", side):
-                result = suite(a.old if side == "old" else a.new, tmp)
+                result = (suite if a.what == "suite" else clone)(a.old if side == "old" else a.new, tmp)
                 record = json.loads(OUT.read_text()) if OUT.exists() else {}  # another side may have finished
-                record.setdefault("suite", {})[side] = result
+                record.setdefault(a.what, {})[side] = result
                 OUT.parent.mkdir(parents=True, exist_ok=True)
                 OUT.write_text(json.dumps(record, indent=2) + "\n")
-        s = record.setdefault("suite", {})
+        s = record.setdefault(a.what, {})
         if "old" in s and "new" in s:
             s["cpu_ratio_old_over_new"] = round(s["old"]["cpu_s"] / s["new"]["cpu_s"], 2)
             s["wall_ratio_old_over_new"] = round(s["old"]["wall_s"] / s["new"]["wall_s"], 2)

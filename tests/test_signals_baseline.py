@@ -115,9 +115,8 @@ def test_harmonic_test_is_chi_square_under_noise():
     base = B.Baseline.from_record(healthy(n), dt, KIN, B.BaselineSettings())
     f0 = slipped_frequencies(KIN, base.slip)["bpfo_Hz"]
     rng = np.random.default_rng(11)
-    test = B.one_blas_thread(lambda: [B.harmonic_test(healthy(n) + 2.0 * rng.standard_normal(n), dt, f0, base, 2.0)
-                                      for _ in range(m)])
-    res = test()
+    x = np.array([healthy(n) + 2.0 * rng.standard_normal(n) for _ in range(m)])
+    res = B.one_blas_thread(B.harmonic_tests)(x, dt, [f0] * m, [base] * m, [2.0] * m)
     qs, dof = [r["statistic"] for r in res], res[0]["dof"]
     assert dof == 2 * B.below_nyquist(dt, f0) - 1
     lo, hi = binom.ppf([0.0005, 0.9995], m, 0.05) / m
@@ -151,8 +150,8 @@ def test_slip_searched_harmonic_test_threshold_by_monte_carlo():
     rng = np.random.default_rng(12)
     lo, hi = binom.ppf([0.0005, 0.9995], m, 0.05) / m
     for noise in (2.0, np.sqrt(10.0 * np.mean(healthy(n) ** 2))):
-        res = B.one_blas_thread(lambda s: [B.harmonic_test(healthy(n) + s * rng.standard_normal(n), dt, f_true,
-                                                           base, s, 0.0, window) for _ in range(m)])(noise)
+        x = np.array([healthy(n) + noise * rng.standard_normal(n) for _ in range(m)])
+        res = B.one_blas_thread(B.harmonic_tests)(x, dt, [f_true] * m, [base] * m, [noise] * m, 0.0, window)
         q, dof = np.array([r["statistic"] for r in res]), res[0]["dof"]
         assert dof == 2 * B.below_nyquist(dt, window[1]) - 1
         assert lo <= np.mean(q > chi2.ppf(0.95, dof)) <= hi, (noise, np.mean(q > chi2.ppf(0.95, dof)))
@@ -210,7 +209,8 @@ def test_hide_and_find(noise):
     for true in ("none", "outer_race", "inner_race", "rolling_element"):
         v = h + (impacts(true, n) if true != "none" else 0.0)
         sigma = np.sqrt(np.mean(v**2) / 10.0) if noise == "relative_10dB" else 3.6e-4
-        got = [B.detect(v + sigma * rng.standard_normal(n), dt, KIN, base, st).fault_type for _ in range(6)]
+        got = [d.fault_type for d in B.detect_many([v + sigma * rng.standard_normal(n) for _ in range(6)], dt, KIN,
+                                                   base, st)]
         assert got == [true] * 6, (true, got)
 
 
@@ -269,6 +269,7 @@ def test_fast_detector_gives_the_qr_methods_indicators(monkeypatch, noise):
     the two-inverse information matrix (until 2026-11-23), on an inner-race record at 25.6 kHz (0.25 s):
     every type's indicator the same to 1e-6 (relative, or absolute below 1)."""
     from piezobearing.signals import harmonics as H
+    from piezobearing.signals import outer_race as O
 
     fs, n = 25600.0, 6400
     dt = 1 / fs
@@ -284,7 +285,43 @@ def test_fast_detector_gives_the_qr_methods_indicators(monkeypatch, noise):
         return np.linalg.inv(sigma**2 * np.linalg.inv(gram)[1:, 1:])
 
     monkeypatch.setattr(B, "refine_period", H.refine_period_qr)
-    monkeypatch.setattr(B, "_information", old_information)
+    monkeypatch.setattr(O, "_information", old_information)  # the outer-race test's module (outer_race.py)
     old = B.detect(x, dt, KIN, base, st).per_type
     for t in new:
         assert new[t]["indicator"] == pytest.approx(old[t]["indicator"], rel=1e-6, abs=1e-6), t
+
+
+def test_batched_searches_equal_one_by_one():
+    """The outer-race searches stepped together over records (scalar_search.fminbound_many) take scipy's bounded
+    Brent steps problem by problem: the same minima bit for bit as separate scipy calls; detect_many,
+    harmonic_tests and clipped.detect_many give each record's detection exactly as alone."""
+    from scipy.optimize import minimize_scalar
+
+    from piezobearing.signals import clipped as CL
+    from piezobearing.signals.scalar_search import fminbound_many
+
+    rng = np.random.default_rng(9)
+    c, w = rng.uniform(-1.0, 2.0, 60), rng.uniform(0.5, 20.0, 60)
+    lo = rng.uniform(-1.0, 0.0, 60)
+    hi = lo + rng.uniform(0.01, 3.0, 60)
+    tol = 1e-5 * (1 + np.arange(60) % 3)
+    x, fx = fminbound_many(lambda i, v: np.cos(w[i] * v) + (v - c[i]) ** 2, lo, hi, tol)
+    for i in range(60):
+        r = minimize_scalar(lambda v, i=i: np.cos(w[i] * v) + (v - c[i]) ** 2, bounds=(lo[i], hi[i]),
+                            method="bounded", options={"xatol": tol[i]})
+        assert (r.x, r.fun) == (x[i], fx[i])
+    n, dt = 2295, 1 / FS
+    st = B.BaselineSettings()
+    h = healthy(n)
+    base = B.Baseline.from_record(h, dt, KIN, st)
+    xs = [h + impacts(t, n) + 11.0 * rng.standard_normal(n) for t in ("outer_race", "inner_race")]
+    xs.insert(0, h + 11.0 * rng.standard_normal(n))
+    xs.append(np.clip(h + 36.0 * rng.standard_normal(n), -60.0, 60.0))  # clipped: the clipped model
+    assert [d.per_type for d in B.detect_many(xs, dt, KIN, base, st)] == [B.detect(x, dt, KIN, base, st).per_type
+                                                                          for x in xs]
+    assert [d.per_type for d in CL.detect_many(xs, dt, KIN, base, st)] == [CL.detect(x, dt, KIN, base, st).per_type
+                                                                           for x in xs]
+    f0 = slipped_frequencies(KIN, SLIP)["bpfo_Hz"]
+    window = (KIN["bpfo_Hz"] * 0.97, KIN["bpfo_Hz"])
+    many = B.harmonic_tests(np.array(xs[:3]), dt, [f0] * 3, [base] * 3, [11.0] * 3, 0.01, window, 0.05)
+    assert many == [B.harmonic_test(x, dt, f0, base, 11.0, 0.01, window, 0.05) for x in xs[:3]]

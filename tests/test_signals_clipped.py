@@ -108,15 +108,13 @@ def test_hide_and_find_on_clipped_records():
     h = healthy(n)
     base = B.Baseline.from_record(h, dt, KIN, st)
     rng = np.random.default_rng(5)
-    got, old = [], []
-    for _ in range(8):
-        x = adc(h, SIGMA, rng)
-        got.append(CL.detect(x, dt, KIN, base, st).fault_type)
-        old.append(B.detect(x, dt, KIN, base, st).fault_type)
+    xs = [adc(h, SIGMA, rng) for _ in range(8)]
+    got = [d.fault_type for d in CL.detect_many(xs, dt, KIN, base, st)]
+    old = [d.fault_type for d in B.detect_many(xs, dt, KIN, base, st)]
     assert got == ["none"] * 8, got
     assert old.count("outer_race") >= 6, old  # the bug the clipped model fixes
-    faulty = [CL.detect(adc(h + impacts("outer_race", n), SIGMA, rng), dt, KIN, base, st).fault_type
-              for _ in range(8)]
+    faulty = [d.fault_type for d in CL.detect_many([adc(h + impacts("outer_race", n), SIGMA, rng) for _ in range(8)],
+                                                   dt, KIN, base, st)]
     assert faulty == ["outer_race"] * 8, faulty
 
 
@@ -137,15 +135,15 @@ def test_unclipped_records_go_through_the_baseline_detector_unchanged():
 def test_clipped_false_alarm_rate_by_monte_carlo():
     """Clipped healthy records (a quarter of the samples clipped): each type's rate of p < 5% within the binomial
     99.9% interval of 5% (400 records, 1 s at 2550 Hz), and no record called faulty more often than the
-    configured 1e-3 allows (at most the binomial 99.9% quantile)."""
+    configured 1e-3 allows (at most the binomial 99.9% quantile). The records detected together
+    (``detect_many``: each detection the record's alone, the same 400 records and numbers as one by one)."""
     n, dt, m = 2550, 1 / FS, 400
     st = B.BaselineSettings()
     h = healthy(n)
     base = B.Baseline.from_record(h, dt, KIN, st)
     rng = np.random.default_rng(17)
     p, called = {t: [] for t in st.fault_types}, 0
-    for _ in range(m):
-        d = CL.detect(adc(h, SIGMA, rng), dt, KIN, base, st)
+    for d in CL.detect_many([adc(h, SIGMA, rng) for _ in range(m)], dt, KIN, base, st):
         called += d.fault_type != "none"
         for t in st.fault_types:
             p[t].append(d.per_type[t]["p_value"])
@@ -167,8 +165,7 @@ def test_every_fault_type_found_where_its_peaks_clip():
     for true in ("none", "outer_race", "inner_race", "rolling_element"):
         v = h + (impacts(true, n) if true != "none" else 0.0)
         got = []
-        for _ in range(3):
-            d = CL.detect(adc(v, 11.0, rng), dt, KIN, base, st)
+        for d in CL.detect_many([adc(v, 11.0, rng) for _ in range(3)], dt, KIN, base, st):
             assert d.per_type["outer_race"]["clipped_fraction"] > 0.02
             got.append(d.fault_type)
         assert got == [true] * 3, (true, got)

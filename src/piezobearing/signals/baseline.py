@@ -81,6 +81,13 @@ from .harmonics import (  # noqa: F401 (API)
     refine_period,
 )
 from .harmonics import lstsq_qr as _lstsq  # noqa: F401 (the tests' reference)
+from .outer_race import (  # noqa: F401 (API: the outer-race test, moved to its module)
+    _information,
+    _phase_search,
+    harmonic_test,
+    harmonic_tests,
+    log_chi2_sf,
+)
 from .passage import on_passage_clock
 
 #: What fault_indicator.json's detector entries mean with signals.detector.statistic = baseline.
@@ -234,196 +241,11 @@ class Baseline:
 # --------------------------------------------------------------------------- tests
 
 
-def log_chi2_sf(q, dof):
-    """ln P(chi^2_dof > q), with the leading asymptotic term where scipy underflows [-] (arrays too)."""
-    from scipy import stats
-    from scipy.special import gammaln
-
-    q, dof = np.broadcast_arrays(np.asarray(q, float), np.asarray(dof, float))
-    v = np.asarray(stats.chi2.logsf(q, dof), float)
-    bad = ~np.isfinite(v)
-    if bad.any():
-        a = 0.5 * dof[bad]
-        v[bad] = -0.5 * q[bad] + (a - 1.0) * np.log(0.5 * q[bad]) - gammaln(a)
-    return float(v) if v.ndim == 0 else v
-
-
 def _search_corrected(log_p: float, n_tests: int) -> float:
     """ln of 1 - (1 - p)^n for p = e^log_p (the smallest of n independent p-values) [-]."""
     if log_p > -30.0:
         return float(np.log(-np.expm1(n_tests * np.log1p(-np.exp(log_p)))))
     return float(np.log(n_tests) + log_p)
-
-
-def _rotate(c: np.ndarray, phi) -> np.ndarray:
-    """Coefficients of the periodic signal shifted in phase by phi at the fundamental [V] (one row per phi)."""
-    phi = np.atleast_1d(np.asarray(phi, float))[:, None]
-    k = np.arange(1, (c.size - 1) // 2 + 1)[None, :]
-    a, b = c[1::2][None, :], c[2::2][None, :]
-    cos, sin = np.cos(k * phi), np.sin(k * phi)
-    out = np.repeat(c[None, :], phi.shape[0], axis=0)
-    out[:, 1::2] = a * cos - b * sin
-    out[:, 2::2] = a * sin + b * cos
-    return out
-
-
-def _information(gram: np.ndarray, sigma: float, cb: np.ndarray, tolerance: float) -> np.ndarray:
-    """Inverse covariance of the harmonic coefficients (the mean marginalised) [1/V^2]:
-    (sigma^2 [(A^T A)^-1]_harmonics + diag(tolerance^2 |c_b,k|^2))^-1.
-
-    [(A^T A)^-1]_hh^-1 is the Schur complement S = G_hh - G_h0 G_0h / G_00 of the mean (no inverse; two
-    inverses of (2K) x (2K) matrices were 1.0 s of the 1.85 s outer-race test at 25.6 kHz); with a
-    ``tolerance``, (sigma^2 S^-1 + D)^-1."""
-    s = gram[1:, 1:] - np.outer(gram[1:, 0], gram[0, 1:]) / gram[0, 0]
-    if tolerance <= 0:
-        return s / sigma**2
-    cov = sigma**2 * np.linalg.inv(s) + np.diag(tolerance**2 * np.repeat(cb[1::2] ** 2 + cb[2::2] ** 2, 2))
-    return np.linalg.inv(cov)
-
-
-def _phase_search(c: np.ndarray, cb: np.ndarray, info: np.ndarray, gain_tolerance: float = 0.0,
-                  n_phases: int = 512) -> tuple[float, float]:
-    """min over phi (and g) of q = (c - g R(phi) c_b)^T info (c - g R(phi) c_b) + (g - 1)^2 / tau^2: (q, phi).
-
-    tau = ``gain_tolerance``: g = 1 for tau = 0, else the gain that minimises q
-    (a Gaussian prior of standard deviation tau on the baseline's level:
-    q stays chi^2 with the same degrees of freedom). The
-    cross term is a trigonometric polynomial in phi: with the diagonal of
-    ``info`` it is Re sum_k z_k e^{i k phi}, evaluated on ``n_phases`` phases
-    by one FFT (its maximum is the best phase either way); the best phase is
-    then refined on the exact q.
-    """
-    from scipy.optimize import minimize_scalar
-
-    kk = (c.size - 1) // 2
-
-    def q(phi) -> np.ndarray:
-        b = _rotate(cb, phi)[:, 1:]
-        if gain_tolerance <= 0:
-            d = c[None, 1:] - b
-            return np.einsum("pi,ij,pj->p", d, info, d)
-        p = 1.0 / gain_tolerance**2
-        g = (np.einsum("i,ij,pj->p", c[1:], info, b) + p) / (np.einsum("pi,ij,pj->p", b, info, b) + p)
-        d = c[None, 1:] - g[:, None] * b
-        return np.einsum("pi,ij,pj->p", d, info, d) + p * (g - 1.0) ** 2
-
-    w = np.diag(info)[0::2]
-    z = np.zeros(n_phases, complex)
-    z[1:kk + 1] = w * (c[1::2] - 1j * c[2::2]) * np.conj(cb[1::2] - 1j * cb[2::2])
-    cross = np.real(n_phases * np.fft.ifft(z))
-    j = int(np.argmax(cross))
-    h = 2.0 * np.pi / n_phases
-    phi_c = j * h
-    r = minimize_scalar(lambda p: float(q(p)[0]), bounds=(phi_c - h, phi_c + h), method="bounded",
-                        options={"xatol": 1e-6})
-    q_c = float(q(phi_c)[0])
-    return (float(r.fun), float(r.x)) if r.fun < q_c else (q_c, phi_c)
-
-
-def harmonic_test(x: np.ndarray, dt_s: float, f0_Hz: float, baseline: Baseline, sigma: float,
-                  tolerance: float = 0.0, f_range_Hz: tuple[float, float] | None = None,
-                  gain_tolerance: float = 0.0) -> dict:
-    """Roller-passage harmonics of ``x`` against the baseline's (outer-race test).
-
-    q(f, phi) = (c(f) - g R(phi) c_b)^T C^-1 (c(f) - g R(phi) c_b), c(f) the
-    least-squares coefficients of the harmonics k f, k = 1..K below Nyquist,
-    C = sigma^2 [(A^T A)^-1]_harmonics + diag(tolerance^2 |c_b|^2) (the mean
-    marginalised), g = 1 or, with ``gain_tolerance`` tau > 0, fitted with the
-    penalty (g - 1)^2 / tau^2 added (a Gaussian prior on the baseline's
-    level; the degrees of freedom stay), minimised over the phase phi of the
-    roller train. Without ``f_range_Hz``, at f = ``f0_Hz``: under noise alone
-    q ~ chi^2_{2K-1}.
-
-    With ``f_range_Hz`` (the slip window) the fundamental is the healthy
-    model's: f, phi = argmin ||x - mean - A(f) g R(phi) c_b||^2 (the baseline's
-    waveform fitted to the record; in sigma^2 units RSS(f) + q(f, phi), RSS(f)
-    the free harmonic fit's residual at f, by Pythagoras), and q is taken
-    there. It is bounded by the likelihood ratio of the healthy model
-    against the free one (any harmonics, f fitted too), q = LR - (RSS(f) -
-    min RSS) / sigma^2 <= LR ~ chi^2_{2K-1} (Wilks: the search over f is in
-    both models). Two alternatives were measured on the LPM records and
-    dropped (README): f from the free fit alone, whose error inflates q at
-    low SNR (the healthy bearing called faulty in 8 of 50 seeds at -10 dB);
-    and the minimum of q over f, which never exceeds q at the true f but
-    lets the search average the fault's harmonics away (the 0.9 mm
-    outer-race fault at -10 dB detected in 5 of 100 seeds instead of 98).
-
-    The f search: K is fixed by the range's top (:func:`below_nyquist`); a
-    grid with the top harmonic moving a quarter of a bin between nodes, each
-    node scored with the diagonal of A^T A from the record's 16-fold padded
-    FFT (the phase by FFT, :func:`_phase_search`), then the best nodes and
-    the node of ``f0_Hz`` (the free fit's f) refined on the exact misfit
-    (:func:`harmonic_fit`).
-
-    Returns
-    -------
-    dict
-        statistic q, dof, log10_p, phase_rad, f0_Hz (the healthy model's f), n_harmonics K.
-    """
-    x = np.asarray(x, float)
-    kb = (baseline.coefficients.size - 1) // 2
-    f_top = f0_Hz if f_range_Hz is None else f_range_Hz[1]
-    k = min(below_nyquist(dt_s, f_top), kb)
-    cb = baseline.coefficients[: 2 * k + 1]
-    xx = float(x @ x)
-
-    def exact(f: float) -> tuple[float, float, float]:
-        """(min_phi q(f, phi), its phi, RSS(f) / sigma^2)"""
-        c, gram, xt = harmonic_fit(x, dt_s, f, k)
-        q, phi = _phase_search(c, cb, _information(gram, sigma, cb, tolerance), gain_tolerance)
-        return q, phi, (xx - c @ xt) / sigma**2
-
-    if f_range_Hz is None:
-        (val, phi, _), f_best = exact(f0_Hz), f0_Hz
-    else:
-        f_best, val, phi = _frequency_search(x, dt_s, f0_Hz, f_range_Hz, k, cb, sigma, tolerance, exact,
-                                             gain_tolerance)
-    dof = 2 * k - 1
-    return {"statistic": val, "dof": dof, "log10_p": log_chi2_sf(val, dof) / np.log(10.0),
-            "phase_rad": phi, "f0_Hz": f_best, "n_harmonics": k}
-
-
-def _frequency_search(x, dt_s, f0_Hz, f_range_Hz, k, cb, sigma, tolerance, exact, gain_tolerance=0.0, n_refine=3):
-    """The healthy model's fundamental in ``f_range_Hz``, argmin RSS(f) + q(f): (f, q, phi) (:func:`harmonic_test`)."""
-    from scipy.optimize import minimize_scalar
-
-    n = x.size
-    lo, hi = f_range_Hz
-    h = 0.25 / (k * n * dt_s)
-    grid = np.linspace(lo, hi, max(int(np.ceil((hi - lo) / h)), 1) + 1)
-    m = 16 * int(2 ** np.ceil(np.log2(n)))
-    spec = np.fft.rfft(x - x.mean(), m)
-    idx = np.clip(np.rint(np.outer(grid, np.arange(1, k + 1)) * m * dt_s).astype(int), 0, spec.size - 1)
-    coef = 2.0 / n * spec[idx]  # a_k - i b_k at each node, to the padded grid's resolution
-    cbc = cb[1::2] - 1j * cb[2::2]
-    amp2 = np.abs(cbc) ** 2
-    w = 1.0 / (2.0 * sigma**2 / n + tolerance**2 * amp2)
-    p = 512 if k < 64 else 4 * int(2 ** np.ceil(np.log2(k)))
-    z = np.zeros((grid.size, p), complex)
-    z[:, 1:k + 1] = w * coef * np.conj(cbc)
-    cross = np.real(p * np.fft.ifft(z, axis=1)).max(axis=1)
-    if gain_tolerance > 0:  # the gain g = (cross + 1/tau^2) / (sum w |c_b|^2 + 1/tau^2) profiled out
-        pg = 1.0 / gain_tolerance**2
-        q = (w * np.abs(coef) ** 2).sum(axis=1) + pg - (cross + pg) ** 2 / ((w * amp2).sum() + pg)
-    else:
-        q = (w * (np.abs(coef) ** 2 + amp2)).sum(axis=1) - 2.0 * cross
-    score = q - 0.5 * n / sigma**2 * (np.abs(coef) ** 2).sum(axis=1)  # RSS(f) + q, less a constant
-    loc = [i for i in range(grid.size)
-           if score[i] <= score[max(i - 1, 0)] and score[i] <= score[min(i + 1, grid.size - 1)]]
-    starts = sorted(loc, key=lambda i: score[i])[:n_refine] + [int(np.argmin(np.abs(grid - f0_Hz)))]
-    evals = []
-
-    def misfit(f: float) -> float:
-        q, phi, rss = exact(f)
-        evals.append((f, q, phi, rss))
-        return q + rss
-
-    for i in dict.fromkeys(starts):
-        a, b = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
-        minimize_scalar(misfit, bounds=(a, b), method="bounded", options={"xatol": 1e-3 * h})
-        misfit(float(grid[i]))
-    f, q, phi, _ = min(evals, key=lambda e: e[1] + e[3])
-    return f, q, phi
 
 
 def roller_passage(x: np.ndarray, dt_s: float, kinematics: dict, baseline: Baseline,
@@ -512,10 +334,10 @@ class BaselineDetection:
                 "lines": {t: [self.details[t]] for t in self.per_type}}
 
 
-@one_blas_thread
 def detect(x: np.ndarray, dt_s: float, kinematics: dict, baseline: Baseline,
            settings: BaselineSettings) -> BaselineDetection:
-    """Test every fault type of ``settings`` in the record ``x`` [V] against the healthy ``baseline``.
+    """Test every fault type of ``settings`` in the record ``x`` [V] against the healthy ``baseline``
+    (:func:`detect_many` of one record).
 
     Parameters
     ----------
@@ -528,7 +350,33 @@ def detect(x: np.ndarray, dt_s: float, kinematics: dict, baseline: Baseline,
     baseline : Baseline
     settings : BaselineSettings
     """
-    x = np.asarray(x, float)
+    return detect_many([x], dt_s, kinematics, baseline, settings)[0]
+
+
+@one_blas_thread
+def detect_many(records, dt_s: float, kinematics: dict, baseline: Baseline,
+                settings: BaselineSettings) -> list[BaselineDetection]:
+    """:func:`detect` of each record of ``records`` (a sequence, or the rows of an array) [V]; the outer-race tests
+    of records of one length run together (:func:`.outer_race.harmonic_tests`), the rest record by record. Each
+    detection is the record's alone (tests)."""
+    xs = [np.asarray(x, float) for x in records]
+    parts = [_front(x, dt_s, kinematics, baseline, settings) for x in xs]
+    outer: list = [None] * len(xs)
+    if "outer_race" in settings.fault_types:
+        window = (kinematics["bpfo_Hz"] * (1.0 - settings.slip_max), kinematics["bpfo_Hz"])
+        for n in dict.fromkeys(x.size for x in xs):
+            rows = [i for i, x in enumerate(xs) if x.size == n]
+            res = harmonic_tests(np.array([xs[i] for i in rows]), dt_s, [parts[i][1]["bpfo_Hz"] for i in rows],
+                                 [baseline] * len(rows), [parts[i][2] for i in rows], settings.tolerance, window,
+                                 settings.gain_tolerance)
+            for i, d in zip(rows, res, strict=True):
+                outer[i] = d
+    return [_decide_types(part, o, kinematics, dt_s, settings) for part, o in zip(parts, outer, strict=True)]
+
+
+def _front(x: np.ndarray, dt_s: float, kinematics: dict, baseline: Baseline, settings: BaselineSettings) -> tuple:
+    """A record's steps before the tests: (slip, fault frequencies, sigma [V], z, its clock or None, the
+    folds' fault frequencies)."""
     s, f0, p, f = roller_passage(x, dt_s, kinematics, baseline, settings)
     sigma = _noise_scale(x - p, dt_s, f0, settings.alias_folds)
     z, t_of, f_fold = (x - p) / sigma, None, f
@@ -538,12 +386,17 @@ def detect(x: np.ndarray, dt_s: float, kinematics: dict, baseline: Baseline,
         r = clock.voltage_V - p_fold
         z, t_of = r / _noise_scale(r, dt_s, f0_fold, settings.alias_folds), clock.time_s
         f_fold = slipped_frequencies(kinematics, slip_of(kinematics, f0_fold))
+    return s, f, sigma, z, t_of, f_fold
+
+
+def _decide_types(part: tuple, outer: dict | None, kinematics: dict, dt_s: float,
+                  settings: BaselineSettings) -> BaselineDetection:
+    """Every type's test of one record (the outer race's given) and the decision."""
+    s, f, sigma, z, t_of, f_fold = part
     details = {}
     for t in settings.fault_types:
         if t == "outer_race":
-            window = (kinematics["bpfo_Hz"] * (1.0 - settings.slip_max), kinematics["bpfo_Hz"])
-            details[t] = harmonic_test(x, dt_s, f["bpfo_Hz"], baseline, sigma, settings.tolerance, window,
-                                       settings.gain_tolerance)
+            details[t] = outer
         elif t == "inner_race" and t_of is not None:  # the defect turns with the shaft: Z f_shaft t - theta
             phase = f_fold["bpfo_Hz"] / f_fold["ftf_Hz"] * f["shaft_Hz"] * t_of - f_fold["bpfo_Hz"] * dt_s * np.arange(z.size)
             details[t] = fold_test(z, dt_s, 1.0 / f_fold["bpfi_Hz"], phase)

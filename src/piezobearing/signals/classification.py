@@ -48,7 +48,16 @@ class Analyser:
             return D.analyse_record(x, dt_s, kinematics, self.envelope_settings, self.settings)[1]
         if self.baseline is None:
             raise ValueError("signals.detector.statistic = baseline needs the healthy record; none was given")
-        return CL.detect(x, dt_s, kinematics, self.baseline, self.baseline_settings, self.end_codes)
+        return self.many([x], dt_s, kinematics)[0]
+
+    def many(self, records, dt_s: float, kinematics: dict) -> list:
+        """The detections of several records [V] at step ``dt_s`` [s], each the record's alone (the baseline
+        detector's outer-race searches of all records run together: :func:`.clipped.detect_many`)."""
+        if self.statistic == "envelope":
+            return [D.analyse_record(x, dt_s, kinematics, self.envelope_settings, self.settings)[1] for x in records]
+        if self.baseline is None:
+            raise ValueError("signals.detector.statistic = baseline needs the healthy record; none was given")
+        return CL.detect_many(records, dt_s, kinematics, self.baseline, self.baseline_settings, self.end_codes)
 
 
 def analyser(sig: dict, kinematics: dict, healthy: tuple[np.ndarray, float] | None) -> Analyser:
@@ -93,9 +102,9 @@ def classify_seeds(records: dict, kinematics: dict, analyse: Analyser, noise: da
     """
     rows = []
     for case, (true_type, v, dt) in records.items():
-        for j in range(n_seeds):
-            acq = daq.add_noise(v, dt, noise, rng(case, j))
-            d = analyse(acq.voltage_V, dt, kinematics)
+        acqs = [daq.add_noise(v, dt, noise, rng(case, j)) for j in range(n_seeds)]
+        for j, (acq, d) in enumerate(zip(acqs, analyse.many([a.voltage_V for a in acqs], dt, kinematics),
+                                         strict=True)):
             row = {"case": case, "true_type": true_type, "seed": j, "fault_type": d.fault_type,
                    "clipped_fraction": acq.clipped_fraction}
             for t, r in d.per_type.items():
@@ -128,9 +137,8 @@ def roc_over_snr(faulty: tuple[str, np.ndarray], healthy: np.ndarray, dt_s: floa
         scores = {}
         for c, x in (("faulty", vf), ("healthy", healthy)):
             sig = float(np.sqrt(np.mean(x * x) / 10.0 ** (s / 10.0)))
-            scores[c] = np.array([
-                analyse(x + sig * z, dt_s, kinematics).per_type[true_type]["margin"] for z in shapes[c]
-            ])
+            scores[c] = np.array([d.per_type[true_type]["margin"]
+                                  for d in analyse.many([x + sig * z for z in shapes[c]], dt_s, kinematics)])
         pfa, pd_ = D.roc_points(scores["faulty"], scores["healthy"])
         out.append({"snr_dB": float(s), "fault_type": true_type, "auc": D.roc_auc(pfa, pd_),
                     "detection_rate": float(np.mean(scores["faulty"] > 1.0)),

@@ -176,55 +176,106 @@ def harmonic_test(x: np.ndarray, dt_s: float, f0_Hz: float, baseline: B.Baseline
     baseline's (and sqrt(E[V]) as its noise scale); at f, q = min_phi (R(-phi) c - c_m)^T C^-1 (R(-phi) c - c_m),
     C = (4 / n) E_theta[V a a^T] + diag(tolerance^2 |c_m,k|^2) in the baseline's frame (the record rotated
     back, so that C need not rotate); q ~ chi^2_{2K-1} under noise alone. ``sigma``: the noise before the ADC
-    [V]; ``lo``, ``hi``: the clip levels [V].
+    [V]; ``lo``, ``hi``: the clip levels [V]. :func:`harmonic_tests` of one record.
 
     Returns the unclipped test's keys and ``clipped_mean_coefficients`` (c_m) [V], ``residual_sigma_V``
     (sqrt E[V]) [V].
     """
     x = np.asarray(x, float)
+    return harmonic_tests(x[None, :], dt_s, [f0_Hz], baseline, [sigma], [(lo, hi)], tolerance, f_range_Hz)[0]
+
+
+def harmonic_tests(x: np.ndarray, dt_s: float, f0_Hz, baseline: B.Baseline, sigma, levels, tolerance: float = 0.0,
+                   f_range_Hz: tuple[float, float] | None = None) -> list[dict]:
+    """:func:`harmonic_test` of each row of ``x`` (R, n) [V], with its own ``f0_Hz``, ``sigma`` and clip
+    ``levels`` (lo, hi) (sequences of R); the unclipped tests' searches of all rows run together."""
+    from .harmonics import harmonic_fits
+    from .outer_race import _phase_searches
+
+    x = np.asarray(x, float)
     kb = (baseline.coefficients.size - 1) // 2
-    f_top = f0_Hz if f_range_Hz is None else f_range_Hz[1]
-    k = min(B.below_nyquist(dt_s, f_top), kb)
-    cm, vaa, v_mean = clipped_baseline(baseline.coefficients, sigma, lo, hi, k)
-    mean_model = B.Baseline(baseline.slip, cm, dt_s)
-    first = B.harmonic_test(x, dt_s, f0_Hz, mean_model, np.sqrt(v_mean), tolerance, f_range_Hz)
-    f = first["f0_Hz"]
-    c = B.harmonic_fit(x, dt_s, f, k)[0]
-    cov = 4.0 / x.size * vaa
-    if tolerance > 0:
-        cov = cov + np.diag(tolerance**2 * np.repeat(cm[1::2] ** 2 + cm[2::2] ** 2, 2))
-    # q(phi) = (c_m - R(-phi) c)^T C^-1 (c_m - R(-phi) c): the unclipped phase search with the roles swapped
-    q, psi = B._phase_search(cm, c, np.linalg.inv(cov))
-    dof = 2 * k - 1
-    return {"statistic": q, "dof": dof, "log10_p": B.log_chi2_sf(q, dof) / np.log(10.0), "phase_rad": -psi,
-            "f0_Hz": f, "n_harmonics": k, "clipped_mean_coefficients": cm.tolist(),
-            "residual_sigma_V": float(np.sqrt(v_mean))}
+    f_top = list(f0_Hz) if f_range_Hz is None else [f_range_Hz[1]] * x.shape[0]
+    ks = [min(B.below_nyquist(dt_s, ft), kb) for ft in f_top]
+    out: list = [None] * x.shape[0]
+    for k in dict.fromkeys(ks):  # rows of one K together
+        rows = [i for i in range(x.shape[0]) if ks[i] == k]
+        models = [clipped_baseline(baseline.coefficients, sigma[i], *levels[i], k) for i in rows]
+        first = B.harmonic_tests(x[rows], dt_s, [f0_Hz[i] for i in rows],
+                                 [B.Baseline(baseline.slip, cm, dt_s) for cm, _, _ in models],
+                                 [np.sqrt(v_mean) for _, _, v_mean in models], tolerance, f_range_Hz)
+        f = np.array([d["f0_Hz"] for d in first])
+        c = harmonic_fits(x[rows], dt_s, f, k)[0]
+        info = []
+        for cm, vaa, _ in models:
+            cov = 4.0 / x.shape[1] * vaa
+            if tolerance > 0:
+                cov = cov + np.diag(tolerance**2 * np.repeat(cm[1::2] ** 2 + cm[2::2] ** 2, 2))
+            info.append(np.linalg.inv(cov))
+        # q(phi) = (c_m - R(-phi) c)^T C^-1 (c_m - R(-phi) c): the unclipped phase search with the roles swapped
+        q, psi = _phase_searches(np.array([cm for cm, _, _ in models]), c, np.array(info))
+        dof = 2 * k - 1
+        for j, i in enumerate(rows):
+            out[i] = {"statistic": float(q[j]), "dof": dof, "log10_p": B.log_chi2_sf(float(q[j]), dof) / np.log(10.0),
+                      "phase_rad": -float(psi[j]), "f0_Hz": float(f[j]), "n_harmonics": k,
+                      "clipped_mean_coefficients": models[j][0].tolist(),
+                      "residual_sigma_V": float(np.sqrt(models[j][2]))}
+    return out
 
 
-@one_blas_thread
 def detect(x: np.ndarray, dt_s: float, kinematics: dict, baseline: B.Baseline,
            settings: B.BaselineSettings, end_codes: tuple[float, float, float] | None = None) -> B.BaselineDetection:
-    """:func:`.baseline.detect`, and on a record with clipped samples the clipped-noise model above.
+    """:func:`.baseline.detect`, and on a record with clipped samples the clipped-noise model above
+    (:func:`detect_many` of one record).
 
     Parameters as :func:`.baseline.detect`; ``end_codes``: the ADC's, where known (:func:`clip_levels`). Every type's entry reports ``clipped_fraction`` [-] and, where
     clipped, ``noise_sigma_V`` (the noise before the ADC) [V] and ``clip_levels_V``. A clipped record's folds
     stay on the record's clock and its outer-race gain at 1: ``follow_passage_phase_applied`` and
     ``gain_tolerance_applied`` are false where the settings ask for them (not modelled under clipping).
     """
-    x = np.asarray(x, float)
-    lo, hi, frac = clip_levels(x, end_codes)
-    if frac == 0.0:
-        d = B.detect(x, dt_s, kinematics, baseline, settings)
+    return detect_many([x], dt_s, kinematics, baseline, settings, end_codes)[0]
+
+
+@one_blas_thread
+def detect_many(records, dt_s: float, kinematics: dict, baseline: B.Baseline, settings: B.BaselineSettings,
+                end_codes: tuple[float, float, float] | None = None) -> list[B.BaselineDetection]:
+    """:func:`detect` of each record of ``records`` (a sequence, or the rows of an array) [V]: the unclipped ones
+    through :func:`.baseline.detect_many`, the clipped ones' outer-race tests together (records of one length);
+    each detection is the record's alone."""
+    xs = [np.asarray(x, float) for x in records]
+    levels = [clip_levels(x, end_codes) for x in xs]
+    out: list = [None] * len(xs)
+    plain = [i for i, (_, _, frac) in enumerate(levels) if frac == 0.0]
+    for i, d in zip(plain, B.detect_many([xs[i] for i in plain], dt_s, kinematics, baseline, settings), strict=True):
         for p in d.per_type.values():
             p["clipped_fraction"] = 0.0
-        return d
+        out[i] = d
+    clipped = [i for i in range(len(xs)) if out[i] is None]
+    for n in dict.fromkeys(xs[i].size for i in clipped):
+        rows = [i for i in clipped if xs[i].size == n]
+        fronts = [_front(xs[i], dt_s, kinematics, baseline, settings, *levels[i][:2]) for i in rows]
+        window = (kinematics["bpfo_Hz"] * (1.0 - settings.slip_max), kinematics["bpfo_Hz"])
+        outer = harmonic_tests(np.array([xs[i] for i in rows]), dt_s, [fr[1]["bpfo_Hz"] for fr in fronts], baseline,
+                               [fr[3] for fr in fronts], [levels[i][:2] for i in rows], settings.tolerance, window)
+        for i, fr, o in zip(rows, fronts, outer, strict=True):
+            out[i] = _decide_clipped(xs[i], fr, o, levels[i], dt_s, baseline, settings)
+    return out
+
+
+def _front(x, dt_s, kinematics, baseline, settings, lo, hi) -> tuple:
+    """A clipped record's steps before the outer-race test: (slip, fault frequencies, residual [V], the noise's
+    sigma before the ADC [V])."""
     s, f0, p, f = B.roller_passage(x, dt_s, kinematics, baseline, settings)
     r = x - p
     scale = B.fit_variance_scale(x.size, dt_s, f0, settings.alias_folds)
     th = _phase_grid((baseline.coefficients.size - 1) // 2)
     sigma = noise_sigma(float(np.mean(r * r)) * scale**2, waveform(baseline.coefficients, th), lo, hi)
-    window = (kinematics["bpfo_Hz"] * (1.0 - settings.slip_max), kinematics["bpfo_Hz"])
-    outer = harmonic_test(x, dt_s, f["bpfo_Hz"], baseline, sigma, lo, hi, settings.tolerance, window)
+    return s, f, r, sigma
+
+
+def _decide_clipped(x, front, outer, levels, dt_s, baseline, settings) -> B.BaselineDetection:
+    """The folds of a clipped record (standardised by the clipped noise's variance) and the decision."""
+    s, f, r, sigma = front
+    lo, hi, frac = levels
     # the residual standardised by the clipped noise's variance at each sample's phase of the roller train
     theta = 2.0 * np.pi * outer["f0_Hz"] * dt_s * np.arange(x.size) - outer["phase_rad"]
     _, v = clipped_normal_moments(waveform(baseline.coefficients, theta), sigma, lo, hi)

@@ -158,6 +158,11 @@ class ForwardModel:
             self._cache.pop(next(iter(self._cache)))
         return out
 
+    def linear_basis(self, values: dict, record: ForceRecord) -> list[tuple[tuple[str, ...], np.ndarray, tuple]]:
+        """The effects' additive terms linear in their parameters: (names, d voltage / d parameter (n, k), key)
+        blocks (:func:`~piezobearing.diagnosis.fit.likelihood_residual` takes their Jacobian columns exactly)."""
+        return [b for e in self.effects for b in e.linear_basis(values, record)]
+
     def release(self) -> None:
         """Empty the cache of :meth:`_cached` (a finished fit needs it no more)."""
         self._cache.clear()
