@@ -119,15 +119,19 @@ def diagnose(
     problem: Problem,
     settings: DiagnosticsSettings | None = None,
     progress: Callable[[str], None] | None = None,
+    baseline: ModelFit | None = None,
 ) -> Diagnosis:
-    """The whole diagnosis of one record (see the module docstring)."""
+    """The whole diagnosis of one record (see the module docstring).
+
+    ``baseline``: the baseline already fitted to this problem (its record, voltage, floor, starts and
+    ``settings``; a subject's pre-pass fits it), not fitted again."""
     settings = settings or DiagnosticsSettings()
     p = problem
     record, v, floor = p.record, np.asarray(p.voltage_V, dtype=float), p.floor
     note = progress or (lambda _msg: None)
 
     note("baseline")
-    baseline = fit_model(
+    baseline = baseline or fit_model(
         p.baseline,
         record,
         v,
