@@ -167,6 +167,7 @@ def quasi_static_loads(
     n = psi.shape[0]
     e = np.zeros((n, 2))
     e[:, 1] = -(gap_m + drop.max(axis=1) + (radial_load_N / k_contact) ** 0.9)
+    reach = -2.0 * e[:, 1]  # longest Newton step: twice the cold start's distance from the centre [m]
     if e0_m is not None:
         e = np.array(e0_m, dtype=float).reshape(n, 2)
     f, q, dq, pot = _state(e, ALL, s, c, drop, gap_m, k_contact, load)
@@ -186,6 +187,10 @@ def quasi_static_loads(
         det = a * d - b * b
         fy, fz = f[idx, 0], f[idx, 1]
         step = -np.stack([(d * fy - b * fz) / det, (-b * fy + a * fz) / det], 1)
+        # at most twice the reach of the start (a roller lifted into a groove leaves only the regularisation's
+        # stiffness along it: a Newton step of millimetres, halved ten times by the line search)
+        length = np.hypot(step[:, 0], step[:, 1])
+        step *= np.minimum(1.0, reach[idx] / np.maximum(length, 1e-300))[:, None]
         slope = np.sum(f[idx] * step, 1)  # directional derivative of Pi, < 0
         lam = np.ones(n_active)
         for _ in range(60):

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...sensor.calibration import SensorCircuit, circuit_voltage, rc_response, resistance_param
+from ...sensor.calibration import SensorCircuit, circuit_voltage, rc_response, resistance_param, unit_delay
 from ..params import Param
 from .effects import Effect, EffectError, ForceRecord, resolve
 from .effects.base import denoised_force, prefilter_response
@@ -195,7 +195,9 @@ class ForwardModel:
 
     def _response(self, values: dict, record: ForceRecord) -> np.ndarray:
         c = self.fitted_circuit(values)
-        g = rc_response(record.freq_Hz, record.dt_s, c.open_circuit_gain_V_per_N, c.tau_s)
+        if "unit_delay" not in record._cache:  # z^-1 on the record's bins: the same at every R
+            record._cache["unit_delay"] = unit_delay(record.freq_Hz, record.dt_s)
+        g = rc_response(record.freq_Hz, record.dt_s, c.open_circuit_gain_V_per_N, c.tau_s, record._cache["unit_delay"])
         for e in self.effects:
             g = g * e.response(values, record)
         return g
