@@ -17,9 +17,15 @@ sums. For each its wall and CPU seconds (the install's and the tests' together, 
 largest process's peak RSS, pytest's own line and seconds, and the per-file sums. Both sides install from the same
 pip cache; run it on an otherwise idle machine (the wall seconds are the target's unit).
 
+``files``: some test files (default: the tests that start Snakemake besides the CI workflow runs, :data:`FILES`)
+in a detached worktree of each revision, old and new in turn, ``-n`` pairs (default 3; the first pair compiles
+the worktrees' bytecode and is kept apart as the warm-up); CPU and wall seconds of each run, the median of the
+pairs' CPU ratios, each side's pass/fail line, and each test's seconds (setup + call + teardown) of the last pair.
+
 Writes ``results/benchmarks/ci_tests.json``. Usage:
 ``python benchmarks/bench_ci_tests.py suite --old REV [--new HEAD] [--which both|old|new]``,
-``python benchmarks/bench_ci_tests.py rerun``, ``python benchmarks/bench_ci_tests.py clone --old REV [--new HEAD]``.
+``python benchmarks/bench_ci_tests.py rerun``, ``python benchmarks/bench_ci_tests.py clone --old REV [--new HEAD]``,
+``python benchmarks/bench_ci_tests.py files --old REV [--new HEAD] [-n 3] [TEST ...]``.
 """
 
 from __future__ import annotations
@@ -85,6 +91,74 @@ def suite(rev: str, tmp: Path) -> dict:
     }
 
 
+#: The tests that start Snakemake other than through the CI workflow runs (``ci_run``, ``ci_rerun``).
+FILES = (
+    "tests/test_workflow_rerun.py",
+    "tests/test_bad_inputs.py",
+    "tests/test_workflow_quality.py::test_ruff_is_clean",
+    "tests/test_workflow_quality.py::test_snakefmt_is_clean",
+    "tests/test_workflow_quality.py::test_snakemake_lint_is_clean",
+    "tests/test_workflow_quality.py::test_slurm_profile_dry_run",
+)
+
+
+def per_test(durations: str) -> dict[str, float]:
+    """Seconds per test of the ``--durations=0`` lines (setup + call + teardown)."""
+    out: dict[str, float] = defaultdict(float)
+    for m in re.finditer(r"^([\d.]+)s (?:call|setup|teardown)\s+(\S+)", durations, re.M):
+        out[m.group(2)] += float(m.group(1))
+    return {k: round(v, 2) for k, v in sorted(out.items(), key=lambda kv: -kv[1])}
+
+
+def files(old: str, new: str, tests: list[str], n: int, tmp: Path) -> dict:
+    """``pytest TESTS`` in detached worktrees of ``old`` and ``new``, in turn, ``n`` pairs."""
+    import statistics
+
+    trees = {}
+    for side, rev in (("old", old), ("new", new)):
+        sha = subprocess.run(["git", "rev-parse", rev], cwd=ROOT, capture_output=True, text=True,
+                             check=True).stdout.strip()
+        trees[side] = (sha, tmp / side)
+        subprocess.run(["git", "worktree", "add", "--detach", str(tmp / side), sha], cwd=ROOT, capture_output=True,
+                       check=True)
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    cmd = [str(BIN / "pytest"), "-q", "--durations=0", "-p", "no:cacheprovider", *tests]
+    runs: dict[str, list] = {"old": [], "new": []}
+    try:
+        for _ in range(n):
+            for side in ("old", "new"):
+                wt = trees[side][1]
+                out, cpu, wall = timed(cmd, wt, {**env, "CI": "true", "PYTHONPATH": str(wt / "src")})
+                summary = [ln for ln in out.stdout.splitlines() if re.search(r"\d+ (passed|failed)", ln)]
+                runs[side].append({"cpu_s": round(cpu, 2), "wall_s": round(wall, 2), "returncode": out.returncode,
+                                   "summary": summary[-1] if summary else out.stdout[-500:],
+                                   "per_test_s": per_test(out.stdout), "load_average": os.getloadavg()})
+    finally:
+        for side in ("old", "new"):
+            subprocess.run(["git", "worktree", "remove", "--force", str(trees[side][1])], cwd=ROOT,
+                           capture_output=True)
+    all_pairs = list(zip(runs["old"], runs["new"], strict=True))
+    pairs = all_pairs[1:] or all_pairs
+    return {
+        "tests": list(tests),
+        "old_revision": trees["old"][0],
+        "new_revision": trees["new"][0],
+        "pairs_after_warm_up": len(pairs),
+        "old_cpu_s": [r["cpu_s"] for r in runs["old"]],
+        "new_cpu_s": [r["cpu_s"] for r in runs["new"]],
+        "old_wall_s": [r["wall_s"] for r in runs["old"]],
+        "new_wall_s": [r["wall_s"] for r in runs["new"]],
+        "cpu_ratio_old_over_new_median": round(statistics.median(o["cpu_s"] / w["cpu_s"] for o, w in pairs), 2),
+        "old_summary": runs["old"][-1]["summary"],
+        "new_summary": runs["new"][-1]["summary"],
+        "all_passed": all(r["returncode"] == 0 for side in runs.values() for r in side),
+        "old_per_test_s_last": runs["old"][-1]["per_test_s"],
+        "new_per_test_s_last": runs["new"][-1]["per_test_s"],
+        "load_average": [r["load_average"] for side in ("old", "new") for r in runs[side]],
+        "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
+    }
+
+
 def clone(rev: str, tmp: Path) -> dict:
     """``.ci/run`` with ``CI=true`` in a fresh clone of ``rev``."""
     sha = subprocess.run(["git", "rev-parse", rev], cwd=ROOT, capture_output=True, text=True, check=True).stdout.strip()
@@ -144,7 +218,9 @@ def rerun(tmp: Path) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("what", choices=("suite", "clone", "rerun"))
+    ap.add_argument("what", choices=("suite", "clone", "rerun", "files"))
+    ap.add_argument("tests", nargs="*", help="files: the tests (default: FILES)")
+    ap.add_argument("-n", type=int, default=3, help="files: pairs of runs (the first a warm-up)")
     ap.add_argument("--old", default="main")
     ap.add_argument("--new", default="HEAD")
     ap.add_argument("--which", choices=("both", "old", "new"), default="both")
@@ -153,6 +229,8 @@ def main() -> None:
     tmp = Path(tempfile.mkdtemp(prefix="bench_ci_tests_"))
     if a.what == "rerun":
         record["rerun"] = rerun(tmp)
+    elif a.what == "files":
+        record["snakemake_tests"] = files(a.old, a.new, a.tests or list(FILES), a.n, tmp)
     else:
         for side in ("old", "new"):
             if a.which in ("both", side):

@@ -1,7 +1,9 @@
 """Snakemake's start-up on this workflow (``snakemake -n``), the previous code beside this checkout's, as ratios.
 
 Every ``snakemake`` call parses the Snakefile, which hashes the package code each rule runs
-(``registry.code_hash``): a dry run, each of the rerun test's 27 dry runs, the start of every real run.
+(``registry.code_hash``): a dry run, each of the rerun test's 42 dry runs, the start of every real run. The same
+dry run warm (a child forked from each tree's own ``tests/warm_snakemake.py`` server, as the tests ask theirs),
+old and new in turn too.
 ``--old REV`` (a git revision) is exported to a temporary folder; the two run in turn (old, new, old, new
 ...), each a fresh process, and each call's CPU seconds (user + system, this process's children) and wall
 seconds are recorded; the ratio is taken pair by pair, which keeps it meaningful on a shared machine.
@@ -46,6 +48,16 @@ def timed(folder: Path, args: list[str]) -> dict:
     return {"cpu_s": r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime, "wall_s": wall}
 
 
+def warm_server(folder: Path):
+    """The warm Snakemake server of the tree ``folder`` (its own tests/warm_snakemake.py, its package)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(f"warm_snakemake_{folder.name}", folder / "tests/warm_snakemake.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.WarmSnakemake({**os.environ, "PYTHONPATH": str(folder / "src")})
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--old", default="main")
@@ -56,16 +68,18 @@ def main() -> None:
     args = ["-n", "--configfile", "config/ci.yaml"]
     timed(old, args), timed(new, args)  # warm-up: bytecode compiled, files in the page cache
     pairs = [(timed(old, args), timed(new, args)) for _ in range(a.n)]
-    sys.path.insert(0, str(ROOT / "tests"))
-    from warm_snakemake import WarmSnakemake
-
-    warm = WarmSnakemake({**os.environ, "PYTHONPATH": str(new / "src")})
-    warm_runs = []
-    for _ in range(a.n):
-        t0 = time.perf_counter()
-        assert warm.run(args, new).returncode == 0
-        warm_runs.append({"cpu_s": warm.last_cpu_s, "wall_s": time.perf_counter() - t0})
-    warm.close()
+    servers = {side: warm_server(folder) for side, folder in (("old", old), ("new", new))}
+    warm_pairs = []
+    for _ in range(a.n):  # old, new, old, new, ...: each side's children from its own tree's server and package
+        pair = []
+        for side, folder in (("old", old), ("new", new)):
+            t0 = time.perf_counter()
+            assert servers[side].run(args, folder).returncode == 0
+            pair.append({"cpu_s": servers[side].last_cpu_s, "wall_s": time.perf_counter() - t0})
+        warm_pairs.append(pair)
+    for server in servers.values():
+        server.close()
+    warm_runs = [p[1] for p in warm_pairs]
     rec = {
         "what": "snakemake -n --configfile config/ci.yaml (a clean folder: every job listed), a fresh process",
         "old_revision": a.old,
@@ -77,14 +91,21 @@ def main() -> None:
         },
         "pairs": pairs,
         "new_warm": {k: statistics.median(r[k] for r in warm_runs) for k in ("cpu_s", "wall_s")},
-        "new_warm_note": "the same dry run as a child forked from tests/warm_snakemake.py's server (Snakemake, "
-        "SciPy and the package imported once), as the rerun test asks its 27 dry runs",
+        "new_warm_note": "the same dry run as a child forked from tests/warm_snakemake.py's server (Snakemake "
+        "and the package imported once), as the rerun test asks its 42 dry runs",
+        "old_warm": {k: statistics.median(p[0][k] for p in warm_pairs) for k in ("cpu_s", "wall_s")},
+        "old_warm_note": "the old revision's own tests/warm_snakemake.py server and package",
+        "warm_new_over_old_median_of_pairs": {
+            k: statistics.median(p[1][k] / p[0][k] for p in warm_pairs) for k in ("cpu_s", "wall_s")
+        },
+        "warm_pairs": warm_pairs,
         "load_average_1_5_15_at_end": os.getloadavg(),
     }
     out = ROOT / "results/benchmarks/startup.json"
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(rec, indent=1) + "\n")
-    print(json.dumps({k: rec[k] for k in ("old", "new", "new_over_old_median_of_pairs", "new_warm")}, indent=1))
+    print(json.dumps({k: rec[k] for k in ("old", "new", "new_over_old_median_of_pairs", "old_warm", "new_warm",
+                                          "warm_new_over_old_median_of_pairs")}, indent=1))
 
 
 if __name__ == "__main__":

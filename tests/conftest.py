@@ -154,31 +154,37 @@ def run_workflow(
     activating the venv: the workflow must find its own tools (papermill, the notebooks' kernel)."""
     bindir = Path(sys.executable).parent
     exe = [sys.executable, str(Path(__file__).with_name("warm_jobs.py"))] if warm_jobs else [str(bindir / "snakemake")]
-    path = [p for p in os.environ.get("PATH", "").split(os.pathsep) if p and Path(p) != bindir]
     return subprocess.run(
         [*exe, "--cores", "2", *args, "--configfile", *configfiles],
         cwd=workdir,
-        env={**os.environ, "PATH": os.pathsep.join(path)},
+        env=workflow_env(),
         capture_output=True,
         text=True,
         timeout=timeout,
     )
 
 
+def workflow_env() -> dict:
+    """The environment of a workflow run in the tests: this one without the environment's bin folder on PATH."""
+    bindir = Path(sys.executable).parent
+    path = [p for p in os.environ.get("PATH", "").split(os.pathsep) if p and Path(p) != bindir]
+    return {**os.environ, "PATH": os.pathsep.join(path)}
+
+
 _WARM = None
 
 
-def snakemake_warm(*args: str, cwd: Path = REPO) -> subprocess.CompletedProcess:
-    """``snakemake ARGS`` in ``cwd`` (a dry run, a lint, a report, a run refused before any job) as a child forked
-    from this test process's warm server (tests/warm_snakemake.py, started at the first call: about 1.1 CPU s a
-    call instead of 3.5; the child parses the Snakefile, validates the config and hashes the code as a fresh
-    process does)."""
+def snakemake_warm(*args: str, cwd: Path = REPO, env: dict | None = None) -> subprocess.CompletedProcess:
+    """``snakemake ARGS`` in ``cwd`` (a dry run, a lint, a report, a run refused before any job, a small run) as a
+    child forked from this test process's warm server (tests/warm_snakemake.py, started at the first call: about
+    1.1 CPU s a call instead of 3.5; the child parses the Snakefile, validates the config and hashes the code as a
+    fresh process does; its jobs are fresh processes); ``env``: the child's environment (default: this one)."""
     global _WARM
     if _WARM is None:
         from warm_snakemake import WarmSnakemake
 
         _WARM = WarmSnakemake()
-    return _WARM.run(list(args), cwd)
+    return _WARM.run(list(args), cwd, env=env)
 
 
 def pytest_sessionfinish(session):

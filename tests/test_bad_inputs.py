@@ -380,16 +380,21 @@ def test_workflow_refuses_a_second_run(tmp_path):
 
 @pytest.mark.slow
 def test_record_path_with_spaces_reaches_the_figure(tmp_path):
-    """A record in 'my records/press test.csv' passes validation, the rules and the papermill figure job."""
-    from conftest import _copy_repo, run_workflow
+    """A record in 'my records/press test.csv' passes validation, the rules and the papermill figure job.
+
+    A real run of the figure's two jobs (``extract_sensitivity``, a fresh Python process, and ``fig05``, papermill
+    and a kernel), with the environment of :func:`conftest.run_workflow`; Snakemake itself starts as a child of the
+    worker's warm server (its imports done), not as a fresh process."""
+    from conftest import _copy_repo, snakemake_warm, workflow_env
 
     work = _copy_repo(tmp_path / "checkout")
     rec = tmp_path / "my records" / "press test.csv"
     rec.parent.mkdir()
     rec.write_text((workdir() / "record.csv").read_text())
     (tmp_path / "user config.yaml").write_text(f"calibration:\n  measurement: {rec}\n")
-    out = run_workflow(
-        work, "results/figures/fig05.png", configfiles=("config/ci.yaml", str(tmp_path / "user config.yaml"))
+    out = snakemake_warm(
+        "--cores", "2", "results/figures/fig05.png", "--configfile", "config/ci.yaml",
+        str(tmp_path / "user config.yaml"), cwd=work, env=workflow_env(),
     )
     assert out.returncode == 0, out.stderr[-3000:]
     assert (work / "results/figures/fig05.png").stat().st_size > 10_000

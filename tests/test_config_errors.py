@@ -17,6 +17,25 @@ def error(config: dict) -> str:
     return msg
 
 
+def test_the_schema_reads_the_same_with_libyaml_and_sets_no_defaults():
+    """The workflow validates the config once, through ``cfg.validate`` (common.smk), which reads the schema with
+    libyaml's loader: the same schema as PyYAML's pure-Python loader reads. Snakemake's own ``validate`` (no longer
+    called) would have filled a schema ``default`` into the config: the schema has none, so nothing was lost."""
+    import yaml
+
+    text = cfg.SCHEMA_PATH.read_text()
+    schema = yaml.load(text, Loader=cfg._SCHEMA_LOADER)
+    assert schema == yaml.safe_load(text)
+    assert cfg._validator(str(cfg.SCHEMA_PATH)).schema == schema
+
+    def defaults(node) -> list:
+        if isinstance(node, dict):
+            return (["default"] if "default" in node else []) + [d for v in node.values() for d in defaults(v)]
+        return [d for v in node for d in defaults(v)] if isinstance(node, list) else []
+
+    assert defaults(schema) == []
+
+
 def test_unknown_key_is_named_by_its_path_with_the_closest_key(paper_config):
     c = copy.deepcopy(paper_config)
     c["synthesis"]["resistence_ohm"] = 20.0e6

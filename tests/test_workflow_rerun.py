@@ -5,25 +5,25 @@ A scratch copy of the workflow is built once with stand-in scripts that only cre
 real scripts' imports, unexecuted, for the code hash) and a stand-in papermill; then ``snakemake -n`` is asked,
 for each rule, after a change to the config keys its stage reads (piezobearing.registry.READS), after an edit of
 a package module in the scratch copy, and after the record is replaced. The rules it lists must be exactly the
-changed rules and the rules downstream of them in the rule graph (``snakemake --rulegraph``). The dry runs go
-through warm Snakemake servers (tests/warm_snakemake.py: forked ``snakemake -n`` processes that skip the
-imports), two at a time.
+changed rules and the rules downstream of them in the rule graph (``snakemake --rulegraph``). Every Snakemake call
+(the build, the rule graph, the dry runs, the record case's run) goes through warm Snakemake servers
+(tests/warm_snakemake.py: forked ``snakemake`` processes that skip the imports), two at a time from one server; the runs' stand-in
+script jobs are forked warm too (tests/warm_jobs.py).
 """
 
 from __future__ import annotations
 
 import ast
 import os
-import queue
 import re
 import shutil
-import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
 import yaml
+from warm_jobs import STAND_IN_PRELOAD
 from warm_snakemake import WarmSnakemake
 
 from piezobearing import config as cfg
@@ -32,7 +32,6 @@ from piezobearing.registry import READS, RECORD_RULES
 pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parents[1]
-SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
 
 STUB = """from pathlib import Path
 
@@ -71,10 +70,6 @@ def _stub(script: Path) -> str:
     return STUB.format(imports="\n".join(imports) or "    pass")
 
 
-def _run(args: list[str], cwd: Path, env: dict) -> subprocess.CompletedProcess:
-    return subprocess.run([SNAKEMAKE, *args], cwd=cwd, env=env, capture_output=True, text=True, timeout=900)
-
-
 def _jobs(out: str) -> set[str]:
     """Rules of the 'Job stats' table of a dry run (without the target rule all)."""
     if "Job stats:" not in out:
@@ -83,8 +78,15 @@ def _jobs(out: str) -> set[str]:
     return {m.group(1) for m in re.finditer(r"^(\w+)\s+\d+\s*$", table, re.M)} - {"all", "job"}
 
 
-def build_scratch(d: Path) -> tuple[Path, dict, dict[str, set[str]]]:
-    """Build a scratch copy of the workflow in ``d`` (stand-in stages); its environment and its rule graph."""
+def build_scratch(d: Path) -> tuple[Path, dict, dict[str, set[str]], WarmSnakemake]:
+    """Build a scratch copy of the workflow in ``d`` (stand-in stages); its environment, its rule graph and the warm
+    Snakemake server of its dry runs (tests/warm_snakemake.py, in the copy's environment: its package from the
+    copy's ``src``).
+
+    The build is a real ``snakemake --cores 2`` run (every job of the CI targets, their metadata recorded), in a
+    child of a warm server, whose stand-in script jobs are forked from a job server that imported Snakemake's
+    script preamble modules (tests/warm_jobs.py): a stand-in only writes its outputs, and as a fresh process it
+    spent its time on Python's start and that preamble."""
     for name in ("Snakefile", "workflow", "config", "notebooks", "src"):
         src = ROOT / name
         (shutil.copytree if src.is_dir() else shutil.copy)(src, d / name)
@@ -96,41 +98,32 @@ def build_scratch(d: Path) -> tuple[Path, dict, dict[str, set[str]]]:
     pm.write_text(PAPERMILL.format(python=sys.executable))
     pm.chmod(0o755)
     env = {**os.environ, "PATH": f"{d / 'bin'}:{os.environ['PATH']}", "PYTHONPATH": str(d / "src")}
-    out = _run(["--cores", "2", "--configfile", "config/ci.yaml"], d, env)
+    server = WarmSnakemake(env)
+    out = server.run(["--cores", "2", "--configfile", "config/ci.yaml"], d, warm_jobs=STAND_IN_PRELOAD)
     assert out.returncode == 0, out.stderr[-3000:]
-    graph = _run(["--rulegraph", "--configfile", "config/ci.yaml"], d, env)
+    graph = server.run(["--rulegraph", "--configfile", "config/ci.yaml"], d)
     assert graph.returncode == 0, graph.stderr[-3000:]
     names = dict(re.findall(r'^\s*(\d+)\[label = "(\w+)"', graph.stdout, re.M))
     children: dict[str, set[str]] = {n: set() for n in names.values()}
     for a, b in re.findall(r"^\s*(\d+) -> (\d+)", graph.stdout, re.M):
         children[names[a]].add(names[b])
-    return d, env, children
+    return d, env, children, server
 
 
 @pytest.fixture(scope="module")
 def scratch(tmp_path_factory):
-    """A built scratch copy of the workflow (stand-in stages), its environment and its rule graph."""
-    return build_scratch(tmp_path_factory.mktemp("rerun"))
+    """A built scratch copy of the workflow (stand-in stages), its environment, its rule graph and its server."""
+    built = build_scratch(tmp_path_factory.mktemp("rerun"))
+    yield built
+    built[3].close()
 
 
 @pytest.fixture(scope="module")
 def dry(scratch):
-    """``dry(args)``: ``snakemake ARGS`` in the scratch copy through one of two warm servers (one per thread)."""
-    d, env, _ = scratch
-    servers: queue.Queue = queue.Queue()
-    for _ in range(2):
-        servers.put(WarmSnakemake(env))
-
-    def run(args: list[str]) -> subprocess.CompletedProcess:
-        server = servers.get()
-        try:
-            return server.run(args, d)
-        finally:
-            servers.put(server)
-
-    yield run
-    while not servers.empty():
-        servers.get().close()
+    """``dry(args, **kw)``: ``snakemake ARGS`` in the scratch copy through its warm server (threads may call it at
+    once: each call is a child of its own)."""
+    d, server = scratch[0], scratch[3]
+    return lambda args, **kw: server.run(args, d, **kw)
 
 
 def _downstream(rules: set[str], children: dict[str, set[str]]) -> set[str]:
@@ -201,7 +194,7 @@ def _readers(key: str) -> set[str]:
 
 
 def test_every_rule_reruns_on_the_keys_its_stage_reads_and_no_other_rule_does(scratch, dry):
-    d, env, children = scratch
+    d, env, children, _ = scratch
     config = cfg.load(d / "config/ci.yaml")
 
     with ThreadPoolExecutor(2) as pool:
@@ -247,7 +240,7 @@ def test_an_undeclared_key_read_raises_naming_the_rule_and_the_fix():
     ],
 )
 def test_a_changed_package_module_reruns_exactly_the_rules_whose_code_imports_it(scratch, dry, module, rules):
-    d, env, children = scratch
+    d, env, children, _ = scratch
     f = d / "src/piezobearing" / module
     original = f.read_text()
     try:
@@ -264,7 +257,7 @@ def test_a_replaced_record_with_an_older_time_reruns_what_reads_it(scratch, dry)
     from piezobearing.stages.calibration import nominal_circuit
     from piezobearing.synthesis import PressProtocol, synthesize
 
-    d, env, children = scratch
+    d, env, children, _ = scratch
     config = cfg.load(d / "config/ci.yaml")
     record = d / "data/record.csv"
 
@@ -275,7 +268,7 @@ def test_a_replaced_record_with_an_older_time_reruns_what_reads_it(scratch, dry)
     write(1)
     (d / "record.yaml").write_text(yaml.safe_dump({"calibration": {"measurement": "data/record.csv"}}))
     args = ["--configfile", "config/ci.yaml", "record.yaml"]
-    out = _run(["--cores", "2", *args], d, env)
+    out = dry(["--cores", "2", *args], warm_jobs=STAND_IN_PRELOAD)  # a real run: the stand-ins of what reads it
     assert out.returncode == 0, out.stderr[-3000:]
     before = record.stat().st_mtime
     write(2)  # another record, then dated a day back (as cp -p, unzip or rsync -a leave it)

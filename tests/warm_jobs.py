@@ -43,6 +43,9 @@ PRELOAD = (
     "snakemake.iocontainers",
     "snakemake.logging",
 )
+#: What a job's script imports when it is a stand-in writing its outputs (tests/test_workflow_rerun.py): the modules
+#: of Snakemake's script preamble (the pickled ``snakemake`` object, its logger) and the stand-in's own.
+STAND_IN_PRELOAD = ("pathlib", "pickle", "snakemake.iocontainers", "snakemake.logging")
 #: The variables Snakemake's shell() sets to a job's thread count (snakemake/shell.py).
 THREAD_VARIABLES = (
     "OMP_NUM_THREADS",
@@ -99,8 +102,10 @@ def _child(request: dict) -> None:
 
 def serve() -> None:
     """Read one JSON request a line ({"id", "script", "cwd", "threads"}) and fork a child for it at once; answer
-    {"id", "returncode", "cpu_s"} a line as each child ends (children run side by side)."""
-    for name in [*PRELOAD, *script_imports(Path(sys.argv[2]))]:
+    {"id", "returncode", "cpu_s"} a line as each child ends (children run side by side). Imports :data:`PRELOAD`
+    and the scripts' package modules first, or only the modules of ``--preload a,b`` where given."""
+    preload = sys.argv[sys.argv.index("--preload") + 1].split(",") if "--preload" in sys.argv else None
+    for name in preload if preload is not None else [*PRELOAD, *script_imports(Path(sys.argv[2]))]:
         try:
             importlib.import_module(name)
         except ImportError:  # a module another branch does not have: the job imports what it needs
@@ -135,10 +140,11 @@ class JobServer:
     """The client: ``run(script, cwd, threads)`` blocks until the forked job ends and returns its exit status;
     safe to call from Snakemake's job threads at once."""
 
-    def __init__(self, scripts: Path):
+    def __init__(self, scripts: Path, preload: tuple[str, ...] | None = None):
+        only = ["--preload", ",".join(preload)] if preload is not None else []
         self._proc = subprocess.Popen(
-            [sys.executable, __file__, "--serve", str(scripts)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-            text=True,
+            [sys.executable, __file__, "--serve", str(scripts), *only], stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE, text=True,
         )
         assert json.loads(self._proc.stdout.readline()).get("ready"), "the warm job server did not start"
         self._ids = itertools.count()
@@ -173,12 +179,14 @@ class JobServer:
         self._proc.wait(timeout=60)
 
 
-def main(args: list[str]) -> int:
-    """``snakemake ARGS`` in the current folder with warm script jobs; its exit status."""
+def main(args: list[str], preload: tuple[str, ...] | None = None) -> int:
+    """``snakemake ARGS`` in the current folder with warm script jobs; its exit status. ``preload``: the modules the
+    job server imports instead of :data:`PRELOAD` and the scripts' package modules (the rerun test's stand-in
+    scripts import nothing but Snakemake's preamble modules, :data:`STAND_IN_PRELOAD`)."""
     from snakemake.cli import main as snakemake_main
     from snakemake.script import PythonScript
 
-    server = JobServer(Path("workflow/scripts").resolve())
+    server = JobServer(Path("workflow/scripts").resolve(), preload)
 
     def execute_script(self, fname, edit=False):
         start = time.time()

@@ -14,6 +14,7 @@ Used by the tests for the many dry runs they ask (tests/test_workflow_rerun.py);
 
 from __future__ import annotations
 
+import itertools
 import json
 import os
 import subprocess
@@ -22,16 +23,31 @@ import tempfile
 import threading
 from pathlib import Path
 
-#: Imported once in the server: Snakemake's command line and what the Snakefile imports.
+#: Imported once in the server: Snakemake's command line and what the Snakefile imports, and what Snakemake imports
+#: on the way of every dry run (its report, storage and profile modules, smart_open, jsonschema, platformdirs, ...:
+#: 280 modules, 0.13 of a child's 0.61 CPU s when each child imported them). Not SciPy's signal package: no module
+#: the Snakefile imports needs it any more (stages import it where they filter), and it was 0.7 CPU s of each
+#: server's start.
 PRELOAD = (
     "snakemake.cli",
     "snakemake.api",
     "snakemake.dag",
     "snakemake.scheduling.job_scheduler",
+    "snakemake.report.html_reporter",
+    "snakemake.storage",
+    "snakemake.profiles",
+    "smart_open",
+    "jsonschema",
+    "platformdirs",
+    "argparse_dataclass",
+    "graphlib",
+    "packaging.version",
     "pandas",
-    "scipy.signal",
+    "pandas.core.methods.to_dict",
     "piezobearing.config",
     "piezobearing.registry",
+    "piezobearing.runlock",
+    "piezobearing.signals.outputs",
     "piezobearing.studies",
     "piezobearing.diagnosis.calibration.effects",
     "piezobearing.diagnosis.calibration.report",
@@ -42,8 +58,13 @@ PRELOAD = (
 
 
 def _child(request: dict) -> None:
-    """In the forked child: become ``snakemake ARGS`` in ``cwd`` with stdout/stderr to the given files."""
+    """In the forked child: become ``snakemake ARGS`` in ``cwd`` with stdout/stderr to the given files; with the
+    request's ``env`` as its environment where given (what its jobs inherit), and with ``warm_jobs`` (a list of
+    modules) its Python script jobs forked from a job server that imported those (tests/warm_jobs.py)."""
     os.chdir(request["cwd"])
+    if request.get("env") is not None:
+        os.environ.clear()
+        os.environ.update(request["env"])
     for fd, path in ((1, request["stdout"]), (2, request["stderr"])):
         f = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
         os.dup2(f, fd)
@@ -51,10 +72,15 @@ def _child(request: dict) -> None:
     sys.argv = ["snakemake", *request["args"]]
     code = 1
     try:
-        from snakemake.cli import main
+        if request.get("warm_jobs") is not None:
+            from warm_jobs import main as warm_main
 
-        main(request["args"])
-        code = 0
+            code = warm_main(request["args"], tuple(request["warm_jobs"]))
+        else:
+            from snakemake.cli import main
+
+            main(request["args"])
+            code = 0
     except SystemExit as e:
         code = e.code if isinstance(e.code, int) else (0 if e.code is None else 1)
     except BaseException:  # noqa: BLE001 - a traceback to stderr, as the real process would print it
@@ -88,11 +114,27 @@ def _remember_parsed_imports() -> None:
     for f in sorted(registry.PACKAGE_DIR.rglob("*.py")):
         registry._module_imports(f)
     registry._module_imports.cache_clear()  # path-keyed: a child must read the files again
+    if hasattr(registry._module_file, "cache_clear"):
+        registry._module_file.cache_clear()  # and look up which files exist
+
+
+def _collect_plugins() -> None:
+    """Build Snakemake's argument parser once here: its plugin registries (executors, storage, loggers, ...; each a
+    singleton that scans the installed packages at its first use) are then collected in every child (0.06 of its
+    0.3 CPU s), as a fresh process would collect them: the installed plugins do not change while the server runs."""
+    try:
+        from snakemake.cli import get_argument_parser
+    except ImportError:
+        return
+    get_argument_parser()
 
 
 def serve() -> None:
-    """Read one JSON request a line ({"args", "cwd", "stdout", "stderr"}), answer {"returncode"} a line."""
+    """Read one JSON request a line ({"id", "args", "cwd", "stdout", "stderr", ...}) and fork a child for it at once;
+    answer {"id", "returncode", "cpu_s"} a line as each child ends (children of several requests run side by side,
+    so one server serves two threads: a second server cost 2.4 CPU s to start)."""
     import importlib
+    import select
 
     for name in PRELOAD:
         try:
@@ -100,19 +142,36 @@ def serve() -> None:
         except ImportError:  # a module another branch does not have: the child imports what it needs
             pass
     _remember_parsed_imports()
+    _collect_plugins()
     print(json.dumps({"ready": True}), flush=True)
-    for line in sys.stdin:
-        request = json.loads(line)
-        pid = os.fork()
-        if pid == 0:
-            _child(request)
-        _, status, usage = os.wait4(pid, 0)
-        cpu = usage.ru_utime + usage.ru_stime
-        print(json.dumps({"returncode": os.waitstatus_to_exitcode(status), "cpu_s": cpu}), flush=True)
+    running: dict[int, int] = {}
+    pending, open_ = b"", True
+    while open_ or running:
+        if open_ and select.select([0], [], [], 0.01)[0]:
+            chunk = os.read(0, 65536)
+            open_ = bool(chunk)
+            pending += chunk
+            *lines, pending = pending.split(b"\n")
+            for line in lines:
+                request = json.loads(line)
+                pid = os.fork()
+                if pid == 0:
+                    _child(request)
+                running[pid] = request["id"]
+        elif not open_:
+            select.select([], [], [], 0.01)
+        while running:
+            pid, status, usage = os.wait4(-1, os.WNOHANG)
+            if pid == 0:
+                break
+            answer = {"id": running.pop(pid), "returncode": os.waitstatus_to_exitcode(status),
+                      "cpu_s": usage.ru_utime + usage.ru_stime}
+            print(json.dumps(answer), flush=True)
 
 
 class WarmSnakemake:
-    """A server (see the module's docstring) and ``run(args, cwd)`` like ``subprocess.run`` of snakemake."""
+    """A server (see the module's docstring) and ``run(args, cwd)`` like ``subprocess.run`` of snakemake; ``run``
+    may be called from several threads at once (each call a child of its own)."""
 
     def __init__(self, env: dict | None = None):
         self._proc = subprocess.Popen(
@@ -122,20 +181,45 @@ class WarmSnakemake:
             text=True,
             env=env,
         )
-        self._lock = threading.Lock()
         assert json.loads(self._proc.stdout.readline()).get("ready"), "the warm snakemake server did not start"
+        self._lock = threading.Lock()
+        self._ids = itertools.count()
+        self._done: dict[int, dict] = {}
+        self._events: dict[int, threading.Event] = {}
+        threading.Thread(target=self._read, daemon=True).start()
 
-    def run(self, args: list[str], cwd: str | Path) -> subprocess.CompletedProcess:
-        with tempfile.TemporaryDirectory() as tmp, self._lock:
+    def _read(self) -> None:
+        for line in self._proc.stdout:
+            answer = json.loads(line)
+            with self._lock:
+                self._done[answer["id"]] = answer
+                self._events.pop(answer["id"]).set()
+
+    def run(
+        self, args: list[str], cwd: str | Path, env: dict | None = None, warm_jobs: tuple[str, ...] | None = None
+    ) -> subprocess.CompletedProcess:
+        """``snakemake ARGS`` in ``cwd``; ``env``: the child's environment (default: the server's); ``warm_jobs``:
+        run the script jobs warm from a job server importing these modules (tests/warm_jobs.py), not as fresh
+        processes. The result's ``cpu_s``: the child's CPU seconds (with its jobs')."""
+        with tempfile.TemporaryDirectory() as tmp:
             out, err = Path(tmp, "stdout"), Path(tmp, "stderr")
-            request = {"args": list(args), "cwd": str(cwd), "stdout": str(out), "stderr": str(err)}
-            self._proc.stdin.write(json.dumps(request) + "\n")
-            self._proc.stdin.flush()
-            answer = json.loads(self._proc.stdout.readline())
-            self.last_cpu_s = answer["cpu_s"]  # the child's CPU seconds (benchmarks/bench_startup.py)
-            return subprocess.CompletedProcess(
+            event = threading.Event()
+            with self._lock:
+                i = next(self._ids)
+                self._events[i] = event
+                request = {"id": i, "args": list(args), "cwd": str(cwd), "stdout": str(out), "stderr": str(err),
+                           "env": env, "warm_jobs": None if warm_jobs is None else list(warm_jobs)}
+                self._proc.stdin.write(json.dumps(request) + "\n")
+                self._proc.stdin.flush()
+            event.wait()
+            with self._lock:
+                answer = self._done.pop(i)
+            self.last_cpu_s = answer["cpu_s"]  # the last call's (benchmarks/bench_startup.py calls one at a time)
+            result = subprocess.CompletedProcess(
                 ["snakemake", *args], answer["returncode"], out.read_text(), err.read_text()
             )
+            result.cpu_s = answer["cpu_s"]
+            return result
 
     def close(self) -> None:
         self._proc.stdin.close()

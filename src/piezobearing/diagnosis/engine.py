@@ -119,24 +119,18 @@ def diagnose(
     problem: Problem,
     settings: DiagnosticsSettings | None = None,
     progress: Callable[[str], None] | None = None,
+    baseline: ModelFit | None = None,
 ) -> Diagnosis:
-    """The whole diagnosis of one record (see the module docstring)."""
+    """The whole diagnosis of one record (see the module docstring); ``baseline``: the baseline already fitted to
+    this problem and ``settings`` (a subject's pre-pass fits it), not fitted again."""
     settings = settings or DiagnosticsSettings()
     p = problem
     record, v, floor = p.record, np.asarray(p.voltage_V, dtype=float), p.floor
     note = progress or (lambda _msg: None)
 
     note("baseline")
-    baseline = fit_model(
-        p.baseline,
-        record,
-        v,
-        floor,
-        start=p.baseline_start,
-        starts=p.baseline_starts,
-        max_nfev=settings.max_nfev,
-        ftol=settings.ftol,
-    )
+    baseline = baseline or fit_model(p.baseline, record, v, floor, start=p.baseline_start, starts=p.baseline_starts,
+                                      max_nfev=settings.max_nfev, ftol=settings.ftol)
     baseline_names = tuple(q.name for q in p.baseline.params(record))
     current = baseline
     for e in p.configured:

@@ -162,7 +162,50 @@ def likelihood_residual(
         r = v - model.simulate(values, record, clean)
         return fd_weighted(r if inv is None else r * inv, s)
 
+    if getattr(model, "linear_basis", None) is not None:
+        weighted.linear_columns = _linear_columns(model, record, floor, w, inv)
     return weighted
+
+
+#: Transforms of a model's linear-parameter bases a likelihood keeps (by the basis's key).
+BASIS_FFTS = 16
+
+
+def _linear_columns(model: Model, record: Record, floor: NoiseFloor, w, inv: np.ndarray | None) -> Callable:
+    """values -> {name: d weighted residual / d value} for the parameters the model's voltage is linear in.
+
+    A model states them with the optional method ``linear_basis(values, record)``: blocks ``(names,
+    basis (n, k), key)``, the voltage's derivative by each named parameter (an additive term's coefficients:
+    a drift's spline, the mains amplitudes; none of them in the response), ``key`` naming the basis's content
+    (its transform is kept). The residual's column is then -:func:`fd_weighted` of the basis, without a model
+    evaluation; :func:`~piezobearing.diagnosis.least_squares.fit` takes it instead of a finite difference.
+    """
+    ffts: dict = {}
+
+    def columns(values: dict) -> dict[str, np.ndarray]:
+        blocks = model.linear_basis(values, record)
+        if not blocks:
+            return {}
+        s = floor.spectrum(model.response(values, record) * w)
+        n = record.n
+        wt = np.sqrt(2.0 / (n * s))
+        wt[0] /= np.sqrt(2.0)
+        if n % 2 == 0:
+            wt[-1] /= np.sqrt(2.0)
+        out = {}
+        for names, basis, key in blocks:
+            r = ffts.get(key)
+            if r is None:
+                r = sfft.rfft(basis if inv is None else basis * inv[:, None], axis=0)
+                ffts[key] = r
+                while len(ffts) > BASIS_FFTS:
+                    ffts.pop(next(iter(ffts)))
+            rw = r * wt[:, None]
+            col = np.concatenate([rw.real, rw[1:-1].imag if n % 2 == 0 else rw[1:].imag], axis=0)
+            out.update({name: -col[:, j] for j, name in enumerate(names)})
+        return out
+
+    return columns
 
 
 def noise_scale(model: Model, values: dict, record: Record, floor: NoiseFloor) -> np.ndarray | None:

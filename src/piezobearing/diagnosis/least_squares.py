@@ -110,9 +110,8 @@ def fit(
     lo = np.array([p.to_internal(p.lower) if np.isfinite(p.lower) else -np.inf for p in free])
     hi = np.array([p.to_internal(p.upper) if np.isfinite(p.upper) else np.inf for p in free])
     u0 = np.clip(u0, np.where(np.isfinite(lo), lo, u0), np.where(np.isfinite(hi), hi, u0))
-    sol = least_squares(
-        lambda u: residual_fn(unpack(u)), u0, bounds=(lo, hi), x_scale="jac", max_nfev=max_nfev, ftol=ftol
-    )
+    fun, jac = _fun_and_jacobian(residual_fn, free, unpack, lo, hi)
+    sol = least_squares(fun, u0, jac=jac, bounds=(lo, hi), x_scale="jac", max_nfev=max_nfev, ftol=ftol)
     r = sol.fun
     n, k = (r.size if n_data is None else n_data), len(free)
     dof = max(n - k, 1)
@@ -133,6 +132,52 @@ def fit(
             for j, q in enumerate(free)
         }
     return FitResult(values, stderr, ci95, corr, r, n, k, float(r @ r), bool(sol.success), str(sol.message))
+
+
+def _fun_and_jacobian(residual_fn, free: list[Param], unpack, lo: np.ndarray, hi: np.ndarray):
+    """The residual of the internal coordinates and its Jacobian for scipy's ``least_squares``.
+
+    scipy's own 2-point differences (``jac="2-point"``) unless ``residual_fn`` has a ``linear_columns``
+    attribute: a function of the values giving d residual / d value, exactly, for the parameters the residual
+    is linear in (an additive voltage's coefficients: :func:`~piezobearing.diagnosis.fit.likelihood_residual`).
+    Those columns are then taken from it (times d value / d internal = the parameter's scale) instead of one
+    model evaluation each, and the others are scipy's 2-point differences with scipy's steps (``approx_derivative``,
+    the same numbers as ``jac="2-point"`` gives them); the difference of a linear column from its finite
+    difference is rounding.
+    """
+    columns = getattr(residual_fn, "linear_columns", None)
+    if columns is None:
+        return (lambda u: residual_fn(unpack(u))), "2-point"
+    from scipy.optimize._numdiff import approx_derivative
+
+    last: list = [None, None]  # the latest point evaluated and its residual: scipy asks the Jacobian there
+
+    def fun(u: np.ndarray) -> np.ndarray:
+        r = residual_fn(unpack(u))
+        last[:] = np.array(u, dtype=float), r
+        return r
+
+    def jac(u: np.ndarray) -> np.ndarray:
+        f0 = last[1] if last[0] is not None and np.array_equal(last[0], u) else fun(u)
+        cols = columns(unpack(u))
+        linear = [i for i, p in enumerate(free) if p.name in cols and not p.log]
+        other = [i for i in range(len(free)) if i not in linear]
+        out = np.empty((f0.size, len(free)))
+        if other:
+            base = np.array(u, dtype=float)
+
+            def part(x: np.ndarray) -> np.ndarray:
+                full = base.copy()
+                full[other] = x
+                return residual_fn(unpack(full))
+
+            out[:, other] = approx_derivative(part, base[other], method="2-point", f0=f0,
+                                              bounds=(lo[other], hi[other])).reshape(f0.size, len(other))
+        for i in linear:
+            out[:, i] = cols[free[i].name] * free[i].scale
+        return out
+
+    return fun, jac
 
 
 def nrmse(residual: np.ndarray, measured: np.ndarray) -> float:

@@ -197,7 +197,7 @@ def frequency_response(frequency_Hz: np.ndarray, circuit: SensorCircuit) -> np.n
     return circuit.open_circuit_gain_V_per_N * jwt / (1 + jwt)
 
 
-def rc_response(freq_Hz: np.ndarray, dt_s: float, gain: float, tau_s: float) -> np.ndarray:
+def rc_response(freq_Hz: np.ndarray, dt_s: float, gain: float, tau_s: float, zi: np.ndarray | None = None) -> np.ndarray:
     """Frequency response of :func:`rc_voltage` as a discrete filter.
 
     The exact discretisation is V_k = a V_{k-1} + b (F_k - F_{k-1}) with
@@ -205,12 +205,18 @@ def rc_response(freq_Hz: np.ndarray, dt_s: float, gain: float, tau_s: float) -> 
 
     .. math::  G(z) = b \\frac{1 - z^{-1}}{1 - a z^{-1}},\\quad z = e^{j 2\\pi f\\,dt}.
 
-    It tends to the continuous gain * j w tau / (1 + j w tau) for f dt << 1.
+    It tends to the continuous gain * j w tau / (1 + j w tau) for f dt << 1. ``zi``: z^-1 at ``freq_Hz``
+    (:func:`unit_delay`) when the caller keeps it for its frequency grid (a fit asks at every R).
     """
     a = np.exp(-dt_s / tau_s)
     b = gain * (tau_s / dt_s) * (-np.expm1(-dt_s / tau_s))
-    zi = np.exp(-2j * np.pi * np.asarray(freq_Hz, dtype=float) * dt_s)
+    zi = unit_delay(freq_Hz, dt_s) if zi is None else zi
     return b * (1 - zi) / (1 - a * zi)
+
+
+def unit_delay(freq_Hz: np.ndarray, dt_s: float) -> np.ndarray:
+    """z^-1 = exp(-j 2 pi f dt) at the frequencies [-] (complex)."""
+    return np.exp(-2j * np.pi * np.asarray(freq_Hz, dtype=float) * dt_s)
 
 
 # --------------------------------------------------------------------------- impulses

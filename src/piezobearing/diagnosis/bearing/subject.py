@@ -168,8 +168,9 @@ class BearingSubject:
         # (each SVD of the trust-region step 70x slower on a loaded 2-core machine, benchmarks/bench_diagnosis_bearing.py)
         with single_blas_thread():
             rec = obs[0]
-            problem = floor_prepass(self.problem(obs, config), settings, rec.clipped, progress)
-            d = diagnose(problem, settings, progress)
+            fits: dict = {}
+            problem = floor_prepass(self.problem(obs, config), settings, rec.clipped, progress, fits)
+            d = diagnose(problem, settings, progress, fits.get("baseline"))
             if d.final.nrmse < REMEASURE_BELOW * d.final.floor_nrmse:
                 fl = noise_floor(d.final.residual_V, problem.record.dt_s, rec.clipped)
                 fl = replace(fl, method=f"{fl.method}, of the final model's residual: the record's own "
@@ -192,7 +193,7 @@ def quiet_level(residual_V: np.ndarray, clipped: np.ndarray | None = None) -> fl
     return robust_diff_std(r if clipped is None else r[~clipped])
 
 
-def floor_prepass(p: Problem, settings, clipped: np.ndarray | None, progress=None) -> Problem:
+def floor_prepass(p: Problem, settings, clipped: np.ndarray | None, progress=None, fits: dict | None = None) -> Problem:
     """The noise floor measured once more, before the engine, where a fault's lines have lifted it.
 
     The baseline is fitted with the record's floor. Where its residual's
@@ -206,7 +207,8 @@ def floor_prepass(p: Problem, settings, clipped: np.ndarray | None, progress=Non
     (:func:`noise_floor`) and ``p`` is returned with it; otherwise ``p``
     unchanged. A white floor's level does not move the fits, only the
     evidence: the engine's run with this floor is the second run of the old
-    two-pass method, found with four fits instead of a whole run.
+    two-pass method, found with four fits instead of a whole run. Where ``p`` is returned unchanged, the
+    baseline's fit is put in ``fits["baseline"]`` (the engine's own first fit, the same numbers: not fitted twice).
     """
     from dataclasses import replace
 
@@ -219,6 +221,8 @@ def floor_prepass(p: Problem, settings, clipped: np.ndarray | None, progress=Non
     base = fit_model(p.baseline, rec, v, p.floor, start=p.baseline_start, starts=p.baseline_starts,
                      max_nfev=settings.max_nfev, ftol=settings.ftol)
     base.model.release()
+    if fits is not None:
+        fits["baseline"] = base  # taken back below if the floor changes
     if quiet_level(base.residual_V, clipped) >= REMEASURE_BELOW * p.floor.voltage_noise_V:
         return p
     best = base
@@ -231,6 +235,8 @@ def floor_prepass(p: Problem, settings, clipped: np.ndarray | None, progress=Non
                 best = f
     if best.nrmse >= REMEASURE_BELOW * best.floor_nrmse:
         return p
+    if fits is not None:
+        fits.pop("baseline")
     fl = noise_floor(best.residual_V, rec.dt_s, clipped)
     fl = replace(fl, method=f"{fl.method}, of the residual of {best.model.label} fitted before the search "
                  f"(pre-pass): the record's own ({p.floor.voltage_noise_V:.4g} V) was lifted by the fault's lines")

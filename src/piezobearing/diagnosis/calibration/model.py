@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...sensor.calibration import SensorCircuit, circuit_voltage, rc_response, resistance_param
+from ...sensor.calibration import SensorCircuit, circuit_voltage, rc_response, resistance_param, unit_delay
 from ..params import Param
 from .effects import Effect, EffectError, ForceRecord, resolve
 from .effects.base import denoised_force, prefilter_response
@@ -158,6 +158,11 @@ class ForwardModel:
             self._cache.pop(next(iter(self._cache)))
         return out
 
+    def linear_basis(self, values: dict, record: ForceRecord) -> list[tuple[tuple[str, ...], np.ndarray, tuple]]:
+        """The effects' additive terms linear in their parameters: (names, d voltage / d parameter (n, k), key)
+        blocks (:func:`~piezobearing.diagnosis.fit.likelihood_residual` takes their Jacobian columns exactly)."""
+        return [b for e in self.effects for b in e.linear_basis(values, record)]
+
     def release(self) -> None:
         """Empty the cache of :meth:`_cached` (a finished fit needs it no more)."""
         self._cache.clear()
@@ -190,7 +195,9 @@ class ForwardModel:
 
     def _response(self, values: dict, record: ForceRecord) -> np.ndarray:
         c = self.fitted_circuit(values)
-        g = rc_response(record.freq_Hz, record.dt_s, c.open_circuit_gain_V_per_N, c.tau_s)
+        if "unit_delay" not in record._cache:  # z^-1 on the record's bins: the same at every R
+            record._cache["unit_delay"] = unit_delay(record.freq_Hz, record.dt_s)
+        g = rc_response(record.freq_Hz, record.dt_s, c.open_circuit_gain_V_per_N, c.tau_s, record._cache["unit_delay"])
         for e in self.effects:
             g = g * e.response(values, record)
         return g

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ....sensor.calibration import rc_response, rc_voltage
+from ....sensor.calibration import rc_response, rc_voltage, unit_delay
 from ...params import Param
 from .base import Effect, ForceRecord, StartContext
 
@@ -64,7 +64,9 @@ class ACCoupling(Effect):
         return rc_voltage(voltage_V, record.dt_s, 1.0, _tau(values))
 
     def response(self, values, record):
-        return rc_response(record.freq_Hz, record.dt_s, 1.0, _tau(values))
+        if "unit_delay" not in record._cache:  # z^-1 on the record's bins (the model's cache)
+            record._cache["unit_delay"] = unit_delay(record.freq_Hz, record.dt_s)
+        return rc_response(record.freq_Hz, record.dt_s, 1.0, _tau(values), record._cache["unit_delay"])
 
     def starts(self, ctx: StartContext) -> list[dict[str, float]]:
         return [{"corner_Hz": 1e-6}, {"corner_Hz": 0.05}, {"corner_Hz": 0.5}]

@@ -127,6 +127,11 @@ class Effect(engine.Effect):
         """A voltage added to the recorded voltage, independent of the force [V]."""
         return None
 
+    def linear_basis(self, values: dict, record: ForceRecord) -> list[tuple[tuple[str, ...], np.ndarray, tuple]]:
+        """Blocks (names, basis (n, k), key) of parameters :meth:`additive` is linear in: the added voltage's
+        derivative by each [V per unit], ``key`` naming the basis's content (hashable). None by default."""
+        return []
+
     def response(self, values: dict, record: ForceRecord) -> np.ndarray | float:
         """Factor this effect puts on the force-to-voltage response at ``record.freq_Hz`` [-].
 

@@ -181,6 +181,15 @@ class BaselineDrift(Effect):
             v = v + kink_basis(record, values["drift_kink_s"]) @ np.array([values[f"drift_k{d}_V"] for d in KINK_DEGREES])
         return v
 
+    def linear_basis(self, values, record):
+        """The spline's columns and, with a kink, the kink's terms at its time (the voltage is linear in both)."""
+        names = tuple(f"drift_p{k}_V" for k in range(DEGREE + 1)) + tuple(f"drift_w{j}_V" for j in range(1, self.knots + 1))
+        out = [(names, basis(record, self.knots), ("drift", self.knots))]
+        if self.kink:
+            tk = float(values["drift_kink_s"])
+            out.append((tuple(f"drift_k{d}_V" for d in KINK_DEGREES), kink_basis(record, tk), ("drift_kink", tk)))
+        return out
+
     def starts(self, ctx: StartContext) -> list[dict[str, float]]:
         """Linear least squares of the current residual; with a kink, at the :data:`KINK_STARTS` best of the
         trial times :data:`KINK_GRID_S` apart."""

@@ -94,6 +94,13 @@ class MainsPickup(Effect):
         coef = np.array([values[f"mains_h{k}_{p}_V"] for k in ks for p in ("cos", "sin")])
         return basis(t, values["mains_frequency_Hz"], ks) @ coef
 
+    def linear_basis(self, values, record):
+        """The harmonics' cos and sin at the mains frequency (the voltage is linear in their amplitudes)."""
+        ks = harmonics(record)
+        f = float(values["mains_frequency_Hz"])
+        names = tuple(f"mains_h{k}_{p}_V" for k in ks for p in ("cos", "sin"))
+        return [(names, basis(record.time_s - record.time_s[0], f, ks), ("mains", f, ks))]
+
     def starts(self, ctx: StartContext) -> list[dict[str, float]]:
         """Largest residual peak within 0.5 Hz of 50 or 60 Hz, then linear least squares of the amplitudes."""
         rec = ctx.record
