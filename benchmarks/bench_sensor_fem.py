@@ -61,11 +61,21 @@ def reduction_error(p: SensorFemParams) -> dict:
     t0 = time.perf_counter()
     reduced = model.voltage_per_force(np.array(freqs), circ)
     t_red = (time.perf_counter() - t0) / len(freqs)
+    # both circuits (measuring, open) per frequency: one factorisation each (old) against one for both (new)
+    c0 = time.process_time()
+    per_circuit = np.array([[fem.direct_voltage_per_force(rs, f, c) for c in (circ, None)] for f in freqs])
+    c1 = time.process_time()
+    per_frequency = np.array([fem.direct_voltages_per_force(rs, f, [circ, None]) for f in freqs])
+    c2 = time.process_time()
     return {
         "frequencies_Hz": freqs,
         "max_rel_error": float(np.abs(reduced / direct - 1).max()),
         "direct_complex_solve_s_per_frequency": t_direct,
         "reduced_s_per_frequency": t_red,
+        "direct_two_circuits_cpu_s_old_one_factorisation_per_circuit": c1 - c0,
+        "direct_two_circuits_cpu_s_new_one_factorisation_per_frequency": c2 - c1,
+        "direct_two_circuits_new_over_old": (c2 - c1) / (c1 - c0),
+        "direct_two_circuits_max_rel_difference": float(np.abs(per_frequency / per_circuit - 1).max()),
     }
 
 

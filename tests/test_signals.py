@@ -164,12 +164,14 @@ def test_threshold_is_the_F_quantile():
 @pytest.mark.parametrize("rule", ["fixed", "kurtogram"])
 def test_false_alarm_rate_on_noise_alone(rule):
     """Gaussian noise alone: the indicator exceeds the threshold for pfa = 0.05 at most at that rate
-    (binomial upper bound), and not absurdly less often (the threshold is not slack)."""
+    (binomial upper bound), and not absurdly less often (the threshold is not slack). The records analysed as one
+    array (``analyse_many``: analyse()'s result per record, identical, test below)."""
     env = S.EnvelopeSettings(band_rule=rule, band_Hz=(500.0, 1250.0))
     ind = S.IndicatorSettings(false_alarm_probability=0.05)
     trials = 400 if rule == "fixed" else 200
     rng = np.random.default_rng(11)
-    hits = sum(S.analyse(rng.standard_normal(2550), DT, BPFO, env, ind).result["detected"] for _ in range(trials))
+    x = np.array([rng.standard_normal(2550) for _ in range(trials)])
+    hits = sum(r["detected"] for r in S.analyse_many(x, DT, BPFO, env, ind))
     rate = hits / trials
     se = np.sqrt(0.05 * 0.95 / trials)
     assert rate <= 0.05 + 3 * se
@@ -246,6 +248,11 @@ def test_batched_snr_sweep_gives_the_rows_of_the_record_by_record_analysis(rule)
     loop = S.snr_sweep(v, DT, BPFO, "faulty", grid, 3, 7, es, IND, method="loop")
     assert batch == loop  # same operations per record: identical floats, bands and decisions
     assert {r["detected"] for r in batch} == {True, False}  # the grid spans both decisions
+    x = v + np.random.default_rng(3).standard_normal((4, v.size)) * np.array([[0.1], [1.0], [3.0], [10.0]])
+    for many, one in zip(S.analyse_many(x, DT, BPFO, es, IND), (S.analyse(r, DT, BPFO, es, IND).result for r in x),
+                         strict=True):
+        assert many == {k: one[k] for k in many if k != "harmonics"} | {
+            "harmonics": [{k: h[k] for k in ("k", "ratio", "ratio_dB")} for h in one["harmonics"]]}
 
 
 def test_fem_correction_factor():

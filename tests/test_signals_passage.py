@@ -111,9 +111,11 @@ def test_folds_on_the_passage_clock_keep_their_false_alarm_rate():
     base = B.Baseline.from_record(jittered("none", 0.0, np.random.default_rng(0))[0], 1 / FS, KIN, st)
     m = 60
     hits = np.zeros(2, int)
+    records = []
     for j in range(m):
         rng = np.random.default_rng([9, j])
-        d = B.detect(noisy(jittered("none", 0.02, rng)[0], rng), 1 / FS, KIN, base, st)
+        records.append(noisy(jittered("none", 0.02, rng)[0], rng))
+    for d in B.detect_many(records, 1 / FS, KIN, base, st):  # each detection the record's alone
         hits += [d.details[t]["log10_p"] < np.log10(0.05) for t in ("inner_race", "rolling_element")]
     assert hits.max() <= binom.ppf(0.999, m, 0.05), hits
 
@@ -127,19 +129,20 @@ def test_jitter_no_longer_reads_as_an_inner_race_or_roller_fault():
     base = B.Baseline.from_record(jittered("none", 0.0, np.random.default_rng(0))[0], 1 / FS, KIN, st)
     folds = ("inner_race", "rolling_element")
     alarms = {True: np.zeros(2, int), False: np.zeros(2, int)}
+    ys = []
     for j in range(10):
         rng = np.random.default_rng([9, j])
-        y = noisy(jittered("none", 0.02, rng)[0], rng)
-        for s in (st, fixed):
-            d = B.detect(y, 1 / FS, KIN, base, s)
+        ys.append(noisy(jittered("none", 0.02, rng)[0], rng))
+    for s in (st, fixed):
+        for d in B.detect_many(ys, 1 / FS, KIN, base, s):
             alarms[s.follow_passage_phase] += [d.per_type[t]["detected"] for t in folds]
     assert alarms[False].tolist() == [10, 10] and alarms[True].tolist() == [0, 0], alarms
     for kind in folds:
-        found = 0
+        records = []
         for j in range(8):
             rng = np.random.default_rng([11, j])
-            found += B.detect(noisy(jittered(kind, 0.02, rng, 30.0)[0], rng), 1 / FS, KIN, base, st).per_type[kind][
-                "detected"]
+            records.append(noisy(jittered(kind, 0.02, rng, 30.0)[0], rng))
+        found = sum(d.per_type[kind]["detected"] for d in B.detect_many(records, 1 / FS, KIN, base, st))
         assert found == 8, (kind, found)
 
 

@@ -725,10 +725,23 @@ def reduced_model(rs: ReducedSystem, short_modes: Modes, damping_ratio: float = 
 
 
 def direct_voltage_per_force(rs: ReducedSystem, f_Hz: float, circuit: MeasuringCircuit | None) -> complex:
-    """V/F [V/N] from one direct (complex, undamped) solve of the full coupled system; for verification."""
+    """V/F [V/N] from one direct (complex, undamped) solve of the full coupled system; for verification
+    (:func:`direct_voltages_per_force` of one circuit)."""
+    return direct_voltages_per_force(rs, f_Hz, [circuit])[0]
+
+
+def direct_voltages_per_force(rs: ReducedSystem, f_Hz: float, circuits) -> list[complex]:
+    """V/F [V/N] of the full coupled system (undamped) at ``f_Hz`` for each of ``circuits`` (None: open).
+
+    The circuits change only the electrode's diagonal entry, d_c = -s^2 (k_EE + load_c): the system of the
+    first circuit is factorised (SuperLU, complex) and solved for the force and for the electrode's unit
+    vector e; each other circuit is the same matrix plus delta e e^T, whose electrode potential is exactly
+    x_E / (1 + delta z_E) (Sherman-Morrison, z = M^-1 e): one factorisation per frequency instead of one
+    per circuit, the same numbers to rounding (benchmarks/bench_sensor_fem.py compares them).
+    """
     s = rs.scale
     w2 = (2 * np.pi * f_Hz) ** 2
-    load = 0.0 if circuit is None else SECTOR_FRACTION * complex(circuit.admittance_over_jw(f_Hz))
+    loads = [0.0 if c is None else SECTOR_FRACTION * complex(c.admittance_over_jw(f_Hz)) for c in circuits]
     n_i = rs.G_I.shape[1]
     a = sp.bmat(
         [
@@ -737,14 +750,24 @@ def direct_voltage_per_force(rs: ReducedSystem, f_Hz: float, circuit: MeasuringC
             [
                 s * sp.csr_matrix(rs.g[None, :]),
                 -(s * s) * sp.csr_matrix(rs.k_I[None, :]),
-                sp.csr_matrix(np.array([[-(s * s) * (rs.k_EE + load)]])),
+                sp.csr_matrix(np.array([[-(s * s) * (rs.k_EE + loads[0])]])),
             ],
         ],
         format="csc",
     ).astype(complex)
     rhs = np.concatenate([rs.f, np.zeros(n_i + 1)]).astype(complex)
-    x = spla.spsolve(a, rhs)
-    return complex(s * x[-1])
+    if len(circuits) == 1:
+        return [complex(s * spla.spsolve(a, rhs)[-1])]
+    lu = spla.splu(a)
+    x_e = lu.solve(rhs)[-1]
+    e = np.zeros(rhs.size, complex)
+    e[-1] = 1.0
+    z_e = lu.solve(e)[-1]
+    out = []
+    for load in loads:
+        delta = -(s * s) * (load - loads[0])
+        out.append(complex(s * x_e / (1.0 + delta * z_e)))
+    return out
 
 
 # --------------------------------------------------------------------------- analyses of the stack

@@ -152,20 +152,29 @@ def noise_sigma(residual_var: float, b: np.ndarray, lo: float, hi: float) -> flo
     return float(brentq(g, lo_s, hi_s, xtol=1e-6 * s0))
 
 
-def clipped_baseline(cb: np.ndarray, sigma: float, lo: float, hi: float, n_harmonics: int) -> tuple:
+def clipped_baseline(cb: np.ndarray, sigma: float, lo: float, hi: float, n_harmonics: int,
+                     tables: tuple | None = None) -> tuple:
     """The clipped healthy record's mean coefficients (mean, a_k, b_k; k = 1..K) [V] and the harmonics'
     covariance per sample, E_theta[V(theta) a a^T] (times 4 / n: the coefficients' covariance) [V^2],
-    and the mean variance E_theta[V] [V^2], from the baseline's coefficients ``cb`` [V]."""
-    th = _phase_grid(max(n_harmonics, (cb.size - 1) // 2))
-    m, v = clipped_normal_moments(waveform(cb, th), sigma, lo, hi)
-    k = np.arange(1, n_harmonics + 1)
-    cos, sin = np.cos(np.outer(th, k)), np.sin(np.outer(th, k))
+    and the mean variance E_theta[V] [V^2], from the baseline's coefficients ``cb`` [V]. ``tables``: what does
+    not depend on sigma and the levels (:func:`baseline_tables`), computed once for many records."""
+    th, wave, cos, sin, a = baseline_tables(cb, n_harmonics) if tables is None else tables
+    m, v = clipped_normal_moments(wave, sigma, lo, hi)
     cm = np.empty(2 * n_harmonics + 1)
     cm[0] = m.mean()
     cm[1::2], cm[2::2] = 2.0 * cos.T @ m / th.size, 2.0 * sin.T @ m / th.size
+    return cm, (a * v[:, None]).T @ a / th.size, float(v.mean())
+
+
+def baseline_tables(cb: np.ndarray, n_harmonics: int) -> tuple:
+    """The phase grid [rad], the baseline's waveform on it [V], and the harmonics' cosines, sines and their
+    interleaved matrix on it [-] (:func:`clipped_baseline`)."""
+    th = _phase_grid(max(n_harmonics, (cb.size - 1) // 2))
+    k = np.arange(1, n_harmonics + 1)
+    cos, sin = np.cos(np.outer(th, k)), np.sin(np.outer(th, k))
     a = np.empty((th.size, 2 * n_harmonics))
     a[:, 0::2], a[:, 1::2] = cos, sin
-    return cm, (a * v[:, None]).T @ a / th.size, float(v.mean())
+    return th, waveform(cb, th), cos, sin, a
 
 
 def harmonic_test(x: np.ndarray, dt_s: float, f0_Hz: float, baseline: B.Baseline, sigma: float, lo: float,
@@ -199,7 +208,8 @@ def harmonic_tests(x: np.ndarray, dt_s: float, f0_Hz, baseline: B.Baseline, sigm
     out: list = [None] * x.shape[0]
     for k in dict.fromkeys(ks):  # rows of one K together
         rows = [i for i in range(x.shape[0]) if ks[i] == k]
-        models = [clipped_baseline(baseline.coefficients, sigma[i], *levels[i], k) for i in rows]
+        tables = baseline_tables(baseline.coefficients, k)  # once for all rows
+        models = [clipped_baseline(baseline.coefficients, sigma[i], *levels[i], k, tables) for i in rows]
         first = B.harmonic_tests(x[rows], dt_s, [f0_Hz[i] for i in rows],
                                  [B.Baseline(baseline.slip, cm, dt_s) for cm, _, _ in models],
                                  [np.sqrt(v_mean) for _, _, v_mean in models], tolerance, f_range_Hz)
@@ -252,7 +262,9 @@ def detect_many(records, dt_s: float, kinematics: dict, baseline: B.Baseline, se
     clipped = [i for i in range(len(xs)) if out[i] is None]
     for n in dict.fromkeys(xs[i].size for i in clipped):
         rows = [i for i in clipped if xs[i].size == n]
-        fronts = [_front(xs[i], dt_s, kinematics, baseline, settings, *levels[i][:2]) for i in rows]
+        th = _phase_grid((baseline.coefficients.size - 1) // 2)
+        wave = waveform(baseline.coefficients, th)  # once for all records
+        fronts = [_front(xs[i], dt_s, kinematics, baseline, settings, *levels[i][:2], wave) for i in rows]
         window = (kinematics["bpfo_Hz"] * (1.0 - settings.slip_max), kinematics["bpfo_Hz"])
         outer = harmonic_tests(np.array([xs[i] for i in rows]), dt_s, [fr[1]["bpfo_Hz"] for fr in fronts], baseline,
                                [fr[3] for fr in fronts], [levels[i][:2] for i in rows], settings.tolerance, window)
@@ -261,14 +273,13 @@ def detect_many(records, dt_s: float, kinematics: dict, baseline: B.Baseline, se
     return out
 
 
-def _front(x, dt_s, kinematics, baseline, settings, lo, hi) -> tuple:
+def _front(x, dt_s, kinematics, baseline, settings, lo, hi, wave) -> tuple:
     """A clipped record's steps before the outer-race test: (slip, fault frequencies, residual [V], the noise's
-    sigma before the ADC [V])."""
+    sigma before the ADC [V]); ``wave``: the baseline's waveform on its phase grid [V]."""
     s, f0, p, f = B.roller_passage(x, dt_s, kinematics, baseline, settings)
     r = x - p
     scale = B.fit_variance_scale(x.size, dt_s, f0, settings.alias_folds)
-    th = _phase_grid((baseline.coefficients.size - 1) // 2)
-    sigma = noise_sigma(float(np.mean(r * r)) * scale**2, waveform(baseline.coefficients, th), lo, hi)
+    sigma = noise_sigma(float(np.mean(r * r)) * scale**2, wave, lo, hi)
     return s, f, r, sigma
 
 

@@ -448,6 +448,18 @@ def analyse(
     return Analysis(spec, kg, fault_indicator(spec, f0_Hz, indicator_settings))
 
 
+def analyse_many(
+    records: np.ndarray, dt_s: float, f0_Hz: float, envelope_settings: EnvelopeSettings,
+    indicator_settings: IndicatorSettings
+) -> list[dict]:
+    """Of :func:`analyse`'s ``result`` for each row of ``records`` (R, n) [V]: band_Hz, indicator, threshold,
+    detected and each harmonic's k, ratio, ratio_dB, as array operations over the rows with the filter gains,
+    bins and threshold computed once (:func:`snr_sweep`'s batch: the same operations per record, identical
+    values, test)."""
+    x = np.asarray(records, dtype=float)
+    return _sweep_seed_batch(x, _SweepPlan(x.shape[1], dt_s, f0_Hz, envelope_settings, indicator_settings))
+
+
 # --------------------------------------------------------------------------- SNR study
 
 
