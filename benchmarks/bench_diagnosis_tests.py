@@ -13,8 +13,13 @@ effect's values and 95% intervals, the final model's values, intervals and NRMSE
 ratio old / new per group and in all, whether every selection, verdict and ranking order is the same, and how
 far each value moved as a share of its 95% interval's half-width (the tests' tolerances are multiples of it).
 
+``--pytest``: also the four test files themselves (tests/test_diagnosis_bearing.py, test_diagnostics.py,
+test_diagnosis_record_quality.py, test_cli.py), ``CI=true pytest -p no:xdist`` in one process per side (that
+side's tests, its package first on ``sys.path``), their CPU seconds (user + system of pytest and its children)
+and the pass line.
+
 Writes results/benchmarks/diagnosis_tests.json. Usage:
-``python benchmarks/bench_diagnosis_tests.py --old REV [--groups bearing calibration diagnostics] [--note TEXT]``.
+``python benchmarks/bench_diagnosis_tests.py --old REV [--groups bearing calibration diagnostics] [--pytest] [--note TEXT]``.
 """
 
 from __future__ import annotations
@@ -177,6 +182,33 @@ def side(root: Path, groups: list[str]) -> dict:
     return {r["case"]: r for r in rows[1:]}
 
 
+TEST_FILES = ("tests/test_diagnosis_bearing.py", "tests/test_diagnostics.py", "tests/test_diagnosis_record_quality.py",
+              "tests/test_cli.py")
+
+
+def pytest_cpu(root: Path) -> dict:
+    """CPU seconds of ``CI=true pytest -p no:xdist`` on :data:`TEST_FILES` in ``root`` (its src first on sys.path)."""
+    import resource
+
+    env = {**os.environ, "PYTHONPATH": str(root / "src"), "CI": "true", "OMP_NUM_THREADS": "1"}
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    out = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:xdist", "-p", "no:cacheprovider",
+                          "--durations=0", *TEST_FILES], cwd=root, env=env, capture_output=True, text=True)
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    per_file: dict = {}
+    for line in out.stdout.splitlines():
+        parts = line.split()
+        if len(parts) >= 3 and parts[0].endswith("s") and parts[1] in ("call", "setup", "teardown"):
+            f = parts[2].split("::")[0]
+            per_file[f] = per_file.get(f, 0.0) + float(parts[0][:-1])
+    return {"cpu_seconds": (r1.ru_utime + r1.ru_stime) - (r0.ru_utime + r0.ru_stime),
+            "wall_seconds": time.perf_counter() - t0, "returncode": out.returncode,
+            "summary": out.stdout.strip().splitlines()[-1] if out.stdout.strip() else out.stderr[-500:],
+            "durations_per_file_s": per_file}
+
+
 def moved(old: dict, new: dict, values: str, ci: str) -> float:
     """Largest |new - old| of the values as a share of the old 95% interval's half-width."""
     worst = 0.0
@@ -248,6 +280,7 @@ def main() -> None:
     ap.add_argument("--old", required=True, help="the revision before the change (git rev)")
     ap.add_argument("--groups", nargs="+", default=list(GROUPS), choices=list(GROUPS))
     ap.add_argument("--note", default="")
+    ap.add_argument("--pytest", action="store_true", help="also the four test files' CPU, old and new")
     args = ap.parse_args()
     sha = subprocess.run(["git", "rev-parse", args.old], cwd=ROOT, capture_output=True, text=True,
                          check=True).stdout.strip()
@@ -256,18 +289,22 @@ def main() -> None:
                                 text=True).stdout.strip())
     with tempfile.TemporaryDirectory() as tmp:
         old_root = Path(tmp)
-        arch = subprocess.run(["git", "archive", sha, "src", "tests", "config"], cwd=ROOT, capture_output=True,
-                              check=True).stdout
+        arch = subprocess.run(["git", "archive", sha, "src", "tests", "config", "pyproject.toml"], cwd=ROOT,
+                              capture_output=True, check=True).stdout
         subprocess.run(["tar", "-x", "-C", str(old_root)], input=arch, check=True)
         old = side(old_root, args.groups)
         new = side(ROOT, args.groups)
+        tests = {"old": pytest_cpu(old_root), "new": pytest_cpu(ROOT)} if args.pytest else None
     res = compare(old, new)
+    if tests:
+        tests["ratio_cpu"] = tests["old"]["cpu_seconds"] / tests["new"]["cpu_seconds"]
+        res["test_files"] = tests
     res.update({"old_revision": sha, "new_revision": new_sha + (" + uncommitted src" if dirty else ""),
                 "note": args.note, "cpu_count": os.cpu_count(), "load_average_1min": os.getloadavg()[0],
                 "blas_threads": 1})
     OUT.parent.mkdir(parents=True, exist_ok=True)
     OUT.write_text(json.dumps(res, indent=2) + "\n")
-    print(json.dumps({"groups": res["groups"], "total": res["total"]}, indent=2))
+    print(json.dumps({"groups": res["groups"], "total": res["total"], "test_files": res.get("test_files")}, indent=2))
 
 
 if __name__ == "__main__":

@@ -47,8 +47,9 @@ TABLE_POINTS = 4096
 TABLE_TOL = 1e-12
 #: A groove-free table whose load, clearance and roller offsets are within this share (of the load, and of the
 #: clearance) of an earlier table's starts Newton's method at that table's shaft offsets: 2-3 evaluations of
-#: the equilibrium instead of 6-17 (farther away the nominal start is as fast, at 30% of clearance 3x faster).
-WARM_START_REL = 1e-3
+#: the equilibrium instead of 6-17 for a fit's finite-difference step, 5-10 instead of 29-43 for a trial load
+#: near 180 N (few rollers loaded); farther away the nominal start is as fast, at 30% of clearance 3x faster.
+WARM_START_REL = 1e-2
 #: A table with a drop function other than an :class:`OuterGroove` is this many times finer (the groove's
 #: edges are kinks that a coarse table would put at grid points: a bias of the fitted angle of about one
 #: table step); over a cage turn (with roller scatter) twice.
