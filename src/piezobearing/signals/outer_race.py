@@ -162,12 +162,25 @@ def harmonic_tests(x: np.ndarray, dt_s: float, f0_Hz, baselines, sigma, toleranc
                    for ft, b in zip(f_top, baselines, strict=True)])
     out: list = [None] * x.shape[0]
     for k in np.unique(ks):  # rows of one K together (a batch shares K)
-        rows = np.flatnonzero(ks == k)
-        res = _tests_of_one_k(x[rows], dt_s, f0[rows], [baselines[r] for r in rows], sigma[rows], int(k),
-                              tolerance, f_range_Hz, gain_tolerance)
-        for r, d in zip(rows, res, strict=True):
-            out[r] = d
+        for rows in row_chunks(np.flatnonzero(ks == k), x.shape[1], int(k)):
+            res = _tests_of_one_k(x[rows], dt_s, f0[rows], [baselines[r] for r in rows], sigma[rows], int(k),
+                                  tolerance, f_range_Hz, gain_tolerance)
+            for r, d in zip(rows, res, strict=True):
+                out[r] = d
     return out
+
+
+#: Largest number of matrix entries (Gram and information matrices of every start, the records) one batch of
+#: :func:`harmonic_tests` holds: about 100 MB in all (at 51.2 kHz, K = 361: one record a batch; at 2550 Hz, 400).
+BATCH_ENTRIES = 4_000_000
+
+
+def row_chunks(rows: np.ndarray, n: int, k: int):
+    """``rows`` in batches whose Gram and information matrices (up to four starts a record) and records stay
+    within :data:`BATCH_ENTRIES`."""
+    size = max(1, BATCH_ENTRIES // (4 * (2 * k + 1) ** 2 + 2 * n))
+    for i in range(0, len(rows), size):
+        yield rows[i:i + size]
 
 
 def _tests_of_one_k(x, dt_s, f0, baselines, sigma, k, tolerance, f_range_Hz, gain_tolerance) -> list[dict]:
