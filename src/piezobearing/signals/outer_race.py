@@ -171,8 +171,9 @@ def harmonic_tests(x: np.ndarray, dt_s: float, f0_Hz, baselines, sigma, toleranc
 
 
 #: Largest number of matrix entries (Gram and information matrices of every start, the records) one batch of
-#: :func:`harmonic_tests` holds: about 100 MB in all (at 51.2 kHz, K = 361: one record a batch; at 2550 Hz, 400).
-BATCH_ENTRIES = 4_000_000
+#: :func:`harmonic_tests` holds: about 25 MB in all, so that a batch needs no more memory than the one-record code
+#: at high rates (at 25.6 and 51.2 kHz, K = 182 and 361: one record a batch; at 2550 Hz, 100).
+BATCH_ENTRIES = 1_000_000
 
 
 def row_chunks(rows: np.ndarray, n: int, k: int):
