@@ -14,6 +14,7 @@ Used by the tests for the many dry runs they ask (tests/test_workflow_rerun.py);
 
 from __future__ import annotations
 
+import gc
 import itertools
 import json
 import os
@@ -143,6 +144,9 @@ def serve() -> None:
             pass
     _remember_parsed_imports()
     _collect_plugins()
+    # The server's objects into the permanent generation: a child's garbage collections no longer traverse them
+    # (nor touch their pages, which a fork shares until written): 0.29 instead of 0.39-0.42 CPU s a dry run.
+    gc.freeze()
     print(json.dumps({"ready": True}), flush=True)
     running: dict[int, int] = {}
     pending, open_ = b"", True

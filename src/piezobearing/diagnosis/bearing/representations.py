@@ -26,9 +26,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import hilbert
-from scipy.stats import chi2 as chi2_dist
-from scipy.stats import norm
 
 from ..subject import Judgement
 from . import chain
@@ -75,6 +72,8 @@ class PerPassage:
     key: str = "per_passage"
 
     def judge(self, fit, problem, settings) -> Judgement:
+        from scipy.stats import chi2 as chi2_dist
+
         rec = problem.record
         kin = fitted_kinematics(fit.values, rec)
         start, stop, centre = passages(kin["phase_rad"], rec.rig.pitch_rad)
@@ -137,6 +136,8 @@ class SynchronousAverage:
     key: str = "synchronous_average"
 
     def judge(self, fit, problem, settings) -> Judgement:
+        from scipy.stats import norm
+
         rec = problem.record
         kin = fitted_kinematics(fit.values, rec)
         pitch = rec.rig.pitch_rad
@@ -200,6 +201,8 @@ def fault_lines(freqs: dict, f_max: float, n_harm: int = 3) -> list[dict]:
 
 def envelope_spectrum(x: np.ndarray, fs: float, band: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
     """Amplitude spectrum of the Hilbert envelope of x band-passed (ideal, in the DFT) to ``band`` [Hz, V]."""
+    from scipy.signal import hilbert
+
     n = x.size
     spec = np.fft.rfft(x - np.mean(x))
     f = np.fft.rfftfreq(n, 1 / fs)
