@@ -12,7 +12,9 @@ The results compared, each side's code on the same inputs (``PROBE``): the basel
 (unclipped at 10 dB and at a DAQ's 3.6e-4 V, clipped, with a gain tolerance) and the slip-searched outer-race
 test's statistics, compared as JSON (byte-identical expected); and the LPM trapezoid rule's Radau reference at
 each side's tolerance (``tests/test_bearing.py``: rtol 1e-9 before, 1e-7 after): its largest load difference
-and each side's error ratio.
+and each side's error ratio; and the fault-type classification over noise seeds (``classification.classify_seeds``,
+the workflow's ``fault_classification``: a healthy and an outer-race stand-in record at 2550 Hz, 50 seeds each,
+the paper config's baseline detector): its CPU seconds and rows (``--probe-only`` reruns this part alone).
 
 Writes ``results/benchmarks/unit_tests.json``. Usage:
 ``python benchmarks/bench_unit_tests.py --old REV [--new HEAD] [-n 2]``.
@@ -92,9 +94,18 @@ sol = solve_ivp(fun, (0, nn * hh), y0, method="Radau", jac=jac, rtol=rtol, atol=
 e = sol.y[:2] - sol.y[2:4]
 q = brg.contact_law(brg.roller_deflections(e.T, res.psi_rad, p.gap_m, p.drops(p.motion(res.time_s))), p.k_contact)[0]
 e0, e1 = float(np.abs(res.load_N - q).max()), float(np.abs(res2.load_N[::2] - q).max())
+import time
+from piezobearing.signals import classification as SC, daq
+sig = cfg.load()["signals"]
+records = {"healthy": ("none", healthy(2550), dt), "outer": ("outer_race", healthy(2550) + impacts("outer_race", 2550), dt)}
+analyse = SC.analyser(sig, KIN, (healthy(2550), dt))
+c0 = time.process_time()
+cm, rows = SC.classify_seeds(records, KIN, analyse, daq.NoiseSettings(), lambda c, j: np.random.default_rng([3, len(c), j]), 50)
+cls_cpu = time.process_time() - c0
 with open(sys.argv[1], "w") as f:
     json.dump({"detections": json.dumps(det, default=float), "radau_load_N": q.tolist(), "radau_nfev": int(sol.nfev),
-               "error_h_over_peak": e0 / float(q.max()), "error_ratio_h_over_h2": e0 / e1}, f)
+               "error_h_over_peak": e0 / float(q.max()), "error_ratio_h_over_h2": e0 / e1,
+               "classification_cpu_s": cls_cpu, "classification_rows": json.dumps(rows, default=float)}, f)
 '''
 
 
@@ -136,6 +147,26 @@ def probe(folder: Path, plugin_dir: Path, rtol: float, atol: float) -> dict:
     return json.loads(out.read_text())
 
 
+def compare(p_old: dict, p_new: dict) -> dict:
+    """The two sides' probe results compared."""
+    q_old, q_new = p_old["radau_load_N"], p_new["radau_load_N"]
+    out = {
+        "detections_byte_identical": p_old["detections"] == p_new["detections"],
+        "radau_reference_max_load_difference_N": float(np.abs(np.subtract(q_old, q_new)).max()),
+        "radau_reference_peak_load_N": float(np.max(q_old)),
+        "radau_rhs_evaluations": {"old": p_old["radau_nfev"], "new": p_new["radau_nfev"]},
+        "trapezoid_error_over_peak": {"old": p_old["error_h_over_peak"], "new": p_new["error_h_over_peak"]},
+        "trapezoid_error_ratio_h_over_h2": {"old": p_old["error_ratio_h_over_h2"],
+                                            "new": p_new["error_ratio_h_over_h2"]},
+    }
+    if "classification_cpu_s" in p_old and "classification_cpu_s" in p_new:
+        out["classify_seeds_2_cases_x_50_seeds_2550Hz"] = {
+            "old_cpu_s": p_old["classification_cpu_s"], "new_cpu_s": p_new["classification_cpu_s"],
+            "new_over_old": p_new["classification_cpu_s"] / p_old["classification_cpu_s"],
+            "rows_byte_identical": p_old["classification_rows"] == p_new["classification_rows"]}
+    return out
+
+
 def per_file(per_test: dict) -> dict:
     out: dict = {}
     for node, s in per_test.items():
@@ -148,7 +179,19 @@ def main() -> None:
     ap.add_argument("--old", required=True)
     ap.add_argument("--new", default="HEAD")
     ap.add_argument("-n", type=int, default=2)
+    ap.add_argument("--probe-only", action="store_true", help="rerun the results' comparison, keep the timings")
     a = ap.parse_args()
+    if a.probe_only:
+        with tempfile.TemporaryDirectory() as tmp:
+            tmp = Path(tmp)
+            (tmp / "plugin").mkdir()
+            (old, _), (new, _) = export_revision(a.old, tmp / "old"), export_revision(a.new, tmp / "new")
+            p_old, p_new = probe(old, tmp / "plugin", 1e-9, 1e-15), probe(new, tmp / "plugin", 1e-7, 1e-13)
+        result = json.loads(OUT.read_text())
+        result["results"] = compare(p_old, p_new)
+        OUT.write_text(json.dumps(result, indent=2) + "\n")
+        print(json.dumps(result["results"], indent=2))
+        return
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         plugin_dir = tmp / "plugin"
@@ -169,7 +212,6 @@ def main() -> None:
         sides[side] = {"tests_cpu_s": sum(tests.values()),
                        "process_cpu_s": statistics.median(r["process_cpu_s"] for r in rs),
                        "per_file_cpu_s": per_file(tests), "per_test_cpu_s": tests, "summary": rs[-1]["summary"]}
-    q_old, q_new = p_old["radau_load_N"], p_new["radau_load_N"]
     result = {
         "old_revision": old_sha, "new_revision": new_sha, "files": list(FILES), "runs_each": a.n,
         "old": sides["old"], "new": sides["new"],
@@ -177,15 +219,7 @@ def main() -> None:
         "process_new_over_old": sides["new"]["process_cpu_s"] / sides["old"]["process_cpu_s"],
         "per_file_new_over_old": {f: sides["new"]["per_file_cpu_s"][f] / sides["old"]["per_file_cpu_s"][f]
                                   for f in sides["old"]["per_file_cpu_s"] if f in sides["new"]["per_file_cpu_s"]},
-        "results": {
-            "detections_byte_identical": p_old["detections"] == p_new["detections"],
-            "radau_reference_max_load_difference_N": float(np.abs(np.subtract(q_old, q_new)).max()),
-            "radau_reference_peak_load_N": float(np.max(q_old)),
-            "radau_rhs_evaluations": {"old": p_old["radau_nfev"], "new": p_new["radau_nfev"]},
-            "trapezoid_error_over_peak": {"old": p_old["error_h_over_peak"], "new": p_new["error_h_over_peak"]},
-            "trapezoid_error_ratio_h_over_h2": {"old": p_old["error_ratio_h_over_h2"],
-                                                "new": p_new["error_ratio_h_over_h2"]},
-        },
+        "results": compare(p_old, p_new),
     }
     OUT.parent.mkdir(parents=True, exist_ok=True)
     OUT.write_text(json.dumps(result, indent=2) + "\n")

@@ -199,15 +199,16 @@ def harmonic_tests(x: np.ndarray, dt_s: float, f0_Hz, baseline: B.Baseline, sigm
     """:func:`harmonic_test` of each row of ``x`` (R, n) [V], with its own ``f0_Hz``, ``sigma`` and clip
     ``levels`` (lo, hi) (sequences of R); the unclipped tests' searches of all rows run together."""
     from .harmonics import harmonic_fits
-    from .outer_race import _phase_searches
+    from .outer_race import _phase_searches, row_chunks
 
     x = np.asarray(x, float)
     kb = (baseline.coefficients.size - 1) // 2
     f_top = list(f0_Hz) if f_range_Hz is None else [f_range_Hz[1]] * x.shape[0]
     ks = [min(B.below_nyquist(dt_s, ft), kb) for ft in f_top]
     out: list = [None] * x.shape[0]
-    for k in dict.fromkeys(ks):  # rows of one K together
-        rows = [i for i in range(x.shape[0]) if ks[i] == k]
+    batches = [(kk, list(part)) for kk in dict.fromkeys(ks)  # rows of one K together, in batches
+               for part in row_chunks(np.array([i for i in range(x.shape[0]) if ks[i] == kk]), x.shape[1], kk)]
+    for k, rows in batches:
         tables = baseline_tables(baseline.coefficients, k)  # once for all rows
         models = [clipped_baseline(baseline.coefficients, sigma[i], *levels[i], k, tables) for i in rows]
         first = B.harmonic_tests(x[rows], dt_s, [f0_Hz[i] for i in rows],

@@ -9,9 +9,10 @@ the evaluations; :func:`harmonic_tests` steps every record's and start's
 searches together (:func:`.scalar_search.fminbound_many`: scipy's bounded
 Brent, problem by problem the same steps) and evaluates the harmonic fits
 (:func:`.harmonics.harmonic_fits`) and the phase searches as arrays over all
-of them. :func:`harmonic_test` is the batch of one. The numbers equal those
-of the one-record code to rounding (NumPy's vectorised sine and cosine give
-the last bit by the array's layout; indicators within 1e-9 relative, tests).
+of them. :func:`harmonic_test` is the batch of one. Each record's numbers are
+exactly those of the record alone (test) and of the one-record code before
+the batching (31 detections and 20 slip-searched tests byte-identical as JSON,
+``benchmarks/bench_unit_tests.py``).
 """
 
 from __future__ import annotations
@@ -161,12 +162,26 @@ def harmonic_tests(x: np.ndarray, dt_s: float, f0_Hz, baselines, sigma, toleranc
                    for ft, b in zip(f_top, baselines, strict=True)])
     out: list = [None] * x.shape[0]
     for k in np.unique(ks):  # rows of one K together (a batch shares K)
-        rows = np.flatnonzero(ks == k)
-        res = _tests_of_one_k(x[rows], dt_s, f0[rows], [baselines[r] for r in rows], sigma[rows], int(k),
-                              tolerance, f_range_Hz, gain_tolerance)
-        for r, d in zip(rows, res, strict=True):
-            out[r] = d
+        for rows in row_chunks(np.flatnonzero(ks == k), x.shape[1], int(k)):
+            res = _tests_of_one_k(x[rows], dt_s, f0[rows], [baselines[r] for r in rows], sigma[rows], int(k),
+                                  tolerance, f_range_Hz, gain_tolerance)
+            for r, d in zip(rows, res, strict=True):
+                out[r] = d
     return out
+
+
+#: Largest number of matrix entries (Gram and information matrices of every start, the records) one batch of
+#: :func:`harmonic_tests` holds: about 25 MB in all, so that a batch needs no more memory than the one-record code
+#: at high rates (at 25.6 and 51.2 kHz, K = 182 and 361: one record a batch; at 2550 Hz, 100).
+BATCH_ENTRIES = 1_000_000
+
+
+def row_chunks(rows: np.ndarray, n: int, k: int):
+    """``rows`` in batches whose Gram and information matrices (up to four starts a record) and records stay
+    within :data:`BATCH_ENTRIES`."""
+    size = max(1, BATCH_ENTRIES // (4 * (2 * k + 1) ** 2 + 2 * n))
+    for i in range(0, len(rows), size):
+        yield rows[i:i + size]
 
 
 def _tests_of_one_k(x, dt_s, f0, baselines, sigma, k, tolerance, f_range_Hz, gain_tolerance) -> list[dict]:
