@@ -22,6 +22,7 @@ paper) runs every job as a fresh process. The CI workflow run and the reproducib
 from __future__ import annotations
 
 import ast
+import gc
 import importlib
 import itertools
 import json
@@ -110,6 +111,9 @@ def serve() -> None:
             importlib.import_module(name)
         except ImportError:  # a module another branch does not have: the job imports what it needs
             pass
+    # The server's objects into the permanent generation: a job's garbage collections no longer traverse them (nor
+    # touch their pages, which the fork shares until written), as in tests/warm_snakemake.py
+    gc.freeze()
     print(json.dumps({"ready": True}), flush=True)
     running: dict[int, int] = {}
     pending, open_ = b"", True

@@ -89,13 +89,20 @@ def newmark_lpm(sn, cn, offset, m, c, k, fext, u0, h, k_contact, tol_m, max_iter
     beta, gamma = 0.25, 0.5
     a0 = 1.0 / (beta * h * h)
     a1 = gamma / (beta * h)
-    keff = a0 * m + a1 * c + k
+    # scalar loops, not array expressions or slice assignments: numba compiles each of those into a
+    # function of its own (a broadcast ``us[0] = u`` alone cost ~1.5 s of compile time), same values
+    keff = np.empty((4, 4))
+    for i in range(4):
+        for jj in range(4):
+            keff[i, jj] = a0 * m[i, jj] + a1 * c[i, jj] + k[i, jj]
     us = np.empty((n1, 4))
     q_out = np.zeros((n1, z))
-    u = u0.copy()
+    u = np.empty(4)
     v = np.zeros(4)
     a = np.zeros(4)
-    us[0] = u
+    for i in range(4):
+        u[i] = u0[i]
+        us[0, i] = u[i]
     ey, ez = u[0] - u[2], u[1] - u[3]
     for j in range(z):
         d = ey * sn[0, j] + ez * cn[0, j] - offset[0, j]
