@@ -180,9 +180,10 @@ def quasi_static_loads(
             return (q, e) if return_offset else q
         idx = ALL if n_active == n else np.flatnonzero(active)  # all rows: views, not copies (the same numbers)
         si, ci, di = s[idx], c[idx], drop[idx]  # the rows' copies once per step, not once per trial
-        a = np.sum(dq[idx] * si * si, 1)
-        b = np.sum(dq[idx] * si * ci, 1)
-        d = np.sum(dq[idx] * ci * ci, 1)
+        dqs, dqc = dq[idx] * si, dq[idx] * ci
+        a = np.sum(dqs * si, 1)
+        b = np.sum(dqs * ci, 1)
+        d = np.sum(dqc * ci, 1)
         reg = 1e-9 * (a + d) + 1e-3 * k_contact * 1e-6 ** (1 / 9)
         a, d = a + reg, d + reg
         det = a * d - b * b
@@ -193,20 +194,8 @@ def quasi_static_loads(
         length = np.hypot(step[:, 0], step[:, 1])
         step *= np.minimum(1.0, reach[idx] / np.maximum(length, 1e-300))[:, None]
         slope = np.sum(f[idx] * step, 1)  # directional derivative of Pi, < 0
-        lam = np.ones(n_active)
-        ei = e[idx]
-        cut = None
-        for _ in range(60):
-            trial = ei + lam[:, None] * step
-            ft, qt, dqt, pt = _state(trial, si, ci, di, gap_m, k_contact, load)
-            # Armijo on Pi; near the solution Pi's rounding hides the decrease, and a smaller residual counts
-            bad = (pt > pot[idx] + 1e-4 * lam * slope) & (np.hypot(ft[:, 0], ft[:, 1]) >= norm[idx])
-            if not bad.any():
-                break
-            if cut is None:
-                cut = _engage_cut(ei, step, si, ci, di, gap_m)
-            lam = np.where(bad, cut * lam, lam)
-            cut = 0.5
+        trial, ft, qt, dqt, pt = _line_search(e[idx], step, slope, pot[idx], norm[idx], si, ci, di, gap_m, k_contact,
+                                              load)
         e[idx] = trial
         f[idx], q[idx], dq[idx], pot[idx] = ft, qt, dqt, pt
     norm = np.hypot(f[:, 0], f[:, 1])
@@ -219,6 +208,30 @@ def quasi_static_loads(
         f"quasi_static_loads: no equilibrium for {int((norm > tol_N * radial_load_N).sum())} of {n} roller "
         f"configurations at F_r = {radial_load_N} N"
     )
+
+
+def _line_search(e, step, slope, pot, norm, si, ci, drop, gap_m, k_contact, load):
+    """The rows' Newton trials e + lam step and their :func:`_state`: Armijo on Pi, or a smaller residual
+    (near the solution Pi's rounding hides the decrease). A rejected full step is next tried at
+    :func:`_engage_cut`, then halved; each trial solves only the rows still rejected (the others keep theirs)."""
+    lam = np.ones(e.shape[0])
+    trial = e + step
+    ft, qt, dqt, pt = _state(trial, si, ci, drop, gap_m, k_contact, load)
+    bad = (pt > pot + 1e-4 * lam * slope) & (np.hypot(ft[:, 0], ft[:, 1]) >= norm)
+    cut = None
+    for _ in range(59):
+        if not bad.any():
+            break
+        if cut is None:
+            cut = _engage_cut(e, step, si, ci, drop, gap_m)
+        lam = np.where(bad, cut * lam, lam)
+        cut = 0.5
+        r = np.flatnonzero(bad)
+        trial[r] = e[r] + lam[r, None] * step[r]
+        ft[r], qt[r], dqt[r], pt[r] = _state(trial[r], si[r], ci[r], drop[r], gap_m, k_contact, load)
+        bad[:] = False
+        bad[r] = (pt[r] > pot[r] + 1e-4 * lam[r] * slope[r]) & (np.hypot(ft[r, 0], ft[r, 1]) >= norm[r])
+    return trial, ft, qt, dqt, pt
 
 
 def _engage_cut(e, step, si, ci, drop, gap_m):
@@ -243,7 +256,7 @@ def _state(e, si, ci, drop, gap_m, k_contact, load):
     gaps drop (n, Z)."""
     delta = e[:, :1] * si + e[:, 1:] * ci - gap_m - drop
     q, dq = contact_law(delta, k_contact)
-    pot = np.sum(q * np.maximum(delta, 0.0), 1) * (9 / 19) - e @ load
+    pot = np.sum(q * delta, 1) * (9 / 19) - e @ load  # q = 0 where delta <= 0: q <delta> bit for bit
     return np.stack([np.sum(q * si, 1), np.sum(q * ci, 1)], 1) - load, q, dq, pot
 
 
