@@ -241,7 +241,9 @@ def contact_law(delta_m: np.ndarray, k_contact: float) -> tuple[np.ndarray, np.n
         dQ / d delta [N/m].
     """
     d = np.maximum(delta_m, 0.0)
-    d19 = d ** (1 / 9)
+    # the power only where a roller is loaded (most of a bearing's rollers carry nothing; 0 ** (1/9) is 0)
+    d19 = np.zeros_like(d)
+    np.power(d, 1 / 9, out=d19, where=d > 0)
     return k_contact * d * d19, (10 / 9) * k_contact * d19
 
 

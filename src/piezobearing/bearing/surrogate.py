@@ -171,7 +171,7 @@ def quasi_static_loads(
     reach = -2.0 * e[:, 1]  # longest Newton step: twice the cold start's distance from the centre [m]
     if e0_m is not None:
         e = np.array(e0_m, dtype=float).reshape(n, 2)
-    f, q, dq, pot = _state(e, ALL, s, c, drop, gap_m, k_contact, load)
+    f, q, dq, pot = _state(e, s, c, drop, gap_m, k_contact, load)
     for _ in range(200):
         norm = np.hypot(f[:, 0], f[:, 1])
         active = norm > tol_N * radial_load_N
@@ -179,7 +179,7 @@ def quasi_static_loads(
         if not n_active:
             return (q, e) if return_offset else q
         idx = ALL if n_active == n else np.flatnonzero(active)  # all rows: views, not copies (the same numbers)
-        si, ci = s[idx], c[idx]
+        si, ci, di = s[idx], c[idx], drop[idx]  # the rows' copies once per step, not once per trial
         a = np.sum(dq[idx] * si * si, 1)
         b = np.sum(dq[idx] * si * ci, 1)
         d = np.sum(dq[idx] * ci * ci, 1)
@@ -194,14 +194,19 @@ def quasi_static_loads(
         step *= np.minimum(1.0, reach[idx] / np.maximum(length, 1e-300))[:, None]
         slope = np.sum(f[idx] * step, 1)  # directional derivative of Pi, < 0
         lam = np.ones(n_active)
+        ei = e[idx]
+        cut = None
         for _ in range(60):
-            trial = e[idx] + lam[:, None] * step
-            ft, qt, dqt, pt = _state(trial, idx, s, c, drop, gap_m, k_contact, load)
+            trial = ei + lam[:, None] * step
+            ft, qt, dqt, pt = _state(trial, si, ci, di, gap_m, k_contact, load)
             # Armijo on Pi; near the solution Pi's rounding hides the decrease, and a smaller residual counts
             bad = (pt > pot[idx] + 1e-4 * lam * slope) & (np.hypot(ft[:, 0], ft[:, 1]) >= norm[idx])
             if not bad.any():
                 break
-            lam = np.where(bad, 0.5 * lam, lam)
+            if cut is None:
+                cut = _engage_cut(ei, step, si, ci, di, gap_m)
+            lam = np.where(bad, cut * lam, lam)
+            cut = 0.5
         e[idx] = trial
         f[idx], q[idx], dq[idx], pot[idx] = ft, qt, dqt, pt
     norm = np.hypot(f[:, 0], f[:, 1])
@@ -216,15 +221,27 @@ def quasi_static_loads(
     )
 
 
-#: Every row (an index of :func:`_state` and the Newton loop that takes views, not copies).
+def _engage_cut(e, step, si, ci, drop, gap_m):
+    """The share of a rejected full Newton step to try next (rows): just past the first roller the step brings
+    into contact (x 1.1), within [0.01, 0.5] [-].
+
+    Newton's Hessian knows only the rollers loaded at e; a step that presses on unloaded ones overshoots (a
+    roller lifted into a groove: 4-5 halvings of the line search per step, one cut with this).
+    """
+    sn = step[:, :1] * si + step[:, 1:] * ci  # d delta / d lam [m]
+    d0 = e[:, :1] * si + e[:, 1:] * ci - gap_m - drop
+    engage = np.where((d0 < 0) & (sn > 0), -d0 / np.where(sn > 0, sn, 1.0), np.inf).min(1)
+    return np.clip(1.1 * engage, 0.01, 0.5)
+
+
+#: Every row (an index of the Newton loop that takes views, not copies).
 ALL = slice(None)
 
 
-def _state(e, idx, s, c, drop, gap_m, k_contact, load):
-    """Force residual, loads, slopes and potential of the rows ``idx`` (indices or :data:`ALL`) at offsets e
-    (n_idx, 2)."""
-    si, ci = s[idx], c[idx]
-    delta = e[:, :1] * si + e[:, 1:] * ci - gap_m - drop[idx]
+def _state(e, si, ci, drop, gap_m, k_contact, load):
+    """Force residual, loads, slopes and potential at offsets e (n, 2) of rows with normals si, ci and extra
+    gaps drop (n, Z)."""
+    delta = e[:, :1] * si + e[:, 1:] * ci - gap_m - drop
     q, dq = contact_law(delta, k_contact)
     pot = np.sum(q * np.maximum(delta, 0.0), 1) * (9 / 19) - e @ load
     return np.stack([np.sum(q * si, 1), np.sum(q * ci, 1)], 1) - load, q, dq, pot
