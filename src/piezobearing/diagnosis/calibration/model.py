@@ -127,8 +127,11 @@ class ForwardModel:
     def _force_path(
         self, f: np.ndarray, values: dict, record: ForceRecord, chain: list[Effect]
     ) -> np.ndarray:
-        head = f[: max(int(round(0.01 / record.dt_s)), 1)]
-        f = np.concatenate([np.full(PAD, np.median(head)), f])
+        level = record._cache.get("start_level")  # the median of the force's first 10 ms, once per force array
+        if level is None or level[0] is not f:
+            level = (f, np.median(f[: max(int(round(0.01 / record.dt_s)), 1)]))
+            record._cache["start_level"] = level
+        f = np.concatenate([np.full(PAD, level[1]), f])
         for e in chain:
             f = e.force(f, values, record)
         v = circuit_voltage(f, record.dt_s, self.fitted_circuit(values))

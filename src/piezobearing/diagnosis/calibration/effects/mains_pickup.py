@@ -51,6 +51,20 @@ def basis(t_s: np.ndarray, f_Hz: float, ks: tuple[int, ...]) -> np.ndarray:
     return np.stack(cols, axis=1)
 
 
+def record_basis(record: ForceRecord, f_Hz: float, ks: tuple[int, ...]) -> np.ndarray:
+    """:func:`basis` on the record's clock from its start, kept for the last two frequencies (a fit asks at one
+    frequency and its finite-difference step, every evaluation) [-]; read-only."""
+    kept = record._cache.setdefault("mains_basis", {})
+    b = kept.get((f_Hz, ks))
+    if b is None:
+        b = basis(record.time_s - record.time_s[0], f_Hz, ks)
+        b.flags.writeable = False
+        kept[(f_Hz, ks)] = b
+        while len(kept) > 2:
+            kept.pop(next(iter(kept)))
+    return b
+
+
 class MainsPickup(Effect):
     name = "mains_pickup"
     title = "mains interference (50/60 Hz + odd harmonics)"
@@ -90,16 +104,15 @@ class MainsPickup(Effect):
 
     def additive(self, values, record):
         ks = harmonics(record)
-        t = record.time_s - record.time_s[0]
         coef = np.array([values[f"mains_h{k}_{p}_V"] for k in ks for p in ("cos", "sin")])
-        return basis(t, values["mains_frequency_Hz"], ks) @ coef
+        return record_basis(record, float(values["mains_frequency_Hz"]), ks) @ coef
 
     def linear_basis(self, values, record):
         """The harmonics' cos and sin at the mains frequency (the voltage is linear in their amplitudes)."""
         ks = harmonics(record)
         f = float(values["mains_frequency_Hz"])
         names = tuple(f"mains_h{k}_{p}_V" for k in ks for p in ("cos", "sin"))
-        return [(names, basis(record.time_s - record.time_s[0], f, ks), ("mains", f, ks))]
+        return [(names, record_basis(record, f, ks), ("mains", f, ks))]
 
     def starts(self, ctx: StartContext) -> list[dict[str, float]]:
         """Largest residual peak within 0.5 Hz of 50 or 60 Hz, then linear least squares of the amplitudes."""
