@@ -111,14 +111,22 @@ def serve() -> None:
             importlib.import_module(name)
         except ImportError:  # a module another branch does not have: the job imports what it needs
             pass
-    # The server's objects into the permanent generation: a job's garbage collections no longer traverse them (nor
-    # touch their pages, which the fork shares until written), as in tests/warm_snakemake.py
+    serve_forks(_child)
+
+
+def serve_forks(child, poll_s: float = 0.02) -> None:
+    """Say ready, then read one JSON request a line (with its ``"id"``) and fork ``child(request)`` (which never
+    returns) for it at once; answer {"id", "returncode", "cpu_s", "max_rss_MB"} a line as each child ends (children
+    run side by side). The server of tests/warm_snakemake.py serves its dry runs with this too.
+
+    First the server's objects go into the permanent generation (``gc.freeze``): a child's garbage collections no
+    longer traverse them, nor touch their pages, which the fork shares until written."""
     gc.freeze()
     print(json.dumps({"ready": True}), flush=True)
     running: dict[int, int] = {}
     pending, open_ = b"", True
     while open_ or running:
-        if open_ and select.select([0], [], [], 0.02)[0]:
+        if open_ and select.select([0], [], [], poll_s)[0]:
             chunk = os.read(0, 65536)
             open_ = bool(chunk)
             pending += chunk
@@ -127,10 +135,10 @@ def serve() -> None:
                 request = json.loads(line)
                 pid = os.fork()
                 if pid == 0:
-                    _child(request)
+                    child(request)
                 running[pid] = request["id"]
         elif not open_:
-            select.select([], [], [], 0.02)
+            select.select([], [], [], poll_s)
         while running:
             pid, status, usage = os.wait4(-1, os.WNOHANG)
             if pid == 0:

@@ -14,7 +14,6 @@ Used by the tests for the many dry runs they ask (tests/test_workflow_rerun.py);
 
 from __future__ import annotations
 
-import gc
 import itertools
 import json
 import os
@@ -135,7 +134,6 @@ def serve() -> None:
     answer {"id", "returncode", "cpu_s"} a line as each child ends (children of several requests run side by side,
     so one server serves two threads: a second server cost 2.4 CPU s to start)."""
     import importlib
-    import select
 
     for name in PRELOAD:
         try:
@@ -144,33 +142,11 @@ def serve() -> None:
             pass
     _remember_parsed_imports()
     _collect_plugins()
-    # The server's objects into the permanent generation: a child's garbage collections no longer traverse them
-    # (nor touch their pages, which a fork shares until written): 0.29 instead of 0.39-0.42 CPU s a dry run.
-    gc.freeze()
-    print(json.dumps({"ready": True}), flush=True)
-    running: dict[int, int] = {}
-    pending, open_ = b"", True
-    while open_ or running:
-        if open_ and select.select([0], [], [], 0.01)[0]:
-            chunk = os.read(0, 65536)
-            open_ = bool(chunk)
-            pending += chunk
-            *lines, pending = pending.split(b"\n")
-            for line in lines:
-                request = json.loads(line)
-                pid = os.fork()
-                if pid == 0:
-                    _child(request)
-                running[pid] = request["id"]
-        elif not open_:
-            select.select([], [], [], 0.01)
-        while running:
-            pid, status, usage = os.wait4(-1, os.WNOHANG)
-            if pid == 0:
-                break
-            answer = {"id": running.pop(pid), "returncode": os.waitstatus_to_exitcode(status),
-                      "cpu_s": usage.ru_utime + usage.ru_stime}
-            print(json.dumps(answer), flush=True)
+    # tests/warm_jobs.py's fork loop, which first freezes the server's objects (gc.freeze: 0.29 instead of 0.39-0.42
+    # CPU s a dry run)
+    from warm_jobs import serve_forks
+
+    serve_forks(_child, poll_s=0.01)
 
 
 class WarmSnakemake:
