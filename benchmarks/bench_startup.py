@@ -52,6 +52,8 @@ def warm_server(folder: Path):
     """The warm Snakemake server of the tree ``folder`` (its own tests/warm_snakemake.py, its package)."""
     import importlib.util
 
+    sys.path.insert(0, str(folder / "tests"))  # the tree's own tests/warm_jobs.py (its ForkServer), not another's
+    sys.modules.pop("warm_jobs", None)
     spec = importlib.util.spec_from_file_location(f"warm_snakemake_{folder.name}", folder / "tests/warm_snakemake.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)

@@ -148,22 +148,19 @@ def serve_forks(child, poll_s: float = 0.02) -> None:
             print(json.dumps(answer), flush=True)
 
 
-class JobServer:
-    """The client: ``run(script, cwd, threads)`` blocks until the forked job ends and returns its exit status;
-    safe to call from Snakemake's job threads at once."""
+class ForkServer:
+    """The client of a server process that runs :func:`serve_forks`: ``request(fields)`` sends one request and
+    blocks until its child ends, returning the answer; safe to call from several threads at once. ``cpu_s``: the
+    children's CPU seconds so far. :class:`JobServer` here and ``warm_snakemake.WarmSnakemake`` are its two kinds."""
 
-    def __init__(self, scripts: Path, preload: tuple[str, ...] | None = None):
-        only = ["--preload", ",".join(preload)] if preload is not None else []
-        self._proc = subprocess.Popen(
-            [sys.executable, __file__, "--serve", str(scripts), *only], stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE, text=True,
-        )
-        assert json.loads(self._proc.stdout.readline()).get("ready"), "the warm job server did not start"
+    def __init__(self, cmd: list[str], name: str, env: dict | None = None):
+        self._proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env)
+        assert json.loads(self._proc.stdout.readline()).get("ready"), f"the {name} did not start"
         self._ids = itertools.count()
         self._lock = threading.Lock()
         self._done: dict[int, dict] = {}
         self._events: dict[int, threading.Event] = {}
-        self.cpu_s = 0.0  # the jobs' CPU seconds so far
+        self.cpu_s = 0.0
         threading.Thread(target=self._read, daemon=True).start()
 
     def _read(self) -> None:
@@ -174,13 +171,13 @@ class JobServer:
                 self.cpu_s += answer["cpu_s"]
                 self._events.pop(answer["id"]).set()
 
-    def run(self, script: str, cwd: str, threads: int) -> dict:
-        """Run the job; {"returncode", "cpu_s", "max_rss_MB"} of its child."""
+    def request(self, fields: dict) -> dict:
+        """Send ``fields`` (with an ``id`` added) and wait for the child's answer."""
         event = threading.Event()
         with self._lock:
             i = next(self._ids)
             self._events[i] = event
-            self._proc.stdin.write(json.dumps({"id": i, "script": script, "cwd": cwd, "threads": threads}) + "\n")
+            self._proc.stdin.write(json.dumps({"id": i, **fields}) + "\n")
             self._proc.stdin.flush()
         event.wait()
         with self._lock:
@@ -189,6 +186,19 @@ class JobServer:
     def close(self) -> None:
         self._proc.stdin.close()
         self._proc.wait(timeout=60)
+
+
+class JobServer(ForkServer):
+    """The job server's client: ``run(script, cwd, threads)`` blocks until the forked job ends and returns its exit
+    status; safe to call from Snakemake's job threads at once."""
+
+    def __init__(self, scripts: Path, preload: tuple[str, ...] | None = None):
+        only = ["--preload", ",".join(preload)] if preload is not None else []
+        super().__init__([sys.executable, __file__, "--serve", str(scripts), *only], "warm job server")
+
+    def run(self, script: str, cwd: str, threads: int) -> dict:
+        """Run the job; {"returncode", "cpu_s", "max_rss_MB"} of its child."""
+        return self.request({"script": script, "cwd": cwd, "threads": threads})
 
 
 def main(args: list[str], preload: tuple[str, ...] | None = None) -> int:

@@ -14,14 +14,13 @@ Used by the tests for the many dry runs they ask (tests/test_workflow_rerun.py);
 
 from __future__ import annotations
 
-import itertools
-import json
 import os
 import subprocess
 import sys
 import tempfile
-import threading
 from pathlib import Path
+
+from warm_jobs import ForkServer, serve_forks
 
 #: Imported once in the server: Snakemake's command line and what the Snakefile imports, and what Snakemake imports
 #: on the way of every dry run (its report, storage and profile modules, smart_open, jsonschema, platformdirs, ...:
@@ -144,36 +143,15 @@ def serve() -> None:
     _collect_plugins()
     # tests/warm_jobs.py's fork loop, which first freezes the server's objects (gc.freeze: 0.29 instead of 0.39-0.42
     # CPU s a dry run)
-    from warm_jobs import serve_forks
-
     serve_forks(_child, poll_s=0.01)
 
 
-class WarmSnakemake:
+class WarmSnakemake(ForkServer):
     """A server (see the module's docstring) and ``run(args, cwd)`` like ``subprocess.run`` of snakemake; ``run``
     may be called from several threads at once (each call a child of its own)."""
 
     def __init__(self, env: dict | None = None):
-        self._proc = subprocess.Popen(
-            [sys.executable, __file__],
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            text=True,
-            env=env,
-        )
-        assert json.loads(self._proc.stdout.readline()).get("ready"), "the warm snakemake server did not start"
-        self._lock = threading.Lock()
-        self._ids = itertools.count()
-        self._done: dict[int, dict] = {}
-        self._events: dict[int, threading.Event] = {}
-        threading.Thread(target=self._read, daemon=True).start()
-
-    def _read(self) -> None:
-        for line in self._proc.stdout:
-            answer = json.loads(line)
-            with self._lock:
-                self._done[answer["id"]] = answer
-                self._events.pop(answer["id"]).set()
+        super().__init__([sys.executable, __file__], "warm snakemake server", env)
 
     def run(
         self, args: list[str], cwd: str | Path, env: dict | None = None, warm_jobs: tuple[str, ...] | None = None
@@ -183,27 +161,14 @@ class WarmSnakemake:
         processes. The result's ``cpu_s``: the child's CPU seconds (with its jobs')."""
         with tempfile.TemporaryDirectory() as tmp:
             out, err = Path(tmp, "stdout"), Path(tmp, "stderr")
-            event = threading.Event()
-            with self._lock:
-                i = next(self._ids)
-                self._events[i] = event
-                request = {"id": i, "args": list(args), "cwd": str(cwd), "stdout": str(out), "stderr": str(err),
-                           "env": env, "warm_jobs": None if warm_jobs is None else list(warm_jobs)}
-                self._proc.stdin.write(json.dumps(request) + "\n")
-                self._proc.stdin.flush()
-            event.wait()
-            with self._lock:
-                answer = self._done.pop(i)
+            answer = self.request({"args": list(args), "cwd": str(cwd), "stdout": str(out), "stderr": str(err),
+                                   "env": env, "warm_jobs": None if warm_jobs is None else list(warm_jobs)})
             self.last_cpu_s = answer["cpu_s"]  # the last call's (benchmarks/bench_startup.py calls one at a time)
             result = subprocess.CompletedProcess(
                 ["snakemake", *args], answer["returncode"], out.read_text(), err.read_text()
             )
             result.cpu_s = answer["cpu_s"]
             return result
-
-    def close(self) -> None:
-        self._proc.stdin.close()
-        self._proc.wait(timeout=60)
 
 
 if __name__ == "__main__":
