@@ -190,6 +190,8 @@ def pytest_cpu(root: Path) -> dict:
     """CPU seconds of ``CI=true pytest -p no:xdist`` on :data:`TEST_FILES` in ``root`` (its src first on sys.path)."""
     import resource
 
+    from bench_ci_tests import per_file  # the --durations lines summed per file, as for the whole suite
+
     env = {**os.environ, "PYTHONPATH": str(root / "src"), "CI": "true", "OMP_NUM_THREADS": "1"}
     env.pop("PYTHONDONTWRITEBYTECODE", None)
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -197,16 +199,10 @@ def pytest_cpu(root: Path) -> dict:
     out = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:xdist", "-p", "no:cacheprovider",
                           "--durations=0", *TEST_FILES], cwd=root, env=env, capture_output=True, text=True)
     r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    per_file: dict = {}
-    for line in out.stdout.splitlines():
-        parts = line.split()
-        if len(parts) >= 3 and parts[0].endswith("s") and parts[1] in ("call", "setup", "teardown"):
-            f = parts[2].split("::")[0]
-            per_file[f] = per_file.get(f, 0.0) + float(parts[0][:-1])
     return {"cpu_seconds": (r1.ru_utime + r1.ru_stime) - (r0.ru_utime + r0.ru_stime),
             "wall_seconds": time.perf_counter() - t0, "returncode": out.returncode,
             "summary": out.stdout.strip().splitlines()[-1] if out.stdout.strip() else out.stderr[-500:],
-            "durations_per_file_s": per_file}
+            "durations_per_file_s": per_file(out.stdout)}
 
 
 def moved(old: dict, new: dict, values: str, ci: str) -> float:
