@@ -46,6 +46,7 @@ import scipy.sparse.linalg as spla
 
 from .. import sparse_solve
 from ..sensor.materials import IsotropicMaterial, PiezoMaterial
+from ..sfepy_setup import defer_serendipity_bases
 from .housing_mesh import GROUP_HOUSING, GROUP_RING, HousingMesh, nested_dissection_order
 
 # ---------------------------------------------------------------------------
@@ -188,6 +189,7 @@ def assemble_matrices(mesh: HousingMesh, ring: IsotropicMaterial, housing: Isotr
     from sfepy.terms import Term
 
     output.set_output(quiet=True)
+    defer_serendipity_bases()  # SymPy's import not paid for an element never used (piezobearing.sfepy_setup)
     sf_mesh = Mesh.from_data(
         "housing",
         mesh.coors,
