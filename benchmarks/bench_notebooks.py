@@ -1,19 +1,20 @@
 """The figure notebooks' CPU: every notebook executed by papermill as its rule does, in a folder where the CI
-workflow finished, with a fresh kernel (every user's run) and with the tests' warm kernel (tests/warm_kernel.py),
-and the previous revision's notebooks beside this checkout's, as ratios.
+workflow finished, fresh (every user's run) and warm (the tests' runs, tests/warm_kernel.py), and the previous
+revision's notebooks beside this checkout's, as ratios.
 
 Each notebook of ``notebooks/`` runs as ``papermill NOTEBOOK OUT -k python3 -p figure SCRATCH/NAME.png`` in
 ``RUN`` (its other parameters keep their defaults, the paths of that run's results), its executed notebook and
-figure going to a scratch folder; a set is all of them, one after the other. ``old``: the notebooks of ``--old
-REV`` (``git show``), fresh kernels; ``cold``: this checkout's notebooks, fresh kernels; ``warm``: this
-checkout's notebooks with tests/warm_kernel.py's kernel spec first on ``JUPYTER_PATH`` (its server started for
-the set, its start counted). All three use this checkout's package. CPU seconds are user + system of every
-process (papermill, kernels, stubs, the server), from the children's resource usage; the sets rotate (old, cold,
-warm, old, ...), ``-n`` rounds, and the ratios are taken round by round, which keeps them meaningful on a shared
-machine. Checked every round: each figure byte for byte against the run's own (``RUN/results/figures``); each
-executed notebook of ``warm`` against ``cold`` (cells and outputs, the displayed images; not the times papermill
-and the kernel record, nor the random id papermill gives the injected-parameters cell); the outputs of ``old``
-against ``cold`` where their notebooks differ.
+figure going to a scratch folder, papermill found on PATH as a job finds it; a set is all of them, one after the
+other. ``old``: the notebooks of ``--old REV`` (``git show``), fresh processes; ``cold``: this checkout's
+notebooks, fresh processes; ``warm``: this checkout's notebooks with tests/warm_kernel.py's kernel spec first on
+``JUPYTER_PATH`` and its papermill stand-in first on PATH (its server started for the set, its start counted).
+All three use this checkout's package. CPU seconds are user + system of every process (papermill, kernels,
+stubs, the server), from the children's resource usage; the sets rotate (old, cold, warm, old, ...), ``-n``
+rounds, and the ratios are taken round by round, which keeps them meaningful on a shared machine. Checked every
+round: each figure byte for byte against the run's own (``RUN/results/figures``); each executed notebook of
+``warm`` against ``cold`` (cells and outputs, the displayed images; not the times papermill and the kernel
+record, nor the random id papermill gives the injected-parameters cell); the outputs of ``old`` against
+``cold``.
 
 ``--ci-run``: the whole of the tests' ``ci_run`` fixture, ``python tests/warm_jobs.py --cores 2 all study_all
 --configfile config/ci.yaml`` as tests/conftest.py runs it (PATH without the environment's bin folder), in a
@@ -83,17 +84,20 @@ def children_cpu() -> float:
 def run_set(run: Path, notebooks: Path, scratch: Path, warm: bool) -> dict:
     """Execute every notebook of ``notebooks`` once in ``run``; CPU seconds of the set, whether each figure is the
     run's, byte for byte, and the executed notebooks (:func:`executed`)."""
-    papermill = str(Path(sys.executable).with_name("papermill"))
+    bindir = Path(sys.executable).parent
     env_before = dict(os.environ)
     figures, done = {}, {}
     c0 = children_cpu()
     kernels = WarmKernels(notebooks) if warm else None
+    # PATH as a job's: the environment's bin folder last (workflow/rules/common.smk), a warm stand-in first
+    path = [p for p in os.environ["PATH"].split(os.pathsep) if p and Path(p) != bindir] + [str(bindir)]
+    env = {**os.environ, "PATH": os.pathsep.join(path)}
     try:
         for nb in sorted(notebooks.glob("*.ipynb")):
             figure = figure_of(nb)
             figures[nb.stem] = (scratch / Path(figure).name, run / figure)
-            subprocess.run([papermill, str(nb), str(scratch / nb.name), "-k", "python3", "-p", "figure",
-                            str(figures[nb.stem][0])], cwd=run, check=True, capture_output=True)
+            subprocess.run(["papermill", str(nb), str(scratch / nb.name), "-k", "python3", "-p", "figure",
+                            str(figures[nb.stem][0])], cwd=run, env=env, check=True, capture_output=True)
     finally:
         if kernels is not None:
             kernels.close()
@@ -115,11 +119,13 @@ def ci_run(old: str, n: int, tmp: Path) -> dict:
 
     bindir = Path(sys.executable).parent
     path = os.pathsep.join(p for p in os.environ["PATH"].split(os.pathsep) if p and Path(p) != bindir)
+    sha = {side: subprocess.run(["git", "rev-parse", rev], cwd=ROOT, capture_output=True, text=True,
+                                check=True).stdout.strip() for side, rev in (("old", old), ("new", "HEAD"))}
     runs: dict[str, list] = {"old": [], "new": []}
     same_figures, same_numbers = [], []
     for i in range(n):
         trees = {}
-        for side, rev in (("old", old), ("new", "HEAD")):
+        for side, rev in sha.items():  # resolved once: a branch may move while this runs
             tree = trees[side] = export_revision(rev, tmp / f"{side}{i}")
             env = {**os.environ, "PATH": path, "PYTHONPATH": str(tree / "src")}
             c0 = children_cpu()
@@ -140,9 +146,8 @@ def ci_run(old: str, n: int, tmp: Path) -> dict:
     return {
         "what": "tests/conftest.py's ci_run: python tests/warm_jobs.py --cores 2 all study_all --configfile "
                 "config/ci.yaml in a fresh export of each revision; CPU seconds (user + system) of every process",
-        "old_revision": old,
-        "new_revision": subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True,
-                                       check=True).stdout.strip(),
+        "old_revision": sha["old"],
+        "new_revision": sha["new"],
         "pairs": n,
         "old_cpu_s": statistics.median(r["cpu_s"] for r in runs["old"]),
         "new_cpu_s": statistics.median(r["cpu_s"] for r in runs["new"]),
@@ -181,12 +186,12 @@ def main() -> None:
                                       capture_output=True, text=True, check=True).stdout
             (old / nb.name).write_text(old_text)
         kinds = {"old": (old, False), **kinds}
-    for kind in kinds:
-        (tmp / kind).mkdir()
-    run_set(run, kinds["cold"][0], tmp / "cold", False)  # warm-up: bytecode caches, page cache
+    scratch = tmp / "out"  # one for all sets: the figure parameter, which papermill writes into each notebook, is
+    scratch.mkdir()  # the same; each set's figures and notebooks are read before the next set runs
+    run_set(run, kinds["cold"][0], scratch, False)  # warm-up: bytecode caches, page cache
     rounds = []
     for i in range(a.n):
-        r = {kind: run_set(run, nbs, tmp / kind, warm) for kind, (nbs, warm) in kinds.items()}
+        r = {kind: run_set(run, nbs, scratch, warm) for kind, (nbs, warm) in kinds.items()}
         rounds.append(r)
         print(f"round {i}: " + ", ".join(f"{k} {v['cpu_s']:.2f} s" for k, v in r.items()), flush=True)
 
