@@ -19,7 +19,10 @@ side's tests, its package first on ``sys.path``), their CPU seconds (user + syst
 and the pass line.
 
 Writes results/benchmarks/diagnosis_tests.json. Usage:
-``python benchmarks/bench_diagnosis_tests.py --old REV [--groups bearing calibration diagnostics] [--pytest] [--note TEXT]``.
+``python benchmarks/bench_diagnosis_tests.py --old REV [--groups bearing calibration diagnostics job] [--pytest] [--note TEXT]``.
+
+``job``: the CI workflow's running-bearing jobs (``synthesize_bearing_record`` and ``diagnose_bearing`` on
+config/ci.yaml, without the figures), whether their record CSV and diagnosis JSON are byte-identical.
 """
 
 from __future__ import annotations
@@ -54,6 +57,10 @@ def summary(d: dict) -> dict:
         "final_params": d["final"]["params"],
         "final_ci95": d["final"]["ci95"],
         "final_nrmse": d["final"]["nrmse"],
+        "bytes_sha256": d.get("bytes_sha256"),
+        "steps": [[st.get("added"), st.get("effects")] for st in d.get("steps", [])],
+        "ranked_params": [r.get("params", {}) for r in d["ranking"]],
+        "ranked_ci95": [r.get("ci95", {}) for r in d["ranking"]],
     }
 
 
@@ -145,7 +152,35 @@ def diagnostics_cases():
         yield f"diagnostics:{name}", lambda h=hidden: td.run(ci, h)
 
 
-GROUPS = {"bearing": bearing_cases, "calibration": calibration_cases, "diagnostics": diagnostics_cases}
+def job_cases():
+    """The CI workflow's ``synthesize_bearing_record`` and ``diagnose_bearing`` jobs on config/ci.yaml (the
+    healthy 0.5 s record; the influence line solved once beforehand, untimed): record CSV and diagnosis JSON
+    as the stages write them (no figures), their SHA-256 in the row."""
+    import hashlib
+    import tempfile
+
+    from piezobearing import config as cfg
+    from piezobearing.diagnosis.bearing.subject import synthesise
+    from piezobearing.io import write_bearing_record, write_json
+    from piezobearing.stages import bearing_diagnosis as bd
+
+    ci = cfg.load(cfg.CONFIG_DIR / "ci.yaml")
+    infl = bd.influence_from_config(ci)
+    folder = Path(tempfile.mkdtemp())
+
+    def job():
+        rec = folder / "synthetic_record.csv"
+        write_bearing_record(synthesise(ci, ci["seed"], ci["bearing"]["hidden_effects"], infl), rec)
+        out, _ = bd.run(str(rec), infl, ci)
+        write_json(out, folder / "diagnosis.json")
+        out["bytes_sha256"] = {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.iterdir())}
+        return out
+
+    yield "job:diagnose_bearing", job
+
+
+GROUPS = {"bearing": bearing_cases, "calibration": calibration_cases, "diagnostics": diagnostics_cases,
+          "job": job_cases}
 
 
 def worker(groups: list[str]) -> None:
@@ -219,6 +254,18 @@ def moved(old: dict, new: dict, values: str, ci: str) -> float:
     return worst
 
 
+def moved_ranked(old: dict, new: dict) -> float:
+    """Largest |new - old| of any ranked candidate's value (same effect in both rankings) as a share of the old
+    95% interval's half-width (0 where a side has no such rows)."""
+    worst = 0.0
+    rows = zip(new.get("ranked_params", []), new.get("ranked_ci95", []), strict=False)
+    new_of = dict(zip(new["ranking"], rows, strict=False))
+    for e, p, ci in zip(old["ranking"], old.get("ranked_params", []), old.get("ranked_ci95", []), strict=False):
+        if e in new_of:
+            worst = max(worst, moved({"v": p, "c": ci}, {"v": new_of[e][0], "c": new_of[e][1]}, "v", "c"))
+    return worst
+
+
 def compare(old: dict, new: dict) -> dict:
     out = {"cases": {}, "groups": {}}
     for case, o in old.items():
@@ -234,12 +281,16 @@ def compare(old: dict, new: dict) -> dict:
             "same_selection": o["selected"] == n["selected"],
             "same_verdict": o["verdict"] == n["verdict"],
             "same_ranking": o["ranking"] == n["ranking"],
+            "same_steps": o.get("steps") == n.get("steps"),
             "first_values_moved_half_widths": moved(o, n, "first_params", "first_ci95"),
+            "ranked_values_moved_half_widths": moved_ranked(o, n),
             "final_values_moved_half_widths": moved(o, n, "final_params", "final_ci95"),
             "max_delta_bic_change": max((abs(a - nb[e]) for e, a in ob.items() if e in nb), default=0.0),
             "max_delta_bic_change_relative": max(
                 (abs(a - nb[e]) / max(abs(a), 1.0) for e, a in ob.items() if e in nb), default=0.0),
             "final_nrmse_old_new": [o["final_nrmse"], n["final_nrmse"]],
+            "same_bytes": ({k: o["bytes_sha256"][k] == n["bytes_sha256"].get(k) for k in o["bytes_sha256"]}
+                           if o.get("bytes_sha256") else None),
             "selected": n["selected"],
             "verdict": n["verdict"],
         }
@@ -261,6 +312,10 @@ def compare(old: dict, new: dict) -> dict:
         "ratio": old_s / new_s,
         "all_same_selection_and_verdict": all(r["same_selection"] and r["same_verdict"] for r in rows),
         "all_same_ranking": all(r["same_ranking"] for r in rows),
+        "all_same_steps": all(r["same_steps"] for r in rows),
+        "max_ranked_values_moved_half_widths_but_blind": max(
+            (r["ranked_values_moved_half_widths"] for c, r in out["cases"].items() if not c.endswith("_blind")),
+            default=0.0),
         "max_values_moved_half_widths": max(
             (max(r["first_values_moved_half_widths"], r["final_values_moved_half_widths"]) for r in rows), default=0.0
         ),

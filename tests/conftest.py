@@ -174,17 +174,21 @@ def workflow_env() -> dict:
 _WARM = None
 
 
-def snakemake_warm(*args: str, cwd: Path = REPO, env: dict | None = None) -> subprocess.CompletedProcess:
-    """``snakemake ARGS`` in ``cwd`` (a dry run, a lint, a report, a run refused before any job, a small run) as a
-    child forked from this test process's warm server (tests/warm_snakemake.py, started at the first call: about
-    1.1 CPU s a call instead of 3.5; the child parses the Snakefile, validates the config and hashes the code as a
-    fresh process does; its jobs are fresh processes); ``env``: the child's environment (default: this one)."""
+def snakemake_warm(
+    *args: str, cwd: Path = REPO, env: dict | None = None, warm_jobs: bool = False
+) -> subprocess.CompletedProcess:
+    """``snakemake ARGS`` in ``cwd`` (a dry run, a lint, a report, a run refused before any job, a small run, the
+    CI workflow run) as a child forked from this test process's warm server (tests/warm_snakemake.py, started at
+    the first call: about 1.1 CPU s a call instead of 3.5; the child parses the Snakefile, validates the config and
+    hashes the code as a fresh process does; its jobs are fresh processes, or with ``warm_jobs`` its Python script
+    jobs forked from a job server of its own, as :func:`run_workflow` runs them); ``env``: the child's environment
+    (default: this one)."""
     global _WARM
     if _WARM is None:
         from warm_snakemake import WarmSnakemake
 
         _WARM = WarmSnakemake()
-    return _WARM.run(list(args), cwd, env=env)
+    return _WARM.run(list(args), cwd, env=env, warm_jobs=True if warm_jobs else None)
 
 
 def pytest_sessionfinish(session):
@@ -226,9 +230,15 @@ def ci_run(tmp_path_factory) -> Path:
     command lines, each with a kernel forked from a server with ipykernel and the notebooks' imports done
     (tests/warm_kernel.py): the same figures, byte for byte, and the same executed notebooks as with fresh kernels
     (benchmarks/bench_notebooks.py). A user's run, the README's first command, starts every job and kernel fresh;
-    what only a fresh process would catch is said in tests/warm_jobs.py and tests/warm_kernel.py."""
+    what only a fresh process would catch is said in tests/warm_jobs.py and tests/warm_kernel.py.
+
+    Snakemake itself is a child forked from this worker's warm server (:func:`snakemake_warm`, with the environment
+    of :func:`run_workflow`), not a fresh process: its imports are done (about 2 CPU s less; the server is
+    started anyway for the workflow tests of this group). The rerun (``ci_rerun``) starts Snakemake fresh, so
+    the two runs' Snakemake processes differ in hash seed as their job servers do."""
     work = _copy_repo(tmp_path_factory.mktemp("ci_run"))
-    out = run_workflow(work, "all", "study_all", warm_jobs=True)
+    out = snakemake_warm("--cores", "2", "all", "study_all", "--configfile", "config/ci.yaml", cwd=work,
+                         env=workflow_env(), warm_jobs=True)
     assert out.returncode == 0, out.stderr[-4000:]
     (work / NUMBERS_LIST).write_text("\n".join(result_numbers(work)))  # before other tests add files
     return work

@@ -49,12 +49,24 @@ def data_untouched():
 # --------------------------------------------------------------------------- the files of the cases
 
 
+#: The session's pytest temporary-folder factory (set by :func:`_temporary_folders`).
+_TMP: dict = {}
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _temporary_folders(tmp_path_factory):
+    """The cases' folder goes under pytest's temporary folder (pytest keeps the last three sessions' and removes
+    older ones), not a folder of its own in /tmp that nobody removes (4 MB a session). Session-scoped: the module's
+    tests stay free to run on either xdist worker (tests/conftest.py groups tests by module-scoped fixtures)."""
+    _TMP["factory"] = tmp_path_factory
+    yield
+    _TMP.clear()
+
+
 @functools.cache
 def workdir() -> Path:
     """One folder with the good record and every bad file and config of the cases."""
-    import tempfile
-
-    d = Path(tempfile.mkdtemp(prefix="bad_inputs_"))
+    d = _TMP["factory"].mktemp("bad_inputs")
     c = cfg.load(cfg.CONFIG_DIR / "ci.yaml")
     m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"])
     write_measurement(m, d / "record.csv")

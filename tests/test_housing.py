@@ -247,3 +247,45 @@ def test_reduced_agrees_with_sfepy_direct(paper_config, meshes):
         d = fem.sensor_force_direct(m, wy, wz, dt, alpha, beta, h["rho_inf"])
         rms = np.sqrt(np.mean((d["force_N"] - red["force_N"]) ** 2)) / np.sqrt(np.mean(red["force_N"] ** 2))
         assert rms < 0.01, case
+
+
+
+_SERENDIPITY = """
+import sys
+import numpy as np
+from piezobearing.bearing import housing_fem as fem
+from piezobearing.io import read_housing_mesh
+from piezobearing.sensor.materials import CAST_IRON, STEEL
+
+k, mass = fem.assemble_matrices(read_housing_mesh(sys.argv[1]), STEEL, CAST_IRON)
+print(int("sympy" in sys.modules), repr(2 * float(mass[0::3][:, 0::3].sum())))
+from sfepy.discrete.fem.geometry_element import GeometryElement
+from sfepy.discrete.fem.poly_spaces import SerendipityTensorProductPolySpace
+
+ps = SerendipityTensorProductPolySpace("s", GeometryElement("3_8"), 2)
+x = np.array([[0.3, 0.2, 0.7], [0.9, 0.1, 0.5]])
+print(int("sympy" in sys.modules), repr(ps.eval_basis(x)[:, 0].sum(axis=-1).tolist()), ps.n_nod)
+"""
+
+
+def test_a_housing_model_is_assembled_without_sympy_and_a_serendipity_space_still_works(meshes, model, tmp_path):
+    """piezobearing.sfepy_setup: a fresh process assembles the housing's matrices without importing SymPy (the
+    serendipity bases that sfepy's first FE domain would import, 0.33 CPU s), and the assembly is the same (the
+    mass [kg] as this process's model has it); a serendipity space made afterwards reads its bases then (SymPy
+    imported) and they are sfepy's: 20 quadratic bases whose sum is one (a partition of unity) at any point."""
+    import subprocess
+    import sys
+
+    from piezobearing.io import write_housing_mesh
+
+    write_housing_mesh(meshes["healthy"], tmp_path / "mesh.npz")
+    out = subprocess.run([sys.executable, "-c", _SERENDIPITY, str(tmp_path / "mesh.npz")], capture_output=True,
+                         text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    first, second = (line.split(" ", 1) for line in out.stdout.strip().splitlines()[-2:])
+    assert first[0] == "0", "SymPy was imported by the assembly"
+    assert float(first[1]) == pytest.approx(model.mass_kg, rel=1e-12)
+    assert second[0] == "1"
+    sums, n_nod = second[1].rsplit(" ", 1)
+    assert int(n_nod) == 20
+    assert np.allclose(eval(sums), 1.0, atol=1e-12)

@@ -317,3 +317,41 @@ def test_order_tracking_finds_the_fault_that_the_ramp_smears():
         assert d_o.per_type["outer_race"]["margin"] > 3 * d_t.per_type["outer_race"]["margin"]
     assert wins_order == 10
     assert wins_time <= 5
+
+
+def test_the_tail_probabilities_from_scipy_special_are_scipy_stats_bit_for_bit():
+    """The chi-square log tail of the outer-race tests (``log_chi2_sf``) and the indicator's F threshold
+    (``indicator_threshold``) take SciPy's special functions directly, not scipy.stats (its import, 0.45 CPU s,
+    no longer paid by the jobs that need nothing else of it): the same bits as ``chi2.logsf`` (both sides of
+    the median, q = 0, inf, NaN, dof <= 0, and the asymptotic term where it underflows) and ``f.isf``."""
+    import warnings
+
+    from scipy.special import gammaln
+    from scipy.stats import chi2, f
+
+    from piezobearing.signals.outer_race import log_chi2_sf
+
+    def reference(q, dof):  # the function as it was: scipy.stats, then the asymptotic term
+        q, dof = np.broadcast_arrays(np.asarray(q, float), np.asarray(dof, float))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            v = np.asarray(chi2.logsf(q, dof), float)
+            bad = ~np.isfinite(v)
+            a = 0.5 * dof[bad]
+            v[bad] = -0.5 * q[bad] + (a - 1.0) * np.log(0.5 * q[bad]) - gammaln(a)
+        return v
+
+    rng = np.random.default_rng(3)
+    q = np.concatenate([[0.0, -1.0, np.inf, np.nan, 1e-300, 2e4, 1e5, 3.0], rng.exponential(20, 3000),
+                        rng.uniform(0, 3000, 1000)])
+    dof = np.concatenate([[2, 3, 4, 1, 2, 2, 2, 0], rng.integers(1, 80, 3000), rng.integers(1, 400, 1000)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ours = log_chi2_sf(q, dof)
+    assert ours.tobytes() == reference(q, dof).tobytes()
+    assert np.isfinite(ours[5:7]).all() and ours[5] < -9000  # the asymptotic tail, not -inf
+    assert log_chi2_sf(q[20], dof[20]) == reference(q[20], dof[20])[()]  # scalars too
+    for p in (1e-6, 1e-3, 0.05, 0.5, 0.999):
+        for k in (1, 3, 10):
+            for m in (1, 7, 60, 1000):
+                assert det.indicator_threshold(p, k, m) == float(k * f.isf(p, 2 * k, 2 * m))

@@ -3,7 +3,9 @@
 ``python .snakemake/scripts/tmpXXXX.<rule>.py`` process, runs that same generated script in a child forked from a
 server that has NumPy, SciPy, pandas, Snakemake's script preamble modules and every package module the workflow's
 scripts import already imported. A job of this workflow spends most of its CPU time on those imports (0.5-1.4 s
-each: benchmarks/bench_ci_tests.py); the forked child pays only the job's own work.
+each: benchmarks/bench_ci_tests.py); the forked child pays only the job's own work. One more difference: the
+scheduler keeps at most one pending re-evaluation timer (:func:`one_reevaluation_timer`: the same jobs in the same
+order, without Snakemake's multiplying timer rounds).
 
 The child is the job as Snakemake would run it: the job's script file (preamble with its pickled ``snakemake``
 object, then the rule's script), run as ``__main__`` in the job's working directory, with the thread variables
@@ -208,6 +210,39 @@ class JobServer(ForkServer):
         return self.request({"script": script, "cwd": cwd, "threads": threads})
 
 
+def one_reevaluation_timer() -> None:
+    """Snakemake's job scheduler with at most one pending re-evaluation timer, not one more per scheduling round.
+
+    With Snakemake's default ``--max-jobs-per-timespan 100/1s`` (9.27), every scheduling round that finds jobs
+    ready, whether or not a core is free for one, starts a 1 s ``threading.Timer`` whose round starts another:
+    each job's end adds a chain of rounds that lasts while jobs wait for a core, so the rounds multiply with the
+    jobs (3987 timer rounds in one CI workflow run, ``all study_all``, each reading the input sizes of every
+    waiting job: its Snakemake process took 6.3 s of CPU, 3.8 s with this; one pair, load 10). Here a round asked
+    for while a timer is pending is left to that timer, which fires sooner; its round, if jobs still wait, starts
+    the next. The rounds at job ends are Snakemake's own, and a core is only freed at a job's end, so the timer
+    rounds start no job here: the jobs and their order are Snakemake's. Used by the tests' real runs (``ci_run``,
+    ``ci_rerun``, the rerun test's stand-in runs); a user's ``snakemake`` keeps Snakemake's own."""
+    from snakemake.scheduling.job_scheduler import JobScheduler
+
+    lock = threading.Lock()
+    pending: set[int] = set()
+
+    def schedule_reevaluation(self, delay) -> None:
+        with lock:
+            if id(self) in pending:
+                return
+            pending.add(id(self))
+
+        def fire() -> None:
+            with lock:
+                pending.discard(id(self))
+            self._open_jobs.release()
+
+        threading.Timer(delay, fire).start()
+
+    JobScheduler._schedule_reevalutation = schedule_reevaluation
+
+
 def main(args: list[str], preload: tuple[str, ...] | None = None) -> int:
     """``snakemake ARGS`` in the current folder with warm script jobs; its exit status. ``preload``: the modules the
     job server imports instead of :data:`PRELOAD` and the scripts' package modules (the rerun test's stand-in
@@ -230,6 +265,7 @@ def main(args: list[str], preload: tuple[str, ...] | None = None) -> int:
             raise subprocess.CalledProcessError(done["returncode"], f"python {fname} (warm job)")
 
     PythonScript.execute_script = execute_script
+    one_reevaluation_timer()
     try:
         snakemake_main(args)
         return 0

@@ -59,7 +59,8 @@ PRELOAD = (
 def _child(request: dict) -> None:
     """In the forked child: become ``snakemake ARGS`` in ``cwd`` with stdout/stderr to the given files; with the
     request's ``env`` as its environment where given (what its jobs inherit), and with ``warm_jobs`` (a list of
-    modules) its Python script jobs forked from a job server that imported those (tests/warm_jobs.py)."""
+    modules, or true for the job server's default: tests/warm_jobs.py's PRELOAD and the scripts' package modules)
+    its Python script jobs forked from a job server that imported those (tests/warm_jobs.py)."""
     os.chdir(request["cwd"])
     if request.get("env") is not None:
         os.environ.clear()
@@ -74,7 +75,8 @@ def _child(request: dict) -> None:
         if request.get("warm_jobs") is not None:
             from warm_jobs import main as warm_main
 
-            code = warm_main(request["args"], tuple(request["warm_jobs"]))
+            preload = request["warm_jobs"]
+            code = warm_main(request["args"], None if preload is True else tuple(preload))
         else:
             from snakemake.cli import main
 
@@ -154,15 +156,17 @@ class WarmSnakemake(ForkServer):
         super().__init__([sys.executable, __file__], "warm snakemake server", env)
 
     def run(
-        self, args: list[str], cwd: str | Path, env: dict | None = None, warm_jobs: tuple[str, ...] | None = None
+        self, args: list[str], cwd: str | Path, env: dict | None = None,
+        warm_jobs: tuple[str, ...] | bool | None = None,
     ) -> subprocess.CompletedProcess:
         """``snakemake ARGS`` in ``cwd``; ``env``: the child's environment (default: the server's); ``warm_jobs``:
-        run the script jobs warm from a job server importing these modules (tests/warm_jobs.py), not as fresh
-        processes. The result's ``cpu_s``: the child's CPU seconds (with its jobs')."""
+        run the script jobs warm from a job server importing these modules (``True``: the job server's default,
+        as ``python tests/warm_jobs.py ARGS`` runs them), not as fresh processes. The result's ``cpu_s``: the
+        child's CPU seconds (with its jobs')."""
         with tempfile.TemporaryDirectory() as tmp:
             out, err = Path(tmp, "stdout"), Path(tmp, "stderr")
             answer = self.request({"args": list(args), "cwd": str(cwd), "stdout": str(out), "stderr": str(err),
-                                   "env": env, "warm_jobs": None if warm_jobs is None else list(warm_jobs)})
+                                   "env": env, "warm_jobs": warm_jobs if warm_jobs in (None, True) else list(warm_jobs)})
             self.last_cpu_s = answer["cpu_s"]  # the last call's (benchmarks/bench_startup.py calls one at a time)
             result = subprocess.CompletedProcess(
                 ["snakemake", *args], answer["returncode"], out.read_text(), err.read_text()

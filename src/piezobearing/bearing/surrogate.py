@@ -128,6 +128,7 @@ def quasi_static_loads(
     e0_m: np.ndarray | None = None,
     return_offset: bool = False,
     normals: tuple[np.ndarray, np.ndarray] | None = None,
+    method: str = "compiled",
 ) -> np.ndarray:
     """Roller loads Q (n, Z) [N] of the quasi-static equilibrium at every row of roller angles.
 
@@ -160,7 +161,13 @@ def quasi_static_loads(
         Also return the shaft offsets e (n, 2) [m].
     normals : (ndarray, ndarray), optional
         sin psi and -cos psi when the caller holds them (a table's fixed grid).
+    method : {"compiled", "numpy"}
+        ``compiled``: each row's Newton loop in :mod:`.surrogate_kernel` (numba, the same steps; loads within
+        the tolerance, README "The running bearing's equilibrium, compiled"); ``numpy``: vectorised over the
+        rows (the reference, kept for the benchmark and as the check of the kernel).
     """
+    if method not in ("compiled", "numpy"):
+        raise ValueError(f"quasi_static_loads: method must be 'compiled' or 'numpy', got {method!r}")
     psi = np.atleast_2d(psi_rad)
     drop = np.broadcast_to(drop_m, psi.shape)
     s, c = _normals(psi) if normals is None else normals
@@ -171,6 +178,8 @@ def quasi_static_loads(
     reach = -2.0 * e[:, 1]  # longest Newton step: twice the cold start's distance from the centre [m]
     if e0_m is not None:
         e = np.array(e0_m, dtype=float).reshape(n, 2)
+    if method == "compiled":
+        return _compiled(s, c, drop, e, reach, radial_load_N, gap_m, k_contact, tol_N, return_offset)
     f, q, dq, pot = _state(e, s, c, drop, gap_m, k_contact, load)
     for _ in range(200):
         norm = np.hypot(f[:, 0], f[:, 1])
@@ -206,6 +215,28 @@ def quasi_static_loads(
         return (q, e) if return_offset else q
     raise RuntimeError(
         f"quasi_static_loads: no equilibrium for {int((norm > tol_N * radial_load_N).sum())} of {n} roller "
+        f"configurations at F_r = {radial_load_N} N"
+    )
+
+
+def _compiled(s, c, drop, e, reach, radial_load_N, gap_m, k_contact, tol_N, return_offset):
+    """:func:`quasi_static_loads` by :func:`.surrogate_kernel.newton_rows` (one compiled signature: contiguous,
+    writable float arrays)."""
+    from .surrogate_kernel import newton_rows
+
+    def arr(x):
+        x = np.ascontiguousarray(x, dtype=float)
+        return x if x.flags.writeable else x.copy()
+
+    s, c, drop, e = arr(s), arr(c), arr(drop), arr(e)  # e: the caller's own copy, overwritten
+    q = np.empty(s.shape)
+    thr = tol_N * radial_load_N
+    norm, _ = newton_rows(s, c, drop, e, arr(reach), float(gap_m), float(k_contact), float(radial_load_N), thr,
+                          1e-3 * k_contact * 1e-6 ** (1 / 9), q)
+    if not np.any(norm > thr) or np.all(norm <= STALL_TOL * radial_load_N):  # the stall: as the numpy loop's
+        return (q, e) if return_offset else q
+    raise RuntimeError(
+        f"quasi_static_loads: no equilibrium for {int((norm > thr).sum())} of {e.shape[0]} roller "
         f"configurations at F_r = {radial_load_N} N"
     )
 
@@ -477,30 +508,32 @@ class Surrogate:
         t = self.table(op, outer_drop, key, offsets_m)
         return np.interp(np.mod(np.asarray(phase_rad, dtype=float), t.period), t.phase, t.force)
 
-    def fine_force(
+    def fine_change(
         self, phase_rad: np.ndarray, op: Operating, drop_m: np.ndarray, outer_drop=None, key=None, offsets_m=None
     ) -> np.ndarray:
-        """F_s [N] at cage phases (n,) with extra drops (n, Z) of a moving defect.
+        """What the extra drops (n, Z) of a moving defect change in F_s [N] at cage phases (n,).
 
-        The table (with any outer-race defect and roller scatter) where no
-        roller stands in the moving defect, the equilibrium solved where one does.
+        The equilibrium is solved where a roller that carries load stands in the moving defect; elsewhere
+        nothing changes (0). With the table's F_s added it is F_s with the defect (and any outer-race defect
+        and roller scatter).
         """
         period = self.table(op, outer_drop, key, offsets_m).period
         bt = self.table(op, None, None, offsets_m)
         loaded, e_tab = bt.loaded, bt.offset
         phi = np.asarray(phase_rad, dtype=float)
-        out = self.table_force(phi, op, outer_drop, key, offsets_m)
+        out = np.zeros(phi.size)
         # a drop under a roller that carries nothing changes nothing: solve only where a loaded roller drops
         # (loaded at the nearest table phase or either neighbour)
         m = loaded.shape[0] - 1
         k = np.rint(np.mod(phi, period) / period * m).astype(int) % m
         # the record's roller j stands where the table's roller j + n does, n = whole pitches turned
-        # (a pitch: the labels shift by one roller; a cage turn: none)
+        # (a pitch: the labels shift by one roller; a cage turn: none); looked up only where a roller drops
         z = loaded.shape[1]
-        n = np.floor(phi / period).astype(int) * int(round(z * period / (2 * np.pi)))
-        cols = (np.arange(z)[None, :] + n[:, None]) % z
-        near = loaded[k[:, None], cols] | loaded[np.mod(k - 1, m)[:, None], cols] | loaded[np.mod(k + 1, m)[:, None], cols]
-        rows = np.flatnonzero(np.any((drop_m > 0) & near, axis=1))
+        r, j = np.nonzero(drop_m > 0)
+        col = (j + np.floor(phi[r] / period).astype(int) * int(round(z * period / (2 * np.pi)))) % z
+        kr = k[r]
+        near = loaded[kr, col] | loaded[np.mod(kr - 1, m), col] | loaded[np.mod(kr + 1, m), col]
+        rows = np.unique(r[near])
         if rows.size:
             psi = self.roller_angles(phi[rows])
             d = drop_m[rows]
@@ -509,7 +542,8 @@ class Surrogate:
             if offsets_m is not None:
                 d = d + np.asarray(offsets_m)[None, :]
             # equilibrium to 1e-7 F_r (50 uN at 500 N, far below any record's noise), from the healthy offset
-            out[rows] = self.sensor_force_at(phi[rows], op, d, e0_m=e_tab[k[rows]], tol_N=1e-7)[0]
+            f = self.sensor_force_at(phi[rows], op, d, e0_m=e_tab[k[rows]], tol_N=1e-7)[0]
+            out[rows] = f - self.table_force(phi[rows], op, outer_drop, key, offsets_m)
         return out
 
 

@@ -72,6 +72,7 @@ import scipy.sparse.linalg as spla
 from piezobearing import sparse_solve
 from piezobearing.sensor.materials import IsotropicMaterial, StressChargeForm
 from piezobearing.sensor.mesh import GROUP_ADHESIVE, GROUP_BOTTOM_DISK, GROUP_PZT, GROUP_TOP_DISK, StackMesh
+from piezobearing.sfepy_setup import defer_serendipity_bases
 
 log = logging.getLogger(__name__)
 
@@ -207,6 +208,7 @@ def assemble(mesh: StackMesh, mat: StackMaterials, order: int = 2, load_face: st
     from sfepy.terms import Term
 
     _sfepy_quiet()
+    defer_serendipity_bases()  # SymPy's import not paid for an element never used (piezobearing.sfepy_setup)
     smesh = Mesh.from_data(
         "stack", mesh.coors, None, [mesh.cells.astype(np.int32)], [mesh.groups.astype(np.int32)], ["3_8"]
     )

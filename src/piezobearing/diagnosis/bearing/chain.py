@@ -168,34 +168,56 @@ def moving_defect_change(rig: Rig, values: dict, edges: np.ndarray, op: Operatin
     w_r = values.get("roller_defect_width_m", 0.0)
     s = rig.substeps()
     frac = (np.arange(s) + 0.5) / s
-    phi_f = (edges[:-1, None] + np.diff(edges)[:, None] * frac[None, :]).ravel()
+    change = np.zeros(edges.size - 1)
+    # the shaft turns f_r / FTF times as far as the cage, the roller R_o / r times
+    cage_per_shaft = rig.ftf_ratio() * (1 - slip)
+    spin_per_cage = g.outer_raceway_radius_m / (0.5 * g.roller_diameter_m)
+    cand = np.zeros(change.size, dtype=bool)
+    if w_i > 0:
+        ri = 0.5 * (g.pitch_diameter_m - g.roller_diameter_m)
+        x = values["inner_defect_angle_rad"] + (edges - values["start_phase_rad"]) / cage_per_shaft - edges
+        cand |= _passes(x, 0.5 * w_i / ri, rig.pitch_rad)
+    if w_r > 0:
+        spin = values["roller_defect_spin_rad"] + spin_per_cage * (edges - values["start_phase_rad"])
+        cand |= _passes(spin, 0.5 * w_r / (0.5 * g.roller_diameter_m), np.pi)
+    cand = np.flatnonzero(cand)
+    if not cand.size:
+        return change
+    # the sub-samples of the candidate samples only (the same numbers as over the whole record)
+    phi_f = (edges[cand, None] + (edges[cand + 1] - edges[cand])[:, None] * frac[None, :]).ravel()
     hit = np.zeros(phi_f.size, dtype=bool)
     if w_i > 0:
-        # the shaft turns f_r / FTF times as far as the cage
-        theta = values["inner_defect_angle_rad"] + (phi_f - values["start_phase_rad"]) / (rig.ftf_ratio() * (1 - slip))
+        theta = values["inner_defect_angle_rad"] + (phi_f - values["start_phase_rad"]) / cage_per_shaft
         j_i, d_i = inner_race_contact(phi_f, theta, w_i, g)
         hit |= d_i > 0
     if w_r > 0:
-        spin = values["roller_defect_spin_rad"] + (g.outer_raceway_radius_m / (0.5 * g.roller_diameter_m)) * (
-            phi_f - values["start_phase_rad"]
-        )
-        d_r = roller_groove_drop(spin, w_r, g)
+        d_r = roller_groove_drop(values["roller_defect_spin_rad"] + spin_per_cage * (phi_f - values["start_phase_rad"]),
+                                 w_r, g)
         hit |= d_r > 0
-    change = np.zeros(edges.size - 1)
-    samples = np.unique(np.flatnonzero(hit) // s)
-    if not samples.size:
+    at = np.unique(np.flatnonzero(hit) // s)
+    if not at.size:
         return change
-    sub = (samples[:, None] * s + np.arange(s)[None, :]).ravel()
+    samples = cand[at]
+    sub = (at[:, None] * s + np.arange(s)[None, :]).ravel()
     drop = np.zeros((sub.size, g.n_rollers))
     rows = np.arange(sub.size)
     if w_i > 0:
         drop[rows, j_i[sub]] += d_i[sub]
     if w_r > 0:
         drop[:, int(values.get("roller_defect_index", 0))] += d_r[sub]
-    sur = rig.surrogate
-    diff = sur.fine_force(phi_f[sub], op, drop, outer, key, offsets) - sur.table_force(phi_f[sub], op, outer, key, offsets)
+    diff = rig.surrogate.fine_change(phi_f[sub], op, drop, outer, key, offsets)
     change[samples] = diff.reshape(-1, s).mean(axis=1)
     return change
+
+
+def _passes(angle_at_edges: np.ndarray, half_rad: float, period_rad: float) -> np.ndarray:
+    """Which sample windows may hold a passage of a groove: the angle (linear in the cage phase, given at the
+    windows' edges) comes within ``half_rad`` of a multiple of ``period_rad`` (margin 0.1% + 1e-9 rad for the
+    sub-samples' rounding; the drops then decide exactly)."""
+    lo = np.minimum(angle_at_edges[:-1], angle_at_edges[1:])
+    hi = np.maximum(angle_at_edges[:-1], angle_at_edges[1:])
+    h = 1.001 * half_rad + 1e-9
+    return np.floor((hi + h) / period_rad) >= np.ceil((lo - h) / period_rad)
 
 
 def force_key(values: dict) -> tuple:

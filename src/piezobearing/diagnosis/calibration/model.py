@@ -30,6 +30,9 @@ from .effects.base import denoised_force, prefilter_response
 
 #: Samples at the initial force level put before the record (see :meth:`ForwardModel.simulate`).
 PAD = 16
+#: Entries of a model's cache of stages (force, voltage, response), least recently used dropped first: a fit's
+#: point and its finite-difference steps.
+CACHE_ENTRIES = 16
 
 
 @dataclass(frozen=True)
@@ -47,8 +50,8 @@ class ForwardModel:
     circuit: SensorCircuit
     effects: tuple[Effect, ...] = ()
     _cache: dict = field(default_factory=dict, compare=False, repr=False, hash=False)
-    #: The names of the additive parameters per record (``id`` -> (record, names)): :meth:`_cached` asks at every
-    #: evaluation, and the effects' parameter lists (a spline's knots) took a tenth of a calibration fit's time.
+    #: The names of the additive and of the force hooks' parameters per record (``id`` -> (record, names)),
+    #: :meth:`_keys`.
     _additive: dict = field(default_factory=dict, compare=False, repr=False, hash=False)
 
     @classmethod
@@ -117,47 +120,81 @@ class ForwardModel:
         """
         chain = self._chain()
         f0 = record.force_N if force_N is None else np.asarray(force_N, dtype=float)
-        v = self._cached("path", f0, values, record, lambda: self._force_path(f0, values, record, chain))
+        v = self._voltage(f0, values, record, chain)[PAD:]
         for e in chain:
             add = e.additive(values, record)
             if add is not None:
                 v = v + add
         return v
 
-    def _force_path(
-        self, f: np.ndarray, values: dict, record: ForceRecord, chain: list[Effect]
-    ) -> np.ndarray:
-        level = record._cache.get("start_level")  # the median of the force's first 10 ms, once per force array
-        if level is None or level[0] is not f:
-            level = (f, np.median(f[: max(int(round(0.01 / record.dt_s)), 1)]))
-            record._cache["start_level"] = level
-        f = np.concatenate([np.full(PAD, level[1]), f])
-        for e in chain:
-            f = e.force(f, values, record)
-        v = circuit_voltage(f, record.dt_s, self.fitted_circuit(values))
-        for e in chain:
-            v = e.voltage(v, values, record)
-        return v[PAD:]
+    @staticmethod
+    def _unit_delay(record: ForceRecord) -> np.ndarray:
+        if "unit_delay" not in record._cache:  # z^-1 on the record's bins: the same at every R
+            record._cache["unit_delay"] = unit_delay(record.freq_Hz, record.dt_s)
+        return record._cache["unit_delay"]
 
-    def _cached(self, what: str, obj, values: dict, record: ForceRecord, compute):
-        """Results of the force path (and response) by the values of the non-additive parameters.
+    def _forced(self, f0: np.ndarray, values: dict, record: ForceRecord, chain: list[Effect]) -> np.ndarray:
+        """The force on the disk with ``PAD`` samples before the record, by the values of the force hooks'
+        parameters (a finite difference in R or the circuit reuses it)."""
 
-        A fit's finite differences in an additive parameter (mains, drift) then
-        reuse the force path. Entries hold their input array, so a key cannot
-        meet a different array with a recycled id.
-        """
+        def compute():
+            level = record._cache.get("start_level")  # the median of the force's first 10 ms, once per force array
+            if level is None or level[0] is not f0:
+                level = (f0, np.median(f0[: max(int(round(0.01 / record.dt_s)), 1)]))
+                record._cache["start_level"] = level
+            f = np.concatenate([np.full(PAD, level[1]), f0])
+            for e in chain:
+                f = e.force(f, values, record)
+            return f
+
+        return self._cached("force", f0, values, record, compute, self._keys(record)[1])
+
+    def _voltage(self, f0: np.ndarray, values: dict, record: ForceRecord, chain: list[Effect]) -> np.ndarray:
+        """The voltage of the force path with the ``PAD`` samples before the record, by the values of the
+        non-additive parameters."""
+
+        def compute():
+            v = circuit_voltage(self._forced(f0, values, record, chain), record.dt_s, self.fitted_circuit(values))
+            for e in chain:
+                v = e.voltage(v, values, record)
+            return v
+
+        return self._cached("voltage", f0, values, record, compute)
+
+    def _keys(self, record: ForceRecord) -> tuple[frozenset, tuple[str, ...]]:
+        """The additive parameters' names and the force hooks' parameters' names, once per record: the
+        effects' parameter lists (a spline's knots) took a tenth of a calibration fit's time."""
         hit = self._additive.get(id(record))
         if hit is None or hit[0] is not record:
-            hit = (record, frozenset(p.name for e in self.effects if e.additive_only for p in e.params(record)))
+            additive = frozenset(p.name for e in self.effects if e.additive_only for p in e.params(record))
+            force = tuple(
+                p.name for e in self._chain() if type(e).force is not Effect.force for p in e.params(record)
+            )
+            hit = (record, (additive, force))
             self._additive[id(record)] = hit
-        additive = hit[1]
-        key = (what, id(obj), tuple(sorted((k, v) for k, v in values.items() if k not in additive)))
+        return hit[1]
+
+    def _cached(self, what: str, obj, values: dict, record: ForceRecord, compute, names: tuple | None = None):
+        """Results of the force path (and response) by the values of the non-additive parameters (or of
+        ``names``, those a stage depends on).
+
+        A fit's finite differences in an additive parameter (mains, drift) then
+        reuse the force path, and those in R or the circuit the force hooks'
+        output. Entries hold their input array, so a key cannot meet a
+        different array with a recycled id.
+        """
+        if names is None:
+            additive = self._keys(record)[0]
+            key = (what, id(obj), tuple(sorted((k, v) for k, v in values.items() if k not in additive)))
+        else:
+            key = (what, id(obj), tuple(values[k] for k in names))
         hit = self._cache.get(key)
         if hit is not None and hit[0] is obj:
+            self._cache[key] = self._cache.pop(key)  # the most recently used last
             return hit[1]
         out = compute()
         self._cache[key] = (obj, out)
-        while len(self._cache) > 8:
+        while len(self._cache) > CACHE_ENTRIES:
             self._cache.pop(next(iter(self._cache)))
         return out
 
@@ -198,9 +235,7 @@ class ForwardModel:
 
     def _response(self, values: dict, record: ForceRecord) -> np.ndarray:
         c = self.fitted_circuit(values)
-        if "unit_delay" not in record._cache:  # z^-1 on the record's bins: the same at every R
-            record._cache["unit_delay"] = unit_delay(record.freq_Hz, record.dt_s)
-        g = rc_response(record.freq_Hz, record.dt_s, c.open_circuit_gain_V_per_N, c.tau_s, record._cache["unit_delay"])
+        g = rc_response(record.freq_Hz, record.dt_s, c.open_circuit_gain_V_per_N, c.tau_s, self._unit_delay(record))
         for e in self.effects:
             g = g * e.response(values, record)
         return g

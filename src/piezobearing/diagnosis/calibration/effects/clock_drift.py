@@ -90,23 +90,32 @@ def drifted(force_N: np.ndarray, epsilon: float, pad: int) -> np.ndarray:
     return out
 
 
-def noise_gain(f_per_sample: np.ndarray, epsilon: float, n: int, k: int = 16) -> np.ndarray:
+def noise_gain(f_per_sample: np.ndarray, epsilon: float, n: int, k: int = 16,
+               cosines: np.ndarray | None = None) -> np.ndarray:
     """sqrt(mean over the record of |H_mu(f)|^2): the kernel's rms response at the record's offsets [-].
 
     ``k`` offsets mu = frac(epsilon j) at evenly spaced samples j of the record. With the taps h[m],
     |H_mu(f)|^2 = r[0] + 2 sum_d r[d] cos(2 pi d f), r the autocorrelation of h, so the mean over the
     offsets is one cosine series of the mean autocorrelation (2 HALF - 1 terms), evaluated term by term
     (memory: one array of the frequencies; 30x faster than the taps x frequencies complex products).
+    ``cosines``: :func:`cosine_table` of ``f_per_sample``, when the caller keeps it (a fit asks at every epsilon).
     """
     shift = epsilon * np.linspace(0, n - 1, k)
     _, h = kernel(shift - np.floor(shift))
     taps = h.shape[1]
     r = np.array([np.mean(np.sum(h[:, d:] * h[:, : taps - d], axis=1)) for d in range(taps)])
     f = np.asarray(f_per_sample, dtype=float)
+    cos = cosine_table(f) if cosines is None else cosines
     p = np.full(f.shape, r[0])
     for d in range(1, taps):
-        p += 2.0 * r[d] * np.cos(2 * np.pi * d * f)
+        p += 2.0 * r[d] * cos[d - 1]
     return np.sqrt(np.clip(p, 0.0, None))
+
+
+def cosine_table(f_per_sample: np.ndarray) -> np.ndarray:
+    """cos(2 pi d f) for d = 1..2 HALF - 1, one row each: :func:`noise_gain`'s terms [-]."""
+    f = np.asarray(f_per_sample, dtype=float)
+    return np.array([np.cos(2 * np.pi * d * f) for d in range(1, 2 * HALF)])
 
 
 class ClockDrift(Effect):
@@ -143,7 +152,11 @@ class ClockDrift(Effect):
 
     def response(self, values, record):
         e = values["clock_drift_ppm"] * 1e-6
-        return 1.0 if e == 0 else noise_gain(record.freq_Hz * record.dt_s, e, record.n)
+        if e == 0:
+            return 1.0
+        if "clock_drift_cosines" not in record._cache:  # the same at every epsilon: kept on the record
+            record._cache["clock_drift_cosines"] = cosine_table(record.freq_Hz * record.dt_s)
+        return noise_gain(record.freq_Hz * record.dt_s, e, record.n, cosines=record._cache["clock_drift_cosines"])
 
     def summary(self, values):
         e = values["clock_drift_ppm"]
