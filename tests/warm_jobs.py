@@ -20,6 +20,13 @@ Snakemake imported before the server was forked) is there anyway, so a job that 
 a missing ``import`` of a name fails here as anywhere) would pass here. The README's first command (the whole
 paper) runs every job as a fresh process. The CI workflow run and the reproducibility rerun (``ci_run``,
 ``ci_rerun``, tests/conftest.py) use this; the bad-input workflow cases (tests/test_bad_inputs.py) run theirs fresh.
+
+The notebook jobs (``papermill ... -k python3``, shell jobs) run as Snakemake runs them, but their kernels start
+warm too (tests/warm_kernel.py: the ``python3`` kernel spec of this run is a stub whose kernel is forked from a
+server with ipykernel and the notebooks' imports done). What that does not prove: that a notebook imports every
+module it uses (a submodule the server preloaded is there anyway), and a fresh kernel's own start (its imports,
+the spec jupyter_client would find without ``JUPYTER_PATH``); papermill, jupyter_client, the kernel's set-up,
+every cell, the executed notebook and the figure are the real ones.
 """
 
 from __future__ import annotations
@@ -288,8 +295,10 @@ def main(args: list[str], preload: tuple[str, ...] | None = None) -> int:
     scripts import nothing but Snakemake's preamble modules, :data:`STAND_IN_PRELOAD`)."""
     from snakemake.cli import main as snakemake_main
     from snakemake.script import PythonScript
+    from warm_kernel import WarmKernels
 
     server = JobServer(Path("workflow/scripts").resolve(), preload)
+    kernels = WarmKernels(Path("notebooks")) if Path("notebooks").is_dir() else None
 
     def execute_script(self, fname, edit=False):
         start = time.time()
@@ -311,6 +320,9 @@ def main(args: list[str], preload: tuple[str, ...] | None = None) -> int:
     finally:
         server.close()
         print(f"warm jobs: {server.cpu_s:.2f} s of CPU in the jobs", file=sys.stderr)
+        if kernels is not None:
+            k = kernels.close()
+            print(f"warm kernels: {k['cpu_s']:.2f} s of CPU in {k['kernels']} notebook kernels", file=sys.stderr)
 
 
 if __name__ == "__main__":

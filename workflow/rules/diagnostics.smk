@@ -58,7 +58,9 @@ rule diagnosis_notebook:
     input:
         notebook="notebooks/diagnosis.ipynb",
         diagnosis=f"{RESULTS}/diagnostics/diagnosis.json",
-        arrays=f"{RESULTS}/diagnostics/diagnosis.npz",
+        figures=[
+            f"{RESULTS}/diagnostics/figures/{name}.png" for name in DIAGNOSIS_FIGURES
+        ],
     output:
         figure=report(
             f"{RESULTS}/figures/diagnosis_ladder.png",
@@ -79,6 +81,7 @@ rule diagnosis_notebook:
         runtime=2,
     params:
         **stage_params("diagnosis_notebook", "notebooks/diagnosis.ipynb"),
+        figures=lambda wc, input: os.path.dirname(input.figures[0]),
     shell:
         "papermill {input.notebook:q} {output.notebook:q} -k python3 -r diagnosis {input.diagnosis:q}"
-        " -r arrays {input.arrays:q} -r figure {output.figure:q} > {log:q} 2>&1"
+        " -r figures {params.figures:q} -r figure {output.figure:q} > {log:q} 2>&1"

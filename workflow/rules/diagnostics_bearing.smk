@@ -84,7 +84,10 @@ rule diagnosis_bearing_notebook:
     input:
         notebook="notebooks/diagnosis_bearing.ipynb",
         diagnosis=f"{RESULTS}/diagnostics_bearing/diagnosis.json",
-        arrays=f"{RESULTS}/diagnostics_bearing/diagnosis.npz",
+        figures=[
+            f"{RESULTS}/diagnostics_bearing/figures/{name}.png"
+            for name in BEARING_FIGURES
+        ],
     output:
         figure=report(
             f"{RESULTS}/figures/diagnosis_bearing.png",
@@ -107,6 +110,7 @@ rule diagnosis_bearing_notebook:
         **stage_params(
             "diagnosis_bearing_notebook", "notebooks/diagnosis_bearing.ipynb"
         ),
+        figures=lambda wc, input: os.path.dirname(input.figures[0]),
     shell:
         "papermill {input.notebook:q} {output.notebook:q} -k python3 -r diagnosis {input.diagnosis:q}"
-        " -r arrays {input.arrays:q} -r figure {output.figure:q} > {log:q} 2>&1"
+        " -r figures {params.figures:q} -r figure {output.figure:q} > {log:q} 2>&1"
