@@ -15,9 +15,11 @@ process's would, and a non-zero exit fails the job. Every child starts from the 
 leak into the next). The server is forked from the run's Snakemake process (:class:`JobServer`), so its hash seed
 is that run's and differs from that of every process of another run.
 
-Not the same as a fresh process: a module the job's script does not import itself but the server preloaded (or
-Snakemake imported before the server was forked) is there anyway, so a job that forgot such an import (an attribute of a package whose submodule it never imported;
-a missing ``import`` of a name fails here as anywhere) would pass here. The README's first command (the whole
+Not the same as a fresh process: a module the job's script does not import itself but the server preloaded
+(:data:`PRELOAD`: SciPy's signal, optimize and interpolate, sfepy, meshio and numba too) or Snakemake imported
+before the server was forked is there anyway, so a job that forgot such an import (an attribute of a package whose
+submodule it never imported; a missing ``import`` of a name fails here as anywhere) would pass here. The README's
+first command (the whole
 paper) runs every job as a fresh process. The CI workflow run and the reproducibility rerun (``ci_run``,
 ``ci_rerun``, tests/conftest.py) use this; the bad-input workflow cases (tests/test_bad_inputs.py) run theirs fresh.
 
@@ -32,6 +34,7 @@ every cell, the executed notebook and the figure are the real ones.
 from __future__ import annotations
 
 import ast
+import contextlib
 import gc
 import importlib
 import itertools
@@ -45,7 +48,11 @@ import threading
 import time
 from pathlib import Path
 
-#: What every job of this workflow imports, besides the package modules its script names.
+#: What every job of this workflow imports, besides the package modules its script names; then the libraries that
+#: the package's modules import inside their functions (to keep a fresh job's start light) and that several jobs of
+#: a run import again each: scipy.signal (with scipy.stats, 0.49 CPU s a job: the calibration, voltage, envelope,
+#: SNR and LPM jobs), sfepy with the polynomial-space table its first domain loads (about 0.35 s: the housing and
+#: sensor FEM jobs), meshio, numba (benchmarks/bench_ci_jobs.py: 12 CPU s less per CI workflow run).
 PRELOAD = (
     "numpy",
     "scipy.sparse.linalg",
@@ -53,6 +60,17 @@ PRELOAD = (
     "threadpoolctl",
     "snakemake.iocontainers",
     "snakemake.logging",
+    "scipy.signal",
+    "scipy.optimize",
+    "scipy.interpolate",
+    "sfepy.discrete",
+    "sfepy.discrete.fem",
+    "sfepy.terms",
+    "sfepy.solvers.ts_solvers",
+    "sfepy.discrete.fem.poly_spaces",
+    "sfepy.discrete.dg.poly_spaces",
+    "meshio",
+    "numba",
 )
 #: What a job's script imports when it is a stand-in writing its outputs (tests/test_workflow_rerun.py): the modules
 #: of Snakemake's script preamble (the pickled ``snakemake`` object, its logger) and the stand-in's own.
@@ -117,7 +135,8 @@ def serve(scripts: Path, preload: tuple[str, ...] | None = None) -> None:
     and the package modules the ``scripts`` import first, or only ``preload`` where given."""
     for name in preload if preload is not None else [*PRELOAD, *script_imports(scripts)]:
         try:
-            importlib.import_module(name)
+            with contextlib.redirect_stdout(sys.stderr):  # sfepy prints at its import; stdout is the answers'
+                importlib.import_module(name)
         except ImportError:  # a module another branch does not have: the job imports what it needs
             pass
     serve_forks(_child)
