@@ -22,10 +22,22 @@ in a detached worktree of each revision, old and new in turn, ``-n`` pairs (defa
 the worktrees' bytecode and is kept apart as the warm-up); CPU and wall seconds of each run, the median of the
 pairs' CPU ratios, each side's pass/fail line, and each test's seconds (setup + call + teardown) of the last pair.
 
+``ci_run``: the CI workflow run of the ``ci_run`` fixture (``all study_all`` on config/ci.yaml, warm script jobs),
+in fresh copies of this checkout, the way ``--old REV``'s tests ran it (a fresh ``python tests/warm_jobs.py``
+process with that revision's tests/warm_jobs.py) and the way this checkout's do (a child forked from a
+tests/warm_snakemake.py server, which the worker starts anyway for its other workflow tests: its start is
+measured once apart; the job server keeping one scheduler re-evaluation timer), alternating, ``-n`` pairs: CPU
+seconds of each run (every process under it), of its script jobs (the job server's children) and the rest (Snakemake,
+the job server's start, the notebooks' papermill runs), the medians' ratio, and the two ways' number files compared
+byte for byte (the reproducibility test's files).
+
+``--key NAME`` stores a ``files`` result under NAME instead of ``snakemake_tests`` (several sets side by side).
+
 Writes ``results/benchmarks/ci_tests.json``. Usage:
 ``python benchmarks/bench_ci_tests.py suite --old REV [--new HEAD] [--which both|old|new]``,
 ``python benchmarks/bench_ci_tests.py rerun``, ``python benchmarks/bench_ci_tests.py clone --old REV [--new HEAD]``,
-``python benchmarks/bench_ci_tests.py files --old REV [--new HEAD] [-n 3] [TEST ...]``.
+``python benchmarks/bench_ci_tests.py files --old REV [--new HEAD] [-n 3] [--key NAME] [TEST ...]``,
+``python benchmarks/bench_ci_tests.py ci_run --old REV [-n 3]``.
 """
 
 from __future__ import annotations
@@ -216,21 +228,94 @@ def rerun(tmp: Path) -> dict:
     }
 
 
+def ci_run(old: str, n: int, tmp: Path) -> dict:
+    """The ``ci_run`` fixture's workflow run, ``old``'s way and this checkout's, alternating, ``n`` pairs."""
+    import statistics
+
+    sys.path.insert(0, str(ROOT / "tests"))
+    from conftest import _copy_repo, result_numbers, workflow_env
+    from warm_snakemake import WarmSnakemake
+
+    old_sha = subprocess.run(["git", "rev-parse", old], cwd=ROOT, capture_output=True, text=True,
+                             check=True).stdout.strip()
+    old_jobs = tmp / "old_warm_jobs.py"  # the old revision's warm_jobs.py (the job server runs it too: __file__)
+    old_jobs.write_text(subprocess.run(["git", "show", f"{old_sha}:tests/warm_jobs.py"], cwd=ROOT,
+                                       capture_output=True, text=True, check=True).stdout)
+    args = ["--cores", "2", "all", "study_all", "--configfile", "config/ci.yaml"]
+    env = {k: v for k, v in workflow_env().items() if k != "PYTHONDONTWRITEBYTECODE"}
+    c0 = _cpu_children()
+    server = WarmSnakemake(env)
+    runs: dict[str, list] = {"old": [], "new": []}
+    folders = {}
+    try:
+        for k in range(n):
+            for side in ("old", "new"):
+                work = _copy_repo(tmp / f"{side}_{k}")
+                t0 = time.perf_counter()
+                if side == "old":
+                    out, cpu, wall = timed([sys.executable, str(old_jobs), *args], work, env)
+                    rc, err = out.returncode, out.stderr
+                else:
+                    out = server.run(args, work, env=env, warm_jobs=True)
+                    cpu, wall, rc, err = out.cpu_s, time.perf_counter() - t0, out.returncode, out.stderr
+                assert rc == 0, err[-3000:]
+                jobs = float(re.search(r"warm jobs: ([\d.]+) s of CPU", err).group(1))
+                runs[side].append({"cpu_s": round(cpu, 2), "jobs_cpu_s": jobs, "rest_cpu_s": round(cpu - jobs, 2),
+                                   "wall_s": round(wall, 1), "load_average": os.getloadavg()})
+                folders.setdefault(side, work)
+    finally:
+        server.close()
+        # the server (reaped at its close) with every child it waited for, less the runs timed above
+        server_start = _cpu_children() - c0 - sum(r["cpu_s"] for side in runs.values() for r in side)
+    numbers = result_numbers(folders["old"])
+    differ = [f for f in numbers if (folders["old"] / f).read_bytes() != (folders["new"] / f).read_bytes()]
+
+    def med(side: str, key: str) -> float:
+        return round(statistics.median(r[key] for r in runs[side]), 2)
+
+    return {
+        "what": "python tests/warm_jobs.py " + " ".join(args) + " (old: a fresh process, the old revision's "
+                "warm_jobs.py) against a child of a warm Snakemake server (new), in fresh copies of this checkout",
+        "old_revision": old_sha,
+        "new_revision": subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True,
+                                       check=True).stdout.strip(),
+        "pairs": n,
+        "old": runs["old"],
+        "new": runs["new"],
+        "median_cpu_s": {"old": med("old", "cpu_s"), "new": med("new", "cpu_s")},
+        "median_rest_cpu_s": {"old": med("old", "rest_cpu_s"), "new": med("new", "rest_cpu_s")},
+        "median_jobs_cpu_s": {"old": med("old", "jobs_cpu_s"), "new": med("new", "jobs_cpu_s")},
+        "cpu_ratio_old_over_new": round(med("old", "cpu_s") / med("new", "cpu_s"), 3),
+        "rest_cpu_ratio_old_over_new": round(med("old", "rest_cpu_s") / med("new", "rest_cpu_s"), 3),
+        "warm_server_start_and_own_cpu_s": round(server_start, 2),
+        "number_files": len(numbers),
+        "number_files_differing": differ,
+        "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
+    }
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("what", choices=("suite", "clone", "rerun", "files"))
+    ap.add_argument("what", choices=("suite", "clone", "rerun", "files", "ci_run"))
     ap.add_argument("tests", nargs="*", help="files: the tests (default: FILES)")
     ap.add_argument("-n", type=int, default=3, help="files: pairs of runs (the first a warm-up)")
     ap.add_argument("--old", default="main")
     ap.add_argument("--new", default="HEAD")
     ap.add_argument("--which", choices=("both", "old", "new"), default="both")
+    ap.add_argument("--key", default="snakemake_tests", help="files: the JSON key of the result")
     a = ap.parse_args()
     record = json.loads(OUT.read_text()) if OUT.exists() else {}
     tmp = Path(tempfile.mkdtemp(prefix="bench_ci_tests_"))
     if a.what == "rerun":
         record["rerun"] = rerun(tmp)
     elif a.what == "files":
-        record["snakemake_tests"] = files(a.old, a.new, a.tests or list(FILES), a.n, tmp)
+        result = files(a.old, a.new, a.tests or list(FILES), a.n, tmp)
+        record = json.loads(OUT.read_text()) if OUT.exists() else {}  # another run may have written meanwhile
+        record[a.key] = result
+    elif a.what == "ci_run":
+        result = ci_run(a.old, a.n, tmp)
+        record = json.loads(OUT.read_text()) if OUT.exists() else {}
+        record["ci_run"] = result
     else:
         for side in ("old", "new"):
             if a.which in ("both", side):

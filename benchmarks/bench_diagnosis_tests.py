@@ -13,7 +13,7 @@ effect's values and 95% intervals, the final model's values, intervals and NRMSE
 ratio old / new per group and in all, whether every selection, verdict and ranking order is the same, and how
 far each value moved as a share of its 95% interval's half-width (the tests' tolerances are multiples of it).
 
-``--pytest``: also the four test files themselves (tests/test_diagnosis_bearing.py, test_diagnostics.py,
+``--pytest``: also the four test files themselves (``--pytest-files``: others) (tests/test_diagnosis_bearing.py, test_diagnostics.py,
 test_diagnosis_record_quality.py, test_cli.py), ``CI=true pytest -p no:xdist`` in one process per side (that
 side's tests, its package first on ``sys.path``), their CPU seconds (user + system of pytest and its children)
 and the pass line.
@@ -221,8 +221,8 @@ TEST_FILES = ("tests/test_diagnosis_bearing.py", "tests/test_diagnostics.py", "t
               "tests/test_cli.py")
 
 
-def pytest_cpu(root: Path) -> dict:
-    """CPU seconds of ``CI=true pytest -p no:xdist`` on :data:`TEST_FILES` in ``root`` (its src first on sys.path)."""
+def pytest_cpu(root: Path, files=TEST_FILES) -> dict:
+    """CPU seconds of ``CI=true pytest -p no:xdist`` on ``files`` in ``root`` (its src first on sys.path)."""
     import resource
 
     from bench_ci_tests import per_file  # the --durations lines summed per file, as for the whole suite
@@ -232,7 +232,7 @@ def pytest_cpu(root: Path) -> dict:
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     out = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:xdist", "-p", "no:cacheprovider",
-                          "--durations=0", *TEST_FILES], cwd=root, env=env, capture_output=True, text=True)
+                          "--durations=0", *files], cwd=root, env=env, capture_output=True, text=True)
     r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     return {"cpu_seconds": (r1.ru_utime + r1.ru_stime) - (r0.ru_utime + r0.ru_stime),
             "wall_seconds": time.perf_counter() - t0, "returncode": out.returncode,
@@ -332,6 +332,7 @@ def main() -> None:
     ap.add_argument("--groups", nargs="+", default=list(GROUPS), choices=list(GROUPS))
     ap.add_argument("--note", default="")
     ap.add_argument("--pytest", action="store_true", help="also the four test files' CPU, old and new")
+    ap.add_argument("--pytest-files", nargs="+", default=list(TEST_FILES), help="--pytest: these test files instead")
     args = ap.parse_args()
     sha = subprocess.run(["git", "rev-parse", args.old], cwd=ROOT, capture_output=True, text=True,
                          check=True).stdout.strip()
@@ -345,7 +346,8 @@ def main() -> None:
         subprocess.run(["tar", "-x", "-C", str(old_root)], input=arch, check=True)
         old = side(old_root, args.groups)
         new = side(ROOT, args.groups)
-        tests = {"old": pytest_cpu(old_root), "new": pytest_cpu(ROOT)} if args.pytest else None
+        tests = ({"old": pytest_cpu(old_root, args.pytest_files), "new": pytest_cpu(ROOT, args.pytest_files),
+                  "files": args.pytest_files} if args.pytest else None)
     res = compare(old, new)
     if tests:
         tests["ratio_cpu"] = tests["old"]["cpu_seconds"] / tests["new"]["cpu_seconds"]

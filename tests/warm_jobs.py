@@ -12,10 +12,11 @@ object, then the rule's script), run as ``__main__`` in the job's working direct
 Snakemake sets for the job's ``threads`` (``OMP_NUM_THREADS``, ``MKL_NUM_THREADS``, ...; and a threadpoolctl limit
 for the BLAS libraries the server loaded before them); an uncaught exception goes to the job's log as the real
 process's would, and a non-zero exit fails the job. Every child starts from the same server state (one job cannot
-leak into the next), and the server's hash seed differs from that of every process of another run.
+leak into the next). The server is forked from the run's Snakemake process (:class:`JobServer`), so its hash seed
+is that run's and differs from that of every process of another run.
 
-Not the same as a fresh process: a module the job's script does not import itself but the server preloaded is
-there anyway, so a job that forgot such an import (an attribute of a package whose submodule it never imported;
+Not the same as a fresh process: a module the job's script does not import itself but the server preloaded (or
+Snakemake imported before the server was forked) is there anyway, so a job that forgot such an import (an attribute of a package whose submodule it never imported;
 a missing ``import`` of a name fails here as anywhere) would pass here. The README's first command (the whole
 paper) runs every job as a fresh process. The CI workflow run and the reproducibility rerun (``ci_run``,
 ``ci_rerun``, tests/conftest.py) use this; the bad-input workflow cases (tests/test_bad_inputs.py) run theirs fresh.
@@ -112,12 +113,11 @@ def _child(request: dict) -> None:
             os._exit(code)
 
 
-def serve() -> None:
+def serve(scripts: Path, preload: tuple[str, ...] | None = None) -> None:
     """Read one JSON request a line ({"id", "script", "cwd", "threads"}) and fork a child for it at once; answer
     {"id", "returncode", "cpu_s"} a line as each child ends (children run side by side). Imports :data:`PRELOAD`
-    and the scripts' package modules first, or only the modules of ``--preload a,b`` where given."""
-    preload = sys.argv[sys.argv.index("--preload") + 1].split(",") if "--preload" in sys.argv else None
-    for name in preload if preload is not None else [*PRELOAD, *script_imports(Path(sys.argv[2]))]:
+    and the package modules the ``scripts`` import first, or only ``preload`` where given."""
+    for name in preload if preload is not None else [*PRELOAD, *script_imports(scripts)]:
         try:
             importlib.import_module(name)
         except ImportError:  # a module another branch does not have: the job imports what it needs
@@ -131,13 +131,15 @@ def serve_forks(child, poll_s: float = 0.02) -> None:
     run side by side). The server of tests/warm_snakemake.py serves its dry runs with this too.
 
     First the server's objects go into the permanent generation (``gc.freeze``): a child's garbage collections no
-    longer traverse them, nor touch their pages, which the fork shares until written."""
+    longer traverse them, nor touch their pages, which the fork shares until written. While no child runs, the
+    server sleeps until a request comes (it polled every ``poll_s`` before: 4.5 ms of CPU a second, about 0.7 s over
+    a test session for each worker's Snakemake server)."""
     gc.freeze()
     print(json.dumps({"ready": True}), flush=True)
     running: dict[int, int] = {}
     pending, open_ = b"", True
     while open_ or running:
-        if open_ and select.select([0], [], [], poll_s)[0]:
+        if open_ and select.select([0], [], [], poll_s if running else None)[0]:
             chunk = os.read(0, 65536)
             open_ = bool(chunk)
             pending += chunk
@@ -164,8 +166,11 @@ class ForkServer:
     blocks until its child ends, returning the answer; safe to call from several threads at once. ``cpu_s``: the
     children's CPU seconds so far. :class:`JobServer` here and ``warm_snakemake.WarmSnakemake`` are its two kinds."""
 
-    def __init__(self, cmd: list[str], name: str, env: dict | None = None):
-        self._proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env)
+    def __init__(self, cmd: list[str] | None, name: str, env: dict | None = None, target=None):
+        """Start the server: ``cmd`` as a fresh process, or (``cmd`` None) ``target()`` in a child forked from this
+        process (:class:`Forked`)."""
+        self._proc = (Forked(target) if cmd is None else
+                      subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env))
         assert json.loads(self._proc.stdout.readline()).get("ready"), f"the {name} did not start"
         self._ids = itertools.count()
         self._lock = threading.Lock()
@@ -199,13 +204,54 @@ class ForkServer:
         self._proc.wait(timeout=60)
 
 
+class Forked:
+    """``target()`` in a child forked from this process, its stdin and stdout pipes to this one (``stdin``,
+    ``stdout``: text files, as ``subprocess.Popen``'s), ``wait()`` for its end. The child exits when ``target``
+    returns (its exit status 0; 1 after an exception, printed to stderr)."""
+
+    def __init__(self, target):
+        sys.stdout.flush()
+        sys.stderr.flush()
+        down, up = os.pipe(), os.pipe()  # (read, write): requests to the child, answers from it
+        self.pid = os.fork()
+        if self.pid == 0:
+            code = 1
+            try:
+                os.dup2(down[0], 0)
+                os.dup2(up[1], 1)
+                for fd in (*down, *up):
+                    os.close(fd)
+                target()
+                code = 0
+            except BaseException:  # noqa: BLE001 - to stderr, as a fresh server process would print it
+                import traceback
+
+                traceback.print_exc()
+            finally:
+                try:
+                    sys.stdout.flush()
+                    sys.stderr.flush()
+                finally:
+                    os._exit(code)
+        os.close(down[0])
+        os.close(up[1])
+        self.stdin, self.stdout = os.fdopen(down[1], "w"), os.fdopen(up[0])
+
+    def wait(self, timeout: float | None = None) -> int:
+        return os.waitstatus_to_exitcode(os.waitpid(self.pid, 0)[1])
+
+
 class JobServer(ForkServer):
     """The job server's client: ``run(script, cwd, threads)`` blocks until the forked job ends and returns its exit
-    status; safe to call from Snakemake's job threads at once."""
+    status; safe to call from Snakemake's job threads at once.
+
+    The server is a child forked from this process (a Snakemake run's, before its Snakefile is read: Snakemake and
+    what it imports are there already), not a fresh interpreter: it imports only what this process has not (0.3
+    instead of 0.6 CPU s a start for the CI workflow's). Its hash seed is this process's, which is the run's own:
+    the two CI runs' Snakemake processes differ (tests/conftest.py)."""
 
     def __init__(self, scripts: Path, preload: tuple[str, ...] | None = None):
-        only = ["--preload", ",".join(preload)] if preload is not None else []
-        super().__init__([sys.executable, __file__, "--serve", str(scripts), *only], "warm job server")
+        super().__init__(None, "warm job server", target=lambda: serve(scripts, preload))
 
     def run(self, script: str, cwd: str, threads: int) -> dict:
         """Run the job; {"returncode", "cpu_s", "max_rss_MB"} of its child."""
@@ -284,7 +330,8 @@ def main(args: list[str], preload: tuple[str, ...] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    if sys.argv[1:2] == ["--serve"]:
-        serve()
+    if sys.argv[1:2] == ["--serve"]:  # a job server as a fresh process: --serve SCRIPTS [--preload a,b]
+        only = sys.argv[sys.argv.index("--preload") + 1].split(",") if "--preload" in sys.argv else None
+        serve(Path(sys.argv[2]), None if only is None else tuple(only))
     else:
         sys.exit(main(sys.argv[1:]))

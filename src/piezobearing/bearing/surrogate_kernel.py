@@ -92,7 +92,7 @@ def newton_rows(s, c, drop, e, reach, gap, k_contact, f_r, thr, reg_k, q_out):  
     thr : float
         Force residual below which a row has converged [N].
     reg_k : float
-        The constant part of the Hessian's regularisation [N/m].
+        The constant part of the Hessian's regularisation where it is near singular [N/m].
     q_out : ndarray (n, Z)
         Roller loads [N], written.
 
@@ -133,7 +133,7 @@ def newton_rows(s, c, drop, e, reach, gap, k_contact, f_r, thr, reg_k, q_out):  
             for j in range(z):
                 tmp[j] = (dq[j] * ci[j]) * ci[j]
             d = _rsum(tmp, z)
-            reg = 1e-9 * (a + d) + reg_k
+            reg = 0.0 if a * d - b * b > 1e-6 * (a + d) * (a + d) else 1e-9 * (a + d) + reg_k  # near singular only
             a, d = a + reg, d + reg
             det = a * d - b * b
             s0 = -((d * fy - b * fz) / det)
