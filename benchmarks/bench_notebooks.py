@@ -6,15 +6,15 @@ Each notebook of ``notebooks/`` runs as ``papermill NOTEBOOK OUT -k python3 -p f
 ``RUN`` (its other parameters keep their defaults, the paths of that run's results), its executed notebook and
 figure going to a scratch folder, papermill found on PATH as a job finds it; a set is all of them, one after the
 other. ``old``: the notebooks of ``--old REV`` (``git show``), fresh processes; ``cold``: this checkout's
-notebooks, fresh processes; ``warm``: this checkout's notebooks with tests/warm_kernel.py's kernel spec first on
-``JUPYTER_PATH`` and its papermill stand-in first on PATH (its server started for the set, its start counted).
-All three use this checkout's package. CPU seconds are user + system of every process (papermill, kernels,
-stubs, the server), from the children's resource usage; the sets rotate (old, cold, warm, old, ...), ``-n``
-rounds, and the ratios are taken round by round, which keeps them meaningful on a shared machine. Checked every
-round: each figure byte for byte against the run's own (``RUN/results/figures``); each executed notebook of
-``warm`` against ``cold`` (cells and outputs, the displayed images; not the times papermill and the kernel
-record, nor the random id papermill gives the injected-parameters cell); the outputs of ``old`` against
-``cold``.
+notebooks, fresh processes; ``warm_kernel``: this checkout's notebooks with tests/warm_kernel.py's kernel spec
+first on ``JUPYTER_PATH`` (papermill fresh); ``warm``: the same and its papermill stand-in first on PATH, as the
+tests' runs (the server started for the set, its start counted). All use this checkout's package. CPU seconds are
+user + system of every process (papermill, kernels, stubs, the server), from the children's resource usage; the
+sets rotate (old, cold, warm_kernel, warm, old, ...), ``-n`` rounds, and the ratios are taken round by round,
+which keeps them meaningful on a shared machine. Checked every round: each figure byte for byte against the run's
+own (``RUN/results/figures``); each executed notebook of ``warm_kernel`` and ``warm`` against ``cold`` (cells and
+outputs, the displayed images; not the times papermill and the kernel record, nor the random id papermill gives
+the injected-parameters cell); the outputs of ``old`` against ``cold``.
 
 ``--ci-run``: the whole of the tests' ``ci_run`` fixture, ``python tests/warm_jobs.py --cores 2 all study_all
 --configfile config/ci.yaml`` as tests/conftest.py runs it (PATH without the environment's bin folder), in a
@@ -81,14 +81,14 @@ def children_cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def run_set(run: Path, notebooks: Path, scratch: Path, warm: bool) -> dict:
+def run_set(run: Path, notebooks: Path, scratch: Path, warm: str | None) -> dict:
     """Execute every notebook of ``notebooks`` once in ``run``; CPU seconds of the set, whether each figure is the
     run's, byte for byte, and the executed notebooks (:func:`executed`)."""
     bindir = Path(sys.executable).parent
     env_before = dict(os.environ)
     figures, done = {}, {}
     c0 = children_cpu()
-    kernels = WarmKernels(notebooks) if warm else None
+    kernels = WarmKernels(notebooks, papermill=warm == "papermill") if warm else None
     # PATH as a job's: the environment's bin folder last (workflow/rules/common.smk), a warm stand-in first
     path = [p for p in os.environ["PATH"].split(os.pathsep) if p and Path(p) != bindir] + [str(bindir)]
     env = {**os.environ, "PATH": os.pathsep.join(path)}
@@ -177,7 +177,8 @@ def main() -> None:
         return
     run = a.run.resolve()
     tmp = Path(tempfile.mkdtemp(prefix="bench_notebooks_"))
-    kinds = {"cold": (ROOT / "notebooks", False), "warm": (ROOT / "notebooks", True)}
+    kinds = {"cold": (ROOT / "notebooks", None), "warm_kernel": (ROOT / "notebooks", "kernel"),
+             "warm": (ROOT / "notebooks", "papermill")}
     if a.old:
         old = tmp / "old_notebooks"
         old.mkdir()
@@ -185,10 +186,10 @@ def main() -> None:
             old_text = subprocess.run(["git", "show", f"{a.old}:notebooks/{nb.name}"], cwd=ROOT,
                                       capture_output=True, text=True, check=True).stdout
             (old / nb.name).write_text(old_text)
-        kinds = {"old": (old, False), **kinds}
+        kinds = {"old": (old, None), **kinds}
     scratch = tmp / "out"  # one for all sets: the figure parameter, which papermill writes into each notebook, is
     scratch.mkdir()  # the same; each set's figures and notebooks are read before the next set runs
-    run_set(run, kinds["cold"][0], scratch, False)  # warm-up: bytecode caches, page cache
+    run_set(run, kinds["cold"][0], scratch, None)  # warm-up: bytecode caches, page cache
     rounds = []
     for i in range(a.n):
         r = {kind: run_set(run, nbs, scratch, warm) for kind, (nbs, warm) in kinds.items()}
@@ -207,10 +208,12 @@ def main() -> None:
         **{f"{k}_cpu_s": med(lambda r, k=k: r[k]["cpu_s"]) for k in kinds},
         **{f"{k}_cpu_s_each_round": [r[k]["cpu_s"] for r in rounds] for k in kinds},
         "warm_over_cold": med(lambda r: r["warm"]["cpu_s"] / r["cold"]["cpu_s"]),
+        "warm_kernel_over_cold": med(lambda r: r["warm_kernel"]["cpu_s"] / r["cold"]["cpu_s"]),
+        "warm_over_warm_kernel": med(lambda r: r["warm"]["cpu_s"] / r["warm_kernel"]["cpu_s"]),
         "figures_byte_identical_to_the_run": all(all(s["figures_identical"].values()) for r in rounds
                                                  for s in r.values()),
-        "warm_notebooks_identical_to_cold_but_times": all(r["warm"]["notebooks"] == r["cold"]["notebooks"]
-                                                          for r in rounds),
+        "warm_notebooks_identical_to_cold_but_times": all(r[k]["notebooks"] == r["cold"]["notebooks"]
+                                                          for r in rounds for k in ("warm", "warm_kernel")),
         "load_average_1_5_15_at_end": os.getloadavg(),
     }
     if a.old:

@@ -227,9 +227,9 @@ def ci_run(tmp_path_factory) -> Path:
     script jobs run warm (tests/warm_jobs.py: each the job's own generated script, forked from a server with the
     imports done): 73 against 112 s of CPU for this run, its 67 number files byte-identical to those of a run with
     every job a fresh process (measured side by side). Its notebooks are executed by papermill from their rules'
-    command lines, each with a kernel forked from a server with ipykernel and the notebooks' imports done
-    (tests/warm_kernel.py): the same figures, byte for byte, and the same executed notebooks as with fresh kernels
-    (benchmarks/bench_notebooks.py). A user's run, the README's first command, starts every job and kernel fresh;
+    command lines, papermill and each kernel forked from a server with papermill, ipykernel and the notebooks'
+    imports done (tests/warm_kernel.py): the same figures, byte for byte, and the same executed notebooks as with
+    fresh processes (benchmarks/bench_notebooks.py). A user's run, the README's first command, starts every job and kernel fresh;
     what only a fresh process would catch is said in tests/warm_jobs.py and tests/warm_kernel.py.
 
     Snakemake itself is a child forked from this worker's warm server (:func:`snakemake_warm`, with the environment

@@ -23,12 +23,14 @@ first command (the whole
 paper) runs every job as a fresh process. The CI workflow run and the reproducibility rerun (``ci_run``,
 ``ci_rerun``, tests/conftest.py) use this; the bad-input workflow cases (tests/test_bad_inputs.py) run theirs fresh.
 
-The notebook jobs (``papermill ... -k python3``, shell jobs) run as Snakemake runs them, but their kernels start
-warm too (tests/warm_kernel.py: the ``python3`` kernel spec of this run is a stub whose kernel is forked from a
-server with ipykernel and the notebooks' imports done). What that does not prove: that a notebook imports every
-module it uses (a submodule the server preloaded is there anyway), and a fresh kernel's own start (its imports,
-the spec jupyter_client would find without ``JUPYTER_PATH``); papermill, jupyter_client, the kernel's set-up,
-every cell, the executed notebook and the figure are the real ones.
+The notebook jobs (``papermill ... -k python3``, shell jobs) run as Snakemake runs them, but their papermill and
+kernel processes start warm too (tests/warm_kernel.py: a papermill stand-in first on the jobs' PATH and a
+``python3`` kernel spec whose stubs have both forked from a server with papermill, ipykernel and the notebooks'
+imports done). What that does not prove: that a notebook imports every module it uses (a submodule the server
+preloaded is there anyway), and a fresh papermill's and kernel's own start (console script, launcher, imports,
+the spec jupyter_client would find without ``JUPYTER_PATH``); papermill's run (found on the job's PATH as the
+shell finds it), jupyter_client, the kernel's set-up, every cell, the executed notebook and the figure are the
+real ones.
 """
 
 from __future__ import annotations
@@ -317,7 +319,8 @@ def main(args: list[str], preload: tuple[str, ...] | None = None) -> int:
     from warm_kernel import WarmKernels
 
     server = JobServer(Path("workflow/scripts").resolve(), preload)
-    kernels = WarmKernels(Path("notebooks")) if Path("notebooks").is_dir() else None
+    # notebooks run warm too, unless the run's scripts are stand-ins (their papermill is one as well)
+    kernels = WarmKernels(Path("notebooks")) if preload is None and Path("notebooks").is_dir() else None
 
     def execute_script(self, fname, edit=False):
         start = time.time()
@@ -341,7 +344,8 @@ def main(args: list[str], preload: tuple[str, ...] | None = None) -> int:
         print(f"warm jobs: {server.cpu_s:.2f} s of CPU in the jobs", file=sys.stderr)
         if kernels is not None:
             k = kernels.close()
-            print(f"warm kernels: {k['cpu_s']:.2f} s of CPU in {k['kernels']} notebook kernels", file=sys.stderr)
+            print(f"warm notebooks: {k['papermill']['cpu_s']:.2f} s of CPU in {k['papermill']['n']} papermill runs, "
+                  f"{k['kernel']['cpu_s']:.2f} s in {k['kernel']['n']} kernels", file=sys.stderr)
 
 
 if __name__ == "__main__":

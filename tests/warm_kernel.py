@@ -1,28 +1,39 @@
-"""Notebook kernels started warm, for the tests' workflow runs (tests/warm_jobs.py): each figure rule still runs
-its own command line, ``papermill NOTEBOOK OUT -k python3 -r ...``, and papermill still starts a kernel named
-``python3`` through jupyter_client, talks to it over ZeroMQ, executes every cell and writes the executed notebook
-and the figure; only the kernel's process starts differently.
+"""Notebook jobs started warm, for the tests' workflow runs (tests/warm_jobs.py): each figure rule still runs its
+own command line, ``papermill NOTEBOOK OUT -k python3 -r ...``, through Snakemake's shell; papermill still reads
+the notebook, injects the parameters, starts a kernel named ``python3`` through jupyter_client, talks to it over
+ZeroMQ, executes every cell and writes the executed notebook and the figure. Only the two processes start
+differently: each is a child forked from one server that has papermill, jupyter_client, nbclient, ipykernel,
+IPython, debugpy and every module the notebooks' code cells import (pandas, matplotlib, piezobearing.plotting,
+...) already imported.
 
-In the tests' environment ``JUPYTER_PATH`` names a folder whose ``kernels/python3/kernel.json`` (the installed
-``python3`` spec, its ``argv`` replaced) starts ``python -S tests/warm_kernel.py -f {connection_file}``: a stub
-that passes its arguments, folder, environment and standard streams (the rule's log) over a Unix socket to a
-server that has ipykernel, IPython, debugpy and every module the notebooks' code cells import (pandas,
-matplotlib, piezobearing.plotting, ...) already imported. The server forks a child that becomes the kernel: the
-stub's streams as its own, the stub's environment and folder, then ``ipykernel_launcher``'s own start
-(``kernelapp.launch_new_instance()`` with the stub's arguments, the current folder taken off ``sys.path`` as the
-launcher does). The stub waits for the child's exit status and exits with it, and forwards the signals
-jupyter_client sends it (an interrupt, a terminate) to the child; if the stub is killed, the server kills the
-child. A fresh kernel spends about 1.1 of its 1.3 CPU s on those imports; the child pays only the kernel's set-up
-and the cells' own work (reading the results, drawing, saving). The server starts at the first kernel a run
-asks for (the reproducibility rerun draws no figure and starts none).
+The kernel: in the tests' environment ``JUPYTER_PATH`` names a folder whose ``kernels/python3/kernel.json`` (the
+installed ``python3`` spec, its ``argv`` replaced) starts ``python -S tests/warm_kernel.py -f {connection_file}``,
+a stub that passes its arguments, folder, environment and standard streams (the rule's log) over a Unix socket to
+the server. The server forks a child that becomes the kernel: the stub's streams as its own, the stub's
+environment and folder, then ``ipykernel_launcher``'s own start (``kernelapp.launch_new_instance()`` with the
+stub's arguments, the current folder taken off ``sys.path`` as the launcher does). The stub waits for the child's
+exit status and exits with it, and forwards the signals jupyter_client sends it (an interrupt, a terminate) to
+the child; if the stub is killed, the server kills the child.
 
-Not the same as a fresh kernel (besides what tests/warm_jobs.py says of warm script jobs): a notebook that
+papermill: the jobs' PATH starts with a folder holding a stand-in ``papermill`` (:func:`papermill_stub`). It
+looks papermill up on the rest of the job's PATH as the shell would have: none found, it answers as the shell
+does (127, "command not found"), so a workflow that could not find its papermill still fails; another papermill
+(a test's own stand-in) is executed as it is; this environment's papermill runs as a child of the server, in the
+same way as a kernel, as its console script would (``papermill.cli.papermill()`` with the job's arguments).
+
+A fresh kernel spends about 1.1 of its 1.3 CPU s on imports, a fresh papermill about 0.3 of its 0.5; the children
+pay only the kernel's set-up, papermill's own work and the cells' (reading the results, drawing, saving). The
+server starts at the first request of a run (the reproducibility rerun draws no figure and starts none).
+
+Not the same as fresh processes (besides what tests/warm_jobs.py says of warm script jobs): a notebook that
 forgot an import of a module the server preloaded (a submodule it uses as an attribute) would pass here; the
-kernels share the server's hash seed; matplotlib was imported before ipykernel set ``MPLBACKEND`` (the figures
+processes share the server's hash seed; matplotlib was imported before ipykernel set ``MPLBACKEND`` (the figures
 are drawn with the Agg backend that ``piezobearing.plotting`` selects either way: the same PNG bytes, measured
-for the ten notebooks). The README's first command and the bad-input workflow cases start every kernel fresh.
+for the ten notebooks); papermill's and the kernel's own start (their console script and launcher, their imports)
+are not run. The README's first command and the bad-input workflow cases (one of them runs Fig. 5's notebook)
+start every process fresh.
 
-This file runs as the stub without ``site`` (``python -S``): everything above :func:`serve` uses only the
+This file runs as the stubs without ``site`` (``python -S``): everything above :func:`serve` uses only the
 standard library.
 """
 
@@ -45,16 +56,32 @@ KERNEL_PRELOAD = (
     "IPython.core.completer",
     "threadpoolctl",
 )
+#: What a papermill run imports (its command line, the execution engine, jupyter_client's kernel manager and
+#: provisioner, ipykernel's kernel spec, which jupyter_client reads for ``python3``; black, where installed, which
+#: papermill formats the parameters cell with: the test extras install it for snakefmt).
+PAPERMILL_PRELOAD = (
+    "papermill.cli",
+    "papermill.engines",
+    "papermill.translators",
+    "nbclient",
+    "jupyter_client.manager",
+    "jupyter_client.provisioning.local_provisioner",
+    "ipykernel.kernelspec",
+    "tqdm.auto",
+    "psutil",
+    "black",
+)
 #: The largest request (arguments, folder, environment) a stub sends, bytes.
 MAX_REQUEST = 1 << 20
 
 
-def stub(argv: list[str]) -> int:
-    """The kernel process jupyter_client started: have the server fork the kernel with this process's arguments,
+def stub(argv: list[str], kind: str = "kernel", exe: str | None = None) -> int:
+    """The process jupyter_client started as the kernel (``kind="kernel"``) or the shell as ``papermill``
+    (``kind="papermill"``, ``exe`` the real papermill): have the server fork it with this process's arguments,
     folder, environment and standard streams; forward signals to it; its exit status."""
     conn = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
     conn.connect(os.environ[SOCKET_VARIABLE])
-    request = {"argv": argv, "cwd": os.getcwd(), "env": dict(os.environ)}
+    request = {"kind": kind, "exe": exe, "argv": argv, "cwd": os.getcwd(), "env": dict(os.environ)}
     socket.send_fds(conn, [json.dumps(request).encode()], [0, 1, 2])
     started = conn.recv(4096)
     if not started:
@@ -71,6 +98,22 @@ def stub(argv: list[str]) -> int:
         signal.signal(signum, forward)
     answer = conn.recv(4096)  # retried after a forwarded signal (PEP 475)
     return json.loads(answer)["returncode"] if answer else 1
+
+
+def papermill_stub(argv: list[str], stand_in_dir: str) -> int:
+    """``papermill ARGV`` as the job's shell would run it: the papermill that the job's PATH without this stand-in's
+    folder finds; this environment's own (beside this Python) runs in a child of the server, any other (a test's
+    stand-in) is executed as it is; where the PATH finds none, the shell's own answer."""
+    import shutil
+
+    path = os.pathsep.join(p for p in os.environ.get("PATH", "").split(os.pathsep) if p and p != stand_in_dir)
+    exe = shutil.which("papermill", path=path)
+    if exe is None:
+        print("papermill: command not found", file=sys.stderr)
+        return 127
+    if os.path.realpath(os.path.dirname(exe)) != os.path.realpath(os.path.dirname(sys.executable)):
+        os.execv(exe, [exe, *argv])
+    return stub(argv, "papermill", exe)
 
 
 def notebook_imports(notebooks) -> list[str]:
@@ -95,8 +138,9 @@ def notebook_imports(notebooks) -> list[str]:
     return sorted(out)
 
 
-def _kernel(request: dict, fds: list[int]) -> None:
-    """In the forked child: become ``python -m ipykernel_launcher ARGV`` as the stub would have; never return."""
+def _child(request: dict, fds: list[int]) -> None:
+    """In the forked child: become ``python -m ipykernel_launcher ARGV`` (a kernel) or ``papermill ARGV`` as the
+    stub would have; never return."""
     code = 1
     try:
         for target, fd in enumerate(fds[:3]):
@@ -111,14 +155,21 @@ def _kernel(request: dict, fds: list[int]) -> None:
             from threadpoolctl import threadpool_limits
 
             threadpool_limits(int(threads))
-        del sys.path[0]  # this file's folder; ipykernel_launcher takes the kernel's folder off sys.path the same way
-        sys.argv = ["ipykernel_launcher", *request["argv"]]
-        from ipykernel import kernelapp
+        if request["kind"] == "papermill":  # as its console script: its folder first on sys.path, its argv
+            sys.path[0] = os.path.dirname(request["exe"])
+            sys.argv = [request["exe"], *request["argv"]]
+            from papermill.cli import papermill
 
-        kernelapp.launch_new_instance(  # two defaults the class took from the environment at its import (the server's)
-            parent_handle=int(os.environ.get("JPY_PARENT_PID") or 0),
-            interrupt=int(os.environ.get("JPY_INTERRUPT_EVENT") or 0),
-        )
+            papermill()  # click's main: exits
+        else:
+            del sys.path[0]  # this file's folder; ipykernel_launcher takes the kernel's folder off sys.path likewise
+            sys.argv = ["ipykernel_launcher", *request["argv"]]
+            from ipykernel import kernelapp
+
+            kernelapp.launch_new_instance(  # two defaults the class took from the environment at its import (the server's)
+                parent_handle=int(os.environ.get("JPY_PARENT_PID") or 0),
+                interrupt=int(os.environ.get("JPY_INTERRUPT_EVENT") or 0),
+            )
         code = 0
     except SystemExit as e:
         code = e.code if isinstance(e.code, int) else (0 if e.code is None else 1)
@@ -141,13 +192,13 @@ def serve(listen_fd: int, notebooks) -> None:
     """Import :data:`KERNEL_PRELOAD` and the notebooks' modules, then accept stubs on the listening socket
     ``listen_fd`` and fork a kernel for each at once; answer each stub its kernel's pid, then its exit status;
     kill a kernel whose stub went away. Stops accepting when stdin closes, and returns when every kernel ended,
-    writing {"kernels", "cpu_s", "cpu_s_each"} (in the order they ended) to stdout."""
+    writing {"kernel": {"n", "cpu_s", "cpu_s_each"}, "papermill": {...}} (in the order they ended) to stdout."""
     import gc
     import importlib
     import select
 
     os.environ.setdefault("PYDEVD_DISABLE_FILE_VALIDATION", "1")  # debugpy's note on frozen modules, at its import
-    for name in [*KERNEL_PRELOAD, *notebook_imports(notebooks)]:
+    for name in [*PAPERMILL_PRELOAD, *KERNEL_PRELOAD, *notebook_imports(notebooks)]:
         try:
             importlib.import_module(name)
         except ImportError:  # ``from a import name`` of a name that is no module: imported with ``a``
@@ -155,7 +206,8 @@ def serve(listen_fd: int, notebooks) -> None:
     listener = socket.socket(fileno=listen_fd)
     gc.freeze()  # as tests/warm_jobs.py's server: the children's collections do not touch the preloaded objects
     running: dict[int, socket.socket] = {}
-    cpu_s: list[float] = []
+    done: dict[str, list[float]] = {"kernel": [], "papermill": []}
+    kinds: dict[int, str] = {}
     open_ = True
     while open_ or running:
         watch = [*running.values(), *([listener, sys.stdin] if open_ else [])]
@@ -172,11 +224,12 @@ def serve(listen_fd: int, notebooks) -> None:
                     listener.close()
                     for other in (conn, *running.values()):
                         other.close()
-                    _kernel(json.loads(msg), fds)
+                    _child(json.loads(msg), fds)
                 for fd in fds:
                     os.close(fd)
                 conn.send(json.dumps({"pid": pid}).encode())
                 running[pid] = conn
+                kinds[pid] = json.loads(msg)["kind"]
             elif not ready.recv(4096):  # the stub is gone (killed): so goes its kernel
                 pid = next(p for p, c in running.items() if c is ready)
                 try:
@@ -187,22 +240,22 @@ def serve(listen_fd: int, notebooks) -> None:
             pid, status, usage = os.wait4(-1, os.WNOHANG)
             if pid == 0:
                 break
-            cpu_s.append(usage.ru_utime + usage.ru_stime)
+            done[kinds.pop(pid)].append(usage.ru_utime + usage.ru_stime)
             conn = running.pop(pid)
             try:
                 conn.send(json.dumps({"returncode": os.waitstatus_to_exitcode(status)}).encode())
             except OSError:  # the stub is gone
                 pass
             conn.close()
-    print(json.dumps({"kernels": len(cpu_s), "cpu_s": sum(cpu_s), "cpu_s_each": cpu_s}), flush=True)
+    print(json.dumps({k: {"n": len(v), "cpu_s": sum(v), "cpu_s_each": v} for k, v in done.items()}), flush=True)
 
 
 class WarmKernels:
     """In the process that runs Snakemake (tests/warm_jobs.py): make the jobs' ``python3`` kernel the warm one
     (``JUPYTER_PATH``, the socket's variable), start the server at the first kernel asked for; ``close()`` ends it
-    and returns {"kernels", "cpu_s", "cpu_s_each"} of the kernels it forked."""
+    and returns what the server's children took: {"kernel": {"n", "cpu_s", "cpu_s_each"}, "papermill": {...}}."""
 
-    def __init__(self, notebooks, kernel_name: str = "python3"):
+    def __init__(self, notebooks, kernel_name: str = "python3", papermill: bool = True):
         import shutil
         import subprocess
         import tempfile
@@ -233,6 +286,15 @@ class WarmKernels:
         self._thread.start()
         os.environ["JUPYTER_PATH"] = os.pathsep.join(filter(None, [str(self._dir), os.environ.get("JUPYTER_PATH")]))
         os.environ[SOCKET_VARIABLE] = str(self._dir / "socket")
+        if papermill:  # the stand-in first on the jobs' PATH
+            (self._dir / "bin").mkdir()
+            stand_in = self._dir / "bin/papermill"
+            stand_in.write_text(
+                f"#!{sys.executable} -S\nimport sys\n\nsys.path.insert(0, {os.path.dirname(os.path.abspath(__file__))!r})\n"
+                f"from warm_kernel import papermill_stub\n\nsys.exit(papermill_stub(sys.argv[1:], {str(stand_in.parent)!r}))\n"
+            )
+            stand_in.chmod(0o755)
+            os.environ["PATH"] = os.pathsep.join([str(stand_in.parent), os.environ.get("PATH", "")])
 
     def _start_when_asked(self) -> None:
         import select
@@ -248,7 +310,7 @@ class WarmKernels:
         os.write(self._stop_w, b"x")
         self._thread.join()
         self._listener.close()
-        done = {"kernels": 0, "cpu_s": 0.0, "cpu_s_each": []}
+        done = {k: {"n": 0, "cpu_s": 0.0, "cpu_s_each": []} for k in ("kernel", "papermill")}
         if self._server is not None:
             out, _ = self._server.communicate(timeout=120)
             done = json.loads(out.strip().splitlines()[-1])
