@@ -124,11 +124,16 @@ def _child(request: dict) -> None:
 
         traceback.print_exc()
     finally:
-        try:
-            sys.stdout.flush()
-            sys.stderr.flush()
-        finally:
-            os._exit(code)
+        _flushed_exit(code)
+
+
+def _flushed_exit(code: int) -> None:
+    """Flush a forked child's streams and end it with ``code``, without the parent's exit handlers."""
+    try:
+        sys.stdout.flush()
+        sys.stderr.flush()
+    finally:
+        os._exit(code)
 
 
 def serve(scripts: Path, preload: tuple[str, ...] | None = None) -> None:
@@ -247,11 +252,7 @@ class Forked:
 
                 traceback.print_exc()
             finally:
-                try:
-                    sys.stdout.flush()
-                    sys.stderr.flush()
-                finally:
-                    os._exit(code)
+                _flushed_exit(code)
         os.close(down[0])
         os.close(up[1])
         self.stdin, self.stdout = os.fdopen(down[1], "w"), os.fdopen(up[0])
