@@ -10,7 +10,8 @@ wall, and each job's CPU from its rule's ``benchmark:`` file (tests/warm_jobs.py
 there; a notebook's is Snakemake's own measurement). The machine may be shared: compare the medians' ratio, and
 the spread (min, max) says how much to trust it. Then every JSON and CSV result of the first old and new runs is
 compared as the reproducibility test does (results/logs, benchmarks and notebooks left out):
-byte-identical, or the largest relative difference of their numbers (bench_workflow.compare_results).
+byte-identical, or the largest relative difference of their numbers (bench_workflow.compare_results); and their
+figures (PNG), byte for byte.
 
 Writes ``results/benchmarks/ci_jobs.json``. Usage (repository root, the package's environment active)::
 
@@ -54,7 +55,9 @@ def job_cpu(folder: Path) -> dict[str, float]:
 def one_run(rev: str, tmp: Path, k: int) -> tuple[dict, Path]:
     """One warm CI run of revision ``rev`` in a fresh export; (its record, its folder)."""
     folder = export_revision(rev, tmp / f"{rev.replace('/', '_')}_{k}")
-    env = {**os.environ, "PYTHONPATH": str(folder / "src")}
+    bindir = Path(sys.executable).parent  # left out of PATH, as the tests' workflow runs do (workflow_env)
+    path = os.pathsep.join(p for p in os.environ["PATH"].split(os.pathsep) if p and Path(p) != bindir)
+    env = {**os.environ, "PATH": path, "PYTHONPATH": str(folder / "src")}
     env.pop("PYTHONDONTWRITEBYTECODE", None)  # as the test suite runs (tests/conftest.py turns bytecode caches on)
     r0, t0 = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
     out = subprocess.run([sys.executable, "tests/warm_jobs.py", *ARGS], cwd=folder, env=env, capture_output=True,
@@ -68,6 +71,11 @@ def one_run(rev: str, tmp: Path, k: int) -> tuple[dict, Path]:
 
 def summary(values: list[float]) -> dict:
     return {"median": statistics.median(values), "min": min(values), "max": max(values), "runs": values}
+
+
+def figures(folder: Path) -> dict[str, bytes]:
+    """The run's figures (results/**.png), by path."""
+    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted((folder / "results").rglob("*.png"))}
 
 
 def number_files(folder: Path) -> None:
@@ -109,6 +117,7 @@ def main() -> None:
         n = sides["new"]["jobs_cpu_s"].get(j, {"median": 0.0})["median"]
         per_job[j] = {"old_s": o, "new_s": n, "saved_s": o - n}
     per_job = dict(sorted(per_job.items(), key=lambda kv: -kv[1]["saved_s"]))
+    same_figures = figures(first["old"]) == figures(first["new"])
     for folder in first.values():
         number_files(folder)
     result = {
@@ -120,6 +129,7 @@ def main() -> None:
         "jobs_median_cpu_s": per_job,
         "load_average_1_5_15_at_end": os.getloadavg(),
         "results": compare_results(first["old"], first["new"]),
+        "figures_byte_identical": same_figures,
     }
     out = ROOT / a.out
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -16,17 +16,12 @@ own (``RUN/results/figures``); each executed notebook of ``warm_kernel`` and ``w
 outputs, the displayed images; not the times papermill and the kernel record, nor the random id papermill gives
 the injected-parameters cell); the outputs of ``old`` against ``cold``.
 
-``--ci-run``: the whole of the tests' ``ci_run`` fixture, ``python tests/warm_jobs.py --cores 2 all study_all
---configfile config/ci.yaml`` as tests/conftest.py runs it (PATH without the environment's bin folder), in a
-fresh export of ``--old REV`` and of this checkout's HEAD, each with its own package (PYTHONPATH), in turn, ``-n``
-pairs; CPU seconds of each run (Snakemake, its jobs, the job server, the kernel server, papermill and the
-kernels), the ratio pair by pair, and whether the two sides' figures and number files (JSON and CSV, as the
-reproducibility check compares them) are byte-identical.
+The whole of the tests' ``ci_run`` fixture, old against new, is benchmarks/bench_ci_jobs.py's measurement (its
+CPU, each job's, and the two sides' figures and number files compared).
 
-Writes ``results/benchmarks/notebooks.json`` (the key ``ci_run`` for ``--ci-run``). Usage: ``python
-benchmarks/bench_notebooks.py RUN [--old REV] [-n 3]``, RUN a folder where ``snakemake all --configfile
-config/ci.yaml`` finished (``tests/conftest.py``'s ``ci_run`` makes one); ``python benchmarks/bench_notebooks.py
---ci-run --old REV [-n 3]``.
+Writes ``results/benchmarks/notebooks.json``. Usage: ``python benchmarks/bench_notebooks.py RUN [--old REV]
+[-n 3]``, RUN a folder where ``snakemake all --configfile config/ci.yaml`` finished (``tests/conftest.py``'s
+``ci_run`` makes one).
 """
 
 from __future__ import annotations
@@ -113,68 +108,14 @@ def run_set(run: Path, notebooks: Path, scratch: Path, warm: str | None) -> dict
     }
 
 
-def ci_run(old: str, n: int, tmp: Path) -> dict:
-    """The ``ci_run`` fixture's workflow run in fresh exports of ``old`` and HEAD, in turn, ``n`` pairs."""
-    from bench_startup import export_revision  # benchmarks/ is on sys.path when run as a script
-
-    bindir = Path(sys.executable).parent
-    path = os.pathsep.join(p for p in os.environ["PATH"].split(os.pathsep) if p and Path(p) != bindir)
-    sha = {side: subprocess.run(["git", "rev-parse", rev], cwd=ROOT, capture_output=True, text=True,
-                                check=True).stdout.strip() for side, rev in (("old", old), ("new", "HEAD"))}
-    runs: dict[str, list] = {"old": [], "new": []}
-    same_figures, same_numbers = [], []
-    for i in range(n):
-        trees = {}
-        for side, rev in sha.items():  # resolved once: a branch may move while this runs
-            tree = trees[side] = export_revision(rev, tmp / f"{side}{i}")
-            env = {**os.environ, "PATH": path, "PYTHONPATH": str(tree / "src")}
-            c0 = children_cpu()
-            out = subprocess.run([sys.executable, str(tree / "tests/warm_jobs.py"), "--cores", "2", "all", "study_all",
-                                  "--configfile", "config/ci.yaml"], cwd=tree, env=env, capture_output=True, text=True)
-            if out.returncode:
-                raise RuntimeError(out.stderr[-3000:])
-            runs[side].append({"cpu_s": children_cpu() - c0, "load_average": os.getloadavg(),
-                               "servers": [ln for ln in out.stderr.splitlines() if ln.startswith("warm ")]})
-            print(side, runs[side][-1], flush=True)
-
-        def files(tree, suffixes, skip=("results/logs", "results/benchmarks", "results/notebooks")):
-            return {p.relative_to(tree).as_posix(): p.read_bytes() for p in sorted((tree / "results").rglob("*"))
-                    if p.suffix in suffixes and not p.relative_to(tree).as_posix().startswith(skip)}
-
-        same_figures.append(files(trees["old"], {".png"}) == files(trees["new"], {".png"}))
-        same_numbers.append(files(trees["old"], {".json", ".csv"}) == files(trees["new"], {".json", ".csv"}))
-    return {
-        "what": "tests/conftest.py's ci_run: python tests/warm_jobs.py --cores 2 all study_all --configfile "
-                "config/ci.yaml in a fresh export of each revision; CPU seconds (user + system) of every process",
-        "old_revision": sha["old"],
-        "new_revision": sha["new"],
-        "pairs": n,
-        "old_cpu_s": statistics.median(r["cpu_s"] for r in runs["old"]),
-        "new_cpu_s": statistics.median(r["cpu_s"] for r in runs["new"]),
-        "new_over_old": statistics.median(b["cpu_s"] / a["cpu_s"] for a, b in zip(runs["old"], runs["new"], strict=True)),
-        "runs": runs,
-        "figures_byte_identical": all(same_figures),
-        "number_files_byte_identical": all(same_numbers),
-    }
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("run", type=Path, nargs="?")
     ap.add_argument("--old", default=None, help="a revision whose notebooks to run beside this checkout's")
-    ap.add_argument("--ci-run", action="store_true", help="the whole ci_run fixture, --old against HEAD")
     ap.add_argument("-n", type=int, default=3)
     a = ap.parse_args()
     os.environ.pop("PYTHONDONTWRITEBYTECODE", None)  # as the test suite runs (tests/conftest.py)
     out = ROOT / "results/benchmarks/notebooks.json"
-    if a.ci_run:
-        result = ci_run(a.old or "main", a.n, Path(tempfile.mkdtemp(prefix="bench_notebooks_ci_")))
-        record = json.loads(out.read_text()) if out.exists() else {}  # the notebook sets', if they ran meanwhile
-        record["ci_run"] = result
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(json.dumps(record, indent=1) + "\n")
-        print(json.dumps(record["ci_run"], indent=1))
-        return
     run = a.run.resolve()
     tmp = Path(tempfile.mkdtemp(prefix="bench_notebooks_"))
     kinds = {"cold": (ROOT / "notebooks", None), "warm_kernel": (ROOT / "notebooks", "kernel"),
@@ -223,8 +164,6 @@ def main() -> None:
             k: all(outputs(r["old"]["notebooks"][k]) == outputs(r["cold"]["notebooks"][k]) for r in rounds)
             for k in rec["notebooks"]
         }
-    if out.exists() and "ci_run" in (previous := json.loads(out.read_text())):
-        rec["ci_run"] = previous["ci_run"]
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(rec, indent=1) + "\n")
     print(json.dumps(rec, indent=1))
