@@ -140,7 +140,7 @@ class Case:
 
 
 def _unreadable(monkeypatch):
-    import piezobearing.io as pio
+    import piezobearing.io.formats as pio
 
     real = open
 
