@@ -235,8 +235,10 @@ def test_compiled_kernel_matches_the_python_loop(bcfg):
     """The numba kernel runs the reference loop's algorithm: same loads, same Newton iterations.
 
     Over two defect passages of the faulty bearing (the contacts open and close, the
-    roller drops into the groove) the loads agree to 1e-9 of the peak; only the order of
-    floating-point sums differs.
+    roller drops into the groove) the loads and the shaft displacement agree to 1e-9 of
+    their peaks. The tolerance is relative because numba compiles for the host CPU (FMA,
+    vector width): the two paths differ in the last bits, by different amounts on
+    different CPUs.
     """
     p = _params(bcfg, faulty=True, start_angle_rad=-0.3)
     kin = brg.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
@@ -246,7 +248,7 @@ def test_compiled_kernel_matches_the_python_loop(bcfg):
     rp = brg.simulate_lpm(p, 0.0, n, h, method="python")
     assert rp.load_N.max() > 0 and (rc.load_N == 0).any()
     np.testing.assert_allclose(rc.load_N, rp.load_N, rtol=0, atol=1e-9 * rp.load_N.max())
-    np.testing.assert_allclose(rc.shaft_m, rp.shaft_m, rtol=0, atol=1e-18)
+    np.testing.assert_allclose(rc.shaft_m, rp.shaft_m, rtol=0, atol=1e-9 * np.abs(rp.shaft_m).max())
     assert abs(rc.newton_iterations - rp.newton_iterations) <= n // 1000 + 1
     with pytest.raises(ValueError, match="method"):
         brg.simulate_lpm(p, 0.0, 2, h, method="fortran")

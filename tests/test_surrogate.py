@@ -140,9 +140,10 @@ def test_groove_aligned_table_equals_a_fine_uniform_one(setup):
 
 
 def test_compiled_equilibrium_matches_the_numpy_loop(setup):
-    """The numba kernel runs the numpy reference's Newton iteration row by row: the same loads and offsets
-    to 1e-12 of F_r (measured: 1.5e-15; the C library's pow and hypot against numpy's SIMD ones), from the
-    cold start and from given starts, with grooves and rollers lifted."""
+    """The numba kernel runs the numpy reference's Newton iteration row by row: the same loads to 1e-12 of F_r
+    and offsets to 1e-9 of the largest offset (measured: 1.5e-15 of F_r; the C library's pow and hypot against
+    numpy's SIMD ones, which differ by CPU), from the cold start and from given starts, with grooves and
+    rollers lifted."""
     _, geo, _ = setup
     k = lpm.line_contact_stiffness(geo.roller_length_m)
     rng = np.random.default_rng(5)
@@ -155,7 +156,7 @@ def test_compiled_equilibrium_matches_the_numpy_loop(setup):
         qn, en = sg.quasi_static_loads(psi, drop, f_r, gap, k, tol, return_offset=True, method="numpy")
         qc, ec = sg.quasi_static_loads(psi, drop, f_r, gap, k, tol, return_offset=True)
         assert np.abs(qc - qn).max() < 1e-12 * f_r
-        assert np.abs(ec - en).max() < 1e-15  # m
+        assert np.abs(ec - en).max() < 1e-9 * np.abs(en).max()
         # from given starts (a table's offsets next to a defect's)
         e0 = en + rng.normal(0, 1e-6, en.shape)
         qn = sg.quasi_static_loads(psi, drop, f_r, gap, k, tol, e0_m=e0, method="numpy")
