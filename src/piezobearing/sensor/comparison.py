@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import copy
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -44,8 +44,7 @@ from ..bearing import housing_fem as fem
 from ..bearing import lpm as brg
 from ..bearing import transient as tr
 from ..bearing.housing_mesh import build_housing_mesh
-from ..signals import daq
-from ..signals import detectors
+from ..signals import daq, detectors
 from ..signals import outputs as sout
 from ..signals.detectors import envelope as envelope_detector
 from . import accelerometer as acc
@@ -114,9 +113,10 @@ def rig_config(config: dict, settings: ComparisonSettings) -> dict:
 
 
 def pzt_noise_settings(config: dict) -> daq.NoiseSettings:
-    """The PZT DAQ's noise: ``signals.noise`` in volts (model absolute, whatever the workflow's model)."""
+    """The PZT DAQ's noise: ``signals.noise`` in volts (model absolute, whatever the workflow's model), its
+    input range ``sensor_comparison.pzt_range_V``."""
     n = daq.NoiseSettings.from_config(config["signals"])
-    return daq.NoiseSettings(**{**n.__dict__, "model": "absolute"})
+    return replace(n, model="absolute", range_V=config["sensor_comparison"]["pzt_range_V"])
 
 
 def accelerometer_daq_settings(config: dict) -> daq.NoiseSettings:

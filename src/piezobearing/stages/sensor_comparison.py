@@ -7,12 +7,11 @@ from __future__ import annotations
 import copy
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
+from ..bearing.lpm import BearingGeometry, kinematic_frequencies
 from ..io import read_harmonic, read_json, write_csv, write_json
 from ..sensor import comparison as cmp
-from ..signals import detector as sdet
 from ..signals import outputs as sout
 
 #: The two conditions of the main workflow's comparison: the frame at rest, and the configured surroundings.
@@ -36,18 +35,14 @@ def at_rest(config: dict) -> dict:
 
 
 def envelope_spectra(result: dict, condition: str) -> pd.DataFrame:
-    """The faulty bearing's first replicate's envelope spectrum of each sensor in the band its detection used,
-    amplitude over the median of the spectrum in the plotted range (long table: condition, sensor, frequency_Hz,
-    amplitude_over_median)."""
+    """The faulty bearing's first replicate's squared envelope spectrum of each sensor as the envelope detector
+    tested it (its chosen band; power over the local median, a noise bin's ratio being Exp(1)): a long table
+    of condition, sensor, frequency_Hz, ratio."""
     rows = []
     for s in cmp.SENSORS:
-        y, dt = result["records"][s]["faulty"]
-        band = result["sensors"][s]["detection"]["band_Hz"]
-        spec = sdet.windowed_envelope_spectrum(y, dt, tuple(band))
-        keep = (spec.frequency_Hz > 0) & (spec.frequency_Hz <= 1000.0)
-        amp = spec.amplitude_V[keep]
-        rows.append(pd.DataFrame({"condition": condition, "sensor": s, "frequency_Hz": spec.frequency_Hz[keep],
-                                  "amplitude_over_median": amp / np.median(amp)}))
+        spec = result["sensors"][s]["detection"]["details"]["spectrum"]
+        rows.append(pd.DataFrame({"condition": condition, "sensor": s, "frequency_Hz": spec["frequency_Hz"],
+                                  "ratio": spec["ratio"]}))
     return pd.concat(rows, ignore_index=True)
 
 
@@ -70,7 +65,7 @@ def sensor_comparison(resistance_json: str, harmonic_csv: str | None, out_json: 
         spectra.append(envelope_spectra(res, condition))
         results[condition] = _summary(res)
     b = config["bearing"]
-    kin = cmp.brg.kinematic_frequencies(cmp.brg.BearingGeometry.from_config(b), b["shaft_speed_rpm"] / 60.0)
+    kin = kinematic_frequencies(BearingGeometry.from_config(b), b["shaft_speed_rpm"] / 60.0)
     write_json({
         "definition": (
             "per condition and sensor: detection_rate = share of seeds on the faulty bearing the envelope "
