@@ -59,7 +59,8 @@ def test_paper_case_at_rest_both_sensors(at_rest):
     assert pzt["margin_dB"] > 20.0
     assert accel["detection"]["families"]["outer_race"]["detected"]
     assert accel["margin_dB"] > 10.0
-    assert pzt["clipped_samples"] == 0 and accel["clipped_samples"] == 0
+    # nothing clipped: the PZT's DAQ range (sensor_comparison.pzt_range_V) holds its peaks
+    assert pzt["clipped_samples"] == 0 and accel["clipped_samples"] == 0, pzt["levels"]
     # the roller passage at BPFO: the healthy bearing's outer-race family passes too
     assert pzt["detection_healthy"]["families"]["outer_race"]["margin_dB"] > 0.0
     assert accel["detection_healthy"]["families"]["outer_race"]["margin_dB"] > 0.0

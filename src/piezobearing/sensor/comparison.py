@@ -323,6 +323,7 @@ def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_
                 if rep == 0:
                     v = clean[s].voltage_V
                     levels[s][case] = {"clean_rms_V": float(np.sqrt(np.mean(v * v))),
+                                       "clean_peak_V": float(np.max(np.abs(v))),
                                        "noise_std_V": out[s].noise_std_V, "sample_rate_Hz": 1.0 / clean[s].dt_s}
                     if keep_records:
                         records.setdefault(s, {})[case] = (out[s].voltage_V, clean[s].dt_s)
