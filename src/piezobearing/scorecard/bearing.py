@@ -23,7 +23,7 @@ def rows(kin: dict, lpm: dict, tr: dict, conv: dict, samp: dict, b: dict) -> lis
             kin["bpfo_Hz"],
             "Hz",
             f"{b['n_rollers']} rollers, D_r/D_p = {b['roller_diameter_m'] * 1e3:g}/{b['pitch_diameter_m'] * 1e3:g} mm "
-            "(the paper's BPFO fixes 10/44; README); FTF x Z",
+            "(the paper's BPFO fixes 10/44; docs/theory/bearing_housing.md); FTF x Z",
             KINEMATICS,
         ),
         Row("IV", "rollers", P["n_rollers"].value, float(b["n_rollers"]), "-", "config bearing.n_rollers",
