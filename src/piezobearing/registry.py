@@ -22,6 +22,8 @@ import json
 from functools import lru_cache
 from pathlib import Path
 
+from .paper import CASE
+
 PACKAGE_DIR = Path(__file__).resolve().parent
 
 #: The sensor circuit of Eq. 6 (SensorCircuit.from_config) without R.
@@ -139,6 +141,9 @@ _PASSAGE = [
     "bearing.roller_diameter_scatter_m",
 ]
 
+#: The config keys of the paper's case (piezobearing.paper.CASE), against which the scorecard compares the run's.
+_CASE = list(CASE)
+
 #: Config keys each rule's stage reads, by rule.
 READS: dict[str, list[str]] = {
     # calibration.smk
@@ -146,7 +151,7 @@ READS: dict[str, list[str]] = {
     "extract_sensitivity": ["calibration", *_CIRCUIT],
     "fit_resistance": ["sensor", "calibration", "synthesis.resistance_ohm", "diagnostics.quiet_settle_s"],
     "lowfreq_sensitivity": ["sensor", "lowfreq"],
-    "scorecard_calibration": ["calibration.measurement", *_CIRCUIT],
+    "scorecard_calibration": ["calibration.measurement", "synthesis.resistance_ohm", *_CIRCUIT],
     # sensor_fem.smk
     "sensor_mesh": _STACK_MESH,
     "sensor_convergence": ["sensor", "sensor_fem"],
@@ -179,6 +184,8 @@ READS: dict[str, list[str]] = {
     # diagnostics_bearing.smk
     "synthesize_bearing_record": ["seed", "sensor", "bearing", "bearing_diagnosis"],
     "diagnose_bearing": ["seed", "sensor", "bearing", "bearing_diagnosis", "diagnostics"],
+    # scorecard.smk: the run's conditions against the paper's case (piezobearing.paper.CASE)
+    "scorecard": _CASE,
 }
 
 
