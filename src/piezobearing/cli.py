@@ -297,7 +297,7 @@ def _hide_and_find(args) -> int:
 def _diagnose_bearing(args) -> int:
     from . import config as cfg
     from .diagnosis.effect import EffectError
-    from .io import MeasurementError, ResultFileError
+    from .io import MeasurementError, ResultFileError, SignalFileError
     from .stages.bearing_diagnosis import diagnose_bearing
 
     try:
@@ -313,12 +313,14 @@ def _diagnose_bearing(args) -> int:
     try:
         if not args.influence and not args.quiet:
             print("solving the housing's influence line from the config (a few seconds)", file=sys.stderr)
-        d = diagnose_bearing(args.record, args.out, config, args.influence, progress)
-    except (MeasurementError, EffectError, ResultFileError) as e:
+        d = diagnose_bearing(args.record, args.out, config, args.influence, progress, args.sensor_response)
+    except (MeasurementError, EffectError, ResultFileError, SignalFileError) as e:
         return _fail(str(e))
     for w in d["record_warnings"]:
         print(f"warning: {w}")
     base, final, f = d["baseline"], d["final"], d["fault"]
+    sm = d["sensor_model"]
+    print(f"sensor model: d33/C x FEM correction {sm['fem_factor']:.4g} ({sm['source']})")
     print(f"baseline NRMSE {100 * base['nrmse']:.2f}% (noise floor {100 * base['noise_floor_nrmse']:.2f}%)")
     print(
         f"selected: {', '.join(d['selected']) or 'nothing'}; final NRMSE {100 * final['nrmse']:.2f}% "
@@ -384,6 +386,12 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument(
         "--influence",
         help="the housing's influence line (results/bearing/influence_line_healthy.csv); default: solved from the config",
+    )
+    b.add_argument(
+        "--sensor-response",
+        metavar="CSV",
+        help="the sensor FEM's harmonic response (results/sensor/harmonic.csv) for the FEM correction of the sensor "
+        "model; default: the paper sensor's, shipped with the package",
     )
     b.add_argument("--quiet", action="store_true", help="no progress lines")
     b.set_defaults(func=_diagnose_bearing)
