@@ -48,8 +48,9 @@ def run_chain(tmp_path, inputs, config, harmonic=True):
         st.noisy(out / f"voltage_{case}.csv", case, out / f"noisy_{case}.csv", out / f"noisy_{case}.json", config)
         st.envelope(out / f"noisy_{case}.csv", out / f"voltage_{case}.csv", inputs["kinematics"],
                     out / f"envelope_{case}.csv", out / f"envelope_{case}.json", config)
-    st.indicator({c: (out / f"envelope_{c}.csv", out / f"envelope_{c}.json") for c in ("healthy", "faulty")},
-                 inputs["kinematics"], {c: out / f"noisy_{c}.json" for c in ("healthy", "faulty")},
+    cases = ("healthy", "faulty")
+    st.indicator({c: out / f"envelope_{c}.json" for c in cases}, inputs["kinematics"],
+                 {c: str(out / f"noisy_{c}.csv") for c in cases}, {c: out / f"noisy_{c}.json" for c in cases},
                  out / "fault_indicator.json", config)
     return out
 

@@ -121,21 +121,6 @@ def noise_rng(master_seed: int, case: str, replicate: int) -> np.random.Generato
     return np.random.default_rng([int(master_seed), 6, CASE_CODES[case], int(replicate)])
 
 
-def add_white_noise(x: np.ndarray, snr_dB: float, rng: np.random.Generator) -> tuple[np.ndarray, float]:
-    """Add white Gaussian noise at ``snr_dB`` (signal power of the whole record over noise power).
-
-    Returns
-    -------
-    noisy : ndarray
-        x + n [V].
-    sigma : float
-        Standard deviation of the added noise [V].
-    """
-    x = np.asarray(x, dtype=float)
-    sigma = noise_std_for_snr(x, snr_dB)
-    return x + sigma * rng.standard_normal(x.size), sigma
-
-
 # --------------------------------------------------------------------------- record length
 
 

@@ -23,12 +23,13 @@ indicator, threshold, detected, p_value, n_lines, own_lines, margin) and
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 
-from .. import detection, detector
+from .. import detector
+from ..envelope import EnvelopeSettings, EnvelopeSpectrum
 from .result import Detection, FamilyEvidence, LineEvidence, margin_dB
 
 #: The carrier and sideband names of each family's line labels.
@@ -48,17 +49,13 @@ class Settings:
         Harmonics, sidebands, slip range, floors, window, false-alarm probability, families tested.
     """
 
-    envelope: detection.EnvelopeSettings
+    envelope: EnvelopeSettings
     search: detector.DetectorSettings
 
     @classmethod
     def from_config(cls, signals: dict) -> "Settings":
         """From the validated config's ``signals`` section."""
-        return cls(detection.EnvelopeSettings.from_config(signals), detector.DetectorSettings.from_config(signals))
-
-    def in_band(self, band_Hz: tuple[float, float]) -> "Settings":
-        """The same settings with the band fixed to ``band_Hz`` [Hz]."""
-        return replace(self, envelope=replace(self.envelope, band_rule="fixed", band_Hz=tuple(band_Hz)))
+        return cls(EnvelopeSettings.from_config(signals), detector.DetectorSettings.from_config(signals))
 
 
 def line_label(line) -> str:
@@ -74,7 +71,7 @@ def _line_threshold(alpha: float, n_bins: int, n_floor_bins: float) -> float:
     return detector.window_threshold(alpha, n_bins, n_floor_bins)
 
 
-def to_detection(found: detector.Detection, spec: detection.EnvelopeSpectrum, kinematics: dict,
+def to_detection(found: detector.Detection, spec: EnvelopeSpectrum, kinematics: dict,
                  settings: Settings) -> Detection:
     """The :class:`Detection` of the search detector's result ``found`` in the spectrum ``spec``."""
     st = settings.search
