@@ -9,6 +9,7 @@ import pandas as pd
 from snakemake.utils import Paramspace
 
 from piezobearing.config import ConfigError
+from piezobearing.registry import short_param
 from piezobearing.studies import check_studies
 
 try:  # a bad study table or case value stops before any job, in one line
@@ -32,7 +33,7 @@ _SENSOR_INPUTS = {
         else {}
     ),
 }
-# the detector studies (issue 11) run the fault_detection chain and the classification
+# the detector studies run the fault_detection chain and the classification
 DETECTOR_STUDIES = ("daq_noise", "defect_position", "fault_type_speed")
 STUDY_INPUTS = {
     "fault_detection": _SENSOR_INPUTS,
@@ -88,8 +89,10 @@ rule study_case:
         runtime=lambda wc: STUDY_RUNTIME_MIN.get(wc.study, 10),
     params:
         code=code_hash(f"{workflow.basedir}/workflow/scripts/study_case.py"),
-        overrides=lambda wc: dict(STUDIES[wc.study].instance(wc)),
-        sections=lambda wc: {k: config[k] for k in STUDY_SECTIONS.get(wc.study, [])},
+        overrides=lambda wc: short_param(dict(STUDIES[wc.study].instance(wc))),
+        sections=lambda wc: short_param(
+            {k: config[k] for k in STUDY_SECTIONS.get(wc.study, [])}
+        ),
     script:
         "../scripts/study_case.py"
 
@@ -108,10 +111,9 @@ rule sensor_design_housing:
         mem_mb=2500,
         runtime=5,
     params:
-        sensor=config["sensor"],
-        sensor_fem=config["sensor_fem"],
-        bearing=config["bearing"],
-        housing=config["housing"],
+        sections=short_param(
+            {k: config[k] for k in ("sensor", "sensor_fem", "bearing", "housing")}
+        ),
     script:
         "../scripts/sensor_design_housing.py"
 

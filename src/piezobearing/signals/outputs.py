@@ -18,7 +18,7 @@ import pandas as pd
 from ..bearing.lpm import BearingGeometry, kinematic_frequencies
 from ..io import SignalFileError
 from ..sensor.calibration import SensorCircuit, design_resistance_ohm, frequency_response, rc_voltage
-from . import classification, daq, detection, detector, detectors
+from . import classification, daq, detection, detectors
 from .analysis import INDICATOR_DEFINITION, envelope_analysis
 
 
@@ -152,6 +152,19 @@ def envelope(y: np.ndarray, v: np.ndarray, dt: float, kinematics: dict, config: 
     return table, {**record, "config": {"signals": s}}
 
 
+#: What fault_indicator.json's ``detection`` entries hold, by method (signals.detector.statistic).
+DETECTION_DEFINITIONS = {
+    "envelope": (
+        "detection (statistic envelope, piezobearing.signals.detectors.envelope): the Hann squared envelope "
+        "spectrum of the configured band; per family the sum over its lines (k x carrier + m x sideband, searched "
+        "over the slip range) of the largest power ratio over the local-median floor; threshold: the sum's "
+        "(1 - pfa / n_families) quantile under noise alone; margin_dB = 10 log10(statistic / threshold); "
+        "fault_type: none if no family is detected, else the detected family of largest margin"
+    ),
+    "baseline": detectors.baseline.DEFINITION + "; " + detectors.baseline.CLIPPED_DEFINITION,
+}
+
+
 def fault_indicator(envelopes: dict, kinematics: dict, noisy_records: dict, config: dict) -> dict:
     """Rule fault_indicator: the paper's indicator and the configured detector on each case's noisy record.
 
@@ -181,9 +194,7 @@ def fault_indicator(envelopes: dict, kinematics: dict, noisy_records: dict, conf
         r["fault_type"] = found.fault_type
         r["detection"] = found.to_dict()
         out[case] = r
-    out["definition"] = INDICATOR_DEFINITION + "; " + (
-        detector.DEFINITION if chosen.method == "envelope"
-        else detectors.baseline.DEFINITION + "; " + detectors.baseline.CLIPPED_DEFINITION)
+    out["definition"] = INDICATOR_DEFINITION + "; " + DETECTION_DEFINITIONS[chosen.method]
     out["kinematics"] = kinematics
     out["config"] = {"seed": config["seed"], "signals": s}
     return out
