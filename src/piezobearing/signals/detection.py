@@ -46,21 +46,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import fdtri
 
-# the envelope functions live in .envelope; the chain's callers still reach them here (detection.X)
-from .envelope import (  # noqa: F401
+from .envelope import (
     EnvelopeSettings,
     EnvelopeSpectrum,
     Kurtogram,
-    amplitude_spectrum,
-    analytic_band_signal,
     band_gain,
-    band_power_V2,
     choose_band,
-    envelope,
     envelope_spectrum,
-    kurtogram,
     kurtogram_bands,
-    spectral_kurtosis,
 )
 
 #: Stable codes of the cases, used to derive independent noise streams (the fault types: the
