@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from piezobearing.sensor.calibration import SensorCircuit, circuit_voltage
+from piezobearing.sensor.calibration import SensorCircuit, circuit_voltage, frequency_response
+from piezobearing.sensor.response import fem_ratio
 from piezobearing.signals import daq, detection, envelope
 
 FS = 2550.0  # the paper's sampling rate [Hz]
@@ -258,14 +259,12 @@ def test_batched_snr_sweep_gives_the_rows_of_the_record_by_record_analysis(rule)
 
 def test_fem_correction_factor():
     c = SensorCircuit()
-    from piezobearing.sensor.calibration import frequency_response
-
     f = np.array([500.0, 1000.0, 5000.0, 1e5])
     rc = np.abs(frequency_response(f, c))
     fem = 0.9 * rc * np.array([1.0, 1.0, 1.05, 3.0])  # flat below Nyquist, resonant far above
-    out = detection.fem_correction(f, fem, rc, FS / 2)
+    out = fem_ratio(f, fem / rc, FS / 2)
     assert out["factor"] == pytest.approx(0.9) and out["n_frequencies"] == 2
-    out = detection.fem_correction(f[2:], fem[2:], rc[2:], FS / 2)  # no FEM point below Nyquist: the lowest two
+    out = fem_ratio(f[2:], fem[2:] / rc[2:], FS / 2)  # no FEM point below Nyquist: the lowest two
     assert out["frequencies_Hz"] == [5000.0, 1e5]
 
 

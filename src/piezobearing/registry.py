@@ -182,8 +182,8 @@ READS: dict[str, list[str]] = {
     # diagnostics.smk
     "diagnose": ["seed", "sensor", "synthesis", "calibration", "model", "diagnostics"],
     # diagnostics_bearing.smk
-    "synthesize_bearing_record": ["seed", "sensor", "bearing", "bearing_diagnosis"],
-    "diagnose_bearing": ["seed", "sensor", "bearing", "bearing_diagnosis", "diagnostics"],
+    "synthesize_bearing_record": ["seed", "sensor", "signals.sensor_fem_correction", "bearing", "bearing_diagnosis"],
+    "diagnose_bearing": ["seed", "sensor", "signals.sensor_fem_correction", "bearing", "bearing_diagnosis", "diagnostics"],
     # scorecard.smk: the run's conditions against the paper's case (piezobearing.paper.CASE)
     "scorecard": _CASE,
 }

@@ -411,32 +411,7 @@ def detection_limit_dB(snr_dB: np.ndarray, rate: np.ndarray, required_rate: floa
     return float(s[i])
 
 
-# --------------------------------------------------------------------------- sensor model and events
-
-
-def fem_correction(frequency_Hz: np.ndarray, fem_V_per_N: np.ndarray, rc_V_per_N: np.ndarray, f_max_Hz: float) -> dict:
-    """Constant gain that carries the RC model over to the sensor FEM in the analysed band.
-
-    The ratio |H_FEM| / |H_RC| is taken at the FEM frequencies up to
-    ``f_max_Hz`` (the Nyquist frequency of the signal); if fewer than two lie
-    there, at the two lowest FEM frequencies. Returns the median ratio
-    ("factor") and its spread (min, max) over those frequencies, so a
-    frequency-dependent correction would show as a wide spread.
-    """
-    f = np.asarray(frequency_Hz, dtype=float)
-    ratio = np.abs(np.asarray(fem_V_per_N, dtype=float)) / np.abs(np.asarray(rc_V_per_N))
-    sel = f <= f_max_Hz
-    if sel.sum() < 2:
-        sel = np.zeros(f.size, dtype=bool)
-        sel[np.argsort(f)[:2]] = True
-    r = ratio[sel]
-    return {
-        "factor": float(np.median(r)),
-        "min": float(r.min()),
-        "max": float(r.max()),
-        "frequencies_Hz": [float(f[sel].min()), float(f[sel].max())],
-        "n_frequencies": int(sel.sum()),
-    }
+# --------------------------------------------------------------------------- defect events (Fig. 9)
 
 
 def defect_event_times(

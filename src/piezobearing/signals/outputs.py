@@ -17,7 +17,8 @@ import pandas as pd
 
 from ..bearing.lpm import BearingGeometry, kinematic_frequencies
 from ..io import SignalFileError
-from ..sensor.calibration import SensorCircuit, design_resistance_ohm, frequency_response, rc_voltage
+from ..sensor.calibration import SensorCircuit, design_resistance_ohm, rc_voltage
+from ..sensor.response import sensor_model
 from . import classification, daq, detection, detectors
 from .analysis import INDICATOR_DEFINITION, envelope_analysis
 
@@ -72,20 +73,18 @@ def sensor_voltage(t: np.ndarray, force: np.ndarray, dt: float, circuit: SensorC
                    source: str = "the force record") -> tuple[pd.DataFrame, dict]:
     """Rule sensor_voltage_{case}: the sensor force through the calibrated sensor model.
 
-    The RC model of Eq. 6 (``circuit``: the fitted or the DAQ's R, the cable) by :func:`rc_record`, started in
-    its periodic steady state for the sensor force's period (:func:`sensor_force_period_s`), the first ``signals.skip_s`` dropped. ``harmonic``: the sensor FEM's (frequency [Hz], |V/F| [V/N]) where
-    ``signals.sensor_fem_correction``, else None; the voltage is then scaled by the median |H_FEM| / |H_RC|
-    below the Nyquist frequency (the FEM is flat there: its first resonance is near 100 kHz). Returns the
-    table (time_s, force_N, voltage_V) and the record (voltage_{case}.json without ``source``).
+    The one model of the sensor (:func:`piezobearing.sensor.response.sensor_model`, the diagnosis's too): the
+    RC model of Eq. 6 (``circuit``: the fitted or the DAQ's R, the cable) times the sensor FEM's correction,
+    the median |H_FEM| / |H_RC| below the Nyquist frequency (the FEM is flat there: its first resonance is near
+    100 kHz); ``harmonic``: the sensor FEM's (frequency [Hz], |V/F| [V/N]) where ``signals.sensor_fem_correction``,
+    else None. By :func:`rc_record`, started in its periodic steady state for the sensor force's period
+    (:func:`sensor_force_period_s`), the first ``signals.skip_s`` dropped. Returns the table (time_s, force_N,
+    voltage_V) and the record (voltage_{case}.json without ``source``).
     """
     s = config["signals"]
-    t, force, v, skip = rc_record(t, force, dt, circuit.open_circuit_gain_V_per_N, circuit.tau_s, s["skip_s"],
+    model = sensor_model(config, circuit, 0.5 / dt, harmonic)
+    t, force, v, skip = rc_record(t, force, dt, model.gain_V_per_N, model.tau_s, s["skip_s"],
                                   sensor_force_period_s(config["bearing"]), source)
-    corr = None
-    if harmonic is not None:
-        f_fem, h_fem = harmonic
-        corr = detection.fem_correction(f_fem, h_fem, np.abs(frequency_response(f_fem, circuit)), 0.5 / dt)
-        v = v * corr["factor"]
     record = {
         "dt_s": dt,
         "sample_rate_Hz": 1.0 / dt,
@@ -96,7 +95,8 @@ def sensor_voltage(t: np.ndarray, force: np.ndarray, dt: float, circuit: SensorC
         "capacitance_F": circuit.capacitance_F,
         "tau_s": circuit.tau_s,
         "open_circuit_gain_V_per_N": circuit.open_circuit_gain_V_per_N,
-        "fem_correction": corr,
+        "fem_correction": model.correction,
+        "sensor_model": model.describe(),
         "voltage_rms_V": float(np.sqrt(np.mean(v**2))),
         "voltage_peak_to_peak_V": float(np.ptp(v)),
         "force_mean_N": float(force.mean()),
