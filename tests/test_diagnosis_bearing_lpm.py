@@ -49,6 +49,12 @@ def test_lpm_record_hidden_effect_is_found_with_its_value_in_the_interval(setup,
     assert abs(d["final"]["params"][key] / hidden[key] - 1) < 0.05, (d["final"]["params"][key], lo, hi)
     if name == "outer_race_defect":
         assert d["fault"]["type"] == "outer_race"
+        # what the surrogate leaves of the groove's own lines (the LPM's shaft rings after each edge) is stated
+        # with the fault, line by line, beside the verdict
+        f = d["fault"]
+        assert f["statement"].startswith("outer race 0.")
+        for line in f["lines_left"]:
+            assert "BPFO" in line["line"] and line["line"] in f["statement"]
 
 
 @pytest.mark.slow
