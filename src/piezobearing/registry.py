@@ -179,6 +179,11 @@ READS: dict[str, list[str]] = {
         "seed", *_BEARING, *_HOUSING_GEOMETRY, "housing", *_PZT, *_ALUMINA_DISK,
         "signals.skip_s", "signals.sensor_fem_correction", *_CIRCUIT,
     ],
+    # sensor_comparison.smk
+    "sensor_comparison": [
+        "seed", *_BEARING, *_HOUSING_GEOMETRY, "housing", *_PZT, *_ALUMINA_DISK, *_CIRCUIT, "signals",
+        "base_motion", "accelerometer", "sensor_comparison",
+    ],
     # diagnostics.smk
     "diagnose": ["seed", "sensor", "synthesis", "calibration", "model", "diagnostics"],
     # diagnostics_bearing.smk

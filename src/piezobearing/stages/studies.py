@@ -37,6 +37,7 @@ from ..io import (
 from ..sensor import outputs as cout
 from ..signals import outputs as sout
 from ..studies import case_config
+from .sensor_comparison import study_case as sensor_comparison_case
 
 
 def calibration_circuit_case(config: dict, outdir: Path) -> dict:
@@ -322,6 +323,7 @@ KINDS = {
     "defect_position": detector_case,
     "fault_type_speed": detector_case,
     "sensor_design": sensor_design_case,
+    "sensor_comparison": sensor_comparison_case,
 }
 
 
@@ -349,7 +351,9 @@ def summarize(study: str, case_jsons: list[str], out_csv: str, out_png: str) -> 
     rows = []
     for p in case_jsons:
         d = read_json(p)
-        rows.append({**d["overrides"], **{k: v for k, v in d["summary"].items() if not isinstance(v, list)}})
+        case = {**d["overrides"], **{k: v for k, v in d["summary"].items() if not isinstance(v, list)}}
+        # a kind with several rows per case (one per sensor) lists them under "rows"
+        rows.extend([{**case, **r} for r in d["summary"]["rows"]] if "rows" in d["summary"] else [case])
     df = pd.DataFrame(rows)
     Path(out_csv).parent.mkdir(parents=True, exist_ok=True)
     df.to_csv(out_csv, index=False)
