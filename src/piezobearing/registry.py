@@ -179,11 +179,16 @@ READS: dict[str, list[str]] = {
         "seed", *_BEARING, *_HOUSING_GEOMETRY, "housing", *_PZT, *_ALUMINA_DISK,
         "signals.skip_s", "signals.sensor_fem_correction", *_CIRCUIT,
     ],
+    # sensor_comparison.smk
+    "sensor_comparison": [
+        "seed", *_BEARING, *_HOUSING_GEOMETRY, "housing", *_PZT, *_ALUMINA_DISK, *_CIRCUIT, "signals",
+        "base_motion", "accelerometer", "sensor_comparison",
+    ],
     # diagnostics.smk
     "diagnose": ["seed", "sensor", "synthesis", "calibration", "model", "diagnostics"],
     # diagnostics_bearing.smk
-    "synthesize_bearing_record": ["seed", "sensor", "bearing", "bearing_diagnosis"],
-    "diagnose_bearing": ["seed", "sensor", "bearing", "bearing_diagnosis", "diagnostics"],
+    "synthesize_bearing_record": ["seed", "sensor", "signals.sensor_fem_correction", "bearing", "bearing_diagnosis"],
+    "diagnose_bearing": ["seed", "sensor", "signals.sensor_fem_correction", "bearing", "bearing_diagnosis", "diagnostics"],
     # scorecard.smk: the run's conditions against the paper's case (piezobearing.paper.CASE)
     "scorecard": _CASE,
 }

@@ -55,3 +55,23 @@ def defer_serendipity_bases() -> None:
     stand_in = types.ModuleType(MODULE, "sfepy's serendipity bases, read at their first use (piezobearing)")
     stand_in.all_bfs = _DeferredBases(spec)
     sys.modules[MODULE] = stand_in
+
+
+JAX_TERMS = "sfepy.terms.terms_jax"
+
+
+def skip_jax_terms() -> None:
+    """Without JAX, put an empty stand-in for sfepy's JAX terms in ``sys.modules`` (unless it is there already).
+
+    sfepy's term table imports every ``sfepy/terms/terms*.py``; its proof-of-concept JAX terms, without JAX,
+    print "install jax and jaxlib to use terms_jax.py!" and a WARNING with "No module named 'jax'" on every run,
+    about terms this project never uses. The stand-in holds no terms, so the table is the same as sfepy builds
+    it without JAX, and nothing is printed. With JAX installed nothing changes.
+    """
+    if JAX_TERMS in sys.modules or importlib.util.find_spec("jax") is not None:
+        return
+    sys.modules[JAX_TERMS] = types.ModuleType(JAX_TERMS, "sfepy's JAX terms, left out: JAX is not installed (piezobearing)")
+
+
+# before any sfepy import of the modules that import this one (housing_fem, sensor.fem)
+skip_jax_terms()

@@ -38,6 +38,7 @@ DETECTOR_STUDIES = ("daq_noise", "defect_position", "fault_type_speed")
 STUDY_INPUTS = {
     "fault_detection": _SENSOR_INPUTS,
     **{name: _SENSOR_INPUTS for name in DETECTOR_STUDIES},
+    "sensor_comparison": _SENSOR_INPUTS,
     "sensor_design": {
         "resistance": f"{RESULTS}/calibration/resistance.json",
         "force_healthy": f"{RESULTS}/bearing/sensor_force_healthy.csv",
@@ -53,12 +54,15 @@ STUDY_MEM_MB = {
     "fault_detection": 1000,
     **{name: 2000 for name in DETECTOR_STUDIES},
     "sensor_design": 1500,
+    # measured per case: benchmarks/bench_sensor_comparison.py (results/benchmarks/sensor_comparison.json)
+    "sensor_comparison": 3000,
 }
 STUDY_RUNTIME_MIN = {
     "calibration_circuit": 2,
     "fault_detection": 4,
     **{name: 20 for name in DETECTOR_STUDIES},
     "sensor_design": 3,
+    "sensor_comparison": 60,
 }
 # Config sections a kind's cases depend on (as params: a changed value reruns the cases).
 STUDY_SECTIONS = {
@@ -69,6 +73,7 @@ STUDY_SECTIONS = {
         for name in DETECTOR_STUDIES
     },
     "sensor_design": "seed sensor sensor_fem lowfreq bearing housing signals".split(),
+    "sensor_comparison": "seed sensor sensor_fem bearing housing signals base_motion accelerometer sensor_comparison".split(),
 }
 
 

@@ -315,8 +315,9 @@ def _pick_channels(path: Path, found: dict, columns, optional, channels: dict, k
     return RawTable(pd.DataFrame({c: cols[c] for c in order}), _sample)
 
 
-def _mat_channels(path: Path, channels: dict, wav_full_scale_V, key: str) -> dict:
-    """MATLAB variables as channels (v5 by scipy.io, v7.3 by h5py); ``name[k]`` is column k of a matrix."""
+def mat_arrays(path: Path) -> dict[str, np.ndarray]:
+    """The numeric variables of a MATLAB file (v5 by scipy.io, v7.3 by h5py), each at least 2-D, in
+    MATLAB's orientation (an n x k matrix as (n, k)); scalars are 1 x 1."""
     if h5py.is_hdf5(path):
         with h5py.File(path, "r") as f:
             # MATLAB stores arrays column-major: an n x k matrix reads as (k, n)
@@ -331,10 +332,14 @@ def _mat_channels(path: Path, channels: dict, wav_full_scale_V, key: str) -> dic
             for n, v in loadmat(path, squeeze_me=False).items()
             if not n.startswith("__") and isinstance(v, np.ndarray) and np.issubdtype(v.dtype, np.number)
         }
+    return {n: np.atleast_2d(a) for n, a in arrays.items()}
+
+
+def _mat_channels(path: Path, channels: dict, wav_full_scale_V, key: str) -> dict:
+    """MATLAB variables as channels (v5 by scipy.io, v7.3 by h5py); ``name[k]`` is column k of a matrix."""
     out: dict[str, _Channel] = {}
     rate = None
-    for n, a in arrays.items():
-        a = np.atleast_2d(a)
+    for n, a in mat_arrays(path).items():
         if a.size == 1:
             if n == "sample_rate_Hz":
                 rate = float(a.ravel()[0])

@@ -6,6 +6,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
+from . import sensor_comparison
+
 
 def calibration_circuit(df: pd.DataFrame):
     """Impulse sensitivity, onset of linearity and reference sensitivity against R, one line per cable."""
@@ -210,4 +212,5 @@ SUMMARY_FIGURES = {
     "defect_position": defect_position,
     "fault_type_speed": fault_type_speed,
     "sensor_design": sensor_design,
+    "sensor_comparison": sensor_comparison.summary_figure,
 }

@@ -148,7 +148,7 @@ def views(d: dict, figures: s.Figures) -> list[str]:
 METHOD_FIT = (
     "- Fit: maximum likelihood with the noise floor measured from the record (white), over the DFT bins. "
     "The model: the rings' quasi-static load distribution with any defect's drop, times the housing's "
-    "influence line (the quasi-static surrogate, README), through the RC circuit of Eq. 6 from its steady "
+    "influence line (the quasi-static surrogate, docs/theory/bearing_housing.md), through the RC circuit of Eq. 6 from its steady "
     "state; nuisance parameters fitted in every model: the roller set's phase at the first sample, the "
     "shaft speed within its tolerance (or the tachometer's), the DC level. NRMSE = rms(residual) / rms(measured)."
 )

@@ -18,6 +18,7 @@ from ...bearing.lpm import BearingGeometry
 from ...bearing.surrogate import InfluenceLine, cage_phase
 from ...io import BearingRecord, read_bearing_record
 from ...sensor.calibration import SensorCircuit
+from ...sensor.response import sensor_model
 from ...signals.detection import noise_std_for_snr
 from ...threads import single_blas_thread
 from ..effect import Catalogue, EffectError, StartContext
@@ -38,26 +39,31 @@ ZOOM_PASSAGES = 12
 REMEASURE_BELOW = 0.8
 
 
-def rig_from_config(config: dict, influence: InfluenceLine, time_s: np.ndarray, tach_Hz=None) -> chain.Rig:
-    """The chain's fixed part from the config (bearing, sensor, bearing_diagnosis) and an influence line."""
+def rig_from_config(config: dict, influence: InfluenceLine, time_s: np.ndarray, tach_Hz=None,
+                    harmonic: tuple[np.ndarray, np.ndarray] | None = None) -> chain.Rig:
+    """The chain's fixed part from the config (bearing, sensor, signals.sensor_fem_correction, bearing_diagnosis)
+    and an influence line; ``harmonic``: the sensor FEM's (frequency [Hz], |V/F| [V/N]) of this configuration
+    (the workflow's), else the paper sensor's (:func:`piezobearing.sensor.response.sensor_model`)."""
     b, bd = config["bearing"], config["bearing_diagnosis"]
+    t = np.asarray(time_s, dtype=float)
     circuit = SensorCircuit.from_config(config["sensor"], bd["resistance_ohm"])
+    nyquist = 0.5 / float(np.median(np.diff(t))) if t.size > 1 else np.inf
     return chain.Rig(
         BearingGeometry.from_config(b),
         influence,
-        circuit.open_circuit_gain_V_per_N * bd["gain_factor"],
-        circuit.tau_s,
+        sensor_model(config, circuit, nyquist, harmonic),
+        bd["gain_factor"],
         b["radial_load_N"],
         b["radial_clearance_m"],
         b["shaft_speed_rpm"] / 60.0,
-        np.asarray(time_s, dtype=float),
+        t,
         None if tach_Hz is None else np.asarray(tach_Hz, dtype=float),
     )
 
 
-def rig_record(rec: BearingRecord, config: dict, influence: InfluenceLine) -> RigRecord:
+def rig_record(rec: BearingRecord, config: dict, influence: InfluenceLine, harmonic=None) -> RigRecord:
     tach = None if rec.speed_rpm is None else rec.speed_rpm / 60.0
-    rig = rig_from_config(config, influence, rec.time_s, tach)
+    rig = rig_from_config(config, influence, rec.time_s, tach, harmonic)
     return RigRecord(
         rec.time_s, None, "voltage", "V", rig=rig,
         speed_tolerance_ratio=config["bearing_diagnosis"]["speed_tolerance_ratio"],
@@ -123,9 +129,10 @@ class BearingSubject:
         b = config["bearing"]
         return read_bearing_record(path, b.get("channels"), b.get("wav_full_scale_V"))
 
-    def problem(self, obs: tuple[BearingRecord, InfluenceLine], config: dict) -> Problem:
-        rec, influence = obs
-        rr = rig_record(rec, config, influence)
+    def problem(self, obs: tuple, config: dict) -> Problem:
+        """``obs``: (record, influence line) or (record, influence line, the sensor FEM's harmonic response)."""
+        rec, influence, *rest = obs
+        rr = rig_record(rec, config, influence, rest[0] if rest else None)
         v = np.asarray(rec.voltage_V, dtype=float)
         start, starts = baseline_starts(rr, v)
         configured = tuple(CATALOGUE.resolve(config["bearing_diagnosis"]["effects"], "bearing_diagnosis.effects"))
@@ -135,8 +142,9 @@ class BearingSubject:
             zoom_segments=ZOOM_PASSAGES,
         )
 
-    def synthesise(self, config: dict, seed: int, hidden_effects: list[dict], influence: InfluenceLine) -> BearingRecord:
-        return synthesise(config, seed, hidden_effects, influence)
+    def synthesise(self, config: dict, seed: int, hidden_effects: list[dict], influence: InfluenceLine,
+                   harmonic=None) -> BearingRecord:
+        return synthesise(config, seed, hidden_effects, influence, harmonic)
 
     def answer(self, diagnosis) -> dict:
         return {"fault": fault_answer(diagnosis)}
@@ -279,11 +287,13 @@ def hidden_values(specs: list[dict], record: RigRecord | None, key: str = "beari
     return model, values
 
 
-def synthesise(config: dict, seed: int, hidden_effects: list[dict], influence: InfluenceLine) -> BearingRecord:
+def synthesise(config: dict, seed: int, hidden_effects: list[dict], influence: InfluenceLine,
+               harmonic: tuple[np.ndarray, np.ndarray] | None = None) -> BearingRecord:
     """A synthetic running-bearing record: the chain at the nominal point with the hidden effects, plus noise.
 
     White Gaussian noise at ``bearing_diagnosis.synthetic_snr_dB`` over the
-    noiseless record (seeded by ``seed``); the roller set starts at
+    noiseless record (seeded by ``seed``); the sensor model as the diagnosis's (``harmonic``: the sensor FEM's
+    response of this configuration, :func:`rig_from_config`); the roller set starts at
     ``synthetic_start_phase_deg``; with ``synthetic_tachometer`` the shaft
     speed (times 1 + any hidden ``speed_deviation_ratio``) is written as speed_rpm.
     """
@@ -292,7 +302,7 @@ def synthesise(config: dict, seed: int, hidden_effects: list[dict], influence: I
     t = np.arange(int(round(bd["synthetic_duration_s"] * fs))) / fs
     f0 = config["bearing"]["shaft_speed_rpm"] / 60.0
     tach = np.full(t.size, f0) if bd["synthetic_tachometer"] else None
-    rig = rig_from_config(config, influence, t, tach)
+    rig = rig_from_config(config, influence, t, tach, harmonic)
     rr = RigRecord(t, None, "voltage", "V", rig=rig, speed_tolerance_ratio=bd["speed_tolerance_ratio"])
     model, values = hidden_values(hidden_effects, rr)
     values["start_phase_rad"] = float(np.radians(bd["synthetic_start_phase_deg"]))
