@@ -21,7 +21,7 @@ def test_the_guide_gives_each_studys_target_and_cases():
     assert set(rows) == set(paper)
     for name, (target, n_paper, n_ci) in rows.items():
         assert target == f"study_{name}" and n_paper == paper[name] and n_ci == ci.get(name, 0), name
-    total = re.search(r"\| all six \| `snakemake --cores 2 study_all` \| (\d+) \| (\d+) \|", GUIDE.read_text())
+    total = re.search(r"\| all seven \| `snakemake --cores 2 study_all` \| (\d+) \| (\d+) \|", GUIDE.read_text())
     assert (int(total.group(1)), int(total.group(2))) == (sum(paper.values()), sum(ci.values()))
 
 
