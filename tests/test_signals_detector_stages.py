@@ -9,23 +9,26 @@ import pandas as pd
 import pytest
 from test_signals_stages import inputs, run_chain  # noqa: F401  (the fixture)
 
+from piezobearing.signals.detectors import Detection
 from piezobearing.stages import signals as st
 
 CASES = ("healthy", "faulty")
 
 
 def test_indicator_carries_the_fault_type_and_every_type_test(tmp_path, inputs, paper_config):  # noqa: F811
-    """fault_indicator.json: per case fault_type and per type indicator, threshold, detected; today's keys kept."""
+    """fault_indicator.json: per case the paper's indicator, the fault_type and the configured detector's
+    Detection (per family statistic, threshold, margin, detected), readable back as one."""
     out = run_chain(tmp_path, inputs, paper_config)
     ind = json.loads((out / "fault_indicator.json").read_text())
     assert ind["faulty"]["fault_type"] == "outer_race" and ind["healthy"]["fault_type"] == "none"
     for case in CASES:
         assert {"indicator", "threshold", "detected", "harmonics"} <= set(ind[case])
-        assert set(ind[case]["fault_types"]) == {"outer_race", "inner_race", "rolling_element"}
-        for r in ind[case]["fault_types"].values():
-            assert {"indicator", "threshold", "detected", "lines"} <= set(r)
-    assert ind["faulty"]["fault_types"]["outer_race"]["detected"]
-    assert not any(r["detected"] for r in ind["healthy"]["fault_types"].values())
+        d = Detection.from_dict(ind[case]["detection"])
+        assert d.method == paper_config["signals"]["detector"]["statistic"] and d.fault_type == ind[case]["fault_type"]
+        assert set(d.families) == {"outer_race", "inner_race", "rolling_element"}
+    faulty, healthy = (Detection.from_dict(ind[c]["detection"]) for c in ("faulty", "healthy"))
+    assert faulty.families["outer_race"].detected and faulty.margin_dB > 0
+    assert not any(f.detected for f in healthy.families.values())
     nz = json.loads((out / "noisy_faulty.json").read_text())
     assert nz["anti_alias"].startswith("none") and nz["daq"]["n_clipped"] == 0  # the paper's rate: as is
 
@@ -134,9 +137,8 @@ def test_healthy_stays_healthy_at_a_daq_noise(tmp_path, inputs, paper_config, mo
     stand-in's 44 V swing), the stand-in's roller over the sensor at t = 0 as in the LPM (bearing.start_angle_deg 0):
     the healthy record is classified none and over 10 seeds its folds stay quiet, the fault is outer_race in every
     seed. The sensor circuit starts in its
-    periodic steady state; started at rest (the code before 2026-11-23) the free decay left after signals.skip_s
-    (7.6 tau: 10 mV of 22 V) is what the folds pick up (before 2ddf851 and with 24 bits: a rolling-element fault,
-    4.9 > 3.5; now 2.6, against at most 0.06 over the 10 seeds with the periodic start)."""
+    periodic steady state; started at rest, the free decay left after signals.skip_s (7.6 tau: 10 mV of 22 V)
+    is what the folds pick up (indicator 2.6 against at most 0.06 over the 10 seeds with the periodic start)."""
     import numpy as np
     from test_signals import DT, bearing_force
 
@@ -160,10 +162,9 @@ def test_healthy_stays_healthy_at_a_daq_noise(tmp_path, inputs, paper_config, mo
     st.classification(volt, inputs["kinematics"], out / "cls.json", out / "cls.csv", out / "roc.csv", cfg)
     seeds = pd.read_csv(out / "cls.csv")
     healthy = seeds[seeds["case"] == "healthy"]
-    # the start's leftover shows in the folds (its cells at phase 0); the outer-race harmonic test: from 2ddf851
-    # (the closed-form fit) to its fix (refine_period's Gauss-Newton step by QR where the folds coincide, f_s = 36
-    # BPFO exactly) it called 3 of these 10 healthy records an outer-race fault (indicator 5-460); 0 of 10 before
-    # and after
+    # the start's leftover shows in the folds (its cells at phase 0); the outer-race harmonic test needs
+    # refine_period's Gauss-Newton step by QR where the folds coincide (f_s = 36 BPFO exactly): the closed-form
+    # step alone calls 3 of these 10 healthy records an outer-race fault (indicator 5-460)
     assert not healthy["inner_race_detected"].any() and not healthy["rolling_element_detected"].any()
     assert (healthy["fault_type"] == "none").all()
     assert (seeds[seeds["case"] == "faulty"]["fault_type"] == "outer_race").all()
@@ -176,6 +177,6 @@ def test_healthy_stays_healthy_at_a_daq_noise(tmp_path, inputs, paper_config, mo
     monkeypatch.setattr(sout, "rc_voltage", lambda f, dt, g, tau, period_s: rest(f, dt, g, tau))
     old = run_chain(tmp_path / "rest", inputs, cfg, harmonic=False)
     assert leftover(out) < 1e-6 and leftover(old) > 5e-3  # the free decay over one passage: 10 mV x (1 - e^-1.08)
-    folds = json.loads((old / "fault_indicator.json").read_text())["healthy"]["fault_types"]
-    assert max(folds[t]["indicator"] for t in ("inner_race", "rolling_element")) > 2 * max(
+    folds = json.loads((old / "fault_indicator.json").read_text())["healthy"]["detection"]["families"]
+    assert max(folds[t]["statistic"] for t in ("inner_race", "rolling_element")) > 2 * max(
         healthy["inner_race_indicator"].max(), healthy["rolling_element_indicator"].max())

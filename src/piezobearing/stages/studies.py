@@ -35,7 +35,9 @@ from ..io import (
     write_json,
 )
 from ..sensor import outputs as cout
+from ..signals import daq, detection
 from ..signals import outputs as sout
+from ..signals.envelope import EnvelopeSettings
 from ..studies import case_config
 from .sensor_comparison import study_case as sensor_comparison_case
 
@@ -73,7 +75,7 @@ def workflow_chain(config: dict, resistance: dict, harmonic=None, resistance_sou
     ``signals.sensor_fem_correction``, else None.
 
     Returns the records by rule (``kinematics``, ``lpm``, per case ``transient``, ``voltage`` (t, v, dt),
-    ``noisy`` (y, dt, record), ``envelope`` (table, record)) and ``indicator`` (fault_indicator.json).
+    ``noisy`` (y, v, dt, record), ``envelope`` (table, record)) and ``indicator`` (fault_indicator.json).
     """
     lpm = bout.bearing_lpm(config)
     kin = kinematics_of(json_as_read(lpm["kinematics"]), "kinematics.json")
@@ -92,13 +94,11 @@ def workflow_chain(config: dict, resistance: dict, harmonic=None, resistance_sou
         table = as_read(table)
         _, y, dt = table_series(table, "voltage_V", f"noisy_{c}.csv")
         _, v, _ = table_series(table, "noiseless_V", f"noisy_{c}.csv")
-        out["noisy"][c] = (y, dt, json_as_read(record))
-        if c == "healthy":
-            out["baseline"] = (v, dt)  # the baseline detector's healthy record
+        out["noisy"][c] = (y, v, dt, json_as_read(record))
         env, env_record = sout.envelope(y, v, dt, kin, config)
         out["envelope"][c] = (as_read(env), json_as_read(env_record))
-    out["indicator"] = json_as_read(sout.fault_indicator(out["envelope"], kin, out["noisy"], config,
-                                                         out.get("baseline")))
+    out["indicator"] = json_as_read(sout.fault_indicator({c: rec for c, (_, rec) in out["envelope"].items()}, kin,
+                                                         out["noisy"], config))
     return out
 
 
@@ -130,19 +130,17 @@ def fault_detection_case(config: dict, outdir: Path, resistance: str, harmonic: 
 
 def _fault_detection_row(cfg: dict, run: dict) -> dict:
     """The fault_detection summary row of a case's chain (:func:`workflow_chain`)."""
-    from ..signals import detection as sig
-
     s, b, kin = cfg["signals"], cfg["bearing"], run["kinematics"]
     f0 = kin["bpfo_Hz"]
     # time a roller centre takes to cross the (first) groove (it sinks over this arc; lpm.chord_drop_m)
     crossing_s = b["defects"][0]["width_m"] / (
         BearingGeometry.from_config(b).outer_raceway_radius_m * 2 * np.pi * kin["ftf_Hz"]
     )
-    es, ins = sig.EnvelopeSettings.from_config(s), sig.IndicatorSettings.from_config(s)
+    es, ins = EnvelopeSettings.from_config(s), detection.IndicatorSettings.from_config(s)
     rows = []
     for c in CASES:
         _, v, dt = run["voltage"][c]
-        rows += sig.snr_sweep(v, dt, f0, c, [s["snr_dB"]], s["study_n_seeds"], cfg["seed"], es, ins)
+        rows += detection.snr_sweep(v, dt, f0, c, [s["snr_dB"]], s["study_n_seeds"], cfg["seed"], es, ins)
     seeds = pd.DataFrame(rows)
     ind, lpm, tr = run["indicator"], run["lpm"], run["transient"]
     by = {c: seeds[seeds["case"] == c] for c in CASES}
@@ -208,9 +206,6 @@ def sensor_design_case(
     from ..sensor.analysis import SensorFemParams
     from ..sensor.calibration import design_resistance_ohm
     from ..sensor.mesh import stack_mesh
-    from ..signals import daq
-    from ..signals import detection as sig
-
     s, f = config["sensor"], config["sensor_fem"]
     p = SensorFemParams.from_config(config)
     r_ohm = design_resistance_ohm(s, read_json(resistance)["resistance_ohm"])
@@ -243,7 +238,7 @@ def sensor_design_case(
         voltages[case], dt_daq = smp.voltage_V, smp.dt_s
     det = sd.detection_at_noise(
         voltages, dt_daq, kin["bpfo_Hz"], noise_settings(config), sg["study_n_seeds"], config["seed"],
-        sig.EnvelopeSettings.from_config(sg), sig.IndicatorSettings.from_config(sg),
+        EnvelopeSettings.from_config(sg), detection.IndicatorSettings.from_config(sg),
         sg["study_required_detection_rate"],
     )
     return {
@@ -272,8 +267,6 @@ def sensor_design_case(
 def noise_settings(config: dict):
     """The DAQ's absolute noise: ``signals.noise`` where the config has it (model forced to absolute), else
     :class:`piezobearing.signals.daq.NoiseSettings`' absolute defaults (1 uV/sqrt(Hz), 24 bits, +-60 V)."""
-    from ..signals import daq
-
     if "noise" in config["signals"]:
         return replace(daq.NoiseSettings.from_config(config["signals"]), model="absolute")
     return daq.NoiseSettings(model="absolute")
