@@ -1,14 +1,14 @@
-"""Run times of the search detector against today's exact-bin test on one record.
+"""Run times of the search detector against the paper's exact-bin test on one record.
 
 A 1 s record at 2550 Hz (the paper) and at 51.2 kHz: white noise plus a
-slipped outer-race impulse train; the band 500-1250 Hz. Times: today's
+slipped outer-race impulse train; the band 500-1250 Hz. Times: the paper's
 ``detection.analyse`` (whole periods, one bin per harmonic), the search
 detector ``detector.analyse_record`` (three fault types, windows, computed
 null distributions) with its null distributions cached (the usual case: one
 record length per run) and cold (first record), and the DAQ's ``sample``
 from 51.2 kHz to 10.24 kHz; the baseline detector ``baseline.detect`` (slip, roller-passage fit,
 harmonic and fold tests) and ``Baseline.from_record`` at 2550 Hz, 25.6 kHz and 51.2 kHz with the fit to f_s and
-to Nyquist (CPU seconds: one BLAS thread), with today's least squares (``signals/harmonics.py``: the normal
+to Nyquist (CPU seconds: one BLAS thread), with the package's least squares (``signals/harmonics.py``: the normal
 equations in closed form, Bluestein transforms, Cholesky) and the plain method
 (``old_*``: explicit matrices and pivoted QR, ``harmonics.refine_period_qr``; scipy's CZT and two inverses in
 the outer-race test; kept here for the comparison), their ratio and the indicators' largest relative
