@@ -12,7 +12,7 @@ import pytest
 from scipy.io import loadmat, savemat, wavfile
 
 from piezobearing import cli
-from piezobearing.io import MeasurementError
+from piezobearing.io import MeasurementError, read_bearing_record
 from piezobearing.io.vibration import read_vibration_record
 from piezobearing.recording import RigError, detect_recording
 
@@ -111,3 +111,10 @@ def test_a_short_or_dead_record_and_a_bad_rig_file_are_refused(tmp_path):
     rig.write_text("bearing: {designation: SKF 6203}\nshaft_speed: 1797\n")
     with pytest.raises(RigError, match="key 'shaft_speed' unknown; a rig file holds bearing, shaft_speed_rpm"):
         detect_recording(DATA / "fe39.mat", rig)
+
+
+def test_a_running_bearing_record_names_its_channel_by_a_suffix(tmp_path):
+    fe, de = _cwru_channels()
+    savemat(tmp_path / "r.mat", {"X744_FE_time": fe, "X744_DE_time": de, "sample_rate_Hz": 12000.0})
+    record = read_bearing_record(tmp_path / "r.mat", channels={"voltage_V": "_DE_time"})
+    assert np.array_equal(record.voltage_V, de) and record.sample_rate_Hz == pytest.approx(12000.0)

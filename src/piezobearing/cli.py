@@ -381,6 +381,8 @@ def _diagnose_bearing(args) -> int:
         f"(floor {100 * final['noise_floor_nrmse']:.2f}%)"
     )
     print(f"fault: {f['type']}" + "".join(f"; {k} = {v:.6g} [{f['ci95'][k][0]:.6g}, {f['ci95'][k][1]:.6g}]" for k, v in f["params"].items() if f["ci95"].get(k)))
+    if f.get("lines_left"):
+        print(f"found, with lines left: {f['statement']}")
     print(f"verdict: {d['verdict']}")
     stuck = (d.get("outside_catalogue") or {}).get("stuck") or {}
     if stuck.get("where"):

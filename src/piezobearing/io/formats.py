@@ -283,6 +283,10 @@ def _pick_channels(path: Path, found: dict, columns, optional, channels: dict, k
             continue
         name = channels.get(col, col)
         ch = found.get(str(name))
+        if ch is None and col in channels:  # a configured name may be a suffix only one channel ends with
+            ends = [n for n in data_names if n.lower().endswith(str(name).lower())]
+            if len(ends) == 1:
+                ch = found[ends[0]]
         if ch is None and col == "voltage_V" and "voltage_V" not in channels:
             others = [n for n in data_names if n not in channels.values() and n != "time_s"]
             if len(others) == 1:

@@ -71,6 +71,24 @@ def lpm_parameters(config: dict, hidden: dict, start_phase_rad: float, seed: int
     )
 
 
+def lpm_sensor_force(config: dict, influence: InfluenceLine, hidden: dict, time_s: np.ndarray) -> np.ndarray:
+    """The LPM's sensor force [N] averaged over each sample window of the uniform clock ``time_s`` [s].
+
+    The LPM (:func:`lpm_parameters`, roller 0 at ``bearing_diagnosis.synthetic_start_phase_deg`` at t = 0) starts
+    from static equilibrium :data:`SETTLE_S` before the first window, steps at most :data:`MAX_STEP_S`; each
+    roller's load times the influence line at its angle, summed, is box-averaged over the windows, times
+    ``load_share_ratio``.
+    """
+    t = np.asarray(time_s, dtype=float)
+    dt = float(t[1] - t[0])
+    p = lpm_parameters(config, hidden, float(np.radians(config["bearing_diagnosis"]["synthetic_start_phase_deg"])))
+    h = dt / int(np.ceil(dt / MAX_STEP_S))
+    t_start = t[0] - dt - SETTLE_S
+    res = simulate_lpm(p, t_start, int(np.ceil((t[-1] + dt - t_start) / h)), h)
+    fine = np.sum(res.load_N * influence(res.psi_rad), axis=1)
+    return resample_loads(res.time_s, fine[:, None], t, dt, "average")[:, 0] * hidden.get("load_share_ratio", 1.0)
+
+
 def lpm_record(
     config: dict,
     influence: InfluenceLine,
@@ -107,18 +125,11 @@ def lpm_record(
     bd = config["bearing_diagnosis"]
     dt = 1.0 / sample_rate_Hz
     t = dt * np.arange(int(round(duration_s * sample_rate_Hz)))
-    rig = rig_from_config(config, influence, t)
-    p = lpm_parameters(config, hidden, float(np.radians(bd["synthetic_start_phase_deg"])))
-    # the circuit's pre-roll (as the chain's) on the LPM's own force, after the LPM's start has settled
+    rig = rig_from_config(config, influence, t, harmonic=harmonic)
+    # the circuit's pre-roll (as the chain's) on the LPM's own force
     n_pre = int(np.ceil(PRE_ROLL_TAU * rig.tau_s / dt))
     t_ext = t[0] + dt * np.arange(-n_pre, t.size)
-    substeps = int(np.ceil(dt / MAX_STEP_S))
-    h = dt / substeps
-    t_start = t_ext[0] - dt - SETTLE_S
-    res = simulate_lpm(p, t_start, int(np.ceil((t_ext[-1] + dt - t_start) / h)), h)
-    fine = np.sum(res.load_N * influence(res.psi_rad), axis=1)
-    force = resample_loads(res.time_s, fine[:, None], t_ext, dt, "average")[:, 0]
-    force = force * hidden.get("load_share_ratio", 1.0)
+    force = lpm_sensor_force(config, influence, hidden, t_ext)
     v = rig.gain_factor * rig.sensor.voltage(force, dt)[n_pre:]
     if any(k.startswith("mains_") for k in hidden):
         rr = RigRecord(t, None, "voltage", "V", rig=rig)
@@ -126,7 +137,8 @@ def lpm_record(
         v = v + CATALOGUE["mains_pickup"].additive(values, rr)
     rng = np.random.default_rng(seed)
     v = v + noise_std_for_snr(v, snr_dB) * rng.standard_normal(v.size)
-    speed = np.full(t.size, 60.0 * p.shaft_speed_Hz) if tachometer else None
+    f0 = config["bearing"]["shaft_speed_rpm"] / 60.0
+    speed = np.full(t.size, 60.0 * f0 * (1.0 + hidden.get("speed_deviation_ratio", 0.0))) if tachometer else None
     return BearingRecord(t, v, speed, "lpm", (), np.zeros(t.size, dtype=bool))
 
 

@@ -437,16 +437,88 @@ def fault_answer(d) -> dict:
         for k in [*params, *cond]
     }
     how.pop("roller_defect_index", None)  # chosen among the starts, not fitted: no interval
+    remaining = fault_lines_left(d, kind) if kind != "none" else []
     return {
         "type": kind,
         "params": params,
         "ci95": ci95,
+        "statement": fault_statement(kind, params, ci95, remaining),
+        "lines_left": remaining,
         "operating_conditions": cond,
         "operating_conditions_ci95": cond_ci,
         "fitted_conditions": fitted,
         "ci_method": how,
         "non_separable": separability(non_separable(rig.tach_Hz is not None), d.ranking, d.final.result.correlation),
     }
+
+
+#: A residual line belongs to a fault's own line within this share of its frequency, or two bins [-].
+LINE_TOLERANCE = 0.005
+
+
+def family_lines(kind: str, kin: dict, harmonics: int = 3) -> list[tuple[str, float]]:
+    """(label, frequency [Hz]) of the lines a fault of ``kind`` puts into the sensor's spectrum: the harmonics
+    of its passing rate and, for a moving defect, their sidebands at the rate that carries it through the load
+    zone (f_r for the inner race, FTF for a roller)."""
+    if kind == "outer_race":
+        return [(f"{k}xBPFO", k * kin["bpfo_Hz"]) for k in range(1, harmonics + 1)]
+    if kind == "inner_race":
+        base, side, sname, bname = kin["bpfi_Hz"], kin["shaft_Hz"], "fr", "BPFI"
+    else:
+        base, side, sname, bname = 2 * kin["bsf_Hz"], kin["ftf_Hz"], "FTF", "2xBSF"
+    out = []
+    for k in range(1, harmonics + 1):
+        lab = bname if k == 1 else f"{k}x{bname}"
+        out += [(lab, k * base), (f"{lab}-{sname}", k * base - side), (f"{lab}+{sname}", k * base + side)]
+    return out
+
+
+def fault_lines_left(d, kind: str) -> list[dict]:
+    """The residual lines the final model leaves at the found fault's own lines (:func:`family_lines`).
+
+    For each narrowband finding of the verdict within :data:`LINE_TOLERANCE` of one of them: its label and
+    frequency, its level above the noise floor, and the record's line against the model's, 20 log10 of
+    their Hann-windowed amplitude spectra's ratio at the peak (positive: the record's is the stronger) [dB].
+    """
+    values, rig = d.final.values, d.record.rig
+    shaft = float(values.get("shaft_speed_Hz", rig.shaft_speed_Hz) if rig.tach_Hz is None else np.mean(rig.tach_Hz))
+    shaft *= 1.0 + values.get("speed_deviation_ratio", 0.0)
+    lines = family_lines(kind, rig.frequencies(shaft, values.get("cage_slip_ratio", 0.0)))
+    v = np.asarray(d.voltage_V, dtype=float)
+    n = v.size
+    df = 1.0 / (n * d.record.dt_s)
+    w = np.hanning(n)
+    rec_a = np.abs(np.fft.rfft((v - v.mean()) * w))
+    mod = np.asarray(d.final.model_V, dtype=float)
+    mod_a = np.abs(np.fft.rfft((mod - mod.mean()) * w))
+    out = []
+    for u in d.unexplained:
+        if u.get("test") != "spectrum" or u.get("kind") != "narrowband":
+            continue
+        f = u["frequency_Hz"]
+        label, fl = min(lines, key=lambda x: abs(x[1] - f))
+        if abs(fl - f) > max(LINE_TOLERANCE * fl, 2 * df):
+            continue
+        k = int(round(f / df))
+        sl = slice(max(k - 1, 0), k + 2)
+        diff = 20 * np.log10(rec_a[sl].max() / max(mod_a[sl].max(), 1e-300))
+        out.append({"line": label, "frequency_Hz": float(f), "excess_dB": float(u["excess_dB"]),
+                    "record_over_model_dB": float(diff)})
+    return out
+
+
+def fault_statement(kind: str, params: dict, ci95: dict, remaining: list[dict]) -> str:
+    """One line: the fault found with its size and interval, and what of its own lines the model leaves."""
+    if kind == "none":
+        return "no fault"
+    wkey = next(k for k in params if k.endswith("width_m"))
+    lo, hi = ci95.get(wkey) or (float("nan"), float("nan"))
+    text = f"{kind.replace('_', ' ')} {params[wkey] * 1e3:.3g} mm [{lo * 1e3:.3g}, {hi * 1e3:.3g}] (95 %)"
+    if remaining:
+        text += "; its lines differ from the model's: " + ", ".join(
+            f"{r['line']} ({r['frequency_Hz']:.1f} Hz) {r['record_over_model_dB']:+.1f} dB, "
+            f"{r['excess_dB']:.1f} dB above the floor" for r in remaining)
+    return text
 
 
 def start_context(rec: RigRecord, v: np.ndarray, model_v: np.ndarray, values: dict) -> StartContext:
