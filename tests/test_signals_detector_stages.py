@@ -137,9 +137,8 @@ def test_healthy_stays_healthy_at_a_daq_noise(tmp_path, inputs, paper_config, mo
     stand-in's 44 V swing), the stand-in's roller over the sensor at t = 0 as in the LPM (bearing.start_angle_deg 0):
     the healthy record is classified none and over 10 seeds its folds stay quiet, the fault is outer_race in every
     seed. The sensor circuit starts in its
-    periodic steady state; started at rest (the code before 2026-11-23) the free decay left after signals.skip_s
-    (7.6 tau: 10 mV of 22 V) is what the folds pick up (before 2ddf851 and with 24 bits: a rolling-element fault,
-    4.9 > 3.5; now 2.6, against at most 0.06 over the 10 seeds with the periodic start)."""
+    periodic steady state; started at rest, the free decay left after signals.skip_s (7.6 tau: 10 mV of 22 V)
+    is what the folds pick up (indicator 2.6 against at most 0.06 over the 10 seeds with the periodic start)."""
     import numpy as np
     from test_signals import DT, bearing_force
 
@@ -163,10 +162,9 @@ def test_healthy_stays_healthy_at_a_daq_noise(tmp_path, inputs, paper_config, mo
     st.classification(volt, inputs["kinematics"], out / "cls.json", out / "cls.csv", out / "roc.csv", cfg)
     seeds = pd.read_csv(out / "cls.csv")
     healthy = seeds[seeds["case"] == "healthy"]
-    # the start's leftover shows in the folds (its cells at phase 0); the outer-race harmonic test: from 2ddf851
-    # (the closed-form fit) to its fix (refine_period's Gauss-Newton step by QR where the folds coincide, f_s = 36
-    # BPFO exactly) it called 3 of these 10 healthy records an outer-race fault (indicator 5-460); 0 of 10 before
-    # and after
+    # the start's leftover shows in the folds (its cells at phase 0); the outer-race harmonic test needs
+    # refine_period's Gauss-Newton step by QR where the folds coincide (f_s = 36 BPFO exactly): the closed-form
+    # step alone calls 3 of these 10 healthy records an outer-race fault (indicator 5-460)
     assert not healthy["inner_race_detected"].any() and not healthy["rolling_element_detected"].any()
     assert (healthy["fault_type"] == "none").all()
     assert (seeds[seeds["case"] == "faulty"]["fault_type"] == "outer_race").all()
