@@ -63,7 +63,7 @@ def test_surrogate_against_the_lpm_through_the_same_influence_line(setup, faulty
     """The LPM has the shaft's inertia (its ~2 kHz mode rings after a defect), the surrogate does not.
 
     Through this narrow stand-in line (measured: 1.3% healthy, 13% with the 0.9 mm defect, of the
-    force's standard deviation); through the housing FEM's line 0.4% and 5.6% (README).
+    force's standard deviation); through the housing FEM's line 0.4% and 5.6% (docs/theory/bearing_housing.md).
     """
     b, geo, infl = setup
     p = lpm.LPMParameters.from_config(b, faulty)
