@@ -131,13 +131,12 @@ def design_figures(mesh: StackMesh, materials: fem.StackMaterials, circuit: fem.
 
 def _detect(v: np.ndarray, dt_s: float, f0_Hz: float, noise, shapes: np.ndarray, seeds: list, es, ins) -> dict:
     """Median indicator, detection rate and clipping of record ``v`` under ``noise`` over the noise shapes."""
-    from ..signals import daq
-    from ..signals import detection as sig
+    from ..signals import daq, detection
 
     ind, det, clip, thr = [], [], [], []
     for shape, rng_seed in zip(shapes, seeds, strict=True):
         acq = daq.add_noise(v, dt_s, noise, np.random.default_rng(rng_seed), shape=shape)
-        r = sig.analyse(acq.voltage_V, dt_s, f0_Hz, es, ins).result
+        r = detection.analyse(acq.voltage_V, dt_s, f0_Hz, es, ins).result
         ind.append(r["indicator"])
         det.append(r["detected"])
         thr.append(r["threshold"])
@@ -205,12 +204,12 @@ def detection_at_noise(voltages: dict, dt_s: float, f0_Hz: float, noise, n_seeds
     """
     from dataclasses import replace
 
-    from ..signals import detection as sig
+    from ..signals import detection
 
     out = {}
     draws = {}
     for case, v in voltages.items():
-        rngs = [sig.noise_rng(master_seed, case, j) for j in range(n_seeds)]
+        rngs = [detection.noise_rng(master_seed, case, j) for j in range(n_seeds)]
         shapes = np.array([r.standard_normal(len(v)) for r in rngs])
         seeds = [master_seed * 1000 + 17 * j + (1 if case == "faulty" else 0) for j in range(n_seeds)]
         draws[case] = (shapes, seeds)
