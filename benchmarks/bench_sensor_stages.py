@@ -1,8 +1,8 @@
 """The sensor FEM stages (mesh, modal, convergence, harmonic), the previous code beside this checkout's.
 
-Issue 14: ``sensor_modal`` now writes the harmonic analysis's Ritz model and its mesh's convergence row from
-the SS system it factorises anyway, so ``sensor_harmonic`` and ``sensor_convergence`` no longer assemble and
-factorise the modal mesh again. Both sides run the four stages in a fresh process each (``--old-src``: the
+``sensor_modal`` writes the harmonic analysis's Ritz model and its mesh's convergence row from the SS system it
+factorises anyway, so ``sensor_harmonic`` and ``sensor_convergence`` do not assemble and factorise the modal
+mesh again; the previous code did. Both sides run the four stages in a fresh process each (``--old-src``: the
 previous package's ``src``), at the same time, under GNU time (CPU seconds and peak RSS of the process), and
 their result files are compared byte by byte (``bench_workflow.compare_results``).
 

@@ -1,4 +1,4 @@
-"""Old against new methods of issue 14, in one run each, as ratios (timings on a shared machine are noisy).
+"""Sparse solvers and the batched SNR sweep against the methods they replace, in one run each, as ratios.
 
 * housing: factorisation of K and the influence line (one solve) at each mesh level of the
   convergence study, and the shift-invert modes, with SuperLU in the model's nested-dissection
