@@ -12,6 +12,7 @@ import functools
 import math
 from pathlib import Path
 
+import jsonschema
 import yaml
 
 #: The config folder of the checkout the package was installed from (editable install).
@@ -66,8 +67,6 @@ _SCHEMA_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 @functools.lru_cache(maxsize=4)
 def _validator(schema_path: str):
     """The schema's validator, built once per schema file (studies validate one config per case)."""
-    import jsonschema
-
     return jsonschema.Draft202012Validator(yaml.load(Path(schema_path).read_text(), Loader=_SCHEMA_LOADER))
 
 

@@ -25,6 +25,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import brentq
+
+from .lpm_kernel import newmark_lpm
 
 #: The defect types of ``bearing.defects``.
 DEFECT_TYPES = ("outer_race", "inner_race", "rolling_element")
@@ -675,8 +678,6 @@ def harris_discrete_loads(
     delta_r_m : float
         Ring shift along the load [m].
     """
-    from scipy.optimize import brentq
-
     cos = np.cos(psi_rad)
 
     def residual(dr):
@@ -819,8 +820,6 @@ def simulate_lpm(
     up0 = fext[:2] / p.pedestal_stiffness_N_per_m
     u = np.r_[up0 + e0, up0]
     if method == "compiled":
-        from .lpm_kernel import newmark_lpm
-
         us, q_out, n_iter, failed = newmark_lpm(
             np.ascontiguousarray(sn), np.ascontiguousarray(cn), gap + drop, m, c, k, fext, u, step_s, kc, tol_m, 50
         )

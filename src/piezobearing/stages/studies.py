@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from ..bearing import outputs as bout
+from ..bearing import transient as bearing_transient
 from ..bearing.lpm import BearingGeometry
 from ..bearing.transient import CASES
 from ..diagnosis.calibration.record import check_record
@@ -34,7 +35,15 @@ from ..io import (
     table_series,
     write_json,
 )
+from ..plotting import save, use_style
+from ..plotting.studies import SUMMARY_FIGURES
+from ..sensor import design as sensor_design
+from ..sensor import fem as sensor_fem
 from ..sensor import outputs as cout
+from ..sensor.analysis import SensorFemParams
+from ..sensor.calibration import design_resistance_ohm
+from ..sensor.mesh import stack_mesh
+from ..signals import daq, detection
 from ..signals import outputs as sout
 from ..studies import case_config
 
@@ -129,19 +138,17 @@ def fault_detection_case(config: dict, outdir: Path, resistance: str, harmonic: 
 
 def _fault_detection_row(cfg: dict, run: dict) -> dict:
     """The fault_detection summary row of a case's chain (:func:`workflow_chain`)."""
-    from ..signals import detection as sig
-
     s, b, kin = cfg["signals"], cfg["bearing"], run["kinematics"]
     f0 = kin["bpfo_Hz"]
     # time a roller centre takes to cross the (first) groove (it sinks over this arc; lpm.chord_drop_m)
     crossing_s = b["defects"][0]["width_m"] / (
         BearingGeometry.from_config(b).outer_raceway_radius_m * 2 * np.pi * kin["ftf_Hz"]
     )
-    es, ins = sig.EnvelopeSettings.from_config(s), sig.IndicatorSettings.from_config(s)
+    es, ins = detection.EnvelopeSettings.from_config(s), detection.IndicatorSettings.from_config(s)
     rows = []
     for c in CASES:
         _, v, dt = run["voltage"][c]
-        rows += sig.snr_sweep(v, dt, f0, c, [s["snr_dB"]], s["study_n_seeds"], cfg["seed"], es, ins)
+        rows += detection.snr_sweep(v, dt, f0, c, [s["snr_dB"]], s["study_n_seeds"], cfg["seed"], es, ins)
     seeds = pd.DataFrame(rows)
     ind, lpm, tr = run["indicator"], run["lpm"], run["transient"]
     by = {c: seeds[seeds["case"] == c] for c in CASES}
@@ -201,21 +208,12 @@ def sensor_design_case(
        dropped, sampled by the DAQ at ``signals.sample_rate_Hz`` as the noisy rule does (:func:`piezobearing.signals.daq.sample`); the DAQ's absolute noise and ADC
        (:func:`noise_settings`); the envelope indicator over ``signals.study_n_seeds`` replicates.
     """
-    from ..bearing import transient as brs
-    from ..sensor import design as sd
-    from ..sensor import fem
-    from ..sensor.analysis import SensorFemParams
-    from ..sensor.calibration import design_resistance_ohm
-    from ..sensor.mesh import stack_mesh
-    from ..signals import daq
-    from ..signals import detection as sig
-
     s, f = config["sensor"], config["sensor_fem"]
     p = SensorFemParams.from_config(config)
     r_ohm = design_resistance_ohm(s, read_json(resistance)["resistance_ohm"])
-    circuit = fem.MeasuringCircuit(r_ohm, p.cable_capacitance_F)
+    circuit = sensor_fem.MeasuringCircuit(r_ohm, p.cable_capacitance_F)
     mesh = stack_mesh(p.geometry, p.density, f["design_mesh_multiplier"])
-    settings = sd.DesignSettings(
+    settings = sensor_design.DesignSettings(
         order=p.order,
         damping_ratio=p.damping_ratio,
         n_ritz_modes=p.n_ritz_modes,
@@ -223,10 +221,10 @@ def sensor_design_case(
         band_ratio_dB=p.band_ratio_dB,
         linear_tolerance=config["lowfreq"]["deviation_threshold"],
     )
-    figs = sd.design_figures(mesh, p.materials, circuit, settings)
+    figs = sensor_design.design_figures(mesh, p.materials, circuit, settings)
 
     port = read_json(housing)
-    spring = brs.sensor_spring(config)
+    spring = bearing_transient.sensor_spring(config)
     share = bout.design_load_share(config, port, spring)
     kin = read_kinematics(kinematics)
     sg = config["signals"]
@@ -240,9 +238,9 @@ def sensor_design_case(
         # the noisy rule's DAQ: anti-alias filter and sampling at signals.sample_rate_Hz (as is on its clock)
         smp = daq.sample(v, dt, sg["sample_rate_Hz"])
         voltages[case], dt_daq = smp.voltage_V, smp.dt_s
-    det = sd.detection_at_noise(
+    det = sensor_design.detection_at_noise(
         voltages, dt_daq, kin["bpfo_Hz"], noise_settings(config), sg["study_n_seeds"], config["seed"],
-        sig.EnvelopeSettings.from_config(sg), sig.IndicatorSettings.from_config(sg),
+        detection.EnvelopeSettings.from_config(sg), detection.IndicatorSettings.from_config(sg),
         sg["study_required_detection_rate"],
     )
     return {
@@ -271,8 +269,6 @@ def sensor_design_case(
 def noise_settings(config: dict):
     """The DAQ's absolute noise: ``signals.noise`` where the config has it (model forced to absolute), else
     :class:`piezobearing.signals.daq.NoiseSettings`' absolute defaults (1 uV/sqrt(Hz), 24 bits, +-60 V)."""
-    from ..signals import daq
-
     if "noise" in config["signals"]:
         return replace(daq.NoiseSettings.from_config(config["signals"]), model="absolute")
     return daq.NoiseSettings(model="absolute")
@@ -343,9 +339,6 @@ def run_case(
 
 def summarize(study: str, case_jsons: list[str], out_csv: str, out_png: str) -> None:
     """Gather the cases into one table and draw the study's summary figure."""
-    from ..plotting import save, use_style
-    from ..plotting.studies import SUMMARY_FIGURES
-
     rows = []
     for p in case_jsons:
         d = read_json(p)
