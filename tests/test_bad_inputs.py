@@ -1,5 +1,5 @@
 """Every bad input a user can give: one line naming the file or key and the fix, exit status 1, no
-traceback, data/ untouched. The messages collected here ARE the table in docs/bad_inputs.md:
+traceback, data/ untouched. The messages collected here ARE the table in docs/reference/bad_inputs.md:
 ``test_table_is_current`` fails when the table differs from what the code prints; regenerate it with
 ``PIEZOBEARING_WRITE_TABLE=1 pytest tests/test_bad_inputs.py``.
 """
@@ -25,7 +25,7 @@ from piezobearing.stages.calibration import nominal_circuit
 from piezobearing.synthesis import PressProtocol, synthesize
 
 REPO = Path(__file__).resolve().parents[1]
-TABLE = REPO / "docs" / "bad_inputs.md"
+TABLE = REPO / "docs" / "reference" / "bad_inputs.md"
 CI = "seed: 7\nsynthesis: {duration_s: 12.0, sample_rate_Hz: 500.0, n_impulses: 6}\n"
 
 
@@ -139,7 +139,7 @@ class Case:
 
 
 def _unreadable(monkeypatch):
-    import piezobearing.io as pio
+    import piezobearing.io.formats as pio
 
     real = open
 
@@ -324,7 +324,7 @@ def test_table_is_current(monkeypatch, capsys):
         TABLE.parent.mkdir(exist_ok=True)
         TABLE.write_text(text)
     assert TABLE.exists() and TABLE.read_text() == text, (
-        "docs/bad_inputs.md is out of date: PIEZOBEARING_WRITE_TABLE=1 pytest tests/test_bad_inputs.py"
+        "docs/reference/bad_inputs.md is out of date: PIEZOBEARING_WRITE_TABLE=1 pytest tests/test_bad_inputs.py"
     )
 
 

@@ -16,6 +16,7 @@ from scipy.stats import binom
 from piezobearing.signals import daq
 from piezobearing.signals import detection as det
 from piezobearing.signals import detector as D
+from piezobearing.signals import envelope
 from piezobearing.signals.fault_bands import band_metrics, fault_lines, slipped_frequencies
 
 #: No-slip kinematics of the N 305 ECP at 1000 rpm (Z = 11, D_r/D_p = 10/44).
@@ -310,7 +311,7 @@ def test_order_tracking_finds_the_fault_that_the_ramp_smears():
         spec_o = O.order_envelope_spectrum(y, t[1], band, ang, samples_per_rev=64)
         d_o = D.detect(spec_o, O.kinematics_in_orders(KIN), st)
         mean_speed = dict(KIN, **{k: v * 1.2 for k, v in KIN.items()})  # kinematics at the mean 1200 rpm
-        spec_t = D.windowed_envelope_spectrum(y, t[1], band)
+        spec_t = envelope.envelope_spectrum(y, t[1], band, window="hann")
         d_t = D.detect(spec_t, mean_speed, st)
         wins_order += d_o.fault_type == "outer_race"
         wins_time += d_t.fault_type == "outer_race"

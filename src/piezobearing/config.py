@@ -48,6 +48,39 @@ class ConfigError(ValueError):
     """A configuration that does not satisfy the schema."""
 
 
+#: The run name of the paper's case: its results go to :data:`RESULTS_ROOT` itself.
+PAPER_RUN = "paper"
+#: The folder of every run's results (relative to the checkout).
+RESULTS_ROOT = "results"
+#: The folders the paper's case writes under :data:`RESULTS_ROOT` (a stage's area, the figures, logs, ...): no
+#: other run may take one of these names, or its results would mix with the paper's (a test holds this list
+#: against the workflow's rules).
+RESULTS_FOLDERS = frozenset(
+    {
+        "bearing",
+        "benchmarks",
+        "calibration",
+        "diagnostics",
+        "diagnostics_bearing",
+        "figures",
+        "logs",
+        "notebooks",
+        "scorecard",
+        "sensor",
+        "sensor_comparison",
+        "signals",
+        "studies",
+    }
+)
+
+
+def results_folder(config: dict) -> str:
+    """The results folder of ``config``'s run: ``results`` for the paper's case (``run: paper``, the default),
+    ``results/<run>`` for any other run."""
+    run = config.get("run", PAPER_RUN)
+    return RESULTS_ROOT if run == PAPER_RUN else f"{RESULTS_ROOT}/{run}"
+
+
 def deep_merge(base: dict, override: dict) -> dict:
     """Return ``base`` updated recursively with ``override`` (as Snakemake merges --configfile)."""
     out = copy.deepcopy(base)
@@ -132,6 +165,12 @@ def _bearing_defects(b: dict) -> list[tuple[str, float]]:
 def physical_problems(config: dict) -> list[str]:
     """Cross-field checks the schema cannot express: each problem as 'key ...: what; fix'."""
     out = []
+    if config.get("run") in RESULTS_FOLDERS:
+        out.append(
+            f"key 'run': '{config['run']}' is a results folder of the paper's case ({RESULTS_ROOT}/{config['run']}/); "
+            "a run of that name would mix its results with the paper's; choose another name (e.g. "
+            f"'{config['run']}_variant')"
+        )
     b = config.get("bearing", {})
     dr, dp, do = b.get("roller_diameter_m"), b.get("pitch_diameter_m"), b.get("outer_diameter_m")
     if dr is not None and dp is not None:

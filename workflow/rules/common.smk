@@ -7,6 +7,7 @@ import os
 import sys
 
 from piezobearing.config import ConfigError
+from piezobearing.config import results_folder
 from piezobearing.config import validate as validate_config
 from piezobearing.io import MeasurementError
 from piezobearing.registry import RECORD_RULES, code_hash, rule_params
@@ -41,9 +42,11 @@ os.environ["PATH"] = os.pathsep.join(
     [os.environ["PATH"], os.path.dirname(sys.executable)]
 )
 
-RESULTS = "results"
-FIGURES = []  # results/figures/*.png
-SCORECARD_PARTS = []  # results/scorecard/<stage>.csv fragments
+# Every output of a run under RESULTS: results/ for the paper's case (config `run: paper`), results/<run>/ for
+# any other run, so that a variant never overwrites the paper's reproduction.
+RESULTS = results_folder(config)
+FIGURES = []  # RESULTS/figures/*.png
+SCORECARD_PARTS = []  # RESULTS/scorecard/<stage>.csv fragments
 TARGETS = []  # other final outputs
 
 
@@ -75,7 +78,7 @@ def check_measurement():
     """Stop before any job runs when the configured measurement cannot be used (one line, no traceback)."""
     if not config["calibration"]["measurement"]:
         return
-    try:  # once per record content and settings (results/.checked/), not at every start
+    try:  # once per record content and settings (RESULTS/.checked/), not at every start
         check_record_once(
             config["calibration"]["measurement"], config, f"{RESULTS}/.checked"
         )

@@ -17,6 +17,7 @@ from scipy.signal import find_peaks
 from . import housing_fem as fem
 from . import lpm as brg
 from .housing_mesh import build_housing_mesh
+from .kinematics import Kinematics
 from .transient import housing_geometry, make_model
 
 log = logging.getLogger("piezobearing.bearing.lpm")
@@ -36,7 +37,7 @@ def impact_intervals(t: np.ndarray, qmax: np.ndarray, bpfo: float) -> np.ndarray
     return np.diff(t[peaks[inner]])
 
 
-def lpm_checks(run: dict, kin: brg.KinematicFrequencies) -> dict:
+def lpm_checks(run: dict, kin: Kinematics) -> dict:
     """Verification numbers of one LPM run: static Harris check, load balance, impact period."""
     p: brg.LPMParameters = run["params"]
     g = p.geometry

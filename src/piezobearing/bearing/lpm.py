@@ -29,6 +29,8 @@ from scipy.optimize import brentq
 
 from .lpm_kernel import newmark_lpm
 
+from .kinematics import Kinematics, RollingBearing
+
 #: The defect types of ``bearing.defects``.
 DEFECT_TYPES = ("outer_race", "inner_race", "rolling_element")
 
@@ -89,6 +91,11 @@ class BearingGeometry:
         return geo
 
     @property
+    def rolling_bearing(self) -> RollingBearing:
+        """The geometry the kinematics need (:class:`piezobearing.bearing.kinematics.RollingBearing`)."""
+        return RollingBearing(self.n_rollers, self.roller_diameter_m, self.pitch_diameter_m, self.contact_angle_deg)
+
+    @property
     def diameter_ratio(self) -> float:
         """D_r cos(alpha) / D_p [-]."""
         return float(
@@ -132,46 +139,9 @@ class BearingGeometry:
         return 2 * np.pi / self.n_rollers
 
 
-@dataclass(frozen=True)
-class KinematicFrequencies:
-    """Kinematic frequencies of a bearing with a stationary outer ring [Hz].
-
-    Attributes
-    ----------
-    shaft_Hz : float
-        Shaft (inner ring) rotation frequency f_r.
-    ftf_Hz : float
-        Fundamental train (cage) frequency, (1 - s) f_r / 2 (1 - D_r cos a / D_p)
-        with the cage slip s.
-    bpfo_Hz : float
-        Ball (roller) pass frequency on the outer race, Z * FTF.
-    bpfi_Hz : float
-        Roller pass frequency on the inner race, Z (f_r - FTF).
-    bsf_Hz : float
-        Roller spin frequency relative to the cage, (1 - s) D_p / (2 D_r) f_r (1 - (D_r cos a / D_p)^2).
-        A flat on a roller strikes the outer and the inner race once each per
-        spin revolution: at 2 BSF.
-    """
-
-    shaft_Hz: float
-    ftf_Hz: float
-    bpfo_Hz: float
-    bpfi_Hz: float
-    bsf_Hz: float
-
-    def to_dict(self) -> dict[str, float]:
-        return {k: float(getattr(self, k)) for k in ("shaft_Hz", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz")}
-
-
-def kinematic_frequencies(
-    geometry: BearingGeometry, shaft_speed_Hz: float, cage_slip: float = 0.0
-) -> KinematicFrequencies:
-    """Kinematic frequencies with the outer ring fixed and the cage slipping by the fraction s.
-
-    Slip: the cage and the rollers' spin lag the rolling kinematics by the
-    fraction s (the rollers skid on the raceways), so FTF, BPFO and BSF scale
-    by (1 - s) and BPFI = Z (f_r - FTF) grows; the shaft rate does not slip.
-    Real cages slip 1-2% (s = 0.01-0.02).
+def kinematic_frequencies(geometry: BearingGeometry, shaft_speed_Hz: float, cage_slip: float = 0.0) -> Kinematics:
+    """Kinematic frequencies of the model's bearing with the outer ring fixed and the cage slipping by the
+    fraction s (:meth:`piezobearing.bearing.kinematics.Kinematics.from_geometry`, the one formula).
 
     Parameters
     ----------
@@ -183,20 +153,11 @@ def kinematic_frequencies(
 
     Returns
     -------
-    KinematicFrequencies
+    Kinematics
         shaft, FTF (cage), BPFO, BPFI and BSF [Hz]. For the N 305 ECP at
         1000 rpm (Z = 11, D_r / D_p = 10 / 44) the BPFO is 70.83 Hz.
     """
-    g, z = geometry.diameter_ratio, geometry.n_rollers
-    fr, lag = float(shaft_speed_Hz), 1.0 - float(cage_slip)
-    ftf = lag * 0.5 * fr * (1 - g)
-    return KinematicFrequencies(
-        shaft_Hz=fr,
-        ftf_Hz=ftf,
-        bpfo_Hz=z * ftf,
-        bpfi_Hz=z * (fr - ftf),
-        bsf_Hz=lag * 0.5 * geometry.pitch_diameter_m / geometry.roller_diameter_m * fr * (1 - g**2),
-    )
+    return Kinematics.from_geometry(geometry.rolling_bearing, shaft_speed_Hz, cage_slip)
 
 
 # ---------------------------------------------------------------------------

@@ -44,6 +44,24 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import fdtri
+
+# the envelope functions live in .envelope; the chain's callers still reach them here (detection.X)
+from .envelope import (  # noqa: F401
+    EnvelopeSettings,
+    EnvelopeSpectrum,
+    Kurtogram,
+    amplitude_spectrum,
+    analytic_band_signal,
+    band_gain,
+    band_power_V2,
+    choose_band,
+    envelope,
+    envelope_spectrum,
+    kurtogram,
+    kurtogram_bands,
+    spectral_kurtosis,
+)
 
 #: Stable codes of the cases, used to derive independent noise streams (the fault types: the
 #: classification's records per type, rule fault_type_voltage).
@@ -51,38 +69,6 @@ CASE_CODES = {"healthy": 0, "faulty": 1, "outer_race": 2, "inner_race": 3, "roll
 
 
 # --------------------------------------------------------------------------- settings
-
-
-@dataclass(frozen=True)
-class EnvelopeSettings:
-    """How the band of the envelope is chosen.
-
-    Parameters
-    ----------
-    band_rule : str
-        ``"kurtogram"`` (largest spectral kurtosis of the filter bank) or
-        ``"fixed"`` (``band_Hz``).
-    band_Hz : tuple of float
-        The band [low, high] for ``band_rule = "fixed"`` [Hz].
-    min_bandwidth_Hz : float
-        Narrowest band of the kurtogram's filter bank [Hz].
-    filter_order : int
-        Order of the Butterworth band-pass (applied forward and backward) [-].
-    """
-
-    band_rule: str = "kurtogram"
-    band_Hz: tuple[float, float] = (500.0, 1200.0)
-    min_bandwidth_Hz: float = 300.0
-    filter_order: int = 4
-
-    @classmethod
-    def from_config(cls, sig: dict) -> "EnvelopeSettings":
-        return cls(
-            band_rule=sig["band_rule"],
-            band_Hz=tuple(sig["band_Hz"]),
-            min_bandwidth_Hz=sig["kurtogram_min_bandwidth_Hz"],
-            filter_order=sig["filter_order"],
-        )
 
 
 @dataclass(frozen=True)
@@ -170,176 +156,6 @@ def whole_period_samples(n_samples: int, dt_s: float, f0_Hz: float) -> int:
     return min(n_samples, int(round(m * per)))
 
 
-# --------------------------------------------------------------------------- band-pass and envelope
-
-
-def band_gain(frequency_Hz: np.ndarray, fs_Hz: float, band_Hz: tuple[float, float], order: int) -> np.ndarray:
-    """Zero-phase gain |H(f)|^2 of a Butterworth band-pass (a high-pass if the band reaches Nyquist) [-]."""
-    from scipy.signal import butter, sosfreqz
-
-    nyq = fs_Hz / 2
-    lo, hi = float(band_Hz[0]), float(band_Hz[1])
-    if not 0 < lo < hi <= nyq * (1 + 1e-9):
-        raise ValueError(f"band {band_Hz} Hz must satisfy 0 < low < high <= Nyquist = {nyq:.6g} Hz")
-    if hi >= nyq * (1 - 1e-6):
-        sos = butter(order, lo, btype="highpass", fs=fs_Hz, output="sos")
-    else:
-        sos = butter(order, [lo, hi], btype="bandpass", fs=fs_Hz, output="sos")
-    _, h = sosfreqz(sos, worN=np.asarray(frequency_Hz, dtype=float), fs=fs_Hz)
-    return np.abs(h) ** 2
-
-
-def analytic_band_signal(
-    x: np.ndarray, dt_s: float, band_Hz: tuple[float, float], order: int = 4, spectrum: np.ndarray | None = None
-) -> np.ndarray:
-    """Analytic signal z of x band-passed by :func:`band_gain` (periodic extension of the record).
-
-    ``spectrum`` may pass ``numpy.fft.rfft(x)`` to save the transform when many
-    bands are tried on one record.
-    """
-    x = np.asarray(x, dtype=float)
-    n = x.size
-    X = np.fft.rfft(x) if spectrum is None else spectrum
-    f = np.fft.rfftfreq(n, dt_s)
-    Y = X * band_gain(f, 1.0 / dt_s, band_Hz, order)
-    Z = np.zeros(n, dtype=complex)
-    Z[: Y.size] = Y
-    Z[1 : (n + 1) // 2] *= 2.0  # positive frequencies doubled; DC and (even n) Nyquist kept once
-    return np.fft.ifft(Z)
-
-
-def spectral_kurtosis(z: np.ndarray) -> float:
-    """SK = <|z|^4> / <|z|^2>^2 - 2 of a complex band signal [-] (0 for Gaussian noise)."""
-    p = np.abs(z) ** 2
-    return float(np.mean(p * p) / np.mean(p) ** 2 - 2.0)
-
-
-def kurtogram_bands(fs_Hz: float, min_bandwidth_Hz: float) -> list[tuple[float, float]]:
-    """The filter bank of the kurtogram: bandwidths Nyquist/{1.5, 2, 3, 4, 6, 8, ...}, half overlapping.
-
-    Bands that would start at 0 Hz are left out (their envelope would carry
-    the low-frequency content itself, not a modulation).
-    """
-    nyq = fs_Hz / 2
-    bands = []
-    level = 0
-    while True:
-        div = (1.5 if level % 2 == 0 else 2.0) * 2 ** (level // 2)  # 1.5, 2, 3, 4, 6, 8, ...
-        bw = nyq / div
-        if bw < min_bandwidth_Hz * (1 - 1e-9):
-            break
-        j = 1
-        while j * bw / 2 + bw <= nyq * (1 + 1e-9):
-            bands.append((j * bw / 2, min(j * bw / 2 + bw, nyq)))
-            j += 1
-        level += 1
-    if not bands:
-        raise ValueError(
-            f"kurtogram: no band of width >= {min_bandwidth_Hz} Hz fits below Nyquist {nyq:.6g} Hz; "
-            "lower signals.kurtogram_min_bandwidth_Hz"
-        )
-    return bands
-
-
-@dataclass(frozen=True)
-class Kurtogram:
-    """Spectral kurtosis of each band of the filter bank.
-
-    Attributes
-    ----------
-    low_Hz, high_Hz : ndarray
-        Band edges [Hz].
-    kurtosis : ndarray
-        Spectral kurtosis of the band signal [-].
-    """
-
-    low_Hz: np.ndarray
-    high_Hz: np.ndarray
-    kurtosis: np.ndarray
-
-    @property
-    def best_band_Hz(self) -> tuple[float, float]:
-        i = int(np.argmax(self.kurtosis))
-        return float(self.low_Hz[i]), float(self.high_Hz[i])
-
-
-def kurtogram(x: np.ndarray, dt_s: float, min_bandwidth_Hz: float, order: int = 4) -> Kurtogram:
-    """Spectral kurtosis over the filter bank of :func:`kurtogram_bands`."""
-    X = np.fft.rfft(np.asarray(x, dtype=float))
-    bands = kurtogram_bands(1.0 / dt_s, min_bandwidth_Hz)
-    sk = [spectral_kurtosis(analytic_band_signal(x, dt_s, b, order, spectrum=X)) for b in bands]
-    lo, hi = np.array(bands).T
-    return Kurtogram(lo, hi, np.array(sk))
-
-
-def choose_band(x: np.ndarray, dt_s: float, settings: EnvelopeSettings) -> tuple[tuple[float, float], Kurtogram | None]:
-    """The band of the envelope by the configured rule, and the kurtogram if it was used."""
-    if settings.band_rule == "fixed":
-        return (float(settings.band_Hz[0]), float(settings.band_Hz[1])), None
-    if settings.band_rule == "kurtogram":
-        kg = kurtogram(x, dt_s, settings.min_bandwidth_Hz, settings.filter_order)
-        return kg.best_band_Hz, kg
-    raise ValueError(f"signals.band_rule: unknown rule '{settings.band_rule}'; use 'kurtogram' or 'fixed'")
-
-
-@dataclass(frozen=True)
-class EnvelopeSpectrum:
-    """Single-sided amplitude spectrum of the envelope.
-
-    Attributes
-    ----------
-    frequency_Hz : ndarray
-        Frequencies, spacing 1 / (N dt) [Hz].
-    amplitude_V : ndarray
-        Amplitude of the envelope's (mean-removed) sinusoidal components [V].
-    band_Hz : tuple of float
-        The band-pass before the envelope [Hz].
-    n_samples : int
-        Samples of the analysed record [-].
-    """
-
-    frequency_Hz: np.ndarray
-    amplitude_V: np.ndarray
-    band_Hz: tuple[float, float]
-    n_samples: int
-
-    @property
-    def resolution_Hz(self) -> float:
-        return float(self.frequency_Hz[1] - self.frequency_Hz[0])
-
-
-def envelope(x: np.ndarray, dt_s: float, band_Hz: tuple[float, float], order: int = 4) -> np.ndarray:
-    """Hilbert envelope |z| of x in the band [V]."""
-    return np.abs(analytic_band_signal(x, dt_s, band_Hz, order))
-
-
-def envelope_spectrum(x: np.ndarray, dt_s: float, band_Hz: tuple[float, float], order: int = 4) -> EnvelopeSpectrum:
-    """Band-pass, Hilbert envelope, amplitude spectrum 2|DFT(e - mean e)|/N of the whole record given."""
-    e = envelope(x, dt_s, band_Hz, order)
-    n = e.size
-    amp = 2.0 * np.abs(np.fft.rfft(e - e.mean())) / n
-    if n % 2 == 0:
-        amp[-1] /= 2.0  # the Nyquist bin is not mirrored
-    return EnvelopeSpectrum(np.fft.rfftfreq(n, dt_s), amp, (float(band_Hz[0]), float(band_Hz[1])), n)
-
-
-def band_power_V2(x: np.ndarray, dt_s: float, band_Hz: tuple[float, float], order: int = 4) -> float:
-    """Mean square of x band-passed as before the envelope, mean(|z|^2)/2 [V^2]."""
-    return float(np.mean(np.abs(analytic_band_signal(x, dt_s, band_Hz, order)) ** 2) / 2.0)
-
-
-def amplitude_spectrum(x: np.ndarray, dt_s: float) -> EnvelopeSpectrum:
-    """Amplitude spectrum 2|DFT(x - mean x)|/N of the record itself, no band-pass, no envelope [V].
-
-    The naive check: the same harmonic test on it fires for the healthy
-    bearing too, whose roller passages put a strong line at BPFO.
-    """
-    x = np.asarray(x, dtype=float)
-    n = x.size
-    amp = 2.0 * np.abs(np.fft.rfft(x - x.mean())) / n
-    return EnvelopeSpectrum(np.fft.rfftfreq(n, dt_s), amp, (0.0, 0.5 / dt_s), n)
-
-
 # --------------------------------------------------------------------------- indicator
 
 
@@ -355,10 +171,6 @@ def indicator_threshold(false_alarm_probability: float, n_harmonics: int, n_floo
     K F_{1-pfa}(2K, 2M), with M the smallest floor count, is a conservative
     threshold (the false-alarm rate is at most ``false_alarm_probability``).
     """
-    # scipy.stats.f.isf's own function, without scipy.stats's import (0.45 CPU s of a job that needs nothing else
-    # of it): the same bits (tests/test_signals_detector.py)
-    from scipy.special import fdtri
-
     if not 0 < false_alarm_probability < 1:
         raise ValueError("signals.false_alarm_probability must lie in (0, 1)")
     return float(n_harmonics * fdtri(2 * n_harmonics, 2 * n_floor_bins, 1.0 - false_alarm_probability))

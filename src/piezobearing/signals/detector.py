@@ -53,6 +53,7 @@ from functools import lru_cache
 import numpy as np
 
 from . import detection as det
+from . import envelope
 from .fault_bands import FaultLine, fault_bands, fault_lines, window_bins
 
 #: The fault types the classifier chooses among (plus "none").
@@ -70,9 +71,8 @@ DEFINITION = (
     "fault_type: none if no type is detected, else the detected type whose own lines are significant with the "
     "largest margin, else the largest margin"
 )
-#: Envelope windows and the variance inflation of a mean of their bins' powers,
-#: 1 + 2 sum_k |rho_k|^2 (Hann: adjacent bins rho = -2/3, next 1/6).
-WINDOWS = {"rectangular": 1.0, "hann": 1.0 + 2.0 * (4.0 / 9.0 + 1.0 / 36.0)}
+#: Envelope windows and the variance inflation of a mean of their bins' powers.
+WINDOWS = envelope.WINDOWS
 #: Quadrature nodes over the floor's Gamma distribution.
 _N_QUAD = 64
 #: Grid points of the null densities.
@@ -406,25 +406,8 @@ def analyse_record(x: np.ndarray, dt_s: float, kinematics: dict, envelope_settin
     """
     x = np.asarray(x, dtype=float)
     band, _ = det.choose_band(x, dt_s, envelope_settings)
-    spec = windowed_envelope_spectrum(x, dt_s, band, envelope_settings.filter_order, settings.window)
+    spec = envelope.envelope_spectrum(x, dt_s, band, envelope_settings.filter_order, settings.window)
     return spec, detect(spec, kinematics, settings)
-
-
-def windowed_envelope_spectrum(x: np.ndarray, dt_s: float, band_Hz: tuple[float, float], order: int = 4,
-                               window: str = "hann") -> det.EnvelopeSpectrum:
-    """Envelope spectrum 2 |DFT(w (e - mean e))| / sum(w) [V] with window w (amplitudes of lines kept).
-
-    The Hann window's sidelobes fall as 1/k^3: a strong line of one fault
-    type does not leak into the windows of another (the rectangular
-    window's 1/k does, 6 bins away still at 1/360 of its power).
-    """
-    e = det.envelope(x, dt_s, band_Hz, order)
-    n = e.size
-    w = np.hanning(n + 1)[:n] if window == "hann" else np.ones(n)  # periodic Hann
-    amp = 2.0 * np.abs(np.fft.rfft(w * (e - e.mean()))) / w.sum()
-    if n % 2 == 0:
-        amp[-1] /= 2.0
-    return det.EnvelopeSpectrum(np.fft.rfftfreq(n, dt_s), amp, (float(band_Hz[0]), float(band_Hz[1])), n)
 
 
 # --------------------------------------------------------------------------- summaries over seeds

@@ -139,7 +139,7 @@ def order_envelope_spectrum(x: np.ndarray, dt_s: float, band_Hz: tuple[float, fl
 
     The returned spectrum's ``frequency_Hz`` holds orders [cycles/rev] with
     resolution 1 / n_revolutions; amplitudes as in
-    :func:`.detector.windowed_envelope_spectrum` [V].
+    :func:`.envelope.envelope_spectrum` with ``window`` [V].
     """
     e = det.envelope(x, dt_s, band_Hz, order)
     rec = angular_resample(e, dt_s, angle, samples_per_rev, t0_s)
