@@ -26,6 +26,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_workflow import compare_results, parse_time_log  # noqa: E402
 
+CONFIG = Path(__file__).resolve().parents[1] / "config"  # the checkout's configs (ci.yaml)
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -36,7 +38,7 @@ def worker(out: Path, config_name: str) -> None:
 
     d = out / "results/sensor"
     d.mkdir(parents=True, exist_ok=True)
-    c = cfg.load() if config_name == "default" else cfg.load(cfg.CONFIG_DIR / f"{config_name}.yaml")
+    c = cfg.load() if config_name == "default" else cfg.load(CONFIG / f"{config_name}.yaml")
     p = st.SensorFemParams.from_config(c)
     meshes = [f"stack_L{k}.vtk" for k in range(1, len(p.multipliers) + 1)]
     os.chdir(d)  # relative paths: the files name no folder, so the two sides' files compare byte by byte

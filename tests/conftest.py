@@ -57,7 +57,7 @@ def paper_record(paper_config):
 
 
 def copy_repo(dest: Path) -> Path:
-    """Copy the files a clean checkout has (tracked and untracked-but-not-ignored) to ``dest``."""
+    """Copy the files a clean checkout has (tracked and untracked-but-not-ignored) to ``dest``; links stay links."""
     files = subprocess.run(
         ["git", "ls-files", "-co", "--exclude-standard"], cwd=REPO, capture_output=True, text=True, check=True
     ).stdout.split()
@@ -65,7 +65,7 @@ def copy_repo(dest: Path) -> Path:
         src = REPO / f
         if src.is_file():
             (dest / f).parent.mkdir(parents=True, exist_ok=True)
-            shutil.copy2(src, dest / f)
+            shutil.copy2(src, dest / f, follow_symlinks=False)
     return dest
 
 

@@ -13,10 +13,9 @@ import numpy as np
 import pytest
 from scipy.stats import binom
 
-from piezobearing.signals import daq
+from piezobearing.signals import daq, envelope
 from piezobearing.signals import detection as det
 from piezobearing.signals import detector as D
-from piezobearing.signals import envelope
 from piezobearing.signals.fault_bands import band_metrics, fault_lines, slipped_frequencies
 
 #: No-slip kinematics of the N 305 ECP at 1000 rpm (Z = 11, D_r/D_p = 10/44).

@@ -31,7 +31,7 @@ unusable --out), one line naming the file or key and the fix, never a
 traceback; 2 a usage error (unknown option, missing argument); 3 an internal
 error (a bug: one line asking to report it; PIEZOBEARING_DEBUG=1 shows the
 traceback). Run inside a checkout, the defaults come from its
-config/config.yaml; elsewhere from the checkout the package was installed from.
+config/config.yaml; elsewhere from the default config installed with the package.
 """
 
 from __future__ import annotations
@@ -68,10 +68,8 @@ def _data_dirs() -> list[Path]:
     """The data/ folders that hold users' measurements and are never written."""
     from . import config as cfg
 
-    roots = {cfg.CONFIG_DIR.parent.resolve()}
-    here = cfg.find_checkout()
-    if here is not None:
-        roots.add(here.resolve())
+    # the checkout around the current folder, and the one holding the package (an editable install)
+    roots = {r.resolve() for r in (cfg.find_checkout(), cfg.find_checkout(Path(cfg.__file__).parent)) if r}
     return [r / "data" for r in sorted(roots)]
 
 

@@ -2,6 +2,11 @@
 
 The workflow (``workflow/rules/common.smk``), the CLI and the tests all validate
 through :func:`validate` against ``config/schema.yaml``.
+
+The default config and its schema ship inside the package (``piezobearing/defaults/``), so an
+installed ``piezobearing`` finds them anywhere. In a checkout those two files are symbolic links to
+``config/config.yaml`` and ``config/schema.yaml``: one file each, which a wheel or ``pip install .``
+copies into the package.
 """
 
 from __future__ import annotations
@@ -15,8 +20,8 @@ from pathlib import Path
 import jsonschema
 import yaml
 
-#: The config folder of the checkout the package was installed from (editable install).
-CONFIG_DIR = Path(__file__).resolve().parents[2] / "config"
+#: The default config (config.yaml) and its schema (schema.yaml), the package's own data.
+CONFIG_DIR = Path(__file__).parent / "defaults"
 SCHEMA_PATH = CONFIG_DIR / "schema.yaml"
 DEFAULT_CONFIG = CONFIG_DIR / "config.yaml"
 

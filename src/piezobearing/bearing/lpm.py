@@ -27,9 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from .lpm_kernel import newmark_lpm
-
 from .kinematics import Kinematics, RollingBearing
+from .lpm_kernel import newmark_lpm
 
 #: The defect types of ``bearing.defects``.
 DEFECT_TYPES = ("outer_race", "inner_race", "rolling_element")
