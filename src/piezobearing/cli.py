@@ -39,7 +39,14 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
+
+from . import config as cfg
+
+# Each command imports what it runs inside its own function: all of them together take about 2-3 s of CPU to
+# import (SciPy, sfepy, matplotlib, pandas; measured with resource.getrusage), which `piezobearing --help` and
+# every other command would pay.
 
 #: Exit statuses (see the module docstring).
 EXIT_USER, EXIT_USAGE, EXIT_INTERNAL = 1, 2, 3
@@ -56,8 +63,6 @@ def _fail(msg: str) -> int:
 
 def _load_config(args) -> tuple[dict, str]:
     """The config the command uses and a line saying where it came from."""
-    from . import config as cfg
-
     d = cfg.default_config_dir()
     overrides = [args.config] if args.config is not None else []
     config = cfg.load(*overrides, config_dir=d)
@@ -66,8 +71,6 @@ def _load_config(args) -> tuple[dict, str]:
 
 def _data_dirs() -> list[Path]:
     """The data/ folders that hold users' measurements and are never written."""
-    from . import config as cfg
-
     # the checkout around the current folder, and the one holding the package (an editable install)
     roots = {r.resolve() for r in (cfg.find_checkout(), cfg.find_checkout(Path(cfg.__file__).parent)) if r}
     return [r / "data" for r in sorted(roots)]
@@ -117,7 +120,6 @@ def _remove_empty(created: list[Path]) -> None:
 
 
 def _validate(args) -> int:
-    from . import config as cfg
     from .io import MeasurementError
     from .stages.calibration import load_record
 
@@ -161,7 +163,6 @@ def _validate(args) -> int:
 def _diagnose(args) -> int:
     from tqdm import tqdm
 
-    from . import config as cfg
     from .diagnosis.calibration.effects import CATALOGUE, EffectError
     from .io import MeasurementError
     from .stages.diagnostics import diagnose
@@ -239,7 +240,6 @@ def _diagnose(args) -> int:
 
 
 def _hide_and_find(args) -> int:
-    from . import config as cfg
     from .diagnosis.calibration.effects import CATALOGUE, EffectError, ForceRecord
     from .diagnosis.calibration.subject import diagnose_record
     from .diagnosis.settings import DiagnosticsSettings
@@ -293,7 +293,6 @@ def _hide_and_find(args) -> int:
 
 
 def _diagnose_bearing(args) -> int:
-    from . import config as cfg
     from .diagnosis.effect import EffectError
     from .io import MeasurementError, ResultFileError
     from .stages.bearing_diagnosis import diagnose_bearing
@@ -334,8 +333,6 @@ def _diagnose_bearing(args) -> int:
 
 
 def _version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-
     try:
         return version("piezobearing")
     except PackageNotFoundError:
