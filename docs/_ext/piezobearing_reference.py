@@ -45,7 +45,7 @@ def _cell(content) -> nodes.entry:
 
 
 def _table(header: list[str], rows: list[list], widths: list[int], classes: list[str]) -> nodes.table:
-    table = nodes.table(classes=classes)
+    table = nodes.table(classes=[*classes, "colwidths-given"])
     group = nodes.tgroup(cols=len(header))
     table += group
     for width in widths:
@@ -193,7 +193,7 @@ class ConfigReference(Directive):
             section += _table(
                 ["key", "type", "unit", "bounds", "default", "meaning"],
                 rows,
-                [22, 10, 7, 12, 14, 35],
+                [26, 11, 7, 11, 13, 32],
                 ["config-reference"],
             )
             sections.append(section)
@@ -230,7 +230,7 @@ class CliReference(Directive):
         document = self.state.document
         document.settings.env.note_dependency(cli.__file__)
         parser = cli._parser()
-        out = [nodes.paragraph("", parser.description or "")]
+        out = [nodes.paragraph("", (parser.description or "").replace("``", ""))]
         out.append(nodes.literal_block("", parser.format_usage().strip()))
         if parser.epilog:
             out.append(nodes.paragraph("", parser.epilog))
@@ -238,7 +238,7 @@ class CliReference(Directive):
             _table(
                 ["argument", "required", "default", "meaning"],
                 _argument_rows(parser),
-                [25, 9, 10, 56],
+                [24, 10, 10, 56],
                 ["cli-reference"],
             )
         )
@@ -251,7 +251,7 @@ class CliReference(Directive):
             section += _table(
                 ["argument", "required", "default", "meaning"],
                 _argument_rows(sub),
-                [25, 9, 10, 56],
+                [24, 10, 10, 56],
                 ["cli-reference"],
             )
             out.append(section)

@@ -529,14 +529,18 @@ def _ramp_recurrence(omega: np.ndarray, zeta: np.ndarray, h: float):
     return a_mat, b_mat
 
 
-def modal_response(forces: np.ndarray, omega: np.ndarray, zeta: np.ndarray, h: float) -> np.ndarray:
+def modal_response(
+    forces: np.ndarray, omega: np.ndarray, zeta: np.ndarray, h: float, velocity: bool = False
+) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Modal coordinates q (n_t, n) under modal forces (n_t, n) linear between samples, exactly.
 
-    Starts from the static response to the first sample (q = f_0 / w^2, q' = 0).
+    Starts from the static response to the first sample (q = f_0 / w^2, q' = 0). With ``velocity``
+    the modal velocities q' (n_t, n) too, as ``(q, q')``.
     """
     a_mat, b_mat = _ramp_recurrence(omega, zeta, h)
     nt, n = forces.shape
     q = np.empty((nt, n))
+    qd = np.zeros((nt, n)) if velocity else None
     x = np.stack([forces[0] / omega**2, np.zeros(n)], axis=1)  # (n, 2)
     q[0] = x[:, 0]
     for k in range(nt - 1):
@@ -544,7 +548,9 @@ def modal_response(forces: np.ndarray, omega: np.ndarray, zeta: np.ndarray, h: f
             "nij,nj->ni", b_mat, np.stack([forces[k], forces[k + 1]], 1)
         )
         q[k + 1] = x[:, 0]
-    return q
+        if velocity:
+            qd[k + 1] = x[:, 1]
+    return (q, qd) if velocity else q
 
 
 @dataclass(frozen=True)
@@ -603,6 +609,210 @@ def sensor_force_reduced(ops: ReducedOperators, wy: np.ndarray, wz: np.ndarray, 
 
 
 # ---------------------------------------------------------------------------
+# Base motion and surface accelerations
+# ---------------------------------------------------------------------------
+
+#: Mounting places of a housing accelerometer: the surface and its outward normal (y, z) in the model's axes.
+MOUNTING_POSITIONS = ("top", "side", "foot")
+
+
+@dataclass(frozen=True)
+class Probe:
+    """An accelerometer's mounting place on the housing surface.
+
+    Attributes
+    ----------
+    position : str
+        One of :data:`MOUNTING_POSITIONS`.
+    node : int
+        Mesh node under the accelerometer [-].
+    coordinates_m : tuple of float
+        The node's (x, y, z) [m].
+    normal : tuple of float
+        Outward unit normal of the surface there, (x, y, z) [-]; the accelerometer's sensing axis.
+    """
+
+    position: str
+    node: int
+    coordinates_m: tuple[float, float, float]
+    normal: tuple[float, float, float]
+
+
+def mounting_probe(mesh: HousingMesh, position: str) -> Probe:
+    """The node and normal of a mounting place on the half model's surface.
+
+    ``top``: the top of the housing cap above the shaft centre (z = body top, y = 0, on the mirror plane
+    x = 0: the housing's middle), normal +z. ``side``: the body's side at the bearing's centre line
+    (y = body half width, z = 0, x = 0), normal +y. ``foot``: the foot's top face halfway between the body
+    and the foot's end (z = -body bottom, y = (body half width + foot length / 2) / 2, x = 0), normal +z;
+    the foot's underside is held rigidly, so a foot accelerometer reads little but the base's own motion.
+    The node is the surface node nearest the target point.
+    """
+    g = mesh.geometry
+    targets = {
+        "top": ((0.0, 0.0, g.body_top_m), (0.0, 0.0, 1.0), 2),
+        "side": ((0.0, g.body_half_width_m, 0.0), (0.0, 1.0, 0.0), 1),
+        "foot": ((0.0, 0.5 * (g.body_half_width_m + 0.5 * g.foot_length_m), -g.body_bottom_m), (0.0, 0.0, 1.0), 2),
+    }
+    if position not in targets:
+        raise ValueError(
+            f"config accelerometer.position must be one of {', '.join(MOUNTING_POSITIONS)}, got {position!r}"
+        )
+    point, normal, axis = targets[position]
+    c = mesh.coors
+    # the surface: nodes at the target's coordinate along the normal, on the side the normal points to
+    on_plane = np.abs(c[:, axis] - point[axis]) < 1e-9
+    if position == "foot":
+        on_plane &= np.abs(c[:, 1]) >= g.body_half_width_m - 1e-9
+    idx = np.where(on_plane)[0]
+    if idx.size == 0:
+        raise ValueError(f"no mesh node on the {position} mounting surface; check the housing geometry")
+    node = int(idx[np.argmin(np.linalg.norm(c[idx] - np.asarray(point), axis=1))])
+    return Probe(position, node, tuple(float(v) for v in c[node]), normal)
+
+
+@dataclass(frozen=True)
+class BaseMotionOperators:
+    """The base (foot) motion in the modal model, and the probes' rows.
+
+    In base-relative coordinates u_rel = u - r_y b_y - r_z b_z (r: the rigid translations in y and z, 1 on
+    the free DOFs of that component) the housing obeys M u_rel'' + C u_rel' + K u_rel = f(t) - M r a(t),
+    with a = (a_y, a_z) the base's acceleration. The sensor's far end sits in the housing, which moves with
+    the base, so the sensor force c . u_rel holds; an accelerometer reads the absolute acceleration
+    n . (u_rel'' + r a).
+
+    Attributes
+    ----------
+    rigid : ndarray (nf, 2)
+        r_y, r_z on the free DOFs [-].
+    participation : ndarray (2, n)
+        Gamma_i = phi_i . M r for y and z [kg^0.5] (mass-normalised modes).
+    rigid_mass_kg : ndarray (2,)
+        r^T M r for y and z: the free DOFs' mass that the base drags [kg] (the held underside's nodes excluded).
+    static_sensor : ndarray (2,)
+        Quasi-static sensor force per unit base acceleration, -(K^-1 c) . M r [N per m/s^2].
+    probes : tuple of Probe
+    probe_rows : csr_matrix (n_probes, nf)
+        n . u at each probe's node (its normal's components on the free DOFs).
+    probe_modal : ndarray (n_probes, n)
+        n . phi_i at each probe [-].
+    probe_base : ndarray (n_probes, 2)
+        (n_y, n_z) of each probe: its reading of the base's own acceleration [-].
+    """
+
+    rigid: np.ndarray = field(repr=False)
+    participation: np.ndarray
+    rigid_mass_kg: np.ndarray
+    static_sensor: np.ndarray
+    probes: tuple[Probe, ...]
+    probe_rows: sp.csr_matrix = field(repr=False)
+    probe_modal: np.ndarray
+    probe_base: np.ndarray
+
+    def effective_mass_fraction(self) -> np.ndarray:
+        """Cumulative effective modal mass over r^T M r, (2, n) for y and z [-]: sum_{j<=i} Gamma_j^2 / r^T M r."""
+        return np.cumsum(self.participation**2, axis=1) / self.rigid_mass_kg[:, None]
+
+
+def base_motion_operators(model: HousingModel, modes: Modes, probes: tuple[Probe, ...] = ()) -> BaseMotionOperators:
+    """The modal operators of base motion in y and z and of the probes (:class:`BaseMotionOperators`).
+
+    The half model (mirror plane x = 0, U_x = 0 there) carries base motion in y and z only: an axial
+    (x) motion of the base is antisymmetric about that plane.
+    """
+    comp = model.free % 3
+    rigid = np.stack([(comp == 1).astype(float), (comp == 2).astype(float)], axis=1)
+    mr = model.M @ rigid
+    gmap = -np.ones(3 * model.mesh.n_nodes, int)
+    gmap[model.free] = np.arange(model.n_dofs)
+    rows, cols, vals = [], [], []
+    for i, p in enumerate(probes):
+        for c in (1, 2):
+            dof = gmap[3 * p.node + c]
+            if dof >= 0 and p.normal[c] != 0.0:
+                rows.append(i)
+                cols.append(dof)
+                vals.append(p.normal[c])
+    pr = sp.csr_matrix((vals, (rows, cols)), shape=(len(probes), model.n_dofs))
+    zvec = model.factor().solve(model.sensor)
+    return BaseMotionOperators(
+        rigid=rigid,
+        participation=np.asarray(modes.shapes.T @ mr).T,
+        rigid_mass_kg=np.einsum("ij,ij->j", rigid, mr),
+        static_sensor=-(zvec @ mr),
+        probes=tuple(probes),
+        probe_rows=pr,
+        probe_modal=np.asarray(pr @ modes.shapes),
+        probe_base=np.array([[p.normal[1], p.normal[2]] for p in probes]).reshape(len(probes), 2),
+    )
+
+
+def response_reduced(
+    ops: ReducedOperators, base: BaseMotionOperators, wy: np.ndarray, wz: np.ndarray,
+    base_acceleration: np.ndarray, h: float,
+) -> dict:
+    """Sensor force and probe accelerations under roller loads and base motion, by modal superposition.
+
+    The sensor force as :func:`sensor_force_reduced` (modes plus the static correction of the truncated
+    ones), its loads now with the base's inertia -M r a. The probes' accelerations are the retained modes'
+    n . phi_i q_i'' (q_i'' = f_i - 2 zeta_i w_i q_i' - w_i^2 q_i, exact at the samples for loads linear
+    between them) plus the base's n . a: a truncated mode of frequency w_i adds only (w / w_i)^2 of its
+    quasi-static share at frequency w, so the mode count is converged against the band's top
+    (:meth:`BaseMotionOperators.effective_mass_fraction`, and the direct solve).
+
+    Parameters
+    ----------
+    ops : ReducedOperators
+    base : BaseMotionOperators
+    wy, wz : ndarray (n_t, nc)
+        Column loads at the samples [N].
+    base_acceleration : ndarray (n_t, 2)
+        The base's acceleration (y, z) at the samples [m/s^2].
+    h : float
+        Time step [s].
+
+    Returns
+    -------
+    dict with ``force_N`` (n_t,), ``quasi_static_N``, ``dynamic_N`` and ``acceleration_m_per_s2``
+    (n_probes, n_t), the probes' absolute accelerations along their normals.
+    """
+    return response_projected(ops, base, wy @ ops.static_y + wz @ ops.static_z, wy @ ops.modal_y + wz @ ops.modal_z,
+                              base_acceleration, h)
+
+
+def project_roller_loads(model: HousingModel, ops: ReducedOperators, load_N: np.ndarray, angle_rad: np.ndarray,
+                         chunk: int = 2048) -> tuple[np.ndarray, np.ndarray]:
+    """The roller loads' quasi-static sensor force g (n_t,) [N] and modal forces (n_t, n) [N], in chunks of time.
+
+    The same numbers as ``wy @ ops.static_y + wz @ ops.static_z`` and ``wy @ ops.modal_y + wz @ ops.modal_z``
+    of :meth:`HousingModel.column_loads`, without holding the (n_t Z, n_columns) patch weights of a long
+    record at a DAQ rate at once.
+    """
+    nt = load_N.shape[0]
+    g = np.empty(nt)
+    f = np.empty((nt, ops.omega.size))
+    for k in range(0, nt, chunk):
+        wy, wz = model.column_loads(load_N[k:k + chunk], angle_rad[k:k + chunk])
+        g[k:k + chunk] = wy @ ops.static_y + wz @ ops.static_z
+        f[k:k + chunk] = wy @ ops.modal_y + wz @ ops.modal_z
+    return g, f
+
+
+def response_projected(ops: ReducedOperators, base: BaseMotionOperators, static_N: np.ndarray, modal_N: np.ndarray,
+                       base_acceleration: np.ndarray, h: float) -> dict:
+    """:func:`response_reduced` from the roller loads' quasi-static sensor force ``static_N`` (n_t,) [N] and
+    modal forces ``modal_N`` (n_t, n) [N] (:func:`project_roller_loads`)."""
+    a = np.asarray(base_acceleration, dtype=float)
+    g = static_N + a @ base.static_sensor
+    f = modal_N - a @ base.participation
+    q, qd = modal_response(f, ops.omega, ops.zeta, h, velocity=True)
+    dyn = (q - f / ops.omega**2) @ ops.sensor_modal
+    qdd = f - 2 * ops.zeta * ops.omega * qd - ops.omega**2 * q
+    acc = base.probe_modal @ qdd.T + base.probe_base @ a.T
+    return {"force_N": g + dyn, "quasi_static_N": g, "dynamic_N": dyn, "acceleration_m_per_s2": acc}
+
+
+# ---------------------------------------------------------------------------
 # Direct method: sfepy's generalized-alpha stepper on the full system
 # ---------------------------------------------------------------------------
 
@@ -616,8 +826,19 @@ def sensor_force_direct(
     beta: float,
     rho_inf: float = 0.9,
     progress=None,
+    base: BaseMotionOperators | None = None,
+    base_acceleration: np.ndarray | None = None,
+    substeps: int = 1,
 ) -> dict:
-    """Sensor force by direct time integration with sfepy's ``ts.generalized_alpha``.
+    """Sensor force (and, with ``base``, the probes' accelerations) by direct time integration with sfepy's
+    ``ts.generalized_alpha``.
+
+    ``base`` and ``base_acceleration`` (n_t, 2) [m/s^2]: the foot's acceleration in y and z, linear between
+    the samples, as the load -M r a(t) in base-relative coordinates; the probes' absolute accelerations
+    (``probe_acceleration_m_per_s2``, (n_probes, n_t)) are the relative ones of the solver's state plus the
+    base's along each probe's normal. ``substeps``: solver steps per sample (the generalized-alpha rule's
+    period error grows as (omega h)^2: at a DAQ rate's band top a check needs several steps a sample; the
+    loads stay linear between the samples).
 
     The solver class is driven on the assembled matrices: its nonlinear
     solver (sfepy's Newton, linear mode, one iteration a step) evaluates
@@ -638,14 +859,20 @@ def sensor_force_direct(
     kmat, mmat = model.K.tocsr(), model.M.tocsr()
     cmat = (alpha * mmat + beta * kmat).tocsr()
     blocks = sp.block_diag([kmat, cmat, mmat], format="csr")
-    times = h * np.arange(nt)
+    nsub = int(substeps)
+    times = (h / nsub) * np.arange((nt - 1) * nsub + 1)
+
+    inertia = None if base is None else -(model.M @ base.rigid)  # (nf, 2): load per unit base acceleration
 
     def load(t):
         k = int(np.clip(np.floor(t / h + 1e-9), 0, nt - 2))
         lam = np.clip(t / h - k, 0.0, 1.0)
         wyt = (1 - lam) * wy[k] + lam * wy[k + 1]
         wzt = (1 - lam) * wz[k] + lam * wz[k + 1]
-        return model.load_y.T @ wyt + model.load_z.T @ wzt
+        f = model.load_y.T @ wyt + model.load_z.T @ wzt
+        if inertia is not None:
+            f = f + inertia @ ((1 - lam) * base_acceleration[k] + lam * base_acceleration[k + 1])
+        return f
 
     class _State:
         ts = None
@@ -695,7 +922,7 @@ def sensor_force_direct(
         kind="ts.generalized_alpha",
         t0=0.0,
         t1=times[-1],
-        n_step=nt,
+        n_step=len(times),
         rho_inf=rho_inf,
         is_linear=True,
         var_names={"u": "u", "du": "du", "ddu": "ddu"},
@@ -714,13 +941,22 @@ def sensor_force_direct(
     u0 = model.factor().solve(load(0.0))
     vec0 = np.concatenate([u0, np.zeros(nf), np.zeros(nf)])
     out = np.zeros(nt)
+    probes = None if base is None else np.zeros((base.probe_rows.shape[0], nt))
 
     def poststep(ts, vec):
-        out[ts.step] = model.sensor @ vec[:nf]
-        if progress is not None and ts.step % 200 == 0:
-            progress(ts.step, nt)
+        if ts.step % nsub:
+            return vec
+        k = ts.step // nsub
+        out[k] = model.sensor @ vec[:nf]
+        if probes is not None:
+            probes[:, k] = base.probe_rows @ vec[2 * nf:]
+        if progress is not None and k % 200 == 0:
+            progress(k, nt)
         return vec
 
     t0 = time.perf_counter()
     solver(vec0=vec0, init_fun=lambda ts, v: v, prestep_fun=lambda ts, v: v, poststep_fun=poststep)
-    return {"force_N": out, "seconds": time.perf_counter() - t0}
+    result = {"force_N": out, "seconds": time.perf_counter() - t0}
+    if probes is not None:
+        result["probe_acceleration_m_per_s2"] = probes + base.probe_base @ base_acceleration.T
+    return result

@@ -730,12 +730,13 @@ def simulate_lpm(
     step_s: float,
     tol_m: float = 1e-16,
     method: str = "compiled",
+    base_acceleration_m_per_s2: np.ndarray | None = None,
 ) -> LPMResult:
     """Integrate the 4-DOF model with the implicit trapezoidal rule (Newmark, beta = 1/4, gamma = 1/2).
 
     .. math::
-        m_s \\ddot u_s + c_b(\\dot u_s - \\dot u_p) = F - \\sum_j Q_j n_j, \\qquad
-        m_p \\ddot u_p - c_b(\\dot u_s - \\dot u_p) + c_p \\dot u_p + k_p u_p = \\sum_j Q_j n_j
+        m_s \\ddot u_s + c_b(\\dot u_s - \\dot u_p) = F - \\sum_j Q_j n_j - m_s a_b(t), \\qquad
+        m_p \\ddot u_p - c_b(\\dot u_s - \\dot u_p) + c_p \\dot u_p + k_p u_p = \\sum_j Q_j n_j - m_p a_b(t)
 
     with Q_j = K <(u_s - u_p) . n_j - P_d/2 - drop_j>^(10/9) and n_j the
     outward normal at roller j. The contact makes the system stiff (the
@@ -763,11 +764,25 @@ def simulate_lpm(
         ``compiled``: the step loop in :mod:`.lpm_kernel` (numba); ``python``:
         the same algorithm as a numpy loop (the reference, ~50x slower; kept
         for the benchmark and as the check of the kernel).
+    base_acceleration_m_per_s2 : ndarray (n_steps + 1, 2), optional
+        Acceleration a_b (y, z) of the ground (the machine frame under the
+        housing's foot) at every step [m/s^2]. The displacements are then
+        relative to the ground: the pedestal's spring and damper and the
+        radial load's support move with it, each mass feels the inertial
+        load -m a_b, and the shaft's pushes on the rollers (the shaft is
+        held radially by this bearing only: ``shaft_mass_kg`` is the mass
+        it carries). None: a ground at rest.
     """
     if method not in ("compiled", "python"):
         raise ValueError(f"simulate_lpm: method must be 'compiled' or 'python', got {method!r}")
     m, c, k = _matrices(p)
-    fext = np.array([0.0, -p.radial_load_N, 0.0, 0.0])
+    fext = np.tile(np.array([0.0, -p.radial_load_N, 0.0, 0.0]), (n_steps + 1, 1))
+    if base_acceleration_m_per_s2 is not None:
+        ab = np.asarray(base_acceleration_m_per_s2, dtype=float)
+        if ab.shape != (n_steps + 1, 2):
+            raise ValueError(f"simulate_lpm: base acceleration of shape {ab.shape}, expected ({n_steps + 1}, 2)")
+        fext[:, :2] -= p.shaft_mass_kg * ab
+        fext[:, 2:] -= p.pedestal_mass_kg * ab
     kc, gap = p.k_contact, p.gap_m
     t = t_start_s + step_s * np.arange(n_steps + 1)
     mo = p.motion(t)
@@ -775,9 +790,9 @@ def simulate_lpm(
     drop = p.contact_offsets(mo)
     sn, cn = np.sin(psi), -np.cos(psi)
 
-    # static start: rollers carry F_r, the pedestal spring carries F_r
-    e0 = static_offset(fext[:2], psi[0], gap, drop[0], kc)
-    up0 = fext[:2] / p.pedestal_stiffness_N_per_m
+    # static start: the rollers carry the shaft's load, the pedestal spring the shaft's and its own
+    e0 = static_offset(fext[0, :2], psi[0], gap, drop[0], kc)
+    up0 = (fext[0, :2] + fext[0, 2:]) / p.pedestal_stiffness_N_per_m
     u = np.r_[up0 + e0, up0]
     if method == "compiled":
         us, q_out, n_iter, failed = newmark_lpm(
@@ -812,7 +827,7 @@ def simulate_lpm(
             fy, fz = q @ s_n, q @ c_n
             jss, jsc, jcc = dq @ (s_n * s_n), dq @ (s_n * c_n), dq @ (c_n * c_n)
             g = np.array([fy, fz, -fy, -fz])
-            r = k_eff_lin @ x - rhs_const + g - fext
+            r = k_eff_lin @ x - rhs_const + g - fext[n]
             jg = np.array([[jss, jsc], [jsc, jcc]])
             kt = k_eff_lin + np.block([[jg, -jg], [-jg, jg]])
             dx = np.linalg.solve(kt, -r)

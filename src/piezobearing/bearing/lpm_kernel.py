@@ -61,8 +61,9 @@ def newmark_lpm(sn, cn, offset, m, c, k, fext, u0, h, k_contact, tol_m, max_iter
         Gap to close before each roller carries load (clearance + drops) [m].
     m, c, k : ndarray (4, 4)
         Mass [kg], damping [N s/m] and linear stiffness [N/m] of (y_s, z_s, y_p, z_p).
-    fext : ndarray (4,)
-        External force [N].
+    fext : ndarray (n + 1, 4)
+        External force at every step [N] (the radial load; under base motion, minus each mass times the
+        base's acceleration).
     u0 : ndarray (4,)
         Displacement at the first step [m] (velocity and acceleration 0).
     h : float
@@ -150,7 +151,7 @@ def newmark_lpm(sn, cn, offset, m, c, k, fext, u0, h, k_contact, tol_m, max_iter
                 for jj in range(4):
                     s += keff[i, jj] * x[jj]
                     kt[i, jj] = keff[i, jj]
-                r[i] = -(s - rhs[i] - fext[i])
+                r[i] = -(s - rhs[i] - fext[n, i])
             r[0] -= g0
             r[1] -= g1
             r[2] += g0

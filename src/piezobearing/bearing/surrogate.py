@@ -111,8 +111,13 @@ class Operating:
     radial_clearance_m: float
 
 
-#: Force residual (share of F_r) accepted where Newton's method stalls after 200 steps (see quasi_static_loads).
-STALL_TOL = 1e-4
+class NoEquilibriumError(RuntimeError):
+    """Newton's method left rows of :func:`quasi_static_loads` short of the equilibrium after its steps.
+
+    The potential is convex and grows in every direction (rollers all round), so an equilibrium exists at
+    every load and clearance; this says the iteration failed. The diagnosis's fit treats the point as
+    infeasible (the search steps back) instead of stopping.
+    """
 
 
 def _normals(psi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -142,7 +147,11 @@ def quasi_static_loads(
     is the contact stiffness. Newton's method with an Armijo line search on
     Pi converges from any start (accepting a step that lowers Pi or the residual; the LPM's :func:`~piezobearing.bearing.lpm.static_offset`,
     which backtracks on the residual's norm, can stall where a roller stands
-    in a deep groove at the bottom); it runs vectorised over the rows.
+    in a deep groove at the bottom); it runs vectorised over the rows. Where
+    the Hessian is singular (the shaft on one roller, or on none), Pi is
+    linear along the soft direction up to the next roller's contact, and the
+    step goes there (:func:`_newton_step`). Rows still short of the tolerance
+    after 200 steps raise :class:`NoEquilibriumError`.
 
     Parameters
     ----------
@@ -194,14 +203,8 @@ def quasi_static_loads(
         a = np.sum(dqs * si, 1)
         b = np.sum(dqs * ci, 1)
         d = np.sum(dqc * ci, 1)
-        # a floor of stiffness only where the Hessian is near singular (condition above ~1e6: a shaft resting on
-        # one roller, a roller lifted into a groove); elsewhere the exact Newton step (quadratic convergence: a
-        # table from a nearby one in 2 evaluations of the equilibrium per row instead of 3)
-        reg = np.where(a * d - b * b > 1e-6 * (a + d) * (a + d), 0.0, 1e-9 * (a + d) + 1e-3 * k_contact * 1e-6 ** (1 / 9))
-        a, d = a + reg, d + reg
-        det = a * d - b * b
         fy, fz = f[idx, 0], f[idx, 1]
-        step = -np.stack([(d * fy - b * fz) / det, (-b * fy + a * fz) / det], 1)
+        step = _newton_step(a, b, d, fy, fz, e[idx], si, ci, di, gap_m, k_contact, radial_load_N)
         # at most twice the reach of the start (a roller lifted into a groove leaves only the regularisation's
         # stiffness along it: a Newton step of millimetres, halved ten times by the line search)
         length = np.hypot(step[:, 0], step[:, 1])
@@ -212,15 +215,82 @@ def quasi_static_loads(
         e[idx] = trial
         f[idx], q[idx], dq[idx], pot[idx] = ft, qt, dqt, pt
     norm = np.hypot(f[:, 0], f[:, 1])
-    if np.all(norm <= STALL_TOL * radial_load_N):
-        # a shaft resting on one roller a few microradians off the load line (wide clearance): the Hessian has
-        # no sideways stiffness, and the sideways force left (< STALL_TOL F_r) would move the shaft tens of
-        # microns to the next roller; the loads are within that force of the equilibrium
-        return (q, e) if return_offset else q
-    raise RuntimeError(
+    raise NoEquilibriumError(
         f"quasi_static_loads: no equilibrium for {int((norm > tol_N * radial_load_N).sum())} of {n} roller "
         f"configurations at F_r = {radial_load_N} N"
     )
+
+
+#: Condition of the contact stiffness (Hessian) above which a row is treated as singular (a shaft resting on one
+#: roller, a roller lifted into a groove, no roller in contact): :func:`_newton_step`.
+SINGULAR = 1e-6
+
+
+def _newton_step(a, b, d, fy, fz, e, si, ci, drop, gap_m, k_contact, radial_load_N):
+    """The rows' Newton steps (n, 2) [m] for the contact stiffness [[a, b], [b, d]] and the force residual (fy, fz).
+
+    Where the stiffness is regular, the exact Newton step. Where it is near singular (a shaft resting on one
+    roller: no stiffness across that roller's normal; no roller in contact: none at all), the potential along
+    the soft direction is linear until the next roller engages, and a Newton step of a regularised Hessian
+    creeps along it (a step of 12 nm where 3 um are needed at 11.8 N: no equilibrium in 200 steps). There the
+    step is Newton's along the stiff direction, plus a move down the soft direction to just past the first
+    roller it brings into contact (by one roller's deflection under F_r, at most as far again): the next step
+    has two rollers and is regular.
+    """
+    tr = a + d
+    det = a * d - b * b
+    regular = det > SINGULAR * tr * tr
+    out = np.empty((a.size, 2))
+    safe = np.where(regular, det, 1.0)
+    out[:, 0] = -(d * fy - b * fz) / safe
+    out[:, 1] = -(-b * fy + a * fz) / safe
+    sing = np.flatnonzero(~regular)
+    if sing.size:
+        step, found = _soft_step(a[sing], b[sing], d[sing], fy[sing], fz[sing], e[sing], si[sing], ci[sing],
+                                 drop[sing], gap_m, k_contact, radial_load_N)
+        # no roller ahead (not for rollers all round): a floor of stiffness, the step capped by the caller's reach
+        reg = 1e-9 * tr[sing] + 1e-3 * k_contact * 1e-6 ** (1 / 9)
+        ar, dr, bs = a[sing] + reg, d[sing] + reg, b[sing]
+        dt = ar * dr - bs * bs
+        fys, fzs = fy[sing], fz[sing]
+        fallback = -np.stack([(dr * fys - bs * fzs) / dt, (-bs * fys + ar * fzs) / dt], 1)
+        out[sing] = np.where(found[:, None], step, fallback)
+    return out
+
+
+def _soft_step(a, b, d, fy, fz, e, si, ci, drop, gap_m, k_contact, radial_load_N):
+    """:func:`_newton_step` of the near-singular rows (n, 2) [m], and whether a roller ahead was found (n,)."""
+    tr = a + d
+    lam = 0.5 * tr + np.sqrt(0.25 * (a - d) ** 2 + b * b)  # the stiff eigenvalue [N/m]
+    # its unit eigenvector (lam - d, b) or (b, lam - a), whichever is longer; (1, 0) without any stiffness
+    u1 = np.where(np.abs(lam - d) >= np.abs(lam - a), lam - d, b)
+    u2 = np.where(np.abs(lam - d) >= np.abs(lam - a), b, lam - a)
+    nu = np.hypot(u1, u2)
+    none = nu <= 0.0
+    u1, u2 = np.where(none, 1.0, u1 / np.where(none, 1.0, nu)), np.where(none, 0.0, u2 / np.where(none, 1.0, nu))
+    stiff = np.where(lam > 0.0, (fy * u1 + fz * u2) / np.where(lam > 0.0, lam, 1.0), 0.0)
+    base = -stiff[:, None] * np.stack([u1, u2], 1)
+    # down the soft direction v (the force along it): without stiffness at all, down the whole force
+    v1, v2 = -u2, u1
+    gv = fy * v1 + fz * v2
+    sign = -np.sign(gv)
+    dy, dz = np.where(lam > 0.0, sign * v1, -fy), np.where(lam > 0.0, sign * v2, -fz)
+    dn = np.hypot(dy, dz)
+    dn = np.where(dn > 0.0, dn, 1.0)
+    dy, dz = dy / dn, dz / dn
+    ey, ez = e[:, :1] + base[:, :1], e[:, 1:] + base[:, 1:]
+    delta = ey * si + ez * ci - gap_m - drop  # the rollers' overlap after the stiff part [m]
+    rate = dy[:, None] * si + dz[:, None] * ci  # d delta / d t along the soft direction [-]
+    t = np.where((delta < 0.0) & (rate > 0.0), -delta / np.where(rate > 0.0, rate, 1.0), np.inf)
+    j = np.argmin(t, axis=1)
+    rows = np.arange(t.shape[0])
+    t_in, r_in = t[rows, j], rate[rows, j]
+    d1 = (radial_load_N / k_contact) ** 0.9  # one roller's deflection under F_r [m]
+    past = np.minimum(d1 / np.where(r_in > 0.0, r_in, 1.0), np.where(np.isfinite(t_in), t_in, 0.0))
+    moving = (gv != 0.0) | (lam <= 0.0)  # a force along the soft direction (or no stiffness at all)
+    found = np.isfinite(t_in) | ~moving
+    length = np.where(moving & np.isfinite(t_in), t_in + past, 0.0)
+    return base + length[:, None] * np.stack([dy, dz], 1), found
 
 
 def _compiled(s, c, drop, e, reach, radial_load_N, gap_m, k_contact, tol_N, return_offset):
@@ -235,9 +305,9 @@ def _compiled(s, c, drop, e, reach, radial_load_N, gap_m, k_contact, tol_N, retu
     thr = tol_N * radial_load_N
     norm, _ = newton_rows(s, c, drop, e, arr(reach), float(gap_m), float(k_contact), float(radial_load_N), thr,
                           1e-3 * k_contact * 1e-6 ** (1 / 9), q)
-    if not np.any(norm > thr) or np.all(norm <= STALL_TOL * radial_load_N):  # the stall: as the numpy loop's
+    if not np.any(norm > thr):
         return (q, e) if return_offset else q
-    raise RuntimeError(
+    raise NoEquilibriumError(
         f"quasi_static_loads: no equilibrium for {int((norm > thr).sum())} of {e.shape[0]} roller "
         f"configurations at F_r = {radial_load_N} N"
     )

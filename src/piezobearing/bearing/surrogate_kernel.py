@@ -74,6 +74,57 @@ def _state(e0, e1, s, c, drop, gap, k_contact, f_r, q, dq, tmp, tmp2, out):  # p
 
 
 @njit(cache=True)
+def _soft_step(a, b, d, fy, fz, e0, e1, si, ci, di, gap, k_contact, f_r, reg_k):  # pragma: no cover - compiled
+    """One near-singular row's step (the numpy reference's ``_newton_step``): Newton's along the stiff
+    direction, then down the soft one to just past the first roller it brings into contact; without a roller
+    ahead, the step of the Hessian with a floor of stiffness ``reg_k``."""
+    z = si.shape[0]
+    tr = a + d
+    lam = 0.5 * tr + math.sqrt(0.25 * (a - d) ** 2 + b * b)
+    if abs(lam - d) >= abs(lam - a):
+        u1, u2 = lam - d, b
+    else:
+        u1, u2 = b, lam - a
+    nu = math.hypot(u1, u2)
+    if nu <= 0.0:
+        u1, u2 = 1.0, 0.0
+    else:
+        u1, u2 = u1 / nu, u2 / nu
+    stiff = (fy * u1 + fz * u2) / lam if lam > 0.0 else 0.0
+    b0, b1 = -stiff * u1, -stiff * u2
+    v1, v2 = -u2, u1
+    gv = fy * v1 + fz * v2
+    sign = 1.0 if gv < 0.0 else (-1.0 if gv > 0.0 else 0.0)
+    if lam > 0.0:
+        dy, dz = sign * v1, sign * v2
+    else:
+        dy, dz = -fy, -fz
+    dn = math.hypot(dy, dz)
+    if dn > 0.0:
+        dy, dz = dy / dn, dz / dn
+    ey, ez = e0 + b0, e1 + b1
+    t_in = np.inf
+    r_in = 0.0
+    for j in range(z):
+        delta = ((ey * si[j] + ez * ci[j]) - gap) - di[j]
+        rate = dy * si[j] + dz * ci[j]
+        if delta < 0.0 and rate > 0.0:
+            tj = -delta / rate
+            if tj < t_in:
+                t_in, r_in = tj, rate
+    moving = gv != 0.0 or lam <= 0.0
+    if not moving:
+        return b0, b1
+    if t_in < np.inf:
+        length = t_in + min((f_r / k_contact) ** 0.9 / r_in, t_in)
+        return b0 + length * dy, b1 + length * dz
+    reg = 1e-9 * tr + reg_k
+    a, d = a + reg, d + reg
+    det = a * d - b * b
+    return -((d * fy - b * fz) / det), -((-b * fy + a * fz) / det)
+
+
+@njit(cache=True)
 def newton_rows(s, c, drop, e, reach, gap, k_contact, f_r, thr, reg_k, q_out):  # pragma: no cover - compiled
     """Solve every row's equilibrium from its start offset ``e`` (n, 2), overwritten with the solution.
 
@@ -92,7 +143,7 @@ def newton_rows(s, c, drop, e, reach, gap, k_contact, f_r, thr, reg_k, q_out):  
     thr : float
         Force residual below which a row has converged [N].
     reg_k : float
-        The constant part of the Hessian's regularisation where it is near singular [N/m].
+        The constant floor of stiffness where the Hessian is near singular and no roller is ahead [N/m].
     q_out : ndarray (n, Z)
         Roller loads [N], written.
 
@@ -133,11 +184,12 @@ def newton_rows(s, c, drop, e, reach, gap, k_contact, f_r, thr, reg_k, q_out):  
             for j in range(z):
                 tmp[j] = (dq[j] * ci[j]) * ci[j]
             d = _rsum(tmp, z)
-            reg = 0.0 if a * d - b * b > 1e-6 * (a + d) * (a + d) else 1e-9 * (a + d) + reg_k  # near singular only
-            a, d = a + reg, d + reg
-            det = a * d - b * b
-            s0 = -((d * fy - b * fz) / det)
-            s1 = -((-b * fy + a * fz) / det)
+            if a * d - b * b > 1e-6 * (a + d) * (a + d):
+                det = a * d - b * b
+                s0 = -((d * fy - b * fz) / det)
+                s1 = -((-b * fy + a * fz) / det)
+            else:
+                s0, s1 = _soft_step(a, b, d, fy, fz, e0, e1, si, ci, di, gap, k_contact, f_r, reg_k)
             length = math.hypot(s0, s1)
             scale = min(1.0, reach[i] / max(length, 1e-300))
             s0 *= scale

@@ -35,12 +35,16 @@ def time_grid(bearing: dict) -> np.ndarray:
     return dt * np.arange(int(round(bearing["duration_s"] / dt)))
 
 
-def run_lpm(bearing: dict, faulty: bool, method: str = "compiled", seed: int = 0) -> dict:
+def run_lpm(bearing: dict, faulty: bool, method: str = "compiled", seed: int = 0, base_motion=None) -> dict:
     """The LPM on its fine grid and resampled at the FEM step (dict of arrays; ``params``: the LPMParameters).
 
     ``method`` as in :func:`~piezobearing.bearing.lpm.simulate_lpm`; ``seed``: the config's seed (roller
     diameters, slip jitter). With ``bearing.tachometer_pulses_per_rev`` > 0 the dict has the tachometer's
-    pulse times over the record.
+    pulse times over the record. ``base_motion``: None (the ground at rest) or a function of the LPM's fine
+    time grid [s] giving the ground's acceleration (n, 2) [m/s^2] (y, z;
+    :func:`piezobearing.bearing.base_motion.realisation`); the dict then holds it on the fine grid
+    (``fine_base_acceleration_m_per_s2``) and at the FEM step (``base_acceleration_m_per_s2``, treated as the
+    roller loads are, ``bearing.resample``), and the displacements are relative to the ground.
     """
     p = brg.LPMParameters.from_config(bearing, faulty, seed)
     dt = bearing["time_step_s"]
@@ -48,10 +52,16 @@ def run_lpm(bearing: dict, faulty: bool, method: str = "compiled", seed: int = 0
     t_out = time_grid(bearing)
     t_start = -bearing["settle_s"] - dt
     n_steps = int(np.ceil((t_out[-1] + dt - t_start) / h))
-    res = brg.simulate_lpm(p, t_start, n_steps, h, method=method)
+    extra = {}
+    ab = None
+    if base_motion is not None:
+        ab = np.asarray(base_motion(t_start + h * np.arange(n_steps + 1)), dtype=float)
+    res = brg.simulate_lpm(p, t_start, n_steps, h, method=method, base_acceleration_m_per_s2=ab)
     keep = res.time_s >= -dt / 2 - 1e-12
     q_out = brg.resample_loads(res.time_s, res.load_N, t_out, dt, bearing["resample"])
-    extra = {}
+    if ab is not None:
+        extra["fine_base_acceleration_m_per_s2"] = ab[keep]
+        extra["base_acceleration_m_per_s2"] = brg.resample_loads(res.time_s, ab, t_out, dt, bearing["resample"])
     if bearing["tachometer_pulses_per_rev"] > 0:
         extra["tachometer_time_s"] = p.tachometer_times(
             -dt / 2, t_out[-1] + dt / 2, bearing["tachometer_pulses_per_rev"]

@@ -35,7 +35,7 @@ from typing import Callable
 import numpy as np
 from scipy import fft as sfft
 
-from .least_squares import FitResult, fit, nrmse
+from .least_squares import FitResult, InfeasibleError, fit, nrmse
 from .model import Model
 from .noise import NoiseFloor
 from .record import Record
@@ -237,21 +237,29 @@ def fit_model(
     """Fit ``model`` by the likelihood of the module docstring (errors in variables when it has an input).
 
     ``start`` holds start values (others: defaults); each dict in ``starts``
-    overrides some of them for one more start, and the best fit is kept.
+    overrides some of them for one more start, and the best fit is kept. A start at which the model has no
+    solution (:class:`~piezobearing.diagnosis.least_squares.InfeasibleError`) is skipped; with none left the
+    error goes to the caller.
     """
     v = np.asarray(voltage_V, dtype=float)
     weighted = likelihood_residual(model, record, v, floor)
-    best = None
+    best, infeasible = None, None
     for extra in starts or [{}]:
-        res = fit(
-            weighted,
-            model.params(record, {**(start or {}), **extra}),
-            max_nfev=max_nfev,
-            ftol=ftol,
-            n_data=record.n_measured,
-        )
+        try:
+            res = fit(
+                weighted,
+                model.params(record, {**(start or {}), **extra}),
+                max_nfev=max_nfev,
+                ftol=ftol,
+                n_data=record.n_measured,
+            )
+        except InfeasibleError as e:  # this start has no solution of the model: the next start
+            infeasible = e
+            continue
         if best is None or res.chi2 < best.chi2:
             best = res
+    if best is None:
+        raise InfeasibleError(f"{model.label}: no start with a solution of the model ({infeasible})")
     h = noise_scale(model, best.values, record, floor)
     if h is not None:
         # the noise follows the signal: refit once with the scale of the first fit held (feasible

@@ -22,6 +22,16 @@ from scipy.stats import t as student_t
 from .params import Param
 
 
+class InfeasibleError(ValueError):
+    """A model has no solution at the values asked for (the bearing's rings without an equilibrium).
+
+    A residual function raises it; :func:`fit` treats the point as infeasible: a trial step that lands there is
+    refused (the trust region shrinks, the search steps back), a finite difference that lands there leaves its
+    parameter out of that step's Jacobian, and a start value there raises it to the caller (which tries its
+    next start).
+    """
+
+
 @dataclass
 class FitResult:
     """Outcome of :func:`fit`: values, uncertainties and goodness of fit."""
@@ -136,28 +146,40 @@ def fit(
 def _fun_and_jacobian(residual_fn, free: list[Param], unpack, lo: np.ndarray, hi: np.ndarray):
     """The residual of the internal coordinates and its Jacobian for scipy's ``least_squares``.
 
-    scipy's own 2-point differences (``jac="2-point"``) unless ``residual_fn`` has a ``linear_columns``
-    attribute: a function of the values giving d residual / d value, exactly, for the parameters the residual
-    is linear in (an additive voltage's coefficients: :func:`~piezobearing.diagnosis.fit.likelihood_residual`).
-    Those columns are then taken from it (times d value / d internal = the parameter's scale) instead of one
-    model evaluation each, and the others are scipy's 2-point differences with scipy's steps (``approx_derivative``,
-    the same numbers as ``jac="2-point"`` gives them); the difference of a linear column from its finite
-    difference is rounding.
+    The Jacobian is scipy's own 2-point differences (``approx_derivative`` with scipy's steps: the same numbers
+    as ``jac="2-point"`` gives them), except where ``residual_fn`` has a ``linear_columns`` attribute: a function
+    of the values giving d residual / d value, exactly, for the parameters the residual is linear in (an
+    additive voltage's coefficients: :func:`~piezobearing.diagnosis.fit.likelihood_residual`). Those columns are
+    then taken from it (times d value / d internal = the parameter's scale) instead of one model evaluation each;
+    the difference of a linear column from its finite difference is rounding.
+
+    A point where ``residual_fn`` raises :class:`InfeasibleError` has the residual +inf (scipy's trust region
+    refuses the step and shrinks); a finite difference that lands on one gives its column 0 (the parameter
+    stays where it is for that step). The start point must be feasible.
     """
     columns = getattr(residual_fn, "linear_columns", None)
-    if columns is None:
-        return (lambda u: residual_fn(unpack(u))), "2-point"
 
     last: list = [None, None]  # the latest point evaluated and its residual: scipy asks the Jacobian there
+    size: list = [None]
+
+    def value(u: np.ndarray) -> np.ndarray:
+        try:
+            r = residual_fn(unpack(u))
+        except InfeasibleError:
+            if size[0] is None:
+                raise
+            return np.full(size[0], np.inf)
+        size[0] = r.size
+        return r
 
     def fun(u: np.ndarray) -> np.ndarray:
-        r = residual_fn(unpack(u))
+        r = value(u)
         last[:] = np.array(u, dtype=float), r
         return r
 
     def jac(u: np.ndarray) -> np.ndarray:
         f0 = last[1] if last[0] is not None and np.array_equal(last[0], u) else fun(u)
-        cols = columns(unpack(u))
+        cols = columns(unpack(u)) if columns is not None else {}
         linear = [i for i, p in enumerate(free) if p.name in cols and not p.log]
         other = [i for i in range(len(free)) if i not in linear]
         out = np.empty((f0.size, len(free)))
@@ -167,12 +189,13 @@ def _fun_and_jacobian(residual_fn, free: list[Param], unpack, lo: np.ndarray, hi
             def part(x: np.ndarray) -> np.ndarray:
                 full = base.copy()
                 full[other] = x
-                return residual_fn(unpack(full))
+                return value(full)
 
             out[:, other] = approx_derivative(part, base[other], method="2-point", f0=f0,
                                               bounds=(lo[other], hi[other])).reshape(f0.size, len(other))
         for i in linear:
             out[:, i] = cols[free[i].name] * free[i].scale
+        out[:, ~np.all(np.isfinite(out), axis=0)] = 0.0
         return out
 
     return fun, jac

@@ -35,7 +35,7 @@ from typing import Callable, Sequence
 import numpy as np
 from scipy.stats import t as student_t
 
-from .least_squares import FitResult, fit
+from .least_squares import FitResult, InfeasibleError, fit
 from .params import Param
 
 #: |rise of chi2 at a Jacobian interval's end / D - 1| above which the interval is profiled instead.
@@ -112,7 +112,10 @@ class _Profile:
         )
 
     def chi2_at(self, values: dict) -> float:
-        r = np.asarray(self.fn(values), dtype=float)
+        try:
+            r = np.asarray(self.fn(values), dtype=float)
+        except InfeasibleError:
+            return np.inf
         return float(r @ r)
 
     def refit(self, u: float) -> float:
@@ -129,10 +132,15 @@ class _Profile:
                 else q.with_value(start[q.name])
                 for j, q in enumerate(self.free)
             ]
-            res = fit(self.fn, [*ps, *self.fixed], max_nfev=self.max_nfev, ftol=self.ftol)
             self.refits += 1
+            try:
+                res = fit(self.fn, [*ps, *self.fixed], max_nfev=self.max_nfev, ftol=self.ftol)
+            except InfeasibleError:  # no solution of the model at this start: the other start, or none
+                continue
             if best is None or res.chi2 < best.chi2:
                 best = res
+        if best is None:  # the model has no solution with the parameter at u: outside any interval
+            return np.inf
         self.warm = dict(best.values)
         return best.chi2 - self.result.chi2
 

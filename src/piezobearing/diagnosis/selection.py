@@ -32,6 +32,7 @@ import numpy as np
 
 from .effect import Effect, StartContext
 from .fit import ModelFit, fit_model
+from .least_squares import InfeasibleError
 from .noise import NoiseFloor
 from .record import Record
 from .residual_tests import ResidualTests, residual_tests
@@ -135,7 +136,12 @@ def rank(
     for e in effects:
         if progress:
             progress(f"{current.model.label} + {e.name}")
-        f = add_effect(current, e, record, voltage_V, floor, settings)
+        try:
+            f = add_effect(current, e, record, voltage_V, floor, settings)
+        except InfeasibleError as err:  # no start of the effect has a solution of the model: not a candidate
+            if progress:
+                progress(f"{current.model.label} + {e.name}: left out ({err})")
+            continue
         drop = current.chi2 - f.chi2
         explained = float(np.clip(drop / max(current.excess, drop, 1e-12), 0.0, 1.0))
         tests = residual_tests(f.whitened, record.input, record.dt_s, settings, filled=record.left_out)

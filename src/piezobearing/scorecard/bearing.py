@@ -20,7 +20,7 @@ def rows(kin: dict, lpm: dict, tr: dict, conv: dict, samp: dict, b: dict) -> lis
             P["bpfo_Hz"].value,
             kin["bpfo_Hz"],
             "Hz",
-            "D_r/D_p = 10/44 (derived from the paper's BPFO; README); FTF x Z",
+            "D_r/D_p = 10/44 (derived from the paper's BPFO; docs/theory/bearing_housing.md); FTF x Z",
         ),
         Row("IV", "rollers", P["n_rollers"].value, float(b["n_rollers"]), "-", "config bearing.n_rollers"),
         Row(
@@ -48,8 +48,8 @@ def rows(kin: dict, lpm: dict, tr: dict, conv: dict, samp: dict, b: dict) -> lis
             "m",
             (
                 f"a roller sinks at most {lpm['faulty']['defect_max_drop_m'] * 1e6:.1f} um against the concave "
-                f"raceway ({lpm['faulty']['defects'][0]['max_drop_flat_raceway_m'] * 1e6:.1f} um on a flat one, "
-                "as before issue 11), not the 1 mm depth"
+                f"raceway ({lpm['faulty']['defects'][0]['max_drop_flat_raceway_m'] * 1e6:.1f} um on a flat one), "
+                "not the 1 mm depth"
                 if groove
                 else "no outer-race defect configured"
             ),

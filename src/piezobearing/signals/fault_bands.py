@@ -20,6 +20,12 @@ the last the usual approximation that the rollers' spin slows with the cage
 so its band over s in [0, s_max] is the interval between f(0) and f(s_max):
 BPFO, BSF and FTF lines move down, BPFI lines move up.
 
+Speed. Where the shaft rate is only known to within a fraction +-v (a nominal
+speed 1-2 % off), every line scales with it: the band spans f(s) (1 - v) to
+f(s) (1 + v) as well, in both directions. :func:`refine_shaft_rate` finds the
+shaft rate in the record's spectrum where its harmonics show, so that v can
+shrink to the estimate's own spread.
+
 Lines of each type (k = 1..K harmonics, m = -S..S sidebands):
 
 - ``outer_race``: k BPFO. A fixed defect in a fixed load zone: no sidebands.
@@ -36,6 +42,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.ndimage import median_filter
 
 #: Fault types with their lines; ``none`` is the healthy class of the classifier.
 FAULT_TYPES = ("outer_race", "inner_race", "rolling_element", "cage")
@@ -98,7 +105,8 @@ class FaultLine:
         return f"{self.harmonic}x" + ("" if self.sideband == 0 else f"{self.sideband:+d}sb")
 
 
-def fault_lines(kinematics: dict, fault_type: str, n_harmonics: int, n_sidebands: int, slip_max: float) -> list[FaultLine]:
+def fault_lines(kinematics: dict, fault_type: str, n_harmonics: int, n_sidebands: int, slip_max: float,
+                speed_tolerance: float = 0.0) -> list[FaultLine]:
     """Lines of ``fault_type`` (k = 1..n_harmonics, m = -S..S where it has sidebands) and their bands.
 
     Parameters
@@ -111,7 +119,12 @@ def fault_lines(kinematics: dict, fault_type: str, n_harmonics: int, n_sidebands
         K and S [-].
     slip_max : float
         Largest cage slip searched [-].
+    speed_tolerance : float
+        The shaft rate's relative uncertainty v, in both directions [-]: each band widens to
+        [low (1 - v), high (1 + v)].
     """
+    if not 0.0 <= speed_tolerance < 0.5:
+        raise ValueError(f"speed tolerance {speed_tolerance} must lie in [0, 0.5)")
     if fault_type not in FAULT_TYPES:
         raise ValueError(f"fault type '{fault_type}' unknown; use one of {', '.join(FAULT_TYPES)}")
     f0 = slipped_frequencies(kinematics, 0.0)
@@ -127,14 +140,15 @@ def fault_lines(kinematics: dict, fault_type: str, n_harmonics: int, n_sidebands
             mid = k * fm[car] + (m * fm[sb] if sb else 0.0)
             if min(a, b) <= 0.0:
                 continue  # a lower sideband below 0 Hz
-            lines.append(FaultLine(fault_type, k, m, float(mid), float(min(a, b)), float(max(a, b))))
+            low, high = min(a, b) * (1.0 - speed_tolerance), max(a, b) * (1.0 + speed_tolerance)
+            lines.append(FaultLine(fault_type, k, m, float(mid), float(low), float(high)))
     return lines
 
 
 def fault_bands(kinematics: dict, n_harmonics: int, n_sidebands: int, slip_max: float,
-                fault_types: tuple[str, ...] = FAULT_TYPES) -> dict[str, list[FaultLine]]:
+                fault_types: tuple[str, ...] = FAULT_TYPES, speed_tolerance: float = 0.0) -> dict[str, list[FaultLine]]:
     """The lines and bands of every fault type (Python's ``bearingFaultBands``)."""
-    return {t: fault_lines(kinematics, t, n_harmonics, n_sidebands, slip_max) for t in fault_types}
+    return {t: fault_lines(kinematics, t, n_harmonics, n_sidebands, slip_max, speed_tolerance) for t in fault_types}
 
 
 def window_bins(line: FaultLine, resolution_Hz: float, n_bins: int) -> np.ndarray:
@@ -179,3 +193,93 @@ def band_metrics(frequency_Hz: np.ndarray, amplitude_V: np.ndarray, lines: list[
                     "peak_amplitude_V": float(a[i]), "peak_frequency_Hz": float(f[i]),
                     "band_power_V2": float(np.sum(a[b] ** 2) / 2.0)})
     return out
+
+
+# --------------------------------------------------------------------------- the shaft rate from the record
+
+
+@dataclass(frozen=True)
+class ShaftRate:
+    """The shaft rate found in a record's spectrum.
+
+    Attributes
+    ----------
+    shaft_Hz : float
+        The estimate (the nominal rate where ``refined`` is False) [Hz].
+    nominal_Hz : float
+        The rate given [Hz].
+    refined : bool
+        Whether at least ``min_harmonics`` shaft harmonics stood out at a common rate.
+    harmonics : tuple of int
+        The harmonics k whose line stood out at k x shaft_Hz [-].
+    tolerance : float
+        The estimate's relative uncertainty, for the fault bands (the given tolerance where not refined) [-].
+    """
+
+    shaft_Hz: float
+    nominal_Hz: float
+    refined: bool
+    harmonics: tuple[int, ...]
+    tolerance: float
+
+    def to_dict(self) -> dict:
+        return {"shaft_Hz": self.shaft_Hz, "nominal_Hz": self.nominal_Hz, "refined": self.refined,
+                "harmonics": list(self.harmonics), "tolerance": self.tolerance}
+
+
+def peak_over_median(power: np.ndarray, half_width_bins: int) -> np.ndarray:
+    """Each bin's power over the local median of +-``half_width_bins`` bins, scaled so that noise gives
+    Exp(1) ratios (the median of Exp(1) is ln 2) [-]."""
+    floor = median_filter(np.asarray(power, dtype=float), size=2 * half_width_bins + 1, mode="reflect")
+    return np.divide(power * np.log(2.0), floor, out=np.zeros_like(power, dtype=float), where=floor > 0)
+
+
+def refine_shaft_rate(x: np.ndarray, dt_s: float, nominal_Hz: float, tolerance: float, n_harmonics: int = 10,
+                      min_harmonics: int = 3, level: float = 30.0) -> ShaftRate:
+    """The shaft rate from the harmonics k f_r (k = 1..``n_harmonics``) of the record's spectrum.
+
+    The Hann-windowed power spectrum over its local median (:func:`peak_over_median`, +-2 Hz) is read at
+    k f for every candidate f within +-``tolerance`` of the nominal rate (steps of a tenth of a bin over the
+    highest harmonic); f scores the number of harmonics whose ratio passes ``level`` (noise alone passes
+    30 with probability e^-30 per bin), ties broken by the sum of their log ratios. Where fewer than
+    ``min_harmonics`` pass, the nominal rate and tolerance stand. A refined rate is good to about a
+    bin over the highest harmonic found: its tolerance is the larger of that and 0.1 %.
+
+    Parameters
+    ----------
+    x : ndarray
+        The record (raw, not pre-whitened).
+    dt_s : float
+        Its sampling step [s].
+    nominal_Hz : float
+        The shaft rate given (rig file, tachometer, --rpm) [Hz].
+    tolerance : float
+        Its relative uncertainty [-].
+    """
+    x = np.asarray(x, dtype=float)
+    n = x.size
+    df = 1.0 / (n * dt_s)
+    window = np.hanning(n + 1)[:n]
+    power = np.abs(np.fft.rfft(window * (x - x.mean()))) ** 2
+    ratio = peak_over_median(power, max(8, int(round(2.0 / df))))
+    top = min(n_harmonics, int((0.5 / dt_s) / (nominal_Hz * (1 + tolerance))) - 1)
+    if top < min_harmonics or tolerance <= 0:
+        return ShaftRate(float(nominal_Hz), float(nominal_Hz), False, (), float(tolerance))
+    step = 0.1 * df / top
+    candidates = nominal_Hz * (1.0 + np.arange(-tolerance, tolerance + 1e-12, step / nominal_Hz))
+    ks = np.arange(1, top + 1)
+    bins = np.rint(np.outer(candidates, ks) / df).astype(int)
+    # a line between bins of the Hann-windowed spectrum: the larger of the two nearest bins
+    near = np.maximum(ratio[bins], ratio[np.minimum(bins + 1, ratio.size - 1)])
+    near = np.maximum(near, ratio[np.maximum(bins - 1, 0)])
+    passed = near > level
+    score = passed.sum(axis=1) + 1e-3 * np.sum(np.where(passed, np.log(np.maximum(near, 1.0)), 0.0), axis=1)
+    best = int(np.argmax(score))
+    found = tuple(int(k) for k in ks[passed[best]])
+    if len(found) < min_harmonics:
+        return ShaftRate(float(nominal_Hz), float(nominal_Hz), False, found, float(tolerance))
+    # centre of the candidates with the best score: the plateau's middle
+    plateau = np.flatnonzero(score >= score[best] - 1e-12)
+    estimate = float(np.mean(candidates[plateau]))
+    spread = max(1e-3, df / (max(found) * estimate))
+    return ShaftRate(estimate, float(nominal_Hz), True, found, float(spread))

@@ -16,6 +16,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ...bearing.surrogate import NoEquilibriumError
+from ..least_squares import InfeasibleError
 from ..params import Param
 from ..record import Record
 from . import chain
@@ -92,12 +94,17 @@ class BearingModel:
         return out + [p.with_value(start.get(p.name)) for e in self.effects for p in e.params(record)]
 
     def simulate(self, values: dict, record: RigRecord, input_: np.ndarray | None = None) -> np.ndarray:
+        """The chain's voltage at ``values`` [V]; values without an equilibrium of the rings raise
+        :class:`~piezobearing.diagnosis.least_squares.InfeasibleError` (the fit steps back)."""
         add = None
         for e in self.effects:
             a = e.additive(values, record)
             if a is not None:
                 add = a if add is None else add + a
-        return chain.voltage(record.rig, values, add)
+        try:
+            return chain.voltage(record.rig, values, add)
+        except NoEquilibriumError as e:
+            raise InfeasibleError(str(e)) from e
 
     def response(self, values: dict, record: Record) -> np.ndarray:
         """No measured input carries noise into the residual: G = 0 at every bin."""

@@ -1,114 +1,396 @@
-"""The envelope detector: every fault family's lines searched in the envelope spectrum of a band.
+"""The envelope detector: any rolling bearing's faults in any record, by the field's envelope methods.
 
-The record's band (the configured fixed band or the kurtogram's), its
-Hann-windowed envelope spectrum, and per family the search of
-:mod:`piezobearing.signals.detector`: each line k x carrier + m x sideband
-spacing searched over the bins its frequency covers for cage slip in
-[0, slip_max], its largest power ratio over the harmonic's local floor; the
-family's indicator is the sum of its lines' ratios, tested at
-alpha = pfa / n_families against its distribution under noise alone
-(computed, not bounded); several detected families are told apart by their
-own lines. The whole record is used: with slip there is no exact fault
-period to cut it to.
+The chain (Randall & Antoni, MSSP 25 (2011) 485-520; Smith & Randall, MSSP 64-65 (2015) 100-131):
 
-Evidence: per family statistic = the indicator, threshold = its
-(1 - alpha) quantile; per line a :class:`~.result.LineEvidence` whose level is
-10 log10 of its ratio and whose threshold is the level its window's largest
-ratio passes with probability alpha under noise alone
-(:func:`..detector.window_threshold`). ``details``: ``per_type`` (per family
-indicator, threshold, detected, p_value, n_lines, own_lines, margin) and
-``lines`` (per line its band, bins, ratio, peak and floor).
+1. **Shaft rate.** Refined from the record where its harmonics show
+   (:func:`..fault_bands.refine_shaft_rate`); otherwise the given rate with its tolerance.
+2. **Pre-whitening** (:func:`..envelope.prewhiten`): the spectrum's magnitude set to one. Shaft
+   harmonics, gear meshes and resonances are flattened; the defect's impulses stay impulses.
+3. **Bands.** The band of largest spectral kurtosis of the fast kurtogram (:func:`..envelope.fast_kurtogram`,
+   bands at least as wide as the highest line searched, above ``min_band_low_Hz``) and, as the alternative,
+   the whole pre-whitened band above ``min_band_low_Hz``: both are tested, and the false-alarm probability
+   is split between them. A fixed band (``band_Hz``) replaces both.
+4. **Squared envelope spectrum** (:func:`..envelope.envelope_spectrum`, Hann window) of each band; its
+   power over the local median of +-``floor_halfwidth_Hz`` (:func:`..fault_bands.peak_over_median`), scaled
+   so that a bin of noise has an Exp(1) ratio. The median floor is not raised by the lines it is meant to
+   measure against (a mean floor is, by every shaft harmonic and sideband near the line).
+5. **Lines** (:mod:`..fault_bands`): per family its harmonics k = 1..K of the carrier (BPFO; BPFI with
+   shaft-rate sidebands; 2 BSF with cage-rate sidebands; FTF for the cage) over the slip range [0, slip_max]
+   and the shaft rate's tolerance in both directions. The bins at the shaft's harmonics (k f_r +- the
+   rate's spread and ``shaft_guard_bins``) are left out of every window: a healthy machine's shaft lines
+   are not a fault's.
+6. **Decision.** Per family the statistic is the sum over its lines of R_l, the largest ratio in the line's
+   window. Under noise alone R_l is the largest of M_l Exp(1) bins over a median floor of effective Gamma
+   shape M_f = ln(2)^2 n_floor / 1.94 (the median's variance; Hann-correlated bins); the distribution of the
+   sum is computed (densities convolved, the floor by quadrature), and the family is detected when its sum
+   passes the (1 - alpha) quantile, alpha = pfa / (n_families n_bands) (Bonferroni over families and
+   bands: the probability that a record without a fault is called any fault is at most ``pfa``). Of several
+   families detected, the call is the one with the largest margin (the statistic over its threshold,
+   in dB), taken in its better band.
+
+Evidence: per family statistic, threshold, margin_dB; per line its level (10 log10 R_l) against the level
+one window alone passes with probability alpha under noise with an exact floor. ``details``: the shaft
+rate found, both bands with their margins, the kurtogram and the chosen band's spectrum for a report.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from scipy.signal import fftconvolve
+from scipy.special import roots_legendre
+from scipy.stats import gamma as gamma_distribution
 
-from .. import detection, detector
-from .result import Detection, FamilyEvidence, LineEvidence, margin_dB
+from ..envelope import EnvelopeSpectrum, Kurtogram, envelope_spectrum, fast_kurtogram, prewhiten
+from ..fault_bands import FaultLine, ShaftRate, fault_lines, peak_over_median, refine_shaft_rate, window_bins
+from .result import FAULT_TYPES, Detection, FamilyEvidence, LineEvidence, margin_dB
 
 #: The carrier and sideband names of each family's line labels.
-_CARRIER = {"outer_race": "BPFO", "inner_race": "BPFI", "rolling_element": "2BSF", "cage": "FTF"}
+_CARRIER = {"outer_race": "BPFO", "inner_race": "BPFI", "rolling_element": "2xBSF", "cage": "FTF"}
 _SIDEBAND = {"inner_race": "fr", "rolling_element": "FTF"}
+#: Variance inflation of a mean of Hann-windowed bins' powers, 1 + 2 sum |rho_k|^2 (rho = -2/3, 1/6).
+_HANN_INFLATION = 1.0 + 2.0 * (4.0 / 9.0 + 1.0 / 36.0)
+#: Harmonics of a supply frequency (of the first ten) that must show for its lines to be left out [-].
+MIN_MAINS_HARMONICS = 5
+#: Quadrature nodes over the floor's Gamma distribution, and grid points of the null densities.
+_N_QUAD = 32
+_N_GRID = 2**13
 
 
 @dataclass(frozen=True)
 class Settings:
-    """The envelope detector: the band and the search.
+    """The envelope detector's settings.
 
     Parameters
     ----------
-    envelope : EnvelopeSettings
-        Band rule (fixed or kurtogram), band, kurtogram's narrowest band, filter order.
-    search : DetectorSettings
-        Harmonics, sidebands, slip range, floors, window, false-alarm probability, families tested.
+    n_harmonics : int
+        Harmonics k = 1..K of each family's carrier [-].
+    n_sidebands : int
+        Sidebands m = -S..S (inner race: shaft rate; rolling element: cage rate) [-].
+    slip_max : float
+        Largest cage slip searched [-] (1-2 % is usual).
+    speed_tolerance : float
+        Relative uncertainty of the given shaft rate, both directions [-]; where the record's shaft
+        harmonics refine the rate, the refined rate's own spread replaces it.
+    frequency_tolerance : float
+        Relative uncertainty of the fault frequencies at a known shaft rate, both directions [-]: the
+        contact angle of a ball bearing under axial load, the geometry's tolerances (on the shared CWRU
+        records the inner-race lines lie up to 0.5 % below the kinematic BPFI at the refined rate).
+    false_alarm_probability : float
+        Probability that a record without a fault is called any fault [-].
+    families : tuple of str
+        The families tested.
+    floor_halfwidth_Hz : float
+        Half-width of the local median floor [Hz] (at least 8 bins).
+    shaft_guard_bins : int
+        Bins on each side of every shaft harmonic left out of the line windows [-].
+    prewhiten : bool
+        Cepstrum pre-whitening before the envelope.
+    band_Hz : tuple of float or None
+        A fixed band [Hz]; None: the fast kurtogram's band and the whole band.
+    min_band_low_Hz : float or None
+        Lowest band edge [Hz]; None: twice the highest line searched (the envelope's own lines stay
+        out of the band).
+    refine_speed : bool
+        Refine the shaft rate from the record's harmonics.
+    mains_Hz : tuple of float
+        Candidate supply frequencies [Hz]: the one whose harmonics show in the record (at least
+        ``MIN_MAINS_HARMONICS`` of the first ten, :func:`electrical_rate`) has its harmonics left out of the
+        line windows as the shaft's are (an electric motor's lines are not a bearing fault's); () tests none.
     """
 
-    envelope: detection.EnvelopeSettings
-    search: detector.DetectorSettings
+    n_harmonics: int = 3
+    n_sidebands: int = 1
+    slip_max: float = 0.02
+    speed_tolerance: float = 0.02
+    frequency_tolerance: float = 0.01
+    false_alarm_probability: float = 1e-3
+    families: tuple[str, ...] = FAULT_TYPES
+    floor_halfwidth_Hz: float = 5.0
+    shaft_guard_bins: int = 2
+    prewhiten: bool = True
+    band_Hz: tuple[float, float] | None = None
+    min_band_low_Hz: float | None = None
+    refine_speed: bool = True
+    mains_Hz: tuple[float, ...] = (50.0, 60.0)
+
+    def __post_init__(self):
+        if not 0 < self.false_alarm_probability < 1:
+            raise ValueError(f"false_alarm_probability = {self.false_alarm_probability}; give a probability in (0, 1)")
+        unknown = [f for f in self.families if f not in FAULT_TYPES]
+        if unknown:
+            raise ValueError(f"family '{unknown[0]}' is not a call of the detector; use {', '.join(FAULT_TYPES)}")
 
     @classmethod
     def from_config(cls, signals: dict) -> "Settings":
-        """From the validated config's ``signals`` section."""
-        return cls(detection.EnvelopeSettings.from_config(signals), detector.DetectorSettings.from_config(signals))
+        """From the validated config's ``signals`` section (the workflow's simulated records: its
+        ``band_rule: fixed`` band, its harmonics, sidebands, slip range and false-alarm probability).
 
-    def in_band(self, band_Hz: tuple[float, float]) -> "Settings":
-        """The same settings with the band fixed to ``band_Hz`` [Hz]."""
-        return replace(self, envelope=replace(self.envelope, band_rule="fixed", band_Hz=tuple(band_Hz)))
+        No pre-whitening there: a simulated defect strikes exactly periodically, so its impulses are
+        lines of the spectrum, which pre-whitening would flatten with the rest (a real defect's impulses
+        jitter with the slip and spread between the lines); the rate is the model's, exact."""
+        d = signals["detector"]
+        band = tuple(signals["band_Hz"]) if signals.get("band_rule") == "fixed" else None
+        return cls(n_harmonics=d["n_harmonics"], n_sidebands=d["n_sidebands"], slip_max=d["slip_max"],
+                   speed_tolerance=0.0, frequency_tolerance=0.0, false_alarm_probability=signals["false_alarm_probability"],
+                   band_Hz=band, refine_speed=False, prewhiten=False, mains_Hz=())
 
 
-def line_label(line) -> str:
-    """``"2xBPFO"``, ``"1xBPFI-1xfr"``: a :class:`..fault_bands.FaultLine`'s name."""
+# --------------------------------------------------------------------------- null distribution
+
+
+@lru_cache(maxsize=64)
+def _gamma_nodes(shape: float) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes and weights of E[h(Y)], Y ~ Gamma(shape, 1/shape): Gauss-Legendre in probability."""
+    u, w = roots_legendre(_N_QUAD)
+    return gamma_distribution.ppf(0.5 * (u + 1.0), shape, scale=1.0 / shape), 0.5 * w
+
+
+@dataclass(frozen=True)
+class NullDistribution:
+    """Distribution of a family's statistic sum_l R_l under noise alone, on a grid.
+
+    Attributes
+    ----------
+    x : ndarray
+        Grid of the statistic [-].
+    survival : ndarray
+        P(statistic > x) [-].
+    """
+
+    x: np.ndarray
+    survival: np.ndarray
+
+    def threshold(self, alpha: float) -> float:
+        """The (1 - alpha) quantile [-]."""
+        s = self.survival
+        if alpha <= s[-1]:
+            raise ValueError(f"false-alarm probability {alpha:g} below the grid's reach {s[-1]:.3g}")
+        i = int(np.flatnonzero(s > alpha)[-1])
+        return float(self.x[i] + (s[i] - alpha) * (self.x[i + 1] - self.x[i]) / (s[i] - s[i + 1]))
+
+    def p_value(self, value: float) -> float:
+        """P(statistic > value) under noise alone (0 beyond the grid) [-]."""
+        return float(np.interp(value, self.x, self.survival, right=0.0))
+
+
+@lru_cache(maxsize=512)
+def null_distribution(window_bins: tuple[int, ...], floor_shape: float) -> NullDistribution:
+    """Null distribution of sum_l Z_l / Y_l: Z_l the largest of M_l Exp(1) bins, Y_l ~ Gamma(M_f, 1/M_f)
+    independent floors (each line its own median).
+
+    Parameters
+    ----------
+    window_bins : tuple of int
+        M_l of each line [-].
+    floor_shape : float
+        M_f, the floors' effective Gamma shape [-].
+    """
+    n_lines = len(window_bins)
+    x = np.linspace(0.0, 40.0 + 25.0 * n_lines, _N_GRID)
+    h = x[1]
+    y, w = _gamma_nodes(round(floor_shape, 3))
+    total = None
+    for m in window_bins:
+        z = m * np.exp(-x) * (-np.expm1(-x)) ** (m - 1)  # density of the largest of m Exp(1)
+        g = np.sum(w[:, None] * y[:, None] * np.interp(x[None, :] * y[:, None], x, z, right=0.0), axis=0)
+        total = g if total is None else fftconvolve(total, g)[: x.size] * h
+    total = np.clip(total, 0.0, None)
+    cdf = np.concatenate([[0.0], np.cumsum(0.5 * (total[1:] + total[:-1]) * h)])
+    return NullDistribution(x, np.clip(1.0 - cdf / max(cdf[-1], 1.0), 0.0, 1.0))
+
+
+def line_threshold(alpha: float, n_bins: int) -> float:
+    """Level t with P(largest of M Exp(1) bins > t) = alpha (an exact floor) [-]."""
+    return float(-np.log(-np.expm1(np.log1p(-alpha) / n_bins)))
+
+
+# --------------------------------------------------------------------------- the search
+
+
+def line_label(line: FaultLine) -> str:
+    """``"2xBPFO"``, ``"1xBPFI-1xfr"``, ``"1x2xBSF+1xFTF"``: a line's name."""
     label = f"{line.harmonic}x{_CARRIER[line.fault_type]}"
     if line.sideband:
         label += f"{line.sideband:+d}x{_SIDEBAND[line.fault_type]}"
     return label
 
 
-@lru_cache(maxsize=1024)
-def _line_threshold(alpha: float, n_bins: int, n_floor_bins: float) -> float:
-    return detector.window_threshold(alpha, n_bins, n_floor_bins)
+def scaled_kinematics(kinematics: dict, shaft_Hz: float) -> dict:
+    """The kinematic frequencies at another shaft rate (all scale with it) [Hz]."""
+    scale = shaft_Hz / kinematics["shaft_Hz"]
+    return {k: v * scale for k, v in kinematics.items()}
 
 
-def to_detection(found: detector.Detection, spec: detection.EnvelopeSpectrum, kinematics: dict,
-                 settings: Settings) -> Detection:
-    """The :class:`Detection` of the search detector's result ``found`` in the spectrum ``spec``."""
-    st = settings.search
-    inflation = detector.WINDOWS[st.window]
-    families = {}
-    for t, p in found.per_type.items():
-        lines = []
-        for r in found.lines[t]:
-            thr = _line_threshold(st.alpha_per_type, int(r.bins.size), round(r.n_floor_bins / inflation, 6))
-            lines.append(LineEvidence(line_label(r.line), r.peak_frequency_Hz,
-                                      10.0 * math.log10(r.ratio) if r.ratio > 0 else -math.inf,
-                                      10.0 * math.log10(thr), bool(r.ratio > thr)))
-        families[t] = FamilyEvidence(t, float(p["indicator"]), float(p["threshold"]),
-                                     margin_dB(p["indicator"], p["threshold"]), p["detected"], tuple(lines))
-    d = found.to_dict()
-    return Detection.from_families("envelope", families, found.fault_type, spec.band_Hz, kinematics["shaft_Hz"],
-                                   st.false_alarm_probability, {"per_type": d["per_type"], "lines": d["lines"]})
+def harmonic_mask(frequency_Hz: np.ndarray, rate: ShaftRate, guard_bins: int) -> np.ndarray:
+    """Bins within a rate's spread and ``guard_bins`` of one of its harmonics k f (k >= 1)."""
+    f = frequency_Hz
+    df = float(f[1] - f[0])
+    k = np.maximum(np.rint(f / rate.shaft_Hz), 1.0)
+    return np.abs(f - k * rate.shaft_Hz) <= k * rate.shaft_Hz * rate.tolerance + (guard_bins + 0.5) * df
+
+
+def electrical_rate(x: np.ndarray, dt_s: float, candidates_Hz: tuple[float, ...]) -> ShaftRate | None:
+    """The supply frequency among ``candidates_Hz`` whose harmonics show most in the record's spectrum
+    (at least :data:`MIN_MAINS_HARMONICS` of the first ten, within +-0.5 %), or None."""
+    found = [refine_shaft_rate(x, dt_s, f, 0.005, n_harmonics=10, min_harmonics=MIN_MAINS_HARMONICS)
+             for f in candidates_Hz]
+    found = [r for r in found if r.refined]
+    return max(found, key=lambda r: len(r.harmonics)) if found else None
+
+
+@dataclass(frozen=True)
+class BandTest:
+    """The families tested in one band's squared envelope spectrum."""
+
+    band_Hz: tuple[float, float]
+    spectrum: EnvelopeSpectrum
+    ratio: np.ndarray
+    families: dict[str, FamilyEvidence]
+    p_values: dict[str, float]
+
+
+def test_band(spectrum: EnvelopeSpectrum, lines: dict[str, list[FaultLine]], excluded_rates: list[ShaftRate],
+              alpha: float, settings: Settings) -> BandTest:
+    """Every family's lines searched in one squared envelope spectrum (steps 4-6 of the module docstring)."""
+    f = spectrum.frequency_Hz
+    df = spectrum.resolution_Hz
+    half = max(8, int(round(settings.floor_halfwidth_Hz / df)))
+    ratio = peak_over_median(spectrum.amplitude_V**2, half)
+    excluded = np.zeros(f.size, dtype=bool)
+    for rate in excluded_rates:
+        excluded |= harmonic_mask(f, rate, settings.shaft_guard_bins)
+    floor_shape = math.log(2.0) ** 2 * (2 * half + 1) / _HANN_INFLATION
+    families, p_values = {}, {}
+    for family, family_lines in lines.items():
+        evidence, sizes, total = [], [], 0.0
+        for line in family_lines:
+            if line.high_Hz >= f[-1]:
+                continue
+            bins = window_bins(line, df, f.size)
+            bins = bins[~excluded[bins]]
+            if bins.size == 0:
+                continue  # the line lies on a shaft harmonic: no evidence either way
+            i = int(bins[np.argmax(ratio[bins])])
+            r = float(ratio[i])
+            t = line_threshold(alpha, int(bins.size))
+            evidence.append(LineEvidence(line_label(line), float(f[i]), 10.0 * math.log10(r) if r > 0 else -math.inf,
+                                         10.0 * math.log10(t), bool(r > t)))
+            sizes.append(int(bins.size))
+            total += r
+        if not sizes:
+            families[family] = FamilyEvidence(family, 0.0, math.inf, -math.inf, False, ())
+            p_values[family] = 1.0
+            continue
+        null = null_distribution(tuple(sizes), round(floor_shape, 3))
+        threshold = null.threshold(alpha)
+        families[family] = FamilyEvidence(family, total, threshold, margin_dB(total, threshold), bool(total > threshold),
+                                          tuple(evidence))
+        p_values[family] = null.p_value(total)
+    return BandTest(tuple(float(b) for b in spectrum.band_Hz), spectrum, ratio, families, p_values)
+
+
+def candidate_bands(w: np.ndarray, dt_s: float, top_line_Hz: float, settings: Settings
+                    ) -> tuple[list[tuple[float, float]], Kurtogram | None]:
+    """The fixed band, or the fast kurtogram's band and the whole band above the lowest edge [Hz]."""
+    if settings.band_Hz is not None:
+        return [(float(settings.band_Hz[0]), float(settings.band_Hz[1]))], None
+    nyquist = 0.5 / dt_s
+    low = settings.min_band_low_Hz if settings.min_band_low_Hz is not None else 2.0 * top_line_Hz
+    if low + top_line_Hz >= nyquist:
+        raise ValueError(
+            f"the lines searched reach {top_line_Hz:.4g} Hz: no band above {low:.4g} Hz and that wide fits below "
+            f"Nyquist {nyquist:.4g} Hz; record at a higher rate or search fewer harmonics"
+        )
+    kurtogram = fast_kurtogram(w, dt_s, min_bandwidth_Hz=top_line_Hz, min_low_Hz=low)
+    best = kurtogram.best_band_Hz
+    whole = (float(low), float(nyquist))
+    bands = [best] if np.allclose(best, whole) else [best, whole]
+    return bands, kurtogram
 
 
 def detect(samples: np.ndarray, rate_Hz: float, kinematics: dict, settings: Settings, reference=None) -> Detection:
-    """Every family of ``settings`` searched in the record's envelope spectrum (``reference`` is not used).
+    """Detect and classify a bearing fault in one record (``reference`` is not used).
 
     Parameters
     ----------
     samples : ndarray
-        The record [V] (any unit: the tests are ratios).
+        The record (any unit: every test is a ratio).
     rate_Hz : float
         Its sampling rate [Hz].
     kinematics : dict
-        Kinematic frequencies without slip [Hz].
+        The bearing's kinematic frequencies at the given shaft rate, without slip [Hz]
+        (``shaft_Hz``, ``ftf_Hz``, ``bpfo_Hz``, ``bpfi_Hz``, ``bsf_Hz``).
     settings : Settings
+
+    Returns
+    -------
+    Detection
+        ``details``: ``shaft`` (the rate found), ``bands`` (per band tested its families' margins),
+        ``chosen_band`` (index), and, for a report, ``kurtogram`` and ``spectrum`` (the chosen band's
+        squared envelope spectrum up to the highest line) as lists.
     """
-    spec, found = detector.analyse_record(samples, 1.0 / rate_Hz, kinematics, settings.envelope, settings.search)
-    return to_detection(found, spec, kinematics, settings)
+    x = np.asarray(samples, dtype=float)
+    dt = 1.0 / float(rate_Hz)
+    nominal = float(kinematics["shaft_Hz"])
+    if settings.refine_speed:
+        shaft = refine_shaft_rate(x, dt, nominal, settings.speed_tolerance)
+    else:
+        shaft = ShaftRate(nominal, nominal, False, (), settings.speed_tolerance)
+    kin = scaled_kinematics(kinematics, shaft.shaft_Hz)
+    tolerance = shaft.tolerance + settings.frequency_tolerance
+    lines = {fam: fault_lines(kin, fam, settings.n_harmonics, settings.n_sidebands, settings.slip_max, tolerance)
+             for fam in settings.families}
+    top = max(ln.high_Hz for fam in lines.values() for ln in fam)
+    w = prewhiten(x) if settings.prewhiten else x - x.mean()
+    bands, kurtogram = candidate_bands(w, dt, top, settings)
+    alpha = settings.false_alarm_probability / (len(settings.families) * len(bands))
+    mains = electrical_rate(x, dt, settings.mains_Hz) if settings.mains_Hz else None
+    excluded_rates = [shaft] + ([mains] if mains is not None else [])
+    tests = [test_band(envelope_spectrum(w, dt, band, window="hann", squared=True), lines, excluded_rates, alpha,
+                       settings) for band in bands]
+    call, chosen = _call(tests)
+    families = tests[chosen].families
+    if call == "none":
+        # the families' evidence from the band where each came closest
+        families = {fam: max((t.families[fam] for t in tests), key=lambda e: e.margin_dB) for fam in settings.families}
+    spectrum = tests[chosen].spectrum
+    keep = spectrum.frequency_Hz <= 1.1 * top
+    details = {
+        "shaft": shaft.to_dict(),
+        "mains": None if mains is None else mains.to_dict(),
+        "bands": [{"band_Hz": list(t.band_Hz), "margins_dB": {f: e.margin_dB for f, e in t.families.items()},
+                   "p_values": t.p_values} for t in tests],
+        "chosen_band": chosen,
+        "alpha_per_test": alpha,
+        "prewhitened": settings.prewhiten,
+        "kurtogram": None if kurtogram is None else {
+            "level": kurtogram.level.tolist(), "low_Hz": kurtogram.low_Hz.tolist(),
+            "high_Hz": kurtogram.high_Hz.tolist(), "kurtosis": kurtogram.kurtosis.tolist()},
+        "spectrum": {"frequency_Hz": spectrum.frequency_Hz[keep].tolist(),
+                     "ratio": tests[chosen].ratio[keep].tolist()},
+        "lines": {fam: [{"label": line_label(ln), "low_Hz": ln.low_Hz, "high_Hz": ln.high_Hz} for ln in fam_lines]
+                  for fam, fam_lines in lines.items()},
+    }
+    return Detection.from_families("envelope", families, call, tests[chosen].band_Hz, shaft.shaft_Hz,
+                                   settings.false_alarm_probability, details)
+
+
+def _call(tests: list[BandTest]) -> tuple[str, int]:
+    """The detected family with the largest margin over every band, and its band; else none and the band
+    of the largest margin of any family."""
+    best = (-math.inf, "none", 0)
+    for b, t in enumerate(tests):
+        for fam, e in t.families.items():
+            if e.detected and e.margin_dB > best[0]:
+                best = (e.margin_dB, fam, b)
+    if best[1] != "none":
+        return best[1], best[2]
+    margins = [max((e.margin_dB for e in t.families.values()), default=-math.inf) for t in tests]
+    return "none", int(np.argmax(margins))
 
 
 def detect_many(records, rate_Hz: float, kinematics: dict, settings: Settings, reference=None) -> list[Detection]:
