@@ -77,7 +77,7 @@ def workflow_env() -> dict:
     return {**os.environ, "PATH": os.pathsep.join(path)}
 
 
-def snakemake(*args: str, cwd: Path = REPO, env: dict | None = None, timeout: int = 1800) -> subprocess.CompletedProcess:
+def snakemake(*args: str, cwd: Path = REPO, env: dict | None = None, timeout: int = 3600) -> subprocess.CompletedProcess:
     """``snakemake ARGS`` in ``cwd``: the environment's own executable in a fresh process, with ``env``
     (default: :func:`workflow_env`)."""
     return subprocess.run(
