@@ -15,7 +15,7 @@ the outer-race test; kept here for the comparison), their ratio and the indicato
 difference; the outer-race test alone (``baseline.harmonic_test``) at the free fit's fundamental (the method
 until 2026-11-22) and with the healthy model's fundamental fitted over the slip window (since 2026-11-23),
 CPU seconds and their ratio; a record the +-60 V ADC clips (36 V rms of noise) at 2550 and 10240 Hz through
-``baseline.detect`` and ``clipped.detect`` (the clipped-noise model), CPU seconds and their ratio.
+``detectors.baseline.detect`` without and with its clipped-noise model, CPU seconds and their ratio.
 Writes results/benchmarks/detector.json.
 Usage: python benchmarks/bench_detector.py
 """
@@ -29,13 +29,9 @@ from pathlib import Path
 
 import numpy as np
 
-from piezobearing.signals import baseline as B
-from piezobearing.signals import clipped as CL
-from piezobearing.signals import daq
-from piezobearing.signals import detection as det
-from piezobearing.signals import detector as D
-from piezobearing.signals import harmonics as H
-from piezobearing.signals import outer_race as O
+from piezobearing.signals import daq, detection, detector, harmonics, outer_race
+from piezobearing.signals.detectors import baseline
+from piezobearing.signals.envelope import EnvelopeSettings
 from piezobearing.signals.fault_bands import slipped_frequencies
 
 KIN = {"shaft_Hz": 1000 / 60, "ftf_Hz": 0.5 * 1000 / 60 * (1 - 10 / 44)}
@@ -61,7 +57,7 @@ def old_harmonic_fit(x, dt_s, f0_Hz, n_harmonics):
     w = np.exp(1j * m * theta)
     with np.errstate(divide="ignore", invalid="ignore"):
         geo = np.where(np.abs(1.0 - w) > 1e-12, (1.0 - w**n) / (1.0 - w), float(n))
-    g = H.gram_from_sums(n, geo.real, geo.imag)  # the same assembly; the old sums: w ** n, not reduced
+    g = harmonics.gram_from_sums(n, geo.real, geo.imag)  # the same assembly; the old sums: w ** n, not reduced
     if n * kk > 200_000:  # the chirp z-transform on the lines k f0: O((n + K) log(n + K))
         d = CZT(n, kk, np.exp(-1j * theta), np.exp(1j * theta))(x)
     else:  # few lines: K products
@@ -83,13 +79,13 @@ def old_information(gram, sigma, cb, tolerance):
     return np.linalg.inv(cov)
 
 
-@B.one_blas_thread
+@baseline.one_blas_thread
 def old_from_record(v, dt_s, kinematics, settings):
     """``Baseline.from_record`` until 2026-11-23 (explicit matrices, pivoted QR)."""
-    s = B.estimate_slip(v, dt_s, kinematics["bpfo_Hz"], settings.slip_max, settings.slip_harmonics)
-    f0, _ = H.refine_period_qr(v, dt_s, slipped_frequencies(kinematics, s)["bpfo_Hz"], settings.alias_folds)
-    a = H.harmonic_matrix(np.size(v), dt_s, f0, H.below_nyquist(dt_s, f0))
-    return B.Baseline(B.slip_of(kinematics, f0), H.lstsq_qr(a, np.asarray(v, float)), dt_s)
+    s = baseline.estimate_slip(v, dt_s, kinematics["bpfo_Hz"], settings.slip_max, settings.slip_harmonics)
+    f0, _ = harmonics.refine_period_qr(v, dt_s, slipped_frequencies(kinematics, s)["bpfo_Hz"], settings.alias_folds)
+    a = harmonics.harmonic_matrix(np.size(v), dt_s, f0, harmonics.below_nyquist(dt_s, f0))
+    return baseline.Baseline(baseline.slip_of(kinematics, f0), harmonics.lstsq_qr(a, np.asarray(v, float)), dt_s)
 
 
 def old_harmonic_fits(x, dt_s, f0_Hz, n_harmonics):
@@ -101,12 +97,12 @@ def old_harmonic_fits(x, dt_s, f0_Hz, n_harmonics):
 def old_detect(x, dt_s, kinematics, base, settings):
     """``baseline.detect`` with the least squares until 2026-11-23 (the modules' functions swapped in: the
     outer-race test's in ``signals/outer_race.py`` since it moved there)."""
-    saved = B.refine_period, O.harmonic_fits, O._information
-    B.refine_period, O.harmonic_fits, O._information = H.refine_period_qr, old_harmonic_fits, old_information
+    saved = baseline.refine_period, outer_race.harmonic_fits, outer_race._information
+    baseline.refine_period, outer_race.harmonic_fits, outer_race._information = harmonics.refine_period_qr, old_harmonic_fits, old_information
     try:
-        return B.detect(x, dt_s, kinematics, base, settings)
+        return baseline.detect(x, 1 / dt_s, kinematics, settings, base)
     finally:
-        B.refine_period, O.harmonic_fits, O._information = saved
+        baseline.refine_period, outer_race.harmonic_fits, outer_race._information = saved
 
 
 def cpu(fn):
@@ -124,10 +120,10 @@ def baseline_rows(fs: float, rng) -> tuple:
     x = v + 11.0 * rng.standard_normal(n)
     out = {}
     for folds in (1.0, 0.5):
-        bs = B.BaselineSettings(alias_folds=folds)
-        base, new_b = cpu(lambda bs=bs: B.Baseline.from_record(v, 1 / fs, KIN, bs))
+        bs = baseline.Settings(alias_folds=folds)
+        base, new_b = cpu(lambda bs=bs: baseline.Baseline.from_record(v, 1 / fs, KIN, bs))
         _, old_b = cpu(lambda bs=bs: old_from_record(v, 1 / fs, KIN, bs))
-        new, new_s = cpu(lambda bs=bs, base=base: B.detect(x, 1 / fs, KIN, base, bs))
+        new, new_s = cpu(lambda bs=bs, base=base: baseline.detect(x, fs, KIN, bs, base))
         old, old_s = cpu(lambda bs=bs, base=base: old_detect(x, 1 / fs, KIN, base, bs))
         tag = f"alias_folds_{folds:g}"
         out[f"baseline_cpu_s_{tag}"] = new_s
@@ -145,20 +141,20 @@ def baseline_rows(fs: float, rng) -> tuple:
 
 def main() -> None:
     rng = np.random.default_rng(1)
-    env = det.EnvelopeSettings(band_rule="fixed", band_Hz=(500.0, 1250.0))
-    st = D.DetectorSettings()
+    env = EnvelopeSettings(band_rule="fixed", band_Hz=(500.0, 1250.0))
+    st = detector.DetectorSettings()
     out = {"cpu_count": os.cpu_count(), "record_s": 1.0}
     for fs in (2550.0, 25600.0, 51200.0):
         n = int(fs)
         t = np.arange(n) / fs
         x = rng.standard_normal(n) + 3.0 * (np.mod(t * 0.985 * KIN["bpfo_Hz"], 1.0) < 2.0 / fs)
-        D.null_distribution.cache_clear()
-        cold = timed(lambda x=x, fs=fs: D.analyse_record(x, 1 / fs, KIN, env, st), 1)
+        detector.null_distribution.cache_clear()
+        cold = timed(lambda x=x, fs=fs: detector.analyse_record(x, 1 / fs, KIN, env, st), 1)
         out[f"{int(fs)}_Hz"] = {
-            "exact_bin_s": timed(lambda x=x, fs=fs: det.analyse(x, 1 / fs, KIN["bpfo_Hz"], env,
-                                                                det.IndicatorSettings()), 5),
+            "exact_bin_s": timed(lambda x=x, fs=fs: detection.analyse(x, 1 / fs, KIN["bpfo_Hz"], env,
+                                                                detection.IndicatorSettings()), 5),
             "search_cold_s": cold,
-            "search_cached_s": timed(lambda x=x, fs=fs: D.analyse_record(x, 1 / fs, KIN, env, st), 5),
+            "search_cached_s": timed(lambda x=x, fs=fs: detector.analyse_record(x, 1 / fs, KIN, env, st), 5),
         }
         out[f"{int(fs)}_Hz"]["search_over_exact"] = (out[f"{int(fs)}_Hz"]["search_cached_s"]
                                                     / out[f"{int(fs)}_Hz"]["exact_bin_s"])
@@ -168,7 +164,7 @@ def main() -> None:
         f0, window = 0.985 * KIN["bpfo_Hz"], (0.97 * KIN["bpfo_Hz"], KIN["bpfo_Hz"])
         for name, rng_ in (("fixed_f", None), ("slip_window", window)):
             c0 = time.process_time()
-            B.one_blas_thread(B.harmonic_test)(x, 1 / fs, f0, base, 11.0, 0.0, rng_)
+            baseline.one_blas_thread(outer_race.harmonic_test)(x, 1 / fs, f0, base, 11.0, 0.0, rng_)
             out[f"{int(fs)}_Hz"][f"outer_race_test_cpu_s_{name}"] = time.process_time() - c0
         r = out[f"{int(fs)}_Hz"]
         r["outer_race_test_slip_window_over_fixed_f"] = r["outer_race_test_cpu_s_slip_window"] / r[
@@ -178,12 +174,14 @@ def main() -> None:
         t = np.arange(n) / fs
         v = 96.0 * np.exp(10.0 * (np.cos(2 * np.pi * 0.985 * KIN["bpfo_Hz"] * t) - 1.0))
         x = daq.quantise(v - v.mean() + 36.0 * rng.standard_normal(n), 24, 60.0)[0]
-        bs = B.BaselineSettings()
-        base = B.Baseline.from_record(v - v.mean(), 1 / fs, KIN, bs)
+        bs = baseline.Settings()
+        base = baseline.Baseline.from_record(v - v.mean(), 1 / fs, KIN, bs)
         r = out.setdefault(f"{int(fs)}_Hz", {})
-        for name, fn in (("unclipped_model", B.detect), ("clipped_model", CL.detect)):
+        models = (("unclipped_model", lambda x, fs, bs, base: baseline._detect_unclipped([x], 1 / fs, KIN, base, bs)),
+                  ("clipped_model", lambda x, fs, bs, base: baseline.detect(x, fs, KIN, bs, base)))
+        for name, fn in models:
             c0 = time.process_time()
-            fn(x, 1 / fs, KIN, base, bs)
+            fn(x, fs, bs, base)
             r[f"baseline_clipped_record_cpu_s_{name}"] = time.process_time() - c0
         r["baseline_clipped_record_clipped_over_unclipped_model"] = (
             r["baseline_clipped_record_cpu_s_clipped_model"] / r["baseline_clipped_record_cpu_s_unclipped_model"])

@@ -13,7 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from piezobearing.signals import detection as S
+from piezobearing.signals import detection
+from piezobearing.signals.envelope import EnvelopeSettings
 
 FS = 2550.0
 DT = 1 / FS
@@ -23,11 +24,11 @@ BPFO = FS / 36
 def seconds_per_record(n: int, rule: str, repeat: int = 20) -> float:
     rng = np.random.default_rng(0)
     x = rng.standard_normal(n)
-    env, ind = S.EnvelopeSettings(band_rule=rule), S.IndicatorSettings()
-    S.analyse(x, DT, BPFO, env, ind)
+    env, ind = EnvelopeSettings(band_rule=rule), detection.IndicatorSettings()
+    detection.analyse(x, DT, BPFO, env, ind)
     t0 = time.perf_counter()
     for _ in range(repeat):
-        S.analyse(x, DT, BPFO, env, ind)
+        detection.analyse(x, DT, BPFO, env, ind)
     return (time.perf_counter() - t0) / repeat
 
 

@@ -99,8 +99,9 @@ def bench_sensor(config: dict) -> dict:
 
 
 def bench_snr(config: dict) -> dict:
-    from piezobearing.signals import detection as S
+    from piezobearing.signals import detection
     from piezobearing.signals.analysis import snr_grid
+    from piezobearing.signals.envelope import EnvelopeSettings
 
     s = config["signals"]
     fs = 2550.0
@@ -113,13 +114,13 @@ def bench_snr(config: dict) -> dict:
     v[np.flatnonzero(np.diff(np.floor(t * f0 - 0.3)) > 0) + 1] -= 0.05
     grid = snr_grid(s)
     out = {"n_samples": n, "n_snr": len(grid), "n_seeds": s["study_n_seeds"]}
-    ins = S.IndicatorSettings.from_config(s)
+    ins = detection.IndicatorSettings.from_config(s)
     for rule in ("fixed", "kurtogram"):
-        es = S.EnvelopeSettings.from_config(dict(s, band_rule=rule))
+        es = EnvelopeSettings.from_config(dict(s, band_rule=rule))
         res = {}
         for method in ("loop", "batch"):
             rows, res[method] = _timed(
-                lambda m=method, e=es: S.snr_sweep(v, dt, f0, "faulty", grid, s["study_n_seeds"], 7, e, ins, method=m)
+                lambda m=method, e=es: detection.snr_sweep(v, dt, f0, "faulty", grid, s["study_n_seeds"], 7, e, ins, method=m)
             )
             res[method + "_rows"] = rows
         out[rule] = {

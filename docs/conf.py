@@ -50,5 +50,16 @@ html_theme_options = {
     "footer_start": ["copyright"],
     "footer_end": [],
 }
-html_sidebars = {"index": [], "reference/configuration": [], "reference/cli": []}
+# no section navigation where a page has no section (the top-level pages) or needs the width (the tables)
+html_sidebars = {
+    page: []
+    for page in (
+        "index",
+        "getting_started",
+        "performance",
+        "changelog",
+        "reference/configuration",
+        "reference/cli",
+    )
+}
 html_show_sourcelink = False

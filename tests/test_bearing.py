@@ -196,7 +196,7 @@ def test_trapezoidal_rule_agrees_with_radau(bcfg):
     defect's exit, is below 2% of the peak load, and it falls as h^2.
 
     The reference at rtol 1e-7, atol 1e-13 m (12k right-hand sides; rtol 1e-9,
-    atol 1e-15 m until 2026-11-23: 36k, 3x the CPU) is within 1.9e-5 N of the
+    atol 1e-15 m takes 36k, 3x the CPU) is within 1.9e-5 N of the
     rtol-1e-9 one, 1.5e-5 of the smallest error measured here (1.3 N at h/2):
     both give errors[0] = 1.06% of the peak and the ratio 4.0146, so the check
     is as strict as before.

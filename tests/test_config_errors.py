@@ -20,7 +20,8 @@ def error(config: dict) -> str:
 def test_the_schema_reads_the_same_with_libyaml_and_sets_no_defaults():
     """The workflow validates the config once, through ``cfg.validate`` (common.smk), which reads the schema with
     libyaml's loader: the same schema as PyYAML's pure-Python loader reads. Snakemake's own ``validate`` (no longer
-    called) would have filled a schema ``default`` into the config: the schema has none, so nothing was lost."""
+    called) would have filled a schema ``default`` into the config: the schema has one, a defect's ``depth_m`` (the
+    paper's 1 mm), and ``cfg.validate`` fills it (tests/test_diagnosis_bearing_feasible.py)."""
     import yaml
 
     text = cfg.SCHEMA_PATH.read_text()
@@ -28,12 +29,15 @@ def test_the_schema_reads_the_same_with_libyaml_and_sets_no_defaults():
     assert schema == yaml.safe_load(text)
     assert cfg._validator(str(cfg.SCHEMA_PATH)).schema == schema
 
-    def defaults(node) -> list:
+    def defaults(node, path=()) -> list:
         if isinstance(node, dict):
-            return (["default"] if "default" in node else []) + [d for v in node.values() for d in defaults(v)]
-        return [d for v in node for d in defaults(v)] if isinstance(node, list) else []
+            own = [(path, node["default"])] if "default" in node else []
+            return own + [d for k, v in node.items() for d in defaults(v, (*path, k))]
+        return [d for v in node for d in defaults(v, path)] if isinstance(node, list) else []
 
-    assert defaults(schema) == []
+    assert defaults(schema) == [
+        (("properties", "bearing", "properties", "defects", "items", "properties", "depth_m"), 1.0e-3)
+    ]
 
 
 def test_unknown_key_is_named_by_its_path_with_the_closest_key(paper_config):

@@ -1,5 +1,5 @@
 """What a diagnosis keeps of a long record: display-thinned series, the zoom at the full rate, no
-series held per ranked candidate (issue 16, point 10: memory and diagnosis.npz proportional to need)."""
+series held per ranked candidate (memory and diagnosis.npz grow with what is kept, not with the record)."""
 
 from __future__ import annotations
 

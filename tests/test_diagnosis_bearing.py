@@ -46,7 +46,7 @@ def run(c, influence, hidden, snr_dB, seed=11, tach=False, extra=None):
 #: 10 dB (radial_load over load_share by a BIC margin of 12, load_share over clearance by 24; clearance and
 #: mains_pickup with profile-likelihood intervals, mains over the profile budget; the groove's angle the
 #: draw that misses by 2.2 half-widths): 18 s of CPU for the five (benchmarks/bench_diagnosis_bearing.py
-#: --verify-only, this session). The other five (35 s of CPU for all ten) run with PIEZOBEARING_TEST_10DB=1.
+#: --verify-only). The other five (35 s of CPU for all ten) run with PIEZOBEARING_TEST_10DB=1.
 TEN_DB_ALWAYS = ("outer_race_defect", "radial_load", "clearance", "load_share", "mains_pickup")
 
 

@@ -17,7 +17,9 @@ import pytest
 from piezobearing.bearing.transient import CASES
 from piezobearing.io import as_read, json_as_read, read_harmonic, read_json, read_series
 from piezobearing.registry import declared, declared_config
+from piezobearing.signals import detection
 from piezobearing.signals import outputs as sout
+from piezobearing.signals.envelope import EnvelopeSettings
 from piezobearing.stages import bearing as brs
 from piezobearing.stages import signals as sgs
 from piezobearing.stages.studies import KINDS, _fault_detection_row, workflow_chain
@@ -65,9 +67,8 @@ def both(tmp_path_factory, ci_config):
         sgs.noisy(d / f"voltage_{c}.csv", c, d / f"noisy_{c}.csv", d / f"noisy_{c}.json", _rule(cfg, "noisy"))
         sgs.envelope(d / f"noisy_{c}.csv", d / f"voltage_{c}.csv", kin, d / f"envelope_{c}.csv",
                      d / f"envelope_{c}.json", _rule(cfg, "envelope"))
-    sgs.indicator({c: (d / f"envelope_{c}.csv", d / f"envelope_{c}.json") for c in CASES}, kin,
-                  {c: d / f"noisy_{c}.json" for c in CASES}, d / "fault_indicator.json",
-                  _rule(cfg, "fault_indicator"), {c: d / f"noisy_{c}.csv" for c in CASES})
+    sgs.indicator({c: d / f"envelope_{c}.json" for c in CASES}, kin, {c: str(d / f"noisy_{c}.csv") for c in CASES},
+                  {c: d / f"noisy_{c}.json" for c in CASES}, d / "fault_indicator.json", _rule(cfg, "fault_indicator"))
     sgs.classification({c: d / f"voltage_{c}.csv" for c in CASES}, kin, d / "classification.json",
                        d / "classification.csv", d / "roc.csv", _rule(cfg, "fault_classification"))
 
@@ -87,8 +88,9 @@ def test_the_study_chain_equals_the_rules_files_to_the_bit(both):
         t, v, dt = read_series(d / f"voltage_{c}.csv", "voltage_V")
         assert np.array_equal(run["voltage"][c][0], t) and np.array_equal(run["voltage"][c][1], v)
         assert run["voltage"][c][2] == dt
-        y, dts, rec = run["noisy"][c]
+        y, v, dts, rec = run["noisy"][c]
         assert np.array_equal(y, read_series(d / f"noisy_{c}.csv", "voltage_V")[1]) and dts > 0
+        assert np.array_equal(v, read_series(d / f"noisy_{c}.csv", "noiseless_V")[1])
         assert _results(rec) == _results(read_json(d / f"noisy_{c}.json"))
         table, record = run["envelope"][c]
         assert table.equals(pd.read_csv(d / f"envelope_{c}.csv"))
@@ -116,12 +118,10 @@ def test_a_fault_detection_row_reports_the_rules_values(both):
     assert row["defect_max_drop_m"] == read_json(d / "lpm.json")["faulty"]["defect_max_drop_m"]
     assert row["detection_rate_faulty"] == 1.0 and row["indicator_faulty"] > row["threshold"]
     # the row's noise replicate 0 is the noisy rule's record (the DAQ samples at the model's rate here)
-    from piezobearing.signals import detection as sig
-
     s = cfg["signals"]
     _, v, dt = run["voltage"]["faulty"]
-    r0 = sig.snr_sweep(v, dt, run["kinematics"]["bpfo_Hz"], "faulty", [s["snr_dB"]], 1, cfg["seed"],
-                       sig.EnvelopeSettings.from_config(s), sig.IndicatorSettings.from_config(s))[0]
+    r0 = detection.snr_sweep(v, dt, run["kinematics"]["bpfo_Hz"], "faulty", [s["snr_dB"]], 1, cfg["seed"],
+                             EnvelopeSettings.from_config(s), detection.IndicatorSettings.from_config(s))[0]
     assert ind["faulty"]["indicator"] == pytest.approx(r0["indicator"], rel=1e-9)
 
 

@@ -21,8 +21,8 @@ from piezobearing.sensor.mesh import (
     hex_volumes,
     stack_mesh,
 )
-from piezobearing.signals import daq
-from piezobearing.signals import detection as sig
+from piezobearing.signals import daq, detection
+from piezobearing.signals.envelope import EnvelopeSettings
 
 GEO = StackGeometry(bottom_disk_diameter_m=5e-3, top_disk_diameter_m=3e-3)
 PZT = piezo_material("apc850_paper")
@@ -143,8 +143,8 @@ def test_detection_margin_grows_with_the_gain_by_exactly_the_gain():
     """Without clipping or quantisation the noise limit scales with the signal: twice the gain, +6.02 dB."""
     v, dt, f0 = _impulse_records()
     noise = daq.NoiseSettings(model="absolute", noise_density_V_per_sqrtHz=1e-3, adc_bits=48, range_V=1e4)
-    es = sig.EnvelopeSettings("fixed", (500.0, 1250.0), 300.0, 4)
-    ins = sig.IndicatorSettings(3, 0.5, 2, 1e-3)
+    es = EnvelopeSettings("fixed", (500.0, 1250.0), 300.0, 4)
+    ins = detection.IndicatorSettings(3, 0.5, 2, 1e-3)
     a = sd.detection_at_noise(v, dt, f0, noise, 8, 3, es, ins, 0.95)
     b = sd.detection_at_noise({k: 2 * x for k, x in v.items()}, dt, f0, noise, 8, 3, es, ins, 0.95)
     assert a["detection_rate_faulty"] == 1.0 and a["indicator_faulty"] > a["threshold"]
@@ -158,8 +158,8 @@ def test_a_clipped_design_is_flagged_and_its_margin_kept_apart():
     measured on the clipped record apart; with the ideal ADC the margin is the unclipped design's (the same
     records on a +-100 V ADC that does not clip), and it grows with the gain by exactly the gain."""
     v, dt, f0 = _impulse_records()
-    es = sig.EnvelopeSettings("fixed", (500.0, 1250.0), 300.0, 4)
-    ins = sig.IndicatorSettings(3, 0.5, 2, 1e-3)
+    es = EnvelopeSettings("fixed", (500.0, 1250.0), 300.0, 4)
+    ins = detection.IndicatorSettings(3, 0.5, 2, 1e-3)
     narrow = daq.NoiseSettings(model="absolute", noise_density_V_per_sqrtHz=1e-3, adc_bits=24, range_V=30.0)
     wide = replace(narrow, range_V=100.0)
     d = sd.detection_at_noise(v, dt, f0, narrow, 3, 1, es, ins, 0.95)

@@ -1,6 +1,6 @@
 """The sensor FEM stages end to end on the CI config (coarse meshes), and their input checks.
 
-The files are those of the session's CI workflow run (``ci_run``, tests/conftest.py): the stages ran there once,
+The files are those of the test session's CI workflow run (``ci_run``, tests/conftest.py): the stages ran there once,
 not again here.
 """
 
@@ -43,7 +43,7 @@ class _Results:
 
 @pytest.fixture(scope="module")
 def sensor_run(ci_run):
-    """Mesh, convergence, modal, harmonic and scorecard as the CI workflow ran them (the session's one run;
+    """Mesh, convergence, modal, harmonic and scorecard as the CI workflow ran them (the test session's one run;
     the harmonic with the fitted R and the low-frequency stage's band edge, 30 Hz on this config)."""
     return _Results(ci_run)
 
@@ -90,9 +90,8 @@ def test_scorecard_rows(sensor_run):
 
 def test_convergence_csv(sensor_run):
     """The configured refinement levels (CI's 0.5, 0.75, 1.0): the first axial frequency changes by < 1% between
-    the two finest, and falls monotonically (a conforming displacement model is too stiff). Until issue 14 a test
-    of its own computed the paper config's levels (1.0, 1.5, 2.0) for this (about 15 CPU s); the whole-paper run
-    writes their table (README, "Mesh convergence of the first axial frequency")."""
+    the two finest, and falls monotonically (a conforming displacement model is too stiff). The paper config's levels
+    (1.0, 1.5, 2.0) are the whole-paper run's table (docs/validation/closed_forms.md)."""
     conv = pd.read_csv(sensor_run / "convergence.csv")
     assert len(conv) == 3 and conv["n_dof"].is_monotonic_increasing
     assert abs(conv["change_short_percent"].iloc[-1]) < 1.0

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from piezobearing.sensor.calibration import SensorCircuit, circuit_voltage
-from piezobearing.signals import detection as S
+from piezobearing.sensor.calibration import SensorCircuit, circuit_voltage, frequency_response
+from piezobearing.sensor.response import fem_ratio
+from piezobearing.signals import daq, detection, envelope
 
 FS = 2550.0  # the paper's sampling rate [Hz]
 DT = 1.0 / FS
@@ -43,8 +44,8 @@ def bearing_voltage(n, impulse_N=0.0):
     return circuit_voltage(bearing_force(n, impulse_N), DT, SensorCircuit())
 
 
-ENV = S.EnvelopeSettings()
-IND = S.IndicatorSettings()
+ENV = envelope.EnvelopeSettings()
+IND = detection.IndicatorSettings()
 
 
 # --------------------------------------------------------------------------- noise
@@ -52,31 +53,32 @@ IND = S.IndicatorSettings()
 
 def test_noise_has_the_requested_snr_and_is_seeded():
     x = np.sin(2 * np.pi * 50 * np.arange(200_000) * DT) + 0.3
-    y, sigma = S.add_white_noise(x, 10.0, np.random.default_rng(1))
+    acq = daq.add_noise(x, DT, daq.NoiseSettings(model="relative", snr_dB=10.0), np.random.default_rng(1))
+    y, sigma = acq.voltage_V, acq.noise_std_V
     assert sigma == pytest.approx(np.sqrt(np.mean(x**2) / 10.0), rel=1e-12)
     # realised noise power within 4 standard errors (relative s.e. sqrt(2/N)) of sigma^2
     assert np.mean((y - x) ** 2) / sigma**2 == pytest.approx(1.0, abs=4 * np.sqrt(2 / x.size))
-    y2, _ = S.add_white_noise(x, 10.0, np.random.default_rng(1))
+    y2 = daq.add_noise(x, DT, daq.NoiseSettings(model="relative", snr_dB=10.0), np.random.default_rng(1)).voltage_V
     assert np.array_equal(y, y2)
-    a = S.noise_rng(3, "healthy", 0).standard_normal(5)
-    assert np.array_equal(a, S.noise_rng(3, "healthy", 0).standard_normal(5))
-    assert not np.array_equal(a, S.noise_rng(3, "faulty", 0).standard_normal(5))
+    a = detection.noise_rng(3, "healthy", 0).standard_normal(5)
+    assert np.array_equal(a, detection.noise_rng(3, "healthy", 0).standard_normal(5))
+    assert not np.array_equal(a, detection.noise_rng(3, "faulty", 0).standard_normal(5))
 
 
 # --------------------------------------------------------------------------- record length and bins
 
 
 def test_whole_periods_put_bpfo_on_a_bin():
-    n = S.whole_period_samples(2550, DT, BPFO)  # 1 s at the paper's dt
+    n = detection.whole_period_samples(2550, DT, BPFO)  # 1 s at the paper's dt
     assert n == 2520  # 70 periods of 36 samples
     df = 1.0 / (n * DT)
     assert BPFO / df == pytest.approx(70.0, abs=1e-9)
     # the paper's printed dt = 0.392156e-3 s and BPFO = 70.8 Hz: still within 0.02 bin
-    n2 = S.whole_period_samples(2550, 0.392156e-3, 70.8)
+    n2 = detection.whole_period_samples(2550, 0.392156e-3, 70.8)
     off = 70.8 * n2 * 0.392156e-3
     assert abs(off - round(off)) < 0.02
     with pytest.raises(ValueError, match="shorter than one fault period"):
-        S.whole_period_samples(20, DT, BPFO)
+        detection.whole_period_samples(20, DT, BPFO)
 
 
 # --------------------------------------------------------------------------- spectral kurtosis and bands
@@ -86,35 +88,35 @@ def test_spectral_kurtosis_of_known_signals():
     rng = np.random.default_rng(0)
     n = 100_000
     noise = rng.standard_normal(n) + 1j * rng.standard_normal(n)
-    assert S.spectral_kurtosis(noise) == pytest.approx(0.0, abs=0.05)  # s.e. about 2/sqrt(n)
-    assert S.spectral_kurtosis(np.exp(2j * np.pi * 0.1 * np.arange(n))) == pytest.approx(-1.0, abs=1e-9)
+    assert envelope.spectral_kurtosis(noise) == pytest.approx(0.0, abs=0.05)  # s.e. about 2/sqrt(n)
+    assert envelope.spectral_kurtosis(np.exp(2j * np.pi * 0.1 * np.arange(n))) == pytest.approx(-1.0, abs=1e-9)
     train = np.zeros(n, dtype=complex)
     train[::50] = 1.0  # one sample in 50: SK = 50 - 2
-    assert S.spectral_kurtosis(train) == pytest.approx(48.0, rel=1e-9)
+    assert envelope.spectral_kurtosis(train) == pytest.approx(48.0, rel=1e-9)
 
 
 def test_kurtogram_bank_and_choice():
-    bands = S.kurtogram_bands(FS, 300.0)
+    bands = envelope.kurtogram_bands(FS, 300.0)
     nyq = FS / 2
     assert all(0 < lo < hi <= nyq + 1e-9 and hi - lo >= 300.0 - 1e-9 for lo, hi in bands)
     assert (nyq / 3, nyq) in [(pytest.approx(lo), pytest.approx(hi)) for lo, hi in bands]
     # bursts ringing at 900 Hz in noise: the chosen band contains the carrier
     n = 5100
     x = am_impulse_train(n, DT, 53.7, 900.0, 8.0)
-    x += S.noise_std_for_snr(x, 0.0) * np.random.default_rng(2).standard_normal(n)
-    lo, hi = S.kurtogram(x, DT, 300.0).best_band_Hz
+    x += detection.noise_std_for_snr(x, 0.0) * np.random.default_rng(2).standard_normal(n)
+    lo, hi = envelope.kurtogram(x, DT, 300.0).best_band_Hz
     assert lo < 900.0 < hi
     with pytest.raises(ValueError, match="kurtogram_min_bandwidth_Hz"):
-        S.kurtogram_bands(FS, 2000.0)
+        envelope.kurtogram_bands(FS, 2000.0)
 
 
 def test_band_gain_is_a_zero_phase_butterworth():
     f = np.array([100.0, 700.0, 900.0, 1200.0])
-    g = S.band_gain(f, FS, (600.0, 1000.0), 4)
+    g = envelope.band_gain(f, FS, (600.0, 1000.0), 4)
     assert g[0] < 1e-6 and g[1] > 0.9 and g[2] > 0.9 and g[3] < 0.01
-    assert S.band_gain(np.array([600.0]), FS, (600.0, 1000.0), 4)[0] == pytest.approx(0.5, rel=1e-6)  # -3 dB x 2
+    assert envelope.band_gain(np.array([600.0]), FS, (600.0, 1000.0), 4)[0] == pytest.approx(0.5, rel=1e-6)  # -3 dB x 2
     with pytest.raises(ValueError, match="Nyquist"):
-        S.band_gain(f, FS, (600.0, 1400.0), 4)
+        envelope.band_gain(f, FS, (600.0, 1400.0), 4)
 
 
 # --------------------------------------------------------------------------- envelope spectrum
@@ -125,10 +127,10 @@ def test_envelope_peak_of_am_impulse_train_within_one_bin(rate_Hz):
     """Bursts at a known rate, amplitude-modulated at 8 Hz, in noise at 0 dB: the envelope spectrum's
     largest peak near the rate lies within one bin of it, its harmonics too, and the modulation
     sidebands rate +- 8 Hz stand out of the floor."""
-    n = S.whole_period_samples(5100, DT, rate_Hz)
+    n = detection.whole_period_samples(5100, DT, rate_Hz)
     x = am_impulse_train(n, DT, rate_Hz, 900.0, 8.0)
-    x += S.noise_std_for_snr(x, 0.0) * np.random.default_rng(5).standard_normal(n)
-    spec = S.envelope_spectrum(x, DT, (600.0, 1200.0))
+    x += detection.noise_std_for_snr(x, 0.0) * np.random.default_rng(5).standard_normal(n)
+    spec = envelope.envelope_spectrum(x, DT, (600.0, 1200.0))
     f, a = spec.frequency_Hz, spec.amplitude_V
     df = spec.resolution_Hz
     for k in (1, 2, 3):
@@ -144,7 +146,7 @@ def test_envelope_spectrum_amplitude_of_a_known_modulation():
     n = 2550
     t = np.arange(n) * DT
     x = (1 + 0.4 * np.cos(2 * np.pi * 70.0 * t)) * np.cos(2 * np.pi * 900.0 * t)
-    spec = S.envelope_spectrum(x, DT, (600.0, 1200.0))
+    spec = envelope.envelope_spectrum(x, DT, (600.0, 1200.0))
     i = int(round(70.0 / spec.resolution_Hz))
     assert spec.amplitude_V[i] == pytest.approx(0.4, rel=1e-3)
     assert spec.amplitude_V[0] == pytest.approx(0.0, abs=1e-12)
@@ -155,10 +157,10 @@ def test_envelope_spectrum_amplitude_of_a_known_modulation():
 
 def test_threshold_is_the_F_quantile():
     # one harmonic, floor of many bins: approaches the exponential quantile -ln(pfa)
-    assert S.indicator_threshold(1e-3, 1, 100_000) == pytest.approx(-np.log(1e-3), rel=1e-3)
-    assert S.indicator_threshold(1e-3, 3, 60) > S.indicator_threshold(1e-3, 3, 10_000)
+    assert detection.indicator_threshold(1e-3, 1, 100_000) == pytest.approx(-np.log(1e-3), rel=1e-3)
+    assert detection.indicator_threshold(1e-3, 3, 60) > detection.indicator_threshold(1e-3, 3, 10_000)
     with pytest.raises(ValueError):
-        S.indicator_threshold(0.0, 3, 60)
+        detection.indicator_threshold(0.0, 3, 60)
 
 
 @pytest.mark.parametrize("rule", ["fixed", "kurtogram"])
@@ -166,12 +168,12 @@ def test_false_alarm_rate_on_noise_alone(rule):
     """Gaussian noise alone: the indicator exceeds the threshold for pfa = 0.05 at most at that rate
     (binomial upper bound), and not absurdly less often (the threshold is not slack). The records analysed as one
     array (``analyse_many``: analyse()'s result per record, identical, test below)."""
-    env = S.EnvelopeSettings(band_rule=rule, band_Hz=(500.0, 1250.0))
-    ind = S.IndicatorSettings(false_alarm_probability=0.05)
+    env = envelope.EnvelopeSettings(band_rule=rule, band_Hz=(500.0, 1250.0))
+    ind = detection.IndicatorSettings(false_alarm_probability=0.05)
     trials = 400 if rule == "fixed" else 200
     rng = np.random.default_rng(11)
     x = np.array([rng.standard_normal(2550) for _ in range(trials)])
-    hits = sum(r["detected"] for r in S.analyse_many(x, DT, BPFO, env, ind))
+    hits = sum(r["detected"] for r in detection.analyse_many(x, DT, BPFO, env, ind))
     rate = hits / trials
     se = np.sqrt(0.05 * 0.95 / trials)
     assert rate <= 0.05 + 3 * se
@@ -182,33 +184,33 @@ def test_healthy_roller_passage_fools_a_naive_indicator_but_not_the_envelope_ban
     """The healthy signal is periodic at BPFO (one load bump per roller): its raw spectrum has a huge BPFO
     line, so the same CFAR test on the raw spectrum 'detects' a fault; after the band-pass the smooth
     bumps are gone and only the defect's sharp impulses modulate the envelope."""
-    n = S.whole_period_samples(2550, DT, BPFO)
+    n = detection.whole_period_samples(2550, DT, BPFO)
     v = bearing_voltage(n)
-    y, _ = S.add_white_noise(v, 10.0, np.random.default_rng(0))
-    raw = S.EnvelopeSpectrum(np.fft.rfftfreq(n, DT), 2 * np.abs(np.fft.rfft(y - y.mean())) / n, (0, FS / 2), n)
-    assert S.fault_indicator(raw, BPFO, IND)["detected"]
-    assert not S.analyse(y, DT, BPFO, ENV, IND).result["detected"]
+    y = daq.add_noise(v, DT, daq.NoiseSettings(model="relative", snr_dB=10.0), np.random.default_rng(0)).voltage_V
+    raw = envelope.EnvelopeSpectrum(np.fft.rfftfreq(n, DT), 2 * np.abs(np.fft.rfft(y - y.mean())) / n, (0, FS / 2), n)
+    assert detection.fault_indicator(raw, BPFO, IND)["detected"]
+    assert not detection.analyse(y, DT, BPFO, ENV, IND).result["detected"]
 
 
 @pytest.mark.parametrize("rule", ["kurtogram", "fixed"])
 def test_bearing_stand_in_at_snr_10_over_20_seeds(rule):
     """Stand-in bearing (smooth roller bumps, 10 N two-sample defect impulses on 50 N bumps) through the
     RC sensor: at 10 dB the faulty record is detected and the healthy one is not, for 20 noise seeds."""
-    env = S.EnvelopeSettings(band_rule=rule, band_Hz=(500.0, 1250.0))
+    env = envelope.EnvelopeSettings(band_rule=rule, band_Hz=(500.0, 1250.0))
     n = 2550
     vh, vf = bearing_voltage(n), bearing_voltage(n, impulse_N=10.0)
     for j in range(20):
         noise = np.random.default_rng(100 + j).standard_normal(n)
-        rh = S.analyse(vh + S.noise_std_for_snr(vh, 10.0) * noise, DT, BPFO, env, IND).result
-        rf = S.analyse(vf + S.noise_std_for_snr(vf, 10.0) * noise, DT, BPFO, env, IND).result
+        rh = detection.analyse(vh + detection.noise_std_for_snr(vh, 10.0) * noise, DT, BPFO, env, IND).result
+        rf = detection.analyse(vf + detection.noise_std_for_snr(vf, 10.0) * noise, DT, BPFO, env, IND).result
         assert rf["detected"] and not rh["detected"], (j, rf["indicator"], rh["indicator"])
 
 
 def test_harmonic_ratios_report_bins_and_floor():
-    n = S.whole_period_samples(2550, DT, BPFO)
+    n = detection.whole_period_samples(2550, DT, BPFO)
     x = am_impulse_train(n, DT, BPFO, 900.0, 8.0, mod_depth=0.0)
-    spec = S.envelope_spectrum(x + 0.01 * np.random.default_rng(3).standard_normal(n), DT, (600.0, 1200.0))
-    h = S.harmonic_ratios(spec, BPFO, IND)
+    spec = envelope.envelope_spectrum(x + 0.01 * np.random.default_rng(3).standard_normal(n), DT, (600.0, 1200.0))
+    h = detection.harmonic_ratios(spec, BPFO, IND)
     assert [e["k"] for e in h] == [1, 2, 3]
     for e in h:
         assert e["frequency_Hz"] == pytest.approx(e["k"] * BPFO, abs=1e-6)
@@ -216,7 +218,7 @@ def test_harmonic_ratios_report_bins_and_floor():
         assert e["ratio_dB"] > 20
         assert e["n_floor_bins"] >= 60
     with pytest.raises(ValueError, match="n_harmonics"):
-        S.harmonic_ratios(spec, BPFO, S.IndicatorSettings(n_harmonics=40))
+        detection.harmonic_ratios(spec, BPFO, detection.IndicatorSettings(n_harmonics=40))
 
 
 # --------------------------------------------------------------------------- study helpers, sensor model, events
@@ -224,17 +226,17 @@ def test_harmonic_ratios_report_bins_and_floor():
 
 def test_detection_limit():
     snr = np.array([-4.0, -2.0, 0.0, 2.0, 4.0])
-    assert S.detection_limit_dB(snr, np.array([0.0, 1.0, 0.9, 1.0, 1.0]), 0.95) == 2.0
-    assert S.detection_limit_dB(snr, np.array([1.0, 1.0, 1.0, 1.0, 1.0]), 0.95) == -4.0
-    assert np.isnan(S.detection_limit_dB(snr, np.array([0.0, 0.0, 0.0, 0.0, 0.5]), 0.95))
+    assert detection.detection_limit_dB(snr, np.array([0.0, 1.0, 0.9, 1.0, 1.0]), 0.95) == 2.0
+    assert detection.detection_limit_dB(snr, np.array([1.0, 1.0, 1.0, 1.0, 1.0]), 0.95) == -4.0
+    assert np.isnan(detection.detection_limit_dB(snr, np.array([0.0, 0.0, 0.0, 0.0, 0.5]), 0.95))
 
 
 def test_snr_sweep_replicate_zero_is_the_noisy_stage_record():
     n = 2550
     v = bearing_voltage(n, impulse_N=3.0)
-    rows = S.snr_sweep(v, DT, BPFO, "faulty", [10.0], 2, 7, ENV, IND)
-    y, _ = S.add_white_noise(v, 10.0, S.noise_rng(7, "faulty", 0))
-    assert rows[0]["indicator"] == pytest.approx(S.analyse(y, DT, BPFO, ENV, IND).result["indicator"], rel=1e-12)
+    rows = detection.snr_sweep(v, DT, BPFO, "faulty", [10.0], 2, 7, ENV, IND)
+    y = daq.add_noise(v, DT, daq.NoiseSettings(model="relative", snr_dB=10.0), detection.noise_rng(7, "faulty", 0)).voltage_V
+    assert rows[0]["indicator"] == pytest.approx(detection.analyse(y, DT, BPFO, ENV, IND).result["indicator"], rel=1e-12)
     assert rows[0]["indicator"] != rows[1]["indicator"]
 
 
@@ -242,14 +244,14 @@ def test_snr_sweep_replicate_zero_is_the_noisy_stage_record():
 def test_batched_snr_sweep_gives_the_rows_of_the_record_by_record_analysis(rule):
     """The batched sweep (all SNRs of a seed as one array) decides and reports exactly as analyse() per record."""
     v = bearing_voltage(2550, impulse_N=3.0)
-    es = S.EnvelopeSettings(band_rule=rule, band_Hz=(500.0, 1200.0))
+    es = envelope.EnvelopeSettings(band_rule=rule, band_Hz=(500.0, 1200.0))
     grid = [-10.0, 0.0, 5.0, 10.0, 30.0]
-    batch = S.snr_sweep(v, DT, BPFO, "faulty", grid, 3, 7, es, IND)
-    loop = S.snr_sweep(v, DT, BPFO, "faulty", grid, 3, 7, es, IND, method="loop")
+    batch = detection.snr_sweep(v, DT, BPFO, "faulty", grid, 3, 7, es, IND)
+    loop = detection.snr_sweep(v, DT, BPFO, "faulty", grid, 3, 7, es, IND, method="loop")
     assert batch == loop  # same operations per record: identical floats, bands and decisions
     assert {r["detected"] for r in batch} == {True, False}  # the grid spans both decisions
     x = v + np.random.default_rng(3).standard_normal((4, v.size)) * np.array([[0.1], [1.0], [3.0], [10.0]])
-    for many, one in zip(S.analyse_many(x, DT, BPFO, es, IND), (S.analyse(r, DT, BPFO, es, IND).result for r in x),
+    for many, one in zip(detection.analyse_many(x, DT, BPFO, es, IND), (detection.analyse(r, DT, BPFO, es, IND).result for r in x),
                          strict=True):
         assert many == {k: one[k] for k in many if k != "harmonics"} | {
             "harmonics": [{k: h[k] for k in ("k", "ratio", "ratio_dB")} for h in one["harmonics"]]}
@@ -257,20 +259,18 @@ def test_batched_snr_sweep_gives_the_rows_of_the_record_by_record_analysis(rule)
 
 def test_fem_correction_factor():
     c = SensorCircuit()
-    from piezobearing.sensor.calibration import frequency_response
-
     f = np.array([500.0, 1000.0, 5000.0, 1e5])
     rc = np.abs(frequency_response(f, c))
     fem = 0.9 * rc * np.array([1.0, 1.0, 1.05, 3.0])  # flat below Nyquist, resonant far above
-    out = S.fem_correction(f, fem, rc, FS / 2)
+    out = fem_ratio(f, fem / rc, FS / 2)
     assert out["factor"] == pytest.approx(0.9) and out["n_frequencies"] == 2
-    out = S.fem_correction(f[2:], fem[2:], rc[2:], FS / 2)  # no FEM point below Nyquist: the lowest two
+    out = fem_ratio(f[2:], fem[2:] / rc[2:], FS / 2)  # no FEM point below Nyquist: the lowest two
     assert out["frequencies_Hz"] == [5000.0, 1e5]
 
 
 def test_defect_event_times_find_the_impulses():
     n = 2550
     vh, vf = bearing_voltage(n), bearing_voltage(n, impulse_N=3.0)
-    t = S.defect_event_times(vf, vh, DT, BPFO)
+    t = detection.defect_event_times(vf, vh, DT, BPFO)
     assert len(t) == 70
     assert np.allclose(np.diff(t), 1 / BPFO, atol=1.01 * DT)

@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 from scipy.stats import binom, chi2
 
-from piezobearing.signals import baseline as B
+from piezobearing.signals import harmonics, outer_race
+from piezobearing.signals.detectors import baseline
 from piezobearing.signals.fault_bands import slipped_frequencies
 
 FR = 1000.0 / 60.0
@@ -61,10 +62,10 @@ def test_slip_from_the_roller_passage_lines():
     n = 2295
     for s in (0.0, 0.008, 0.015, 0.027):
         v = healthy(n, s)
-        assert B.estimate_slip(v, 1 / FS, KIN["bpfo_Hz"], 0.03) == pytest.approx(s, abs=2e-5)
+        assert baseline.estimate_slip(v, 1 / FS, KIN["bpfo_Hz"], 0.03) == pytest.approx(s, abs=2e-5)
     rng = np.random.default_rng(1)
     v = healthy(n) + 11.4 * rng.standard_normal(n)  # the paper's 10 dB
-    assert B.estimate_slip(v, 1 / FS, KIN["bpfo_Hz"], 0.03) == pytest.approx(SLIP, abs=2e-4)
+    assert baseline.estimate_slip(v, 1 / FS, KIN["bpfo_Hz"], 0.03) == pytest.approx(SLIP, abs=2e-4)
 
 
 def test_periodic_part_takes_the_folded_harmonics_too():
@@ -75,8 +76,8 @@ def test_periodic_part_takes_the_folded_harmonics_too():
     t = np.arange(n) / FS
     k = np.arange(1, 30)  # harmonics to 2090 Hz, beyond the 1275 Hz Nyquist frequency
     v = (np.cos(2 * np.pi * f0 * np.outer(t, k) + 0.7 * k) / k).sum(axis=1)
-    r_full = v - B.periodic_part(v, 1 / FS, f0, alias_folds=1.0)
-    r_half = v - B.periodic_part(v, 1 / FS, f0, alias_folds=0.5)
+    r_full = v - harmonics.periodic_part(v, 1 / FS, f0, alias_folds=1.0)
+    r_half = v - harmonics.periodic_part(v, 1 / FS, f0, alias_folds=0.5)
     assert np.std(r_full) < 1e-6 * np.std(v)
     above = (np.cos(2 * np.pi * f0 * np.outer(t, k[k * f0 > 0.4995 * FS]) + 0.7 * k[k * f0 > 0.4995 * FS])
              / k[k * f0 > 0.4995 * FS]).sum(axis=1)
@@ -89,7 +90,7 @@ def test_fold_test_false_alarm_rate_by_monte_carlo():
     rng = np.random.default_rng(7)
     n, m = 2295, 3000
     period = 1 / slipped_frequencies(KIN, SLIP)["bpfi_Hz"]
-    lp = np.array([B.fold_test(rng.standard_normal(n), 1 / FS, period)["log10_p"] for _ in range(m)])
+    lp = np.array([baseline.fold_test(rng.standard_normal(n), 1 / FS, period)["log10_p"] for _ in range(m)])
     for alpha in (0.05, 0.01):
         lo, hi = binom.ppf([0.0005, 0.9995], m, alpha) / m
         assert lo <= np.mean(lp < np.log10(alpha)) <= hi, (alpha, np.mean(lp < np.log10(alpha)))
@@ -102,8 +103,8 @@ def test_fold_test_finds_impacts_on_their_period_only():
     rng = np.random.default_rng(3)
     z = rng.standard_normal(n) + impacts("inner_race", n, amp_V=6.0)
     f = slipped_frequencies(KIN, SLIP)
-    right = B.fold_test(z, 1 / FS, 1 / f["bpfi_Hz"])["log10_p"]
-    wrong = B.fold_test(z, 1 / FS, 1 / f["2bsf_Hz"])["log10_p"]
+    right = baseline.fold_test(z, 1 / FS, 1 / f["bpfi_Hz"])["log10_p"]
+    wrong = baseline.fold_test(z, 1 / FS, 1 / f["2bsf_Hz"])["log10_p"]
     assert right < -50 and wrong > right + 40
 
 
@@ -112,13 +113,13 @@ def test_harmonic_test_is_chi_square_under_noise():
     the rate of q above its 95% quantile within the binomial 99.9% interval (1000 records, sigma known)."""
     n, m = 640, 1000
     dt = 1 / FS
-    base = B.Baseline.from_record(healthy(n), dt, KIN, B.BaselineSettings())
+    base = baseline.Baseline.from_record(healthy(n), dt, KIN, baseline.Settings())
     f0 = slipped_frequencies(KIN, base.slip)["bpfo_Hz"]
     rng = np.random.default_rng(11)
     x = np.array([healthy(n) + 2.0 * rng.standard_normal(n) for _ in range(m)])
-    res = B.one_blas_thread(B.harmonic_tests)(x, dt, [f0] * m, [base] * m, [2.0] * m)
+    res = baseline.one_blas_thread(outer_race.harmonic_tests)(x, dt, [f0] * m, [base] * m, [2.0] * m)
     qs, dof = [r["statistic"] for r in res], res[0]["dof"]
-    assert dof == 2 * B.below_nyquist(dt, f0) - 1
+    assert dof == 2 * harmonics.below_nyquist(dt, f0) - 1
     lo, hi = binom.ppf([0.0005, 0.9995], m, 0.05) / m
     assert lo <= np.mean(np.array(qs) > chi2.ppf(0.95, dof)) <= hi
 
@@ -129,12 +130,12 @@ def test_harmonic_fit_in_closed_form_equals_the_qr_solution():
     rng = np.random.default_rng(4)
     for n, fs in ((2295, FS), (6000, 25600.0)):
         f0 = slipped_frequencies(KIN, SLIP)["bpfo_Hz"]
-        k = B.below_nyquist(1 / fs, f0)
+        k = harmonics.below_nyquist(1 / fs, f0)
         x = healthy(n, fs=fs) + rng.standard_normal(n)
-        c, gram, _ = B.harmonic_fit(x, 1 / fs, f0, k)
-        a = B.harmonic_matrix(n, 1 / fs, f0, k)
+        c, gram, _ = harmonics.harmonic_fit(x, 1 / fs, f0, k)
+        a = harmonics.harmonic_matrix(n, 1 / fs, f0, k)
         assert np.allclose(gram, a.T @ a, rtol=0, atol=1e-9 * n)
-        assert np.allclose(c, B._lstsq(a, x), rtol=0, atol=1e-9 * np.abs(c).max())
+        assert np.allclose(c, harmonics.lstsq_qr(a, x), rtol=0, atol=1e-9 * np.abs(c).max())
 
 
 def test_slip_searched_harmonic_test_threshold_by_monte_carlo():
@@ -144,16 +145,16 @@ def test_slip_searched_harmonic_test_threshold_by_monte_carlo():
     buried in it (-10 dB relative), the rate above the chi^2_{2K-1} 95% quantile within the binomial 99.9% interval
     of 5% (300 records each) and the mean of q within 4 standard errors of 2K - 1."""
     n, m, dt = 640, 300, 1 / FS
-    base = B.Baseline.from_record(healthy(n), dt, KIN, B.BaselineSettings())
+    base = baseline.Baseline.from_record(healthy(n), dt, KIN, baseline.Settings())
     f_true = slipped_frequencies(KIN, SLIP)["bpfo_Hz"]
     window = (KIN["bpfo_Hz"] * 0.97, KIN["bpfo_Hz"])
     rng = np.random.default_rng(12)
     lo, hi = binom.ppf([0.0005, 0.9995], m, 0.05) / m
     for noise in (2.0, np.sqrt(10.0 * np.mean(healthy(n) ** 2))):
         x = np.array([healthy(n) + noise * rng.standard_normal(n) for _ in range(m)])
-        res = B.one_blas_thread(B.harmonic_tests)(x, dt, [f_true] * m, [base] * m, [noise] * m, 0.0, window)
+        res = baseline.one_blas_thread(outer_race.harmonic_tests)(x, dt, [f_true] * m, [base] * m, [noise] * m, 0.0, window)
         q, dof = np.array([r["statistic"] for r in res]), res[0]["dof"]
-        assert dof == 2 * B.below_nyquist(dt, window[1]) - 1
+        assert dof == 2 * harmonics.below_nyquist(dt, window[1]) - 1
         assert lo <= np.mean(q > chi2.ppf(0.95, dof)) <= hi, (noise, np.mean(q > chi2.ppf(0.95, dof)))
         assert abs(q.mean() - dof) < 4.0 * np.sqrt(2.0 * dof / m), (noise, q.mean())
 
@@ -162,21 +163,21 @@ def test_tolerance_absorbs_a_baseline_off_by_its_size():
     """A healthy bearing 1% stronger than its baseline at micro-volt noise: exact baseline -> outer race
     'detected'; a 2% tolerance -> not."""
     n, dt = 2295, 1 / FS
-    st = B.BaselineSettings()
-    base = B.Baseline.from_record(healthy(n), dt, KIN, st)
+    st = baseline.Settings()
+    base = baseline.Baseline.from_record(healthy(n), dt, KIN, st)
     x = 1.01 * healthy(n) + 1e-4 * np.random.default_rng(2).standard_normal(n)
-    assert B.detect(x, dt, KIN, base, st).per_type["outer_race"]["detected"]
-    d = B.detect(x, dt, KIN, base, B.BaselineSettings(tolerance=0.02))
-    assert not d.per_type["outer_race"]["detected"] and d.fault_type == "none"
+    assert baseline.detect(x, 1 / dt, KIN, st, base).details["per_type"]["outer_race"]["detected"]
+    d = baseline.detect(x, 1 / dt, KIN, baseline.Settings(tolerance=0.02), base)
+    assert not d.details["per_type"]["outer_race"]["detected"] and d.fault_type == "none"
 
 
 def test_baseline_tolerances_from_config(paper_config):
     """signals.detector.baseline_tolerance and baseline_gain_tolerance reach the detector's settings (defaults 0:
     the workflow's baseline is the model's own noiseless healthy record)."""
-    assert B.BaselineSettings.from_config(paper_config["signals"]) == B.BaselineSettings()
+    assert baseline.Settings.from_config(paper_config["signals"]) == baseline.Settings()
     sig = {**paper_config["signals"], "detector": {**paper_config["signals"]["detector"], "baseline_tolerance": 0.1,
                                                    "baseline_gain_tolerance": 0.05}}
-    st = B.BaselineSettings.from_config(sig)
+    st = baseline.Settings.from_config(sig)
     assert (st.tolerance, st.gain_tolerance) == (0.1, 0.05)
 
 
@@ -186,13 +187,13 @@ def test_gain_tolerance_absorbs_a_level_off_but_not_the_fault():
     detected with it (its impacts are not a change of level)."""
     n, dt = 2295, 1 / FS
     rng = np.random.default_rng(2)
-    fixed, loose = B.BaselineSettings(), B.BaselineSettings(gain_tolerance=0.1)
-    base = B.Baseline.from_record(healthy(n), dt, KIN, fixed)
+    fixed, loose = baseline.Settings(), baseline.Settings(gain_tolerance=0.1)
+    base = baseline.Baseline.from_record(healthy(n), dt, KIN, fixed)
     x = 1.1 * healthy(n) + 1e-2 * rng.standard_normal(n)
-    assert B.detect(x, dt, KIN, base, fixed).per_type["outer_race"]["detected"]
-    assert B.detect(x, dt, KIN, base, loose).fault_type == "none"
+    assert baseline.detect(x, 1 / dt, KIN, fixed, base).details["per_type"]["outer_race"]["detected"]
+    assert baseline.detect(x, 1 / dt, KIN, loose, base).fault_type == "none"
     v = healthy(n) + impacts("outer_race", n)
-    d = B.detect(v + np.sqrt(np.mean(v**2) / 10.0) * rng.standard_normal(n), dt, KIN, base, loose)
+    d = baseline.detect(v + np.sqrt(np.mean(v**2) / 10.0) * rng.standard_normal(n), 1 / dt, KIN, loose, base)
     assert d.fault_type == "outer_race"
 
 
@@ -202,29 +203,30 @@ def test_hide_and_find(noise):
     the impacts' 100 V single samples) and at a DAQ's noise (3.6e-4 V rms, 1e-5 V/sqrt(Hz) over 1275 Hz) where
     the healthy bumps are 100 dB above the noise."""
     n, dt = 2295, 1 / FS
-    st = B.BaselineSettings()
+    st = baseline.Settings()
     h = healthy(n)
-    base = B.Baseline.from_record(h, dt, KIN, st)
+    base = baseline.Baseline.from_record(h, dt, KIN, st)
     rng = np.random.default_rng(5)
     for true in ("none", "outer_race", "inner_race", "rolling_element"):
         v = h + (impacts(true, n) if true != "none" else 0.0)
         sigma = np.sqrt(np.mean(v**2) / 10.0) if noise == "relative_10dB" else 3.6e-4
-        got = [d.fault_type for d in B.detect_many([v + sigma * rng.standard_normal(n) for _ in range(6)], dt, KIN,
-                                                   base, st)]
+        got = [d.fault_type for d in baseline.detect_many([v + sigma * rng.standard_normal(n) for _ in range(6)], 1 / dt, KIN,
+                                                   st, base)]
         assert got == [true] * 6, (true, got)
 
 
 def test_detect_reports_per_type_keys_and_refuses_another_clock():
     n, dt = 1200, 1 / FS
-    st = B.BaselineSettings()
-    base = B.Baseline.from_record(healthy(n), dt, KIN, st)
-    d = B.detect(healthy(n) + np.random.default_rng(0).standard_normal(n), dt, KIN, base, st).to_dict()
-    assert set(d["per_type"]) == set(st.fault_types)
-    for r in d["per_type"].values():
+    st = baseline.Settings()
+    base = baseline.Baseline.from_record(healthy(n), dt, KIN, st)
+    d = baseline.detect(healthy(n) + np.random.default_rng(0).standard_normal(n), 1 / dt, KIN, st, base).to_dict()
+    assert set(d["families"]) == set(d["details"]["per_type"]) == set(st.fault_types)
+    assert d["method"] == "baseline" and d["band_Hz"] is None
+    for r in d["details"]["per_type"].values():
         assert {"indicator", "threshold", "detected", "p_value", "margin"} <= set(r)
         assert r["threshold"] == pytest.approx(-np.log10(1e-3 / 3))
     with pytest.raises(ValueError, match="step"):
-        B.detect(healthy(n), 0.5 * dt, KIN, base, st)
+        baseline.detect(healthy(n), 1 / (0.5 * dt), KIN, st, base)
 
 
 def test_fast_roller_passage_fit_equals_the_qr_method():
@@ -232,35 +234,31 @@ def test_fast_roller_passage_fit_equals_the_qr_method():
     (the method until 2026-11-23), every harmonic to f_s at 25.6 kHz (K = 365, 731 columns): the same
     Gauss-Newton f0 to 1e-9 Hz and the same periodic part to 1e-10 of the 96 V train; at an f0 with f_s
     exactly 36 f0 (the paper's 2550 Hz without slip: folded harmonics coincide) the fit and step are the QR's."""
-    from piezobearing.signals import harmonics as H
-
     rng = np.random.default_rng(5)
     for fs, n, slip in ((25600.0, 6000, SLIP), (FS, 2295, 0.0)):
         v = healthy(n, slip=slip, fs=fs) + 1e-3 * rng.standard_normal(n)
         f0 = slipped_frequencies(KIN, slip)["bpfo_Hz"] * (1 + 1e-6)
-        fa, pa = H.refine_period(v, 1 / fs, f0)
-        fb, pb = H.refine_period_qr(v, 1 / fs, f0)
+        fa, pa = harmonics.refine_period(v, 1 / fs, f0)
+        fb, pb = harmonics.refine_period_qr(v, 1 / fs, f0)
         assert fa == pytest.approx(fb, abs=1e-9)
         assert np.abs(pa - pb).max() < 1e-10 * 96.0
-    assert H.Harmonics(2295, 1 / FS, FS / 36, H.n_fitted(1 / FS, FS / 36, 1.0)).by_qr
+    assert harmonics.Harmonics(2295, 1 / FS, FS / 36, harmonics.n_fitted(1 / FS, FS / 36, 1.0)).by_qr
     # started exactly at f_s / 36 at a DAQ's noise: the QR method's step (the FWL step there was +-3e-3 Hz of noise)
     f0 = slipped_frequencies(KIN, 0.0)["bpfo_Hz"]
     for _ in range(5):
         v = healthy(2295, slip=0.0) + 3.6e-4 * rng.standard_normal(2295)
-        assert H.refine_period(v, 1 / FS, f0)[0] == H.refine_period_qr(v, 1 / FS, f0)[0]
-    assert not H.Harmonics(6000, 1 / 25600.0, 70.0, H.n_fitted(1 / 25600.0, 70.0, 1.0)).by_qr
+        assert harmonics.refine_period(v, 1 / FS, f0)[0] == harmonics.refine_period_qr(v, 1 / FS, f0)[0]
+    assert not harmonics.Harmonics(6000, 1 / 25600.0, 70.0, harmonics.n_fitted(1 / 25600.0, 70.0, 1.0)).by_qr
 
 
 def test_chirp_sum_is_the_dtft():
     """Bluestein's sum_j u_j exp(2 pi i nu j m) equals the direct sum to 1e-12 of its size."""
-    from piezobearing.signals import harmonics as H
-
     rng = np.random.default_rng(6)
     u = rng.standard_normal(3000) + 1j * rng.standard_normal(3000)
     nu = 0.0027671234
     m = np.arange(400)
     direct = np.exp(2j * np.pi * nu * np.outer(m, np.arange(u.size))) @ u
-    assert np.abs(H.chirp_sum(u, nu, m.size) - direct).max() < 1e-12 * np.abs(direct).max()
+    assert np.abs(harmonics.chirp_sum(u, nu, m.size) - direct).max() < 1e-12 * np.abs(direct).max()
 
 
 @pytest.mark.parametrize("noise", ["relative_10dB", "daq_3.6e-4V"])
@@ -268,25 +266,22 @@ def test_fast_detector_gives_the_qr_methods_indicators(monkeypatch, noise):
     """detect with the fast least squares and with the pivoted-QR roller-passage fit (refine_period_qr) and
     the two-inverse information matrix (until 2026-11-23), on an inner-race record at 25.6 kHz (0.25 s):
     every type's indicator the same to 1e-6 (relative, or absolute below 1)."""
-    from piezobearing.signals import harmonics as H
-    from piezobearing.signals import outer_race as O
-
     fs, n = 25600.0, 6400
     dt = 1 / fs
-    st = B.BaselineSettings()
+    st = baseline.Settings()
     h = healthy(n, fs=fs)
-    base = B.Baseline.from_record(h, dt, KIN, st)
+    base = baseline.Baseline.from_record(h, dt, KIN, st)
     v = h + impacts("inner_race", n, fs=fs)
     sigma = np.sqrt(np.mean(h**2) / 10.0) if noise == "relative_10dB" else 3.6e-4
     x = v + sigma * np.random.default_rng(8).standard_normal(n)
-    new = B.detect(x, dt, KIN, base, st).per_type
+    new = baseline.detect(x, 1 / dt, KIN, st, base).details["per_type"]
 
     def old_information(gram, sigma, cb, tolerance):
         return np.linalg.inv(sigma**2 * np.linalg.inv(gram)[1:, 1:])
 
-    monkeypatch.setattr(B, "refine_period", H.refine_period_qr)
-    monkeypatch.setattr(O, "_information", old_information)  # the outer-race test's module (outer_race.py)
-    old = B.detect(x, dt, KIN, base, st).per_type
+    monkeypatch.setattr(baseline, "refine_period", harmonics.refine_period_qr)
+    monkeypatch.setattr(outer_race, "_information", old_information)  # the outer-race test's module (outer_race.py)
+    old = baseline.detect(x, 1 / dt, KIN, st, base).details["per_type"]
     for t in new:
         assert new[t]["indicator"] == pytest.approx(old[t]["indicator"], rel=1e-6, abs=1e-6), t
 
@@ -294,10 +289,9 @@ def test_fast_detector_gives_the_qr_methods_indicators(monkeypatch, noise):
 def test_batched_searches_equal_one_by_one():
     """The outer-race searches stepped together over records (scalar_search.fminbound_many) take scipy's bounded
     Brent steps problem by problem: the same minima bit for bit as separate scipy calls; detect_many,
-    harmonic_tests and clipped.detect_many give each record's detection exactly as alone."""
+    and harmonic_tests give each record's detection exactly as alone, clipped or not."""
     from scipy.optimize import minimize_scalar
 
-    from piezobearing.signals import clipped as CL
     from piezobearing.signals.scalar_search import fminbound_many
 
     rng = np.random.default_rng(9)
@@ -311,17 +305,15 @@ def test_batched_searches_equal_one_by_one():
                             method="bounded", options={"xatol": tol[i]})
         assert (r.x, r.fun) == (x[i], fx[i])
     n, dt = 2295, 1 / FS
-    st = B.BaselineSettings()
+    st = baseline.Settings()
     h = healthy(n)
-    base = B.Baseline.from_record(h, dt, KIN, st)
+    base = baseline.Baseline.from_record(h, dt, KIN, st)
     xs = [h + impacts(t, n) + 11.0 * rng.standard_normal(n) for t in ("outer_race", "inner_race")]
     xs.insert(0, h + 11.0 * rng.standard_normal(n))
     xs.append(np.clip(h + 36.0 * rng.standard_normal(n), -60.0, 60.0))  # clipped: the clipped model
-    assert [d.per_type for d in B.detect_many(xs, dt, KIN, base, st)] == [B.detect(x, dt, KIN, base, st).per_type
-                                                                          for x in xs]
-    assert [d.per_type for d in CL.detect_many(xs, dt, KIN, base, st)] == [CL.detect(x, dt, KIN, base, st).per_type
-                                                                           for x in xs]
+    many = baseline.detect_many(xs, FS, KIN, st, base)
+    assert many == [baseline.detect(x, FS, KIN, st, base) for x in xs]
     f0 = slipped_frequencies(KIN, SLIP)["bpfo_Hz"]
     window = (KIN["bpfo_Hz"] * 0.97, KIN["bpfo_Hz"])
-    many = B.harmonic_tests(np.array(xs[:3]), dt, [f0] * 3, [base] * 3, [11.0] * 3, 0.01, window, 0.05)
-    assert many == [B.harmonic_test(x, dt, f0, base, 11.0, 0.01, window, 0.05) for x in xs[:3]]
+    many = outer_race.harmonic_tests(np.array(xs[:3]), dt, [f0] * 3, [base] * 3, [11.0] * 3, 0.01, window, 0.05)
+    assert many == [outer_race.harmonic_test(x, dt, f0, base, 11.0, 0.01, window, 0.05) for x in xs[:3]]

@@ -1,4 +1,4 @@
-"""The baseline detector on clipped records (signals/clipped.py).
+"""The baseline detector on clipped records (signals/detectors/baseline.py, its clipped-noise model).
 
 The clipped normal's mean and variance in closed form against Monte Carlo;
 the noise before the ADC recovered from a clipped record; hide-and-find on
@@ -17,10 +17,9 @@ import pytest
 from scipy.stats import binom
 from test_signals_baseline import FS, KIN, healthy, impacts
 
-from piezobearing.signals import baseline as B
-from piezobearing.signals import clipped as CL
 from piezobearing.signals import daq
 from piezobearing.signals.daq import quantise
+from piezobearing.signals.detectors import baseline
 
 SIGMA = 36.0  # V: 1 V/sqrt(Hz) over the 1275 Hz of a 2550 Hz DAQ (35.7 V)
 
@@ -38,7 +37,7 @@ def test_clipped_normal_moments_against_monte_carlo(mu, sigma):
     z = np.random.default_rng(3).standard_normal(400_000)
     for lo, hi in ((-60.0, 60.0), (-60.0, np.inf)):
         y = np.clip(mu + sigma * z, lo, hi)
-        m, v = CL.clipped_normal_moments(mu, sigma, lo, hi)
+        m, v = baseline.clipped_normal_moments(mu, sigma, lo, hi)
         if sigma == 0:
             assert m == np.clip(mu, lo, hi) and v == 0.0
             continue
@@ -51,9 +50,9 @@ def test_clipped_normal_moments_against_monte_carlo(mu, sigma):
 def test_clip_levels_counts_the_end_codes_only():
     rng = np.random.default_rng(1)
     x = rng.standard_normal(5000)
-    assert CL.clip_levels(x) == (-np.inf, np.inf, 0.0)
+    assert baseline.clip_levels(x) == (-np.inf, np.inf, 0.0)
     y = adc(40.0 * np.sin(np.arange(5000) * 0.01), 36.0, rng)
-    lo, hi, frac = CL.clip_levels(y)
+    lo, hi, frac = baseline.clip_levels(y)
     assert lo == pytest.approx(-60.0) and hi == pytest.approx(60.0, abs=1e-5)
     assert frac == pytest.approx(np.mean((y <= lo) | (y >= hi)))
     assert 0.1 < frac < 0.4
@@ -68,13 +67,13 @@ def test_a_known_adc_reads_clipping_at_its_end_codes_only():
     rng = np.random.default_rng(2)
     for _ in range(200):  # a record whose extreme code repeats (9 of these 200 do)
         y = quantise(healthy(2295, peak_V=40.0) + 3.6e-4 * rng.standard_normal(2295), 24, 60.0)[0]
-        if CL.clip_levels(y)[2] > 0:
+        if baseline.clip_levels(y)[2] > 0:
             break
     else:
         pytest.fail("no record of 200 repeated an extreme code")
-    assert CL.clip_levels(y)[2] > 0 and CL.clip_levels(y, ends) == (-np.inf, np.inf, 0.0)
+    assert baseline.clip_levels(y)[2] > 0 and baseline.clip_levels(y, ends) == (-np.inf, np.inf, 0.0)
     z = adc(40.0 * np.sin(np.arange(5000) * 0.01), 36.0, rng)
-    assert CL.clip_levels(z, ends)[2] == pytest.approx(CL.clip_levels(z)[2]) and CL.clip_levels(z, ends)[2] > 0.1
+    assert baseline.clip_levels(z, ends)[2] == pytest.approx(baseline.clip_levels(z)[2]) and baseline.clip_levels(z, ends)[2] > 0.1
     assert daq.end_codes_V(daq.NoiseSettings()) is None  # the relative model has no ADC
 
 
@@ -83,52 +82,51 @@ def test_noise_before_the_adc_from_the_clipped_residual():
     on five records with a quarter of their samples clipped, where the clipped residual's own rms is lower."""
     n, dt = 2295, 1 / FS
     h = healthy(n)
-    st = B.BaselineSettings()
-    base = B.Baseline.from_record(h, dt, KIN, st)
+    st = baseline.Settings()
+    base = baseline.Baseline.from_record(h, dt, KIN, st)
     rng = np.random.default_rng(11)
     for _ in range(5):
         x = adc(h, SIGMA, rng)
-        d = CL.detect(x, dt, KIN, base, st)
-        p = d.per_type["outer_race"]
+        d = baseline.detect(x, 1 / dt, KIN, st, base)
+        p = d.details["per_type"]["outer_race"]
         assert 0.15 < p["clipped_fraction"] < 0.35
         assert p["noise_sigma_V"] == pytest.approx(SIGMA, rel=0.06)
         assert p["sigma_V"] < 0.9 * SIGMA  # the clipped residual's rms: what the unclipped model would take
         assert p["gain_tolerance_applied"]  # baseline_gain_tolerance 0: gain 1 either way
-    loose = B.BaselineSettings(gain_tolerance=0.1)
-    assert not CL.detect(x, dt, KIN, base, loose).per_type["outer_race"]["gain_tolerance_applied"]
-    passage = B.BaselineSettings(follow_passage_phase=True)
-    assert not CL.detect(x, dt, KIN, base, passage).per_type["inner_race"]["follow_passage_phase_applied"]
+    loose = baseline.Settings(gain_tolerance=0.1)
+    assert not baseline.detect(x, 1 / dt, KIN, loose, base).details["per_type"]["outer_race"]["gain_tolerance_applied"]
+    passage = baseline.Settings(follow_passage_phase=True)
+    assert not baseline.detect(x, 1 / dt, KIN, passage, base).details["per_type"]["inner_race"]["follow_passage_phase_applied"]
 
 
 def test_hide_and_find_on_clipped_records():
     """A clipped healthy record -> none in 8 of 8 seeds (the unclipped detector: outer race in most of them);
     a clipped outer-race fault (100 V impacts every passage) -> outer race in 8 of 8."""
     n, dt = 2295, 1 / FS
-    st = B.BaselineSettings()
+    st = baseline.Settings()
     h = healthy(n)
-    base = B.Baseline.from_record(h, dt, KIN, st)
+    base = baseline.Baseline.from_record(h, dt, KIN, st)
     rng = np.random.default_rng(5)
     xs = [adc(h, SIGMA, rng) for _ in range(8)]
-    got = [d.fault_type for d in CL.detect_many(xs, dt, KIN, base, st)]
-    old = [d.fault_type for d in B.detect_many(xs, dt, KIN, base, st)]
+    got = [d.fault_type for d in baseline.detect_many(xs, 1 / dt, KIN, st, base)]
+    old = [d.fault_type for d in baseline._detect_unclipped(xs, dt, KIN, base, st)]  # the model without clipping
     assert got == ["none"] * 8, got
     assert old.count("outer_race") >= 6, old  # the bug the clipped model fixes
-    faulty = [d.fault_type for d in CL.detect_many([adc(h + impacts("outer_race", n), SIGMA, rng) for _ in range(8)],
-                                                   dt, KIN, base, st)]
+    faulty = [d.fault_type for d in baseline.detect_many([adc(h + impacts("outer_race", n), SIGMA, rng) for _ in range(8)],
+                                                   1 / dt, KIN, st, base)]
     assert faulty == ["outer_race"] * 8, faulty
 
 
 def test_unclipped_records_go_through_the_baseline_detector_unchanged():
     n, dt = 1200, 1 / FS
-    st = B.BaselineSettings()
+    st = baseline.Settings()
     h = healthy(n)
-    base = B.Baseline.from_record(h, dt, KIN, st)
+    base = baseline.Baseline.from_record(h, dt, KIN, st)
     x = h + 3.0 * np.random.default_rng(2).standard_normal(n)
-    a, b = CL.detect(x, dt, KIN, base, st), B.detect(x, dt, KIN, base, st)
-    assert a.fault_type == b.fault_type
+    a, b = baseline.detect(x, 1 / dt, KIN, st, base), baseline._detect_unclipped([x], dt, KIN, base, st)[0]
+    assert a == b
     for t in st.fault_types:
-        assert a.per_type[t]["indicator"] == b.per_type[t]["indicator"]
-        assert a.per_type[t]["clipped_fraction"] == 0.0
+        assert a.details["per_type"][t]["clipped_fraction"] == 0.0
 
 
 @pytest.mark.slow
@@ -138,15 +136,15 @@ def test_clipped_false_alarm_rate_by_monte_carlo():
     configured 1e-3 allows (at most the binomial 99.9% quantile). The records detected together
     (``detect_many``: each detection the record's alone, the same 400 records and numbers as one by one)."""
     n, dt, m = 2550, 1 / FS, 400
-    st = B.BaselineSettings()
+    st = baseline.Settings()
     h = healthy(n)
-    base = B.Baseline.from_record(h, dt, KIN, st)
+    base = baseline.Baseline.from_record(h, dt, KIN, st)
     rng = np.random.default_rng(17)
     p, called = {t: [] for t in st.fault_types}, 0
-    for d in CL.detect_many([adc(h, SIGMA, rng) for _ in range(m)], dt, KIN, base, st):
+    for d in baseline.detect_many([adc(h, SIGMA, rng) for _ in range(m)], 1 / dt, KIN, st, base):
         called += d.fault_type != "none"
         for t in st.fault_types:
-            p[t].append(d.per_type[t]["p_value"])
+            p[t].append(d.details["per_type"][t]["p_value"])
     lo, hi = binom.ppf([0.0005, 0.9995], m, 0.05) / m
     for t, v in p.items():
         assert lo <= np.mean(np.array(v) < 0.05) <= hi, (t, np.mean(np.array(v) < 0.05))
@@ -158,14 +156,14 @@ def test_every_fault_type_found_where_its_peaks_clip():
     samples clipped (the bumps' tops and the impacts); healthy -> none and each fault -> its type, 3 seeds each
     (the residual's mean square, which the impacts raise, leaves the folds their margin)."""
     n, dt = 2295, 1 / FS
-    st = B.BaselineSettings()
+    st = baseline.Settings()
     h = healthy(n) - 30.0
-    base = B.Baseline.from_record(h, dt, KIN, st)
+    base = baseline.Baseline.from_record(h, dt, KIN, st)
     rng = np.random.default_rng(3)
     for true in ("none", "outer_race", "inner_race", "rolling_element"):
         v = h + (impacts(true, n) if true != "none" else 0.0)
         got = []
-        for d in CL.detect_many([adc(v, 11.0, rng) for _ in range(3)], dt, KIN, base, st):
-            assert d.per_type["outer_race"]["clipped_fraction"] > 0.02
+        for d in baseline.detect_many([adc(v, 11.0, rng) for _ in range(3)], 1 / dt, KIN, st, base):
+            assert d.details["per_type"]["outer_race"]["clipped_fraction"] > 0.02
             got.append(d.fault_type)
         assert got == [true] * 3, (true, got)

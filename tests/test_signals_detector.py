@@ -13,9 +13,7 @@ import numpy as np
 import pytest
 from scipy.stats import binom
 
-from piezobearing.signals import daq, envelope
-from piezobearing.signals import detection as det
-from piezobearing.signals import detector as D
+from piezobearing.signals import classification, daq, detection, detector, envelope
 from piezobearing.signals.fault_bands import band_metrics, fault_lines, slipped_frequencies
 
 #: No-slip kinematics of the N 305 ECP at 1000 rpm (Z = 11, D_r/D_p = 10/44).
@@ -25,7 +23,7 @@ FTF = 0.5 * FR * (1 - G)
 KIN = {"shaft_Hz": FR, "ftf_Hz": FTF, "bpfo_Hz": 11 * FTF, "bpfi_Hz": 11 * (FR - FTF),
        "bsf_Hz": 0.5 * 44.0 / 10.0 * FR * (1 - G**2)}
 FS = 2550.0
-ENV = det.EnvelopeSettings(band_rule="fixed", band_Hz=(500.0, 1250.0))
+ENV = envelope.EnvelopeSettings(band_rule="fixed", band_Hz=(500.0, 1250.0))
 
 
 def fault_signal(fault_type: str, slip: float, rng: np.random.Generator, fs: float = FS, duration_s: float = 1.0,
@@ -96,7 +94,7 @@ def test_band_metrics_find_a_slipped_line():
     fs, n = 1000.0, 4000
     f1 = slipped_frequencies(KIN, 0.015)["bpfo_Hz"]
     x = 0.3 * np.cos(2 * np.pi * f1 * np.arange(n) / fs)
-    spec = det.amplitude_spectrum(x, 1 / fs)
+    spec = envelope.amplitude_spectrum(x, 1 / fs)
     m = band_metrics(spec.frequency_Hz, spec.amplitude_V, fault_lines(KIN, "outer_race", 1, 0, 0.03))[0]
     assert m["peak_frequency_Hz"] == pytest.approx(f1, abs=spec.resolution_Hz)
     assert m["band_power_V2"] == pytest.approx(0.3**2 / 2, rel=0.05)
@@ -107,7 +105,7 @@ def test_band_metrics_find_a_slipped_line():
 
 def test_per_bin_probability():
     """1 - (1 - p)^M recovers the window's probability."""
-    p = D.per_bin_probability(1e-3, 7)
+    p = detector.per_bin_probability(1e-3, 7)
     assert 1 - (1 - p) ** 7 == pytest.approx(1e-3, rel=1e-12)
 
 
@@ -115,13 +113,13 @@ def test_per_bin_probability():
 def test_window_threshold_false_alarms_by_monte_carlo(m, mf):
     """Max of M exponential bins over a Gamma floor exceeds the level in pfa of the trials (binomial 99.9%)."""
     pfa, n = 0.01, 40000
-    t = D.window_threshold(pfa, m, mf)
+    t = detector.window_threshold(pfa, m, mf)
     rng = np.random.default_rng([7, m, mf])
     hits = int(np.sum(rng.exponential(size=(n, m)).max(axis=1) / rng.gamma(mf, 1 / mf, n) > t))
     lo, hi = binom.interval(0.999, n, pfa)
     assert lo <= hits <= hi
     # the naive per-bin level (no search correction) fires far more often
-    t_naive = D.window_threshold(pfa, 1, mf)
+    t_naive = detector.window_threshold(pfa, 1, mf)
     if m > 1:
         naive = np.mean(rng.exponential(size=(n, m)).max(axis=1) / rng.gamma(mf, 1 / mf, n) > t_naive)
         assert naive > 3 * pfa
@@ -130,7 +128,7 @@ def test_window_threshold_false_alarms_by_monte_carlo(m, mf):
 def test_indicator_threshold_false_alarms_by_monte_carlo():
     """The sum of window maxima over shared floors: its computed quantile is exceeded at the rate pfa."""
     groups = (((3, 4, 3), 40), ((4, 5, 4), 38), ((5, 6, 5), 35))
-    null = D.null_distribution(groups)
+    null = detector.null_distribution(groups)
     rng = np.random.default_rng(11)
     n = 40000
     total = np.zeros(n)
@@ -144,13 +142,13 @@ def test_indicator_threshold_false_alarms_by_monte_carlo():
 
 def test_detector_false_alarms_on_noise_records():
     """White noise through band-pass, envelope and search detector: any-fault calls at most pfa (binomial 99.9%)."""
-    st = D.DetectorSettings(false_alarm_probability=0.06)
+    st = detector.DetectorSettings(false_alarm_probability=0.06)
     n = 600
     rng = np.random.default_rng(3)
     calls = {t: 0 for t in st.fault_types}
     anyc = 0
     for _ in range(n):
-        _, d = D.analyse_record(rng.standard_normal(int(FS)), 1 / FS, KIN, ENV, st)
+        _, d = detector.analyse_record(rng.standard_normal(int(FS)), 1 / FS, KIN, ENV, st)
         for t in st.fault_types:
             calls[t] += d.per_type[t]["detected"]
         anyc += d.fault_type != "none"
@@ -165,16 +163,16 @@ def test_detector_false_alarms_on_noise_records():
 
 def test_search_detects_slipped_outer_race_fault_where_the_exact_bin_fails():
     """1.5 % slip, 10 dB: the search finds the outer-race fault in >= 95% of 50 seeds, the exact bin in few."""
-    st = D.DetectorSettings()
-    ins = det.IndicatorSettings()
+    st = detector.DetectorSettings()
+    ins = detection.IndicatorSettings()
     found, exact = 0, 0
     for seed in range(50):
         rng = np.random.default_rng([5, seed])
         x = fault_signal("outer_race", 0.015, rng)
         y = daq.add_noise(x, 1 / FS, daq.NoiseSettings(snr_dB=10.0), rng).voltage_V
-        _, d = D.analyse_record(y, 1 / FS, KIN, ENV, st)
+        _, d = detector.analyse_record(y, 1 / FS, KIN, ENV, st)
         found += d.per_type["outer_race"]["detected"] and d.fault_type == "outer_race"
-        exact += det.analyse(y, 1 / FS, KIN["bpfo_Hz"], ENV, ins).result["detected"]
+        exact += detection.analyse(y, 1 / FS, KIN["bpfo_Hz"], ENV, ins).result["detected"]
     assert found >= 48
     assert exact <= 25
 
@@ -182,24 +180,24 @@ def test_search_detects_slipped_outer_race_fault_where_the_exact_bin_fails():
 @pytest.mark.parametrize("fault_type", ["outer_race", "inner_race", "rolling_element"])
 def test_classification_of_each_fault_type(fault_type):
     """Synthetic fault of each type at 1.5 % slip, 2 % jitter: classified right in >= 90 % of 30 seeds."""
-    st = D.DetectorSettings()
+    st = detector.DetectorSettings()
     got = []
     for seed in range(30):
         rng = np.random.default_rng([8, seed])
         x = fault_signal(fault_type, 0.015, rng, jitter=0.002)
         y = daq.add_noise(x, 1 / FS, daq.NoiseSettings(snr_dB=10.0), rng).voltage_V
-        got.append(D.analyse_record(y, 1 / FS, KIN, ENV, st)[1].fault_type)
-    cm = D.confusion_matrix([fault_type] * len(got), got)
+        got.append(detector.analyse_record(y, 1 / FS, KIN, ENV, st)[1].fault_type)
+    cm = classification.confusion_matrix([fault_type] * len(got), got)
     assert cm["correct_rate"][fault_type] >= 0.9, cm["counts"]
 
 
 def test_confusion_matrix_and_roc():
-    cm = D.confusion_matrix(["outer_race", "none", "none"], ["outer_race", "none", "inner_race"])
+    cm = classification.confusion_matrix(["outer_race", "none", "none"], ["outer_race", "none", "inner_race"])
     assert cm["counts"][0][0] == 1 and cm["counts"][3][1] == 1 and cm["correct_rate"]["none"] == 0.5
-    pfa, pd_ = D.roc_points(np.array([3.0, 4.0]), np.array([1.0, 2.0]))
-    assert D.roc_auc(pfa, pd_) == pytest.approx(1.0)
-    pfa, pd_ = D.roc_points(np.array([1.0, 2.0]), np.array([1.0, 2.0]))
-    assert D.roc_auc(pfa, pd_) == pytest.approx(0.5)
+    pfa, pd_ = classification.roc_points(np.array([3.0, 4.0]), np.array([1.0, 2.0]))
+    assert classification.roc_auc(pfa, pd_) == pytest.approx(1.0)
+    pfa, pd_ = classification.roc_points(np.array([1.0, 2.0]), np.array([1.0, 2.0]))
+    assert classification.roc_auc(pfa, pd_) == pytest.approx(0.5)
 
 
 # --------------------------------------------------------------------------- DAQ
@@ -212,11 +210,11 @@ def test_anti_alias_sampling_keeps_the_passband_and_drops_what_would_alias():
     x = 1.0 * np.sin(2 * np.pi * 0.3 * fs * t) + 0.5 * np.sin(2 * np.pi * 0.8 * fs * t)
     s = daq.sample(x, 1 / fs_model, fs)
     assert s.dt_s == pytest.approx(1 / fs, rel=1e-12)
-    spec = det.amplitude_spectrum(s.voltage_V, s.dt_s)
+    spec = envelope.amplitude_spectrum(s.voltage_V, s.dt_s)
     a = dict(zip(np.round(spec.frequency_Hz, 6), spec.amplitude_V, strict=True))
     assert a[round(0.3 * fs, 6)] == pytest.approx(1.0, rel=1e-9)
     assert a[round(0.2 * fs, 6)] < 1e-9
-    naive = det.amplitude_spectrum(x[::10], 10 / fs_model)  # decimation without a filter aliases
+    naive = envelope.amplitude_spectrum(x[::10], 10 / fs_model)  # decimation without a filter aliases
     assert naive.amplitude_V[np.argmin(np.abs(naive.frequency_Hz - 0.2 * fs))] == pytest.approx(0.5, rel=1e-6)
 
 
@@ -251,7 +249,7 @@ def test_absolute_noise_level_and_mains_lines():
     x = np.zeros(int(fs) * 2)
     a = daq.add_noise(x, 1 / fs, st, np.random.default_rng(1))
     assert a.noise_std_V == pytest.approx(2e-5 * np.sqrt(fs / 2))
-    spec = det.amplitude_spectrum(a.voltage_V, 1 / fs)
+    spec = envelope.amplitude_spectrum(a.voltage_V, 1 / fs)
     i50, i100 = (np.argmin(np.abs(spec.frequency_Hz - f)) for f in (50.0, 100.0))
     assert spec.amplitude_V[i50] == pytest.approx(0.01, rel=0.05)
     assert spec.amplitude_V[i100] == pytest.approx(0.003, rel=0.15)
@@ -301,17 +299,17 @@ def test_order_tracking_finds_the_fault_that_the_ramp_smears():
     """On the ramp the time-domain envelope spreads BPFO over ~20 Hz; the order spectrum detects it sharply."""
     from piezobearing.signals import order as O
 
-    st = D.DetectorSettings()
+    st = detector.DetectorSettings()
     band = (1500.0, 3000.0)
     wins_order, wins_time = 0, 0
     for seed in range(10):
         t, _, y, tacho = ramp_record(np.random.default_rng([21, seed]))
         ang = O.shaft_angle(O.pulse_times(tacho, t[1]), 1)
         spec_o = O.order_envelope_spectrum(y, t[1], band, ang, samples_per_rev=64)
-        d_o = D.detect(spec_o, O.kinematics_in_orders(KIN), st)
+        d_o = detector.detect(spec_o, O.kinematics_in_orders(KIN), st)
         mean_speed = dict(KIN, **{k: v * 1.2 for k, v in KIN.items()})  # kinematics at the mean 1200 rpm
         spec_t = envelope.envelope_spectrum(y, t[1], band, window="hann")
-        d_t = D.detect(spec_t, mean_speed, st)
+        d_t = detector.detect(spec_t, mean_speed, st)
         wins_order += d_o.fault_type == "outer_race"
         wins_time += d_t.fault_type == "outer_race"
         assert d_o.per_type["outer_race"]["margin"] > 3 * d_t.per_type["outer_race"]["margin"]
@@ -354,4 +352,4 @@ def test_the_tail_probabilities_from_scipy_special_are_scipy_stats_bit_for_bit()
     for p in (1e-6, 1e-3, 0.05, 0.5, 0.999):
         for k in (1, 3, 10):
             for m in (1, 7, 60, 1000):
-                assert det.indicator_threshold(p, k, m) == float(k * f.isf(p, 2 * k, 2 * m))
+                assert detection.indicator_threshold(p, k, m) == float(k * f.isf(p, 2 * k, 2 * m))

@@ -9,23 +9,26 @@ import pandas as pd
 import pytest
 from test_signals_stages import inputs, run_chain  # noqa: F401  (the fixture)
 
+from piezobearing.signals.detectors import Detection
 from piezobearing.stages import signals as st
 
 CASES = ("healthy", "faulty")
 
 
 def test_indicator_carries_the_fault_type_and_every_type_test(tmp_path, inputs, paper_config):  # noqa: F811
-    """fault_indicator.json: per case fault_type and per type indicator, threshold, detected; today's keys kept."""
+    """fault_indicator.json: per case the paper's indicator, the fault_type and the configured detector's
+    Detection (per family statistic, threshold, margin, detected), readable back as one."""
     out = run_chain(tmp_path, inputs, paper_config)
     ind = json.loads((out / "fault_indicator.json").read_text())
     assert ind["faulty"]["fault_type"] == "outer_race" and ind["healthy"]["fault_type"] == "none"
     for case in CASES:
         assert {"indicator", "threshold", "detected", "harmonics"} <= set(ind[case])
-        assert set(ind[case]["fault_types"]) == {"outer_race", "inner_race", "rolling_element"}
-        for r in ind[case]["fault_types"].values():
-            assert {"indicator", "threshold", "detected", "lines"} <= set(r)
-    assert ind["faulty"]["fault_types"]["outer_race"]["detected"]
-    assert not any(r["detected"] for r in ind["healthy"]["fault_types"].values())
+        d = Detection.from_dict(ind[case]["detection"])
+        assert d.method == paper_config["signals"]["detector"]["statistic"] and d.fault_type == ind[case]["fault_type"]
+        assert set(d.families) == {"outer_race", "inner_race", "rolling_element"}
+    faulty, healthy = (Detection.from_dict(ind[c]["detection"]) for c in ("faulty", "healthy"))
+    assert faulty.families["outer_race"].detected and faulty.margin_dB > 0
+    assert not any(f.detected for f in healthy.families.values())
     nz = json.loads((out / "noisy_faulty.json").read_text())
     assert nz["anti_alias"].startswith("none") and nz["daq"]["n_clipped"] == 0  # the paper's rate: as is
 
@@ -176,6 +179,6 @@ def test_healthy_stays_healthy_at_a_daq_noise(tmp_path, inputs, paper_config, mo
     monkeypatch.setattr(sout, "rc_voltage", lambda f, dt, g, tau, period_s: rest(f, dt, g, tau))
     old = run_chain(tmp_path / "rest", inputs, cfg, harmonic=False)
     assert leftover(out) < 1e-6 and leftover(old) > 5e-3  # the free decay over one passage: 10 mV x (1 - e^-1.08)
-    folds = json.loads((old / "fault_indicator.json").read_text())["healthy"]["fault_types"]
-    assert max(folds[t]["indicator"] for t in ("inner_race", "rolling_element")) > 2 * max(
+    folds = json.loads((old / "fault_indicator.json").read_text())["healthy"]["detection"]["families"]
+    assert max(folds[t]["statistic"] for t in ("inner_race", "rolling_element")) > 2 * max(
         healthy["inner_race_indicator"].max(), healthy["rolling_element_indicator"].max())

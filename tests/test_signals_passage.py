@@ -14,8 +14,9 @@ import pytest
 from scipy.stats import binom
 from test_signals_baseline import FS, KIN, SLIP
 
-from piezobearing.signals import baseline as B
+from piezobearing.signals import harmonics
 from piezobearing.signals import passage as P
+from piezobearing.signals.detectors import baseline
 from piezobearing.signals.fault_bands import slipped_frequencies
 
 Z = 11
@@ -92,9 +93,9 @@ def test_on_its_passage_clock_the_jittered_train_is_periodic_again():
     on the passage clock (the phase's 0.003 cycle lag on the bumps' flanks)."""
     v, _ = jittered("none", 0.02, np.random.default_rng(4))
     dt = 1 / FS
-    f0, p = B.refine_period(v, dt, F["bpfo_Hz"])
+    f0, p = harmonics.refine_period(v, dt, F["bpfo_Hz"])
     clock = P.on_passage_clock(v, dt, f0)
-    _, pw = B.refine_period(clock.voltage_V, dt, clock.f0_Hz)
+    _, pw = harmonics.refine_period(clock.voltage_V, dt, clock.f0_Hz)
     assert abs(clock.voltage_V.size - (N - 2 * P.HALF_WIDTH)) <= 2  # the mean rate's samples between the ends
     assert np.std(clock.voltage_V - pw) < np.std(v - p) / 40
 
@@ -107,16 +108,16 @@ def test_a_record_without_a_roller_train_is_refused():
 def test_folds_on_the_passage_clock_keep_their_false_alarm_rate():
     """Healthy records at 2% jitter and 10 dB: each fold's p-value falls below 0.05 at most as often as the
     binomial bound of 0.05 allows (Monte Carlo, 60 records; the folds' chi^2 holds on the resampled noise)."""
-    st = B.BaselineSettings(follow_passage_phase=True)
-    base = B.Baseline.from_record(jittered("none", 0.0, np.random.default_rng(0))[0], 1 / FS, KIN, st)
+    st = baseline.Settings(follow_passage_phase=True)
+    base = baseline.Baseline.from_record(jittered("none", 0.0, np.random.default_rng(0))[0], 1 / FS, KIN, st)
     m = 60
     hits = np.zeros(2, int)
     records = []
     for j in range(m):
         rng = np.random.default_rng([9, j])
         records.append(noisy(jittered("none", 0.02, rng)[0], rng))
-    for d in B.detect_many(records, 1 / FS, KIN, base, st):  # each detection the record's alone
-        hits += [d.details[t]["log10_p"] < np.log10(0.05) for t in ("inner_race", "rolling_element")]
+    for d in baseline.detect_many(records, FS, KIN, st, base):  # each detection the record's alone
+        hits += [d.details["tests"][t]["log10_p"] < np.log10(0.05) for t in ("inner_race", "rolling_element")]
     assert hits.max() <= binom.ppf(0.999, m, 0.05), hits
 
 
@@ -124,9 +125,9 @@ def test_jitter_no_longer_reads_as_an_inner_race_or_roller_fault():
     """Healthy at 2% jitter and 10 dB: folded on a constant period the smeared roller train's residual is called
     an inner-race and a roller fault in 10 of 10 records; on the passage clock in none. A fault of 30 V impacts
     (found 8 of 8 at no jitter on the constant period) is found 8 of 8 through the jitter on the passage clock."""
-    st = B.BaselineSettings(follow_passage_phase=True)
-    fixed = B.BaselineSettings()
-    base = B.Baseline.from_record(jittered("none", 0.0, np.random.default_rng(0))[0], 1 / FS, KIN, st)
+    st = baseline.Settings(follow_passage_phase=True)
+    fixed = baseline.Settings()
+    base = baseline.Baseline.from_record(jittered("none", 0.0, np.random.default_rng(0))[0], 1 / FS, KIN, st)
     folds = ("inner_race", "rolling_element")
     alarms = {True: np.zeros(2, int), False: np.zeros(2, int)}
     ys = []
@@ -134,20 +135,20 @@ def test_jitter_no_longer_reads_as_an_inner_race_or_roller_fault():
         rng = np.random.default_rng([9, j])
         ys.append(noisy(jittered("none", 0.02, rng)[0], rng))
     for s in (st, fixed):
-        for d in B.detect_many(ys, 1 / FS, KIN, base, s):
-            alarms[s.follow_passage_phase] += [d.per_type[t]["detected"] for t in folds]
+        for d in baseline.detect_many(ys, FS, KIN, s, base):
+            alarms[s.follow_passage_phase] += [d.details["per_type"][t]["detected"] for t in folds]
     assert alarms[False].tolist() == [10, 10] and alarms[True].tolist() == [0, 0], alarms
     for kind in folds:
         records = []
         for j in range(8):
             rng = np.random.default_rng([11, j])
             records.append(noisy(jittered(kind, 0.02, rng, 30.0)[0], rng))
-        found = sum(d.per_type[kind]["detected"] for d in B.detect_many(records, 1 / FS, KIN, base, st))
+        found = sum(d.details["per_type"][kind]["detected"] for d in baseline.detect_many(records, FS, KIN, st, base))
         assert found == 8, (kind, found)
 
 
 def test_follow_passage_phase_from_config(paper_config):
     sig = paper_config["signals"]
-    assert B.BaselineSettings.from_config(sig).follow_passage_phase is False
+    assert baseline.Settings.from_config(sig).follow_passage_phase is False
     on = {**sig, "detector": {**sig["detector"], "follow_passage_phase": True}}
-    assert B.BaselineSettings.from_config(on).follow_passage_phase is True
+    assert baseline.Settings.from_config(on).follow_passage_phase is True

@@ -11,7 +11,7 @@ import pytest
 from test_signals import BPFO, DT, bearing_force
 
 from piezobearing.sensor.calibration import SensorCircuit, frequency_response
-from piezobearing.signals import detection as S
+from piezobearing.signals import envelope
 from piezobearing.stages import signals as st
 from piezobearing.stages.scorecard import scorecard_signals
 
@@ -48,8 +48,9 @@ def run_chain(tmp_path, inputs, config, harmonic=True):
         st.noisy(out / f"voltage_{case}.csv", case, out / f"noisy_{case}.csv", out / f"noisy_{case}.json", config)
         st.envelope(out / f"noisy_{case}.csv", out / f"voltage_{case}.csv", inputs["kinematics"],
                     out / f"envelope_{case}.csv", out / f"envelope_{case}.json", config)
-    st.indicator({c: (out / f"envelope_{c}.csv", out / f"envelope_{c}.json") for c in ("healthy", "faulty")},
-                 inputs["kinematics"], {c: out / f"noisy_{c}.json" for c in ("healthy", "faulty")},
+    cases = ("healthy", "faulty")
+    st.indicator({c: out / f"envelope_{c}.json" for c in cases}, inputs["kinematics"],
+                 {c: str(out / f"noisy_{c}.csv") for c in cases}, {c: out / f"noisy_{c}.json" for c in cases},
                  out / "fault_indicator.json", config)
     return out
 
@@ -122,7 +123,7 @@ def test_bad_files_name_the_problem(tmp_path, inputs, paper_config):
     with pytest.raises(st.SignalFileError, match="skip_s"):
         st.sensor_voltage(inputs["healthy"], inputs["resistance"], None, tmp_path / "v.csv", tmp_path / "v.json", config)
     with pytest.raises(ValueError, match="band_rule"):
-        S.choose_band(np.zeros(100), DT, S.EnvelopeSettings(band_rule="magic"))
+        envelope.choose_band(np.zeros(100), DT, envelope.EnvelopeSettings(band_rule="magic"))
 
 
 def test_snr_grid_always_holds_the_configured_snr(paper_config):

@@ -12,10 +12,10 @@
     95% intervals); writes DIR/diagnosis.json, DIR/report.md, DIR/figures/.
 
 ``piezobearing validate FILE [--config FILE]``
-    Check a calibration CSV (time_s, force_N, voltage_V) as the workflow
-    does before any job runs (file checks, at least two impulses, voltage
-    polarity); prints ``OK`` and a summary, or the one-line problem (exit
-    status 1).
+    Check a calibration record (time_s, force_N, voltage_V in any supported
+    format: .csv, .mat, .uff/.unv, .tdms, .wav) as the workflow does before
+    any job runs (file checks, at least two impulses, voltage polarity);
+    prints ``OK`` and a summary, or the one-line problem (exit status 1).
 
 ``piezobearing hide-and-find EFFECT [--param NAME=VALUE ...] [--seed N] [--config FILE]``
     Hide a catalogue effect (a new one, while it is being written) in the
@@ -25,6 +25,13 @@
     parameters with their 95% intervals and the verdict; exit status 0 when
     the effect (or one it is declared exactly equivalent to) is ranked and
     selected first with the verdict ``explained``, else 1.
+
+``piezobearing detect RECORD --out DIR [--config RIG.yaml] [--bearing DESIGNATION] [--rpm R] [--fs HZ] [--channel NAME]``
+    Detect a rolling-bearing fault in a recording (accelerometer or this
+    sensor; .mat v5/v7.3, .csv, .wav, .uff, .tdms) with the envelope
+    detector: writes DIR/detection.json (the call, per family its evidence,
+    the band, the shaft speed found, the false-alarm probability),
+    DIR/report.md and DIR/detection.png; prints the call in one line.
 
 Exit status: 0 done; 1 a user error (bad file, bad config, unknown effect,
 unusable --out), one line naming the file or key and the fix, never a
@@ -67,6 +74,48 @@ def _load_config(args) -> tuple[dict, str]:
     overrides = [args.config] if args.config is not None else []
     config = cfg.load(*overrides, config_dir=d)
     return config, " + ".join([str(d / "config.yaml"), *map(str, overrides)])
+
+
+#: The record formats the readers take (piezobearing.io.formats.RECORD_FORMATS; a test holds the two equal),
+#: written out here so that ``--help`` does not import the readers.
+FORMATS = ".csv, .mat (MATLAB v5 or v7.3), .uff/.unv (UFF58), .tdms (NI TDMS), .wav"
+
+#: What ``piezobearing --help`` says first.
+DESCRIPTION = (
+    "Hold the embedded PZT force sensor's models against your measurements. 'validate' checks a calibration "
+    "record as the workflow does; 'diagnose' fits the sensor's circuit model to a calibration record and "
+    "names the physical effect it misses; 'diagnose-bearing' holds the bearing, housing and sensor chain "
+    "against a running-bearing record and names the fault; 'hide-and-find' checks that the diagnosis finds an "
+    "effect hidden in a synthetic record. Every command reads the checkout's config/config.yaml with --config "
+    "merged over it, prints which config and which model it used, and stops on a bad input with one line "
+    "naming the file or key and the fix. The paper's figures and numbers come from the Snakemake workflow "
+    "(snakemake --cores 2), not from this script."
+)
+
+
+def _calibration_model(config: dict) -> str:
+    """The calibration model a command used, in one line: the sensor, its circuit and the effects switched on."""
+    s = config["sensor"]
+    effects = ", ".join(config["model"]["effects"]) or "none"
+    return (
+        f"model: RC circuit of Eq. 6 (R fitted) on a {s['material']} disk {s['pzt_diameter_m'] * 1e3:g} x "
+        f"{s['pzt_height_m'] * 1e3:g} mm, {s['cable_length_m']:g} m cable at "
+        f"{s['cable_capacitance_F_per_m'] * 1e12:g} pF/m; effects switched on: {effects}"
+    )
+
+
+def _bearing_model(config: dict, influence: str | None) -> str:
+    """The running-bearing model a command used, in one line: bearing, operating point, housing, sensor."""
+    b, s, bd = config["bearing"], config["sensor"], config["bearing_diagnosis"]
+    effects = ", ".join(bd["effects"]) or "none"
+    housing = f"influence line from {influence}" if influence else "influence line solved from the config"
+    return (
+        f"model: {b['n_rollers']}-roller bearing (D_r {b['roller_diameter_m'] * 1e3:g} mm, D_p "
+        f"{b['pitch_diameter_m'] * 1e3:g} mm) at {b['shaft_speed_rpm']:g} rpm and {b['radial_load_N']:g} N, "
+        f"quasi-static surrogate, {housing}; sensor {s['material']} {s['pzt_diameter_m'] * 1e3:g} x "
+        f"{s['pzt_height_m'] * 1e3:g} mm through R = {bd['resistance_ohm'] / 1e6:g} MOhm; effects switched on: "
+        f"{effects}"
+    )
 
 
 def _data_dirs() -> list[Path]:
@@ -137,6 +186,7 @@ def _validate(args) -> int:
         f"OK: {args.file}: {m.time_s.size} rows, {m.sample_rate_Hz:.6g} Hz, "
         f"{m.time_s[-1] - m.time_s[0]:.6g} s, {len(imps)} impulses"
     )
+    print(f"config: {used}")
     from .diagnosis.describe import stuck_runs
 
     stuck = stuck_runs(m.voltage_V, time_s=m.time_s)
@@ -209,6 +259,7 @@ def _diagnose(args) -> int:
     bar.update(bar.total - bar.n)
     bar.close()
     print(f"config: {used}")
+    print(_calibration_model(config))
     base, final = d["baseline"], d["final"]
     print(f"baseline NRMSE {100 * base['nrmse']:.2f}% (noise floor {100 * base['noise_floor_nrmse']:.2f}%)")
     conf = d["configured"]
@@ -281,6 +332,7 @@ def _hide_and_find(args) -> int:
     found = first is not None and first["effect"] in same and d["selected"][:1] == [first["effect"]]
     source = "" if given == params else " (the effect's example" + (", --param over it)" if given else ")")
     print(f"config: {used}; seed {seed}; hidden: {args.effect} {params or '(defaults)'}{source}")
+    print(_calibration_model({**config, "model": {"effects": []}}))
     if first is not None:
         print(f"ranked first: {first['effect']} (delta BIC {first['delta_bic']:.4g}): {first['summary']}")
     print(f"selected: {', '.join(d['selected']) or 'nothing'}; verdict: {d['verdict']}")
@@ -294,11 +346,11 @@ def _hide_and_find(args) -> int:
 
 def _diagnose_bearing(args) -> int:
     from .diagnosis.effect import EffectError
-    from .io import MeasurementError, ResultFileError
+    from .io import MeasurementError, ResultFileError, SignalFileError
     from .stages.bearing_diagnosis import diagnose_bearing
 
     try:
-        config, _ = _load_config(args)
+        config, used = _load_config(args)
     except (cfg.ConfigError, OSError) as e:
         return _fail(str(e))
     config["bearing"]["measurement"] = args.record
@@ -310,18 +362,24 @@ def _diagnose_bearing(args) -> int:
     try:
         if not args.influence and not args.quiet:
             print("solving the housing's influence line from the config (a few seconds)", file=sys.stderr)
-        d = diagnose_bearing(args.record, args.out, config, args.influence, progress)
-    except (MeasurementError, EffectError, ResultFileError) as e:
+        d = diagnose_bearing(args.record, args.out, config, args.influence, progress, args.sensor_response)
+    except (MeasurementError, EffectError, ResultFileError, SignalFileError) as e:
         return _fail(str(e))
+    print(f"config: {used}")
+    print(_bearing_model(config, args.influence))
     for w in d["record_warnings"]:
         print(f"warning: {w}")
     base, final, f = d["baseline"], d["final"], d["fault"]
+    sm = d["sensor_model"]
+    print(f"sensor model: d33/C x FEM correction {sm['fem_factor']:.4g} ({sm['source']})")
     print(f"baseline NRMSE {100 * base['nrmse']:.2f}% (noise floor {100 * base['noise_floor_nrmse']:.2f}%)")
     print(
         f"selected: {', '.join(d['selected']) or 'nothing'}; final NRMSE {100 * final['nrmse']:.2f}% "
         f"(floor {100 * final['noise_floor_nrmse']:.2f}%)"
     )
     print(f"fault: {f['type']}" + "".join(f"; {k} = {v:.6g} [{f['ci95'][k][0]:.6g}, {f['ci95'][k][1]:.6g}]" for k, v in f["params"].items() if f["ci95"].get(k)))
+    if f.get("lines_left"):
+        print(f"found, with lines left: {f['statement']}")
     print(f"verdict: {d['verdict']}")
     stuck = (d.get("outside_catalogue") or {}).get("stuck") or {}
     if stuck.get("where"):
@@ -329,6 +387,26 @@ def _diagnose_bearing(args) -> int:
     for u in d["unexplained"][:5]:
         print(f"  - {u['where']}")
     print(f"report: {args.out}/report.md")
+    return 0
+
+
+def _detect(args) -> int:
+    from .bearing.kinematics import BearingError
+    from .io import MeasurementError
+    from .recording import RigError, detect_recording, write_detection
+
+    try:
+        created = _prepare_out(args.out)
+    except UserError as e:
+        return _fail(str(e))
+    try:
+        result = detect_recording(args.record, args.config, args.bearing, args.rpm, args.fs, args.channel)
+    except (MeasurementError, RigError, BearingError) as e:
+        _remove_empty(created)
+        return _fail(str(e))
+    paths = write_detection(result, args.out)
+    print(f"{args.record}: {result.to_dict()['summary']}")
+    print(f"report: {paths['report']}")
     return 0
 
 
@@ -342,7 +420,7 @@ def _version() -> str:
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="piezobearing",
-        description=__doc__.split("\n\n")[0].splitlines()[0].strip('"'),
+        description=DESCRIPTION,
         epilog="Exit status: 0 done, 1 user error (one line with the fix), 2 usage error, 3 internal error (a bug).",
     )
     p.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
@@ -350,10 +428,15 @@ def _parser() -> argparse.ArgumentParser:
     d = sub.add_parser(
         "diagnose",
         help="hold the model against a calibration record and write a report",
-        description="Fit the configured model to a calibration record, rank the missing effects, write a report.",
+        description="Fit the sensor's circuit model (Eq. 6, R fitted, with the effects of model.effects) to a "
+        "calibration record of force and voltage; test the residual against the noise floor measured between "
+        "the impulses; rank every effect of the catalogue by how much it explains, add them stepwise while the "
+        "evidence holds, and give the verdict (explained, or what remains and where). Writes diagnosis.json, "
+        "diagnosis.npz, report.md and figures/ to --out; prints the config and the model it used. The record: "
+        f"{FORMATS}, channels time_s, force_N, voltage_V (names in calibration.channels).",
     )
     d.add_argument(
-        "measurement", help="calibration CSV with columns time_s, force_N, voltage_V (s, N, V), UTF-8"
+        "measurement", help=f"calibration record ({FORMATS}) with time_s, force_N, voltage_V (s, N, V)"
     )
     d.add_argument(
         "--out",
@@ -371,7 +454,13 @@ def _parser() -> argparse.ArgumentParser:
     b = sub.add_parser(
         "diagnose-bearing",
         help="hold the bearing model against a running-bearing record and write a report",
-        description="Fit the bearing chain to a running-bearing record, rank the missing effects, name the fault.",
+        description="Fit the running bearing's chain (roller loads with any defect, the housing's influence "
+        "line, the sensor's RC circuit; phase, speed and DC level fitted) to a record of the sensor voltage; "
+        "look at the residual per roller passage, synchronously averaged, in its envelope at every fault band and "
+        "in orders; rank the catalogue's effects (defects, load, clearance, slip, ...), add them stepwise, and "
+        "name the fault with its size and position and their 95% intervals. Writes diagnosis.json, report.md and "
+        "figures/ to --out; prints the config and the model it used. The record: "
+        f"{FORMATS}, channels time_s, voltage_V[, speed_rpm] (names in bearing.channels).",
     )
     b.add_argument("record", help="record with time_s, voltage_V[, speed_rpm] (s, V, rpm): .csv, .mat, .uff, .tdms, .wav")
     b.add_argument("--out", required=True, help="output folder (diagnosis.json, report.md, figures/)")
@@ -380,14 +469,25 @@ def _parser() -> argparse.ArgumentParser:
         "--influence",
         help="the housing's influence line (results/bearing/influence_line_healthy.csv); default: solved from the config",
     )
+    b.add_argument(
+        "--sensor-response",
+        metavar="CSV",
+        help="the sensor FEM's harmonic response (results/sensor/harmonic.csv) for the FEM correction of the sensor "
+        "model; default: the paper sensor's, shipped with the package",
+    )
     b.add_argument("--quiet", action="store_true", help="no progress lines")
     b.set_defaults(func=_diagnose_bearing)
     v = sub.add_parser(
         "validate",
-        help="check a calibration CSV as the workflow does",
-        description="Check a calibration CSV with the workflow's checks; print OK and a summary or the problem.",
+        help="check a calibration record as the workflow does",
+        description="Read a calibration record as the workflow does before any job runs and check it: the "
+        "file and its channels, finite numbers, an increasing and uniform clock (or resampled), at least two "
+        "impulses, the voltage's polarity, dead, constant, clipped or stuck channels. Prints OK with a summary "
+        "and the config used, or the one-line problem with its fix (exit status 1). Formats: "
+        f"{FORMATS}; channels time_s, force_N, voltage_V (s, N, V), named in calibration.channels where the "
+        "file calls them otherwise.",
     )
-    v.add_argument("file", help="calibration CSV with columns time_s, force_N, voltage_V (s, N, V), UTF-8")
+    v.add_argument("file", help=f"calibration record ({FORMATS}) with time_s, force_N, voltage_V (s, N, V)")
     v.add_argument(
         "--resample-to-uniform",
         action="store_true",
@@ -402,8 +502,11 @@ def _parser() -> argparse.ArgumentParser:
     h = sub.add_parser(
         "hide-and-find",
         help="hide a catalogue effect in the synthetic calibration record and check the diagnosis finds it",
-        description="Hide one catalogue effect in the configured synthetic record, diagnose it, say whether it "
-        "came first (exit 0) or not (exit 1).",
+        description="Synthesise the configured calibration record with one effect of the catalogue hidden in "
+        "it (at the effect's example size, or the --param values), diagnose it with the whole catalogue, and say "
+        "whether the diagnosis ranks and selects that effect first with the verdict 'explained' (FOUND, exit 0) "
+        "or not (exit 1); prints the fitted parameters with their 95% intervals beside the hidden values, and "
+        "the config and model used. The check a new effect module must pass.",
     )
     h.add_argument("effect", help="the effect's identifier (e.g. channel_delay)")
     h.add_argument(
@@ -418,6 +521,22 @@ def _parser() -> argparse.ArgumentParser:
         "--config", metavar="FILE", help="YAML file merged over config/config.yaml (synthesis, diagnostics)"
     )
     h.set_defaults(func=_hide_and_find)
+    t = sub.add_parser(
+        "detect",
+        help="detect a rolling-bearing fault in a recording and write a report",
+        description="Detect an outer-race, inner-race or rolling-element fault in a vibration or sensor record with "
+        "the envelope detector (pre-whitening, fast kurtogram, squared envelope spectrum, fault bands).",
+    )
+    t.add_argument("record", help="the record: .mat (v5/v7.3), .csv, .wav, .uff/.unv, .tdms")
+    t.add_argument("--out", required=True, metavar="DIR",
+                   help="output folder (detection.json, report.md, detection.png); not inside data/")
+    t.add_argument("--config", metavar="RIG.yaml",
+                   help="rig file: bearing (designation or geometry), shaft_speed_rpm, sample_rate_Hz, channel")
+    t.add_argument("--bearing", metavar="DESIGNATION", help="a bearing of the designation table, e.g. 'SKF 6205'")
+    t.add_argument("--rpm", type=float, metavar="R", help="shaft speed [rpm] (default: the rig file's, else the record's RPM variable)")
+    t.add_argument("--fs", type=float, metavar="HZ", help="sampling rate [Hz] of a file without a time axis")
+    t.add_argument("--channel", metavar="NAME", help="the channel: its name or a unique suffix such as _DE_time")
+    t.set_defaults(func=_detect)
     return p
 
 

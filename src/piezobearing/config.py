@@ -167,6 +167,19 @@ def _bearing_defects(b: dict) -> list[tuple[str, float]]:
     return [("bearing.defect_width_m", b["defect_width_m"])] if "defect_width_m" in b else []
 
 
+def _defect_defaults(config: dict, schema: dict) -> None:
+    """Fill each ``bearing.defects`` item's keys that the schema gives a ``default`` (``depth_m``: the paper's
+    1 mm) where the config leaves them out, in place (Snakemake's ``validate`` fills them the same way)."""
+    try:
+        props = schema["properties"]["bearing"]["properties"]["defects"]["items"]["properties"]
+    except KeyError:
+        return
+    for d in (config.get("bearing") or {}).get("defects") or []:
+        for key, spec in props.items():
+            if "default" in spec:
+                d.setdefault(key, spec["default"])
+
+
 def physical_problems(config: dict) -> list[str]:
     """Cross-field checks the schema cannot express: each problem as 'key ...: what; fix'."""
     out = []
@@ -235,9 +248,11 @@ def validate(config: dict, source: str = "config", schema_path: str | Path = SCH
     if bad:
         written = ".nan" if math.isnan(bad[1]) else f"{'-' if bad[1] < 0 else ''}.inf"
         raise ConfigError(f"{source}: key '{bad[0]}': {written} is not a finite number; write a finite value")
-    errors = sorted(_validator(str(schema_path)).iter_errors(config), key=lambda e: list(map(str, e.path)))
+    validator = _validator(str(schema_path))
+    errors = sorted(validator.iter_errors(config), key=lambda e: list(map(str, e.path)))
     if errors:
         raise ConfigError(f"{source}: {_message(errors[0])}")
+    _defect_defaults(config, validator.schema)
     problems = physical_problems(config)
     if problems:
         raise ConfigError(f"{source}: {problems[0]}")

@@ -22,6 +22,8 @@ import json
 from functools import lru_cache
 from pathlib import Path
 
+from .paper import CASE
+
 PACKAGE_DIR = Path(__file__).resolve().parent
 
 #: The sensor circuit of Eq. 6 (SensorCircuit.from_config) without R.
@@ -139,6 +141,9 @@ _PASSAGE = [
     "bearing.roller_diameter_scatter_m",
 ]
 
+#: The config keys of the paper's case (piezobearing.paper.CASE), against which the scorecard compares the run's.
+_CASE = list(CASE)
+
 #: Config keys each rule's stage reads, by rule.
 READS: dict[str, list[str]] = {
     # calibration.smk
@@ -146,7 +151,7 @@ READS: dict[str, list[str]] = {
     "extract_sensitivity": ["calibration", *_CIRCUIT],
     "fit_resistance": ["sensor", "calibration", "synthesis.resistance_ohm", "diagnostics.quiet_settle_s"],
     "lowfreq_sensitivity": ["sensor", "lowfreq"],
-    "scorecard_calibration": ["calibration.measurement", *_CIRCUIT],
+    "scorecard_calibration": ["calibration.measurement", "synthesis.resistance_ohm", *_CIRCUIT],
     # sensor_fem.smk
     "sensor_mesh": _STACK_MESH,
     "sensor_convergence": ["sensor", "sensor_fem"],
@@ -174,11 +179,18 @@ READS: dict[str, list[str]] = {
         "seed", *_BEARING, *_HOUSING_GEOMETRY, "housing", *_PZT, *_ALUMINA_DISK,
         "signals.skip_s", "signals.sensor_fem_correction", *_CIRCUIT,
     ],
+    # sensor_comparison.smk
+    "sensor_comparison": [
+        "seed", *_BEARING, *_HOUSING_GEOMETRY, "housing", *_PZT, *_ALUMINA_DISK, *_CIRCUIT, "signals",
+        "base_motion", "accelerometer", "sensor_comparison",
+    ],
     # diagnostics.smk
     "diagnose": ["seed", "sensor", "synthesis", "calibration", "model", "diagnostics"],
     # diagnostics_bearing.smk
-    "synthesize_bearing_record": ["seed", "sensor", "bearing", "bearing_diagnosis"],
-    "diagnose_bearing": ["seed", "sensor", "bearing", "bearing_diagnosis", "diagnostics"],
+    "synthesize_bearing_record": ["seed", "sensor", "signals.sensor_fem_correction", "bearing", "bearing_diagnosis"],
+    "diagnose_bearing": ["seed", "sensor", "signals.sensor_fem_correction", "bearing", "bearing_diagnosis", "diagnostics"],
+    # scorecard.smk: the run's conditions against the paper's case (piezobearing.paper.CASE)
+    "scorecard": _CASE,
 }
 
 
@@ -361,10 +373,37 @@ def record_checksum(path: str | None) -> str | None:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
+class ShortParam(dict):
+    """A rule param holding config values (a dict, as the stage receives it) that Snakemake records and prints by
+    its top-level keys and a digest of every value, not as the whole dictionary.
+
+    Snakemake decides a rerun by comparing ``repr`` of each param with the one it recorded
+    (``snakemake.persistence``: a builtin type's repr; a dict subclass is one), and prints that repr in a rerun's
+    reason. The repr here is ``{key, key, ...} sha256:<16 hex>``, the digest over the values' canonical JSON: a
+    change of any value changes it (a rerun, as with the whole dictionary), an unchanged config keeps it (none)."""
+
+    @property
+    def digest(self) -> str:
+        """The first 16 hex digits of SHA-256 over the values as canonical JSON (sorted keys)."""
+        text = json.dumps(self, sort_keys=True, separators=(",", ":"), default=repr)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def __repr__(self) -> str:
+        return "{" + ", ".join(map(str, self)) + "} sha256:" + self.digest
+
+    __str__ = __repr__
+
+
+def short_param(values: dict) -> ShortParam:
+    """``values`` as a :class:`ShortParam` (a rule param Snakemake prints by its keys and digest)."""
+    return ShortParam(values)
+
+
 def rule_params(rule: str, config: dict, entry: str, record: str | None = None) -> dict:
-    """The ``params`` of ``rule``: ``reads`` (its declared config values), ``code`` (the hash of the package code
-    its ``entry`` script or notebook runs) and, for a rule reading a user's record, ``record`` (its checksum)."""
-    out = {"reads": declared(config, rule), "code": code_hash(entry)}
+    """The ``params`` of ``rule``: ``reads`` (its declared config values, a :class:`ShortParam`), ``code`` (the
+    hash of the package code its ``entry`` script or notebook runs) and, for a rule reading a user's record,
+    ``record`` (its checksum)."""
+    out = {"reads": ShortParam(declared(config, rule)), "code": code_hash(entry)}
     if record is not None or rule in RECORD_RULES:
         out["record"] = record_checksum(record)
     return out

@@ -5,9 +5,9 @@ once and back-substitute many times (influence lines, shift-invert Lanczos,
 time steps). PARDISO (Intel MKL's ``mkl_rt``, called here through ctypes)
 factorises the housing's stiffness several times faster than SciPy's SuperLU
 in the model's nested-dissection order, with 2.6x fewer factor entries
-(benchmarks/bench_solvers.py; README, "Performance"). SciPy's SuperLU stays
-the fallback and the reference: ``solver="superlu"`` reproduces the previous
-results bit for bit.
+(benchmarks/bench_solvers.py; docs/performance.md). SciPy's SuperLU stays
+the fallback and the reference: ``solver="superlu"`` is the method the tests
+and the benchmark compare with.
 
 The binding is ours, not ``pypardiso``'s: pypardiso searches the whole
 environment (a recursive glob) for ``libmkl_rt`` at import and at every

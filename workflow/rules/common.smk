@@ -62,6 +62,11 @@ def bearing_record():
     return user if user else f"{RESULTS}/diagnostics_bearing/synthetic_record.csv"
 
 
+def sensor_harmonic():
+    """The sensor FEM's response where signals.sensor_fem_correction (the one sensor model's correction), else none."""
+    return [f"{RESULTS}/sensor/harmonic.csv"] if config["signals"]["sensor_fem_correction"] else []
+
+
 def stage_params(rule, entry):
     """A rule's params, from piezobearing.registry: the config values its stage reads (``reads``, all the
     stage receives), the hash of the package code its script or notebook ``entry`` runs (``code``) and, for

@@ -25,6 +25,7 @@ TARGETS.extend(
 rule synthesize_bearing_record:
     input:
         influence=f"{RESULTS}/bearing/influence_line_healthy.csv",
+        harmonic=sensor_harmonic(),
     output:
         csv=f"{RESULTS}/diagnostics_bearing/synthetic_record.csv",
     log:
@@ -50,6 +51,7 @@ rule diagnose_bearing:
     input:
         record=bearing_record(),
         influence=f"{RESULTS}/bearing/influence_line_healthy.csv",
+        harmonic=sensor_harmonic(),
     output:
         json=f"{RESULTS}/diagnostics_bearing/diagnosis.json",
         arrays=f"{RESULTS}/diagnostics_bearing/diagnosis.npz",

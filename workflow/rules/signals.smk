@@ -1,6 +1,8 @@
 # From sensor force to fault detection (paper Sec. IV, Fig. 9 and 10): voltage
-# through the calibrated sensor model, white noise at the configured SNR,
-# envelope spectrum, fault indicator, detection against SNR, fault-type classification.
+# through the calibrated sensor model, the DAQ's sampling and noise, envelope
+# spectrum, the paper's fault indicator and the configured detector (both
+# through piezobearing.signals.detectors), detection against SNR, fault-type
+# classification.
 from piezobearing.signals.outputs import extra_fault_types
 
 FIGURES.extend([f"{RESULTS}/figures/{n}.png" for n in ("fig09", "fig10", "snr_study")])
@@ -97,10 +99,8 @@ rule envelope:
 
 rule fault_indicator:
     input:
-        healthy_csv=f"{RESULTS}/signals/envelope_healthy.csv",
-        healthy_json=f"{RESULTS}/signals/envelope_healthy.json",
-        faulty_csv=f"{RESULTS}/signals/envelope_faulty.csv",
-        faulty_json=f"{RESULTS}/signals/envelope_faulty.json",
+        healthy_envelope=f"{RESULTS}/signals/envelope_healthy.json",
+        faulty_envelope=f"{RESULTS}/signals/envelope_faulty.json",
         healthy_noisy=f"{RESULTS}/signals/noisy_healthy.json",
         faulty_noisy=f"{RESULTS}/signals/noisy_faulty.json",
         healthy_noisy_csv=f"{RESULTS}/signals/noisy_healthy.csv",

@@ -9,6 +9,7 @@ import pandas as pd
 from snakemake.utils import Paramspace
 
 from piezobearing.config import ConfigError
+from piezobearing.registry import short_param
 from piezobearing.studies import check_studies
 
 try:  # a bad study table or case value stops before any job, in one line
@@ -32,11 +33,12 @@ _SENSOR_INPUTS = {
         else {}
     ),
 }
-# the detector studies (issue 11) run the fault_detection chain and the classification
+# the detector studies run the fault_detection chain and the classification
 DETECTOR_STUDIES = ("daq_noise", "defect_position", "fault_type_speed")
 STUDY_INPUTS = {
     "fault_detection": _SENSOR_INPUTS,
     **{name: _SENSOR_INPUTS for name in DETECTOR_STUDIES},
+    "sensor_comparison": _SENSOR_INPUTS,
     "sensor_design": {
         "resistance": f"{RESULTS}/calibration/resistance.json",
         "force_healthy": f"{RESULTS}/bearing/sensor_force_healthy.csv",
@@ -52,12 +54,15 @@ STUDY_MEM_MB = {
     "fault_detection": 1000,
     **{name: 2000 for name in DETECTOR_STUDIES},
     "sensor_design": 1500,
+    # measured per case: benchmarks/bench_sensor_comparison.py (results/benchmarks/sensor_comparison.json)
+    "sensor_comparison": 3000,
 }
 STUDY_RUNTIME_MIN = {
     "calibration_circuit": 2,
     "fault_detection": 4,
     **{name: 20 for name in DETECTOR_STUDIES},
     "sensor_design": 3,
+    "sensor_comparison": 60,
 }
 # Config sections a kind's cases depend on (as params: a changed value reruns the cases).
 STUDY_SECTIONS = {
@@ -68,6 +73,7 @@ STUDY_SECTIONS = {
         for name in DETECTOR_STUDIES
     },
     "sensor_design": "seed sensor sensor_fem lowfreq bearing housing signals".split(),
+    "sensor_comparison": "seed sensor sensor_fem bearing housing signals base_motion accelerometer sensor_comparison".split(),
 }
 
 
@@ -88,8 +94,10 @@ rule study_case:
         runtime=lambda wc: STUDY_RUNTIME_MIN.get(wc.study, 10),
     params:
         code=code_hash(f"{workflow.basedir}/workflow/scripts/study_case.py"),
-        overrides=lambda wc: dict(STUDIES[wc.study].instance(wc)),
-        sections=lambda wc: {k: config[k] for k in STUDY_SECTIONS.get(wc.study, [])},
+        overrides=lambda wc: short_param(dict(STUDIES[wc.study].instance(wc))),
+        sections=lambda wc: short_param(
+            {k: config[k] for k in STUDY_SECTIONS.get(wc.study, [])}
+        ),
     script:
         "../scripts/study_case.py"
 
@@ -108,10 +116,9 @@ rule sensor_design_housing:
         mem_mb=2500,
         runtime=5,
     params:
-        sensor=config["sensor"],
-        sensor_fem=config["sensor_fem"],
-        bearing=config["bearing"],
-        housing=config["housing"],
+        sections=short_param(
+            {k: config[k] for k in ("sensor", "sensor_fem", "bearing", "housing")}
+        ),
     script:
         "../scripts/sensor_design_housing.py"
 

@@ -14,4 +14,5 @@ diagnose_bearing(
     config,
     snakemake.input.influence,
     progress=lambda msg: print(f"fit: {msg}", file=sys.stderr, flush=True),
+    harmonic_csv=snakemake.input.harmonic[0] if snakemake.input.harmonic else None,
 )

@@ -8,7 +8,8 @@ from piezobearing.stages.signals import indicator
 config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
 
 i = snakemake.input
-envelopes = {c: (i[f"{c}_csv"], i[f"{c}_json"]) for c in ("healthy", "faulty")}
-noisy = {c: i[f"{c}_noisy"] for c in ("healthy", "faulty")}
-noisy_csvs = {c: i[f"{c}_noisy_csv"] for c in ("healthy", "faulty")}
-indicator(envelopes, i.kinematics, noisy, snakemake.output.json, config, noisy_csvs)
+cases = ("healthy", "faulty")
+envelopes = {c: i[f"{c}_envelope"] for c in cases}
+noisy_csvs = {c: i[f"{c}_noisy_csv"] for c in cases}
+noisy_jsons = {c: i[f"{c}_noisy"] for c in cases}
+indicator(envelopes, i.kinematics, noisy_csvs, noisy_jsons, snakemake.output.json, config)

@@ -7,4 +7,9 @@ from piezobearing.stages.bearing_diagnosis import synthesize_bearing_record
 
 config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
 
-synthesize_bearing_record(snakemake.input.influence, snakemake.output.csv, config)
+synthesize_bearing_record(
+    snakemake.input.influence,
+    snakemake.output.csv,
+    config,
+    snakemake.input.harmonic[0] if snakemake.input.harmonic else None,
+)

@@ -44,6 +44,10 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.linalg import expm
+
+from .. import sfepy_setup  # noqa: F401  (before sfepy: without its JAX terms where JAX is absent)
+
+# isort: split
 from sfepy.base.base import Struct, output
 from sfepy.discrete import Equation, Equations, FieldVariable, Integral, Material, Problem
 from sfepy.discrete.fem import FEDomain, Field, Mesh

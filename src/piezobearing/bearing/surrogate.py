@@ -184,8 +184,12 @@ def quasi_static_loads(
     load = np.array([0.0, -radial_load_N])
     n = psi.shape[0]
     e = np.zeros((n, 2))
-    e[:, 1] = -(gap_m + drop.max(axis=1) + (radial_load_N / k_contact) ** 0.9)
-    reach = -2.0 * e[:, 1]  # longest Newton step: twice the cold start's distance from the centre [m]
+    d1 = (radial_load_N / k_contact) ** 0.9  # one roller's deflection under F_r [m]
+    # the cold start: the shaft on the bottom roller (on the load line with a preload, gap < 0: its equilibrium
+    # is within a deflection of the centre); the longest Newton step: twice the gap, drops and deflection (twice
+    # the cold start's distance from the centre where the gap and the drops are >= 0) [m]
+    e[:, 1] = -(max(gap_m, 0.0) + drop.max(axis=1) + d1)
+    reach = 2.0 * (abs(gap_m) + np.abs(drop).max(axis=1) + d1)
     if e0_m is not None:
         e = np.array(e0_m, dtype=float).reshape(n, 2)
     if method == "compiled":

@@ -182,7 +182,7 @@ def transient(case: str, m: HousingMesh, contact: dict, config: dict) -> dict:
     timings["modes_s"] = time.perf_counter() - t0
     top, nyq = float(modes.frequencies_Hz.max()), 0.5 / dt
     if h["method"] == "reduced" and top < nyq:
-        # the static correction holds for modes well above the band only (README, housing at DAQ rates)
+        # the static correction holds for modes well above the band only (docs/theory/bearing_housing.md)
         raise ValueError(
             f"housing.n_modes = {h['n_modes']}: the highest mode, {top:.0f} Hz, lies below the Nyquist frequency "
             f"{nyq:.0f} Hz of bearing.time_step_s; raise housing.n_modes until it passes {nyq:.0f} Hz"

@@ -74,7 +74,7 @@ class Effect:
         the value the tests hide, the error-rate study hides (``benchmarks/bench_diagnosis_seeds.py``)
         and ``piezobearing hide-and-find`` hides when no ``--param`` is given.
     example_reason : str
-        Why that size is plausible (a sentence; the README's verified table quotes it).
+        Why that size is plausible (a sentence; docs/validation/hide_and_find.md quotes the sizes).
     """
 
     name: str = ""

@@ -50,7 +50,7 @@ UNITS: tuple[Unit, ...] = (
     # the running bearing (diagnosis/bearing): loads, widths and clearances, angles, a roller's index
     Unit("_N", "N", 1.0, "N"),
     Unit("_m", "m", 1e-3, "mm"),
-    Unit("_rad", "rad", 0.017453292519943295, "deg"),  # pi / 180
+    Unit("_rad", "rad", 1.0, "rad"),
     Unit("_index", "1", 1.0, ""),
 )
 

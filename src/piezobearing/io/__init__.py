@@ -4,7 +4,9 @@
   WAV) read into their raw columns;
 - :mod:`piezobearing.io.records`: calibration and running-bearing records read and checked;
 - :mod:`piezobearing.io.results`: result files (JSON, NPZ, CSV tables and time series);
-- :mod:`piezobearing.io.meshes`: the housing and sensor meshes.
+- :mod:`piezobearing.io.meshes`: the housing and sensor meshes;
+- :mod:`piezobearing.io.vibration`: one channel of a vibration record for fault detection (rate, channel
+  and shaft speed as DAQs write them).
 
 Every name a caller uses is importable from ``piezobearing.io`` itself.
 """
@@ -61,6 +63,7 @@ from .results import (
     write_json,
     write_npz,
 )
+from .vibration import VibrationRecord, read_vibration_record
 
 __all__ = [
     "BEARING_COLUMNS",
@@ -85,6 +88,7 @@ __all__ = [
     "RawTable",
     "ResultFileError",
     "SignalFileError",
+    "VibrationRecord",
     "as_read",
     "check_channels",
     "check_readable",
@@ -103,6 +107,7 @@ __all__ = [
     "read_npz",
     "read_series",
     "read_stack_mesh",
+    "read_vibration_record",
     "read_table",
     "table_series",
     "write_bearing_record",

@@ -175,8 +175,9 @@ def read_table(
         Record columns required and optional (``time_s``, ``voltage_V``, ...).
     channels : dict
         Record column -> channel name in the file (``<key>.channels`` in the
-        config). Unnamed columns are looked up by their own name; a file with
-        one data channel gives it to ``voltage_V``. In binary formats without
+        config; in a CSV, the column's header name). Unnamed columns are
+        looked up by their own name; a binary file with one data channel gives
+        it to ``voltage_V``. In binary formats without
         a time channel, time comes from the sampling (TDMS ``wf_increment``,
         UFF58 abscissa, WAV rate, a scalar ``sample_rate_Hz`` in a .mat file).
     key : str
@@ -201,7 +202,7 @@ def read_table(
         )
     channels = {k: v for k, v in (channels or {}).items() if v not in (None, "")}
     if ext == ".csv":
-        return _read_csv_table(path, columns, optional, unit_hint)
+        return _read_csv_table(path, columns, optional, unit_hint, channels, key)
     try:
         found = _BINARY_READERS[ext](path, channels, wav_full_scale_V, key)
     except MeasurementError:
@@ -214,13 +215,21 @@ def read_table(
     return _pick_channels(path, found, columns, optional, channels, key)
 
 
-def _read_csv_table(path: Path, columns, optional, unit_hint: str) -> RawTable:
+def _read_csv_table(path: Path, columns, optional, unit_hint: str, channels: dict, key: str) -> RawTable:
+    """The record columns of a CSV file, found by their header names: ``channels[column]`` where the config
+    names one (``<key>.channels``), else the column's own name; returned under the record's column names."""
     hint = _decimal_comma_hint(path)
     if hint:
         raise MeasurementError(f"{path}: {hint}")
-    fast = _read_numeric(path, (*columns, *optional))
-    if fast is not None and all(c in fast.columns for c in columns):  # every cell a finite number
-        return RawTable(fast[[*columns, *(c for c in optional if c in fast.columns)]], _csv_place)
+    header_of = {c: str(channels.get(c, c)).strip() for c in (*columns, *optional)}
+
+    def record_columns(table: pd.DataFrame) -> pd.DataFrame:
+        keep = [*columns, *(c for c in optional if header_of[c] in table.columns)]
+        return pd.DataFrame({c: table[header_of[c]].to_numpy() for c in keep})
+
+    fast = _read_numeric(path, tuple(header_of.values()))
+    if fast is not None and all(header_of[c] in fast.columns for c in columns):  # every cell a finite number
+        return RawTable(record_columns(fast), _csv_place)
     del fast
     try:
         # keep_default_na=False: a cell reading 'nan' or 'NA' is reported as written, not as empty
@@ -233,7 +242,7 @@ def _read_csv_table(path: Path, columns, optional, unit_hint: str) -> RawTable:
             f"{path}: not a readable CSV ({first}); save it as comma-separated text, header {','.join(columns)}"
         ) from None
     raw.columns = [str(c).strip() for c in raw.columns]
-    missing = [c for c in columns if c not in raw.columns]
+    missing = [c for c in columns if header_of[c] not in raw.columns]
     seps = [s for s in (";", "\t", "|", " ") if len(raw.columns) == 1 and s in raw.columns[0].strip()]
     header = ",".join(columns)
     if missing and seps:
@@ -241,14 +250,19 @@ def _read_csv_table(path: Path, columns, optional, unit_hint: str) -> RawTable:
             f"{path}: the columns are separated by {seps[0]!r}, not commas (header: {raw.columns[0]}); "
             f"save it as comma-separated text with a decimal point, header {header}"
         )
+    if missing and missing[0] in channels:
+        raise MeasurementError(
+            f"{path}: column '{header_of[missing[0]]}' ({key}.channels.{missing[0]}) missing (header has: "
+            f"{', '.join(raw.columns)}); set {key}.channels.{missing[0]} to the header's name of that column"
+        )
     if missing:
         extra = f"[,{','.join(optional)}]" if optional else ""
         raise MeasurementError(
             f"{path}: column '{missing[0]}' missing (header has: {', '.join(raw.columns)}); "
-            f"the header must be {header}{extra}{' ' + unit_hint if unit_hint else ''}"
+            f"the header must be {header}{extra}{' ' + unit_hint if unit_hint else ''}, or name the columns in "
+            f"{key}.channels (e.g. {{{missing[0]}: <its header name>}})"
         )
-    keep = [*columns, *(c for c in optional if c in raw.columns)]
-    return RawTable(raw[keep], _csv_place)
+    return RawTable(record_columns(raw), _csv_place)
 
 
 @dataclass
@@ -269,6 +283,10 @@ def _pick_channels(path: Path, found: dict, columns, optional, channels: dict, k
             continue
         name = channels.get(col, col)
         ch = found.get(str(name))
+        if ch is None and col in channels:  # a configured name may be a suffix only one channel ends with
+            ends = [n for n in data_names if n.lower().endswith(str(name).lower())]
+            if len(ends) == 1:
+                ch = found[ends[0]]
         if ch is None and col == "voltage_V" and "voltage_V" not in channels:
             others = [n for n in data_names if n not in channels.values() and n != "time_s"]
             if len(others) == 1:
@@ -301,8 +319,9 @@ def _pick_channels(path: Path, found: dict, columns, optional, channels: dict, k
     return RawTable(pd.DataFrame({c: cols[c] for c in order}), _sample)
 
 
-def _mat_channels(path: Path, channels: dict, wav_full_scale_V, key: str) -> dict:
-    """MATLAB variables as channels (v5 by scipy.io, v7.3 by h5py); ``name[k]`` is column k of a matrix."""
+def mat_arrays(path: Path) -> dict[str, np.ndarray]:
+    """The numeric variables of a MATLAB file (v5 by scipy.io, v7.3 by h5py), each at least 2-D, in
+    MATLAB's orientation (an n x k matrix as (n, k)); scalars are 1 x 1."""
     if h5py.is_hdf5(path):
         with h5py.File(path, "r") as f:
             # MATLAB stores arrays column-major: an n x k matrix reads as (k, n)
@@ -317,10 +336,14 @@ def _mat_channels(path: Path, channels: dict, wav_full_scale_V, key: str) -> dic
             for n, v in loadmat(path, squeeze_me=False).items()
             if not n.startswith("__") and isinstance(v, np.ndarray) and np.issubdtype(v.dtype, np.number)
         }
+    return {n: np.atleast_2d(a) for n, a in arrays.items()}
+
+
+def _mat_channels(path: Path, channels: dict, wav_full_scale_V, key: str) -> dict:
+    """MATLAB variables as channels (v5 by scipy.io, v7.3 by h5py); ``name[k]`` is column k of a matrix."""
     out: dict[str, _Channel] = {}
     rate = None
-    for n, a in arrays.items():
-        a = np.atleast_2d(a)
+    for n, a in mat_arrays(path).items():
         if a.size == 1:
             if n == "sample_rate_Hz":
                 rate = float(a.ravel()[0])

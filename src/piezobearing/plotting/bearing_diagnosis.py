@@ -26,12 +26,13 @@ def overlay(a: dict, d: dict) -> Figure:
     ax, ar = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [1.5, 1]})
     t = a["zoom_time_s"]
     s, e = int(a["zoom_start"]), int(a["zoom_stop"])
-    ax.plot(t, a["zoom_voltage_V"], color=MEAS, lw=1.6, label="measured")
-    ax.plot(t, a["zoom_baseline_model_V"], color=BASE, lw=0.9, label=_label(d, "baseline"))
-    ar.plot(t, a["zoom_baseline_residual_V"], color=BASE, lw=0.8, label="baseline residual")
+    # the models wide and pale, the measurement thin on top; the baseline's residual wide under the final's
+    ax.plot(t, a["zoom_baseline_model_V"], color=BASE, lw=2.4, alpha=0.45, label=_label(d, "baseline"))
+    ar.plot(t, a["zoom_baseline_residual_V"], color=BASE, lw=1.8, alpha=0.5, label="baseline residual")
     if d["final"]["effects"]:
-        ax.plot(t, a["zoom_final_model_V"], color=FINAL, lw=0.9, ls="--", label=_label(d, "final"))
-        ar.plot(t, a["zoom_final_residual_V"], color=FINAL, lw=0.8, label="final residual")
+        ax.plot(t, a["zoom_final_model_V"], color=FINAL, lw=1.4, ls="--", label=_label(d, "final"))
+        ar.plot(t, a["zoom_final_residual_V"], color=FINAL, lw=0.7, label="final residual")
+    ax.plot(t, a["zoom_voltage_V"], color="k", lw=0.6, label="measured", zorder=3)
     for c in a["passage_peak"]:
         if s <= c < e:
             for axis in (ax, ar):
@@ -75,11 +76,13 @@ def synchronous_average(a: dict, d: dict) -> Figure:
     ax, ar = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [1.4, 1]})
     ang = a["synchronous_average_final_angle_deg"]
     o = np.argsort(ang)
-    ax.plot(ang[o], a["synchronous_average_final_measured_V"][o], color=MEAS, lw=1.6, label="measured")
-    ax.plot(ang[o], a["synchronous_average_baseline_model_V"][o], color=BASE, lw=0.9, label=_label(d, "baseline"))
-    ax.plot(ang[o], a["synchronous_average_final_model_V"][o], color=FINAL, lw=0.9, ls="--", label=_label(d, "final"))
-    for key, col in (("baseline", BASE), ("final", FINAL)):
-        ar.plot(ang[o], 1e3 * a[f"synchronous_average_{key}_residual_V"][o], color=col, lw=0.9)
+    ax.plot(ang[o], a["synchronous_average_baseline_model_V"][o], color=BASE, lw=2.4, alpha=0.45,
+            label=_label(d, "baseline"))
+    ax.plot(ang[o], a["synchronous_average_final_model_V"][o], color=FINAL, lw=1.4, ls="--", label=_label(d, "final"))
+    ax.plot(ang[o], a["synchronous_average_final_measured_V"][o], color="k", lw=0.7, label="measured", zorder=3)
+    for key, col, lw, alpha in (("baseline", BASE, 1.8, 0.5), ("final", FINAL, 0.8, 1.0)):
+        ar.plot(ang[o], 1e3 * a[f"synchronous_average_{key}_residual_V"][o], color=col, lw=lw, alpha=alpha,
+                label=f"{key} residual")
     band = 1e3 * a["synchronous_average_final_band_V"][o]
     ar.fill_between(ang[o], -band, band, color="0.85", lw=0, label="noise band")
     ax.set_ylabel("voltage (V)")
@@ -97,22 +100,33 @@ def envelope(a: dict, d: dict) -> Figure:
     ax, ar = fig.subplots(2, 1, sharex=True)
     f = a["envelope_final_freq_Hz"]
     ax.plot(f, 1e3 * a["envelope_final_measured_V"], color=MEAS, lw=0.8, label="measured")
-    ar.plot(f, 1e3 * a["envelope_baseline_residual_V"], color=BASE, lw=0.7, label="baseline residual")
-    ar.plot(f, 1e3 * a["envelope_final_residual_V"], color=FINAL, lw=0.7, label="final residual")
+    if d["final"]["effects"]:  # the baseline's residual wide and pale under the final's
+        ar.plot(f, 1e3 * a["envelope_baseline_residual_V"], color=BASE, lw=1.8, alpha=0.5, label="baseline residual")
+        ar.plot(f, 1e3 * a["envelope_final_residual_V"], color=FINAL, lw=0.7, label="final residual")
+    else:
+        ar.plot(f, 1e3 * a["envelope_baseline_residual_V"], color=BASE, lw=0.7,
+                label="residual (final model = baseline)")
     colours = {"shaft": "0.4", "FTF": "#009E73", "BPFO": "#CC79A7", "BPFI": "#E69F00", "BSF": "#56B4E9", "2xBSF": "#56B4E9"}
-    for ln in d["envelope"]["final"]["lines"]:
+    labelled = []  # (frequency, level) of the labels placed: a label close to the last one goes one level down
+    span = float(f[-1] - f[0]) if f.size > 1 else 1.0
+    for ln in sorted(d["envelope"]["final"]["lines"], key=lambda x: x["frequency_Hz"]):
         base = ln["name"].split("x", 1)[-1] if ln["name"][0].isdigit() else ln["name"]
         for axis in (ax, ar):
             axis.axvline(ln["frequency_Hz"], color=colours.get(base, "0.6"), lw=0.6, ls=":", zorder=0)
         if not ln["name"][0].isdigit():
-            ax.text(ln["frequency_Hz"], ax.get_ylim()[1], ln["name"], rotation=90, fontsize=6, va="top", ha="right")
+            near = labelled and ln["frequency_Hz"] - labelled[-1][0] < 0.04 * span
+            level = (labelled[-1][1] + 1) % 3 if near else 0
+            labelled.append((ln["frequency_Hz"], level))
+            ax.text(ln["frequency_Hz"], 1.0 - 0.17 * level, ln["name"], transform=ax.get_xaxis_transform(),
+                    fontsize=6.5, va="top", ha="left", color=colours.get(base, "0.3"),
+                    bbox={"boxstyle": "square,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.8})
     lo, hi = d["envelope"]["final"]["band_Hz"]
     ax.set_title(f"envelope of {lo:.0f}-{hi:.0f} Hz; dotted: fault bands (shaft, FTF, BPFO, BPFI, BSF, 2xBSF, harmonics)", fontsize=8)
     ax.set_ylabel("amplitude (mV)")
     ar.set_ylabel("amplitude (mV)")
     ar.set_xlabel("frequency (Hz)")
-    ax.legend(fontsize=8)
-    ar.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="center right")
+    ar.legend(fontsize=8, loc="upper right")
     fig.tight_layout()
     return fig
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from matplotlib.ticker import NullFormatter
 
 
 def fig05_impulses(record: pd.DataFrame, sensitivity: dict):
@@ -77,5 +78,12 @@ def fig08a_lowfreq(curve: pd.DataFrame, lowfreq: dict):
     ax_d.set_ylabel("deviation [%]")
     ax_d.set_xlabel("frequency [Hz]")
     ax_d.legend(loc="upper right")
-    ax_d.set_xticks(np.asarray(f))
+    if f.max() / f.min() >= 10:  # a decade or more: log-spaced, ticks at 1-2-5 and the sweep's ends
+        ax_d.set_xscale("log")
+        ticks = [v for v in (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000) if f.min() <= v <= f.max()]
+        ticks = sorted({float(f.min()), *ticks, float(f.max())})
+        ax_d.set_xticks(ticks, [f"{v:g}" for v in ticks])
+        ax_d.xaxis.set_minor_formatter(NullFormatter())
+    else:
+        ax_d.set_xticks(np.asarray(f))
     return fig

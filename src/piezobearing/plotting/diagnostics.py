@@ -36,13 +36,13 @@ def overlay(a: dict, d: dict) -> Figure:
     fig = Figure(figsize=(7.0, 5.4))
     ax, az = fig.subplots(2, 1, gridspec_kw={"height_ratios": [1.3, 1]})
     t = a["time_s"]
-    for axis, z in ((ax, ""), (az, "zoom_")):
-        axis.plot(a[f"{z}time_s"], a[f"{z}voltage_V"], color=MEAS, lw=1.6, label="measured")
-        axis.plot(a[f"{z}time_s"], a[f"{z}baseline_model_V"], color=BASE, lw=0.9, label=_label(d, "baseline"))
+    for axis, z in ((ax, ""), (az, "zoom_")):  # the models wide and pale, the measurement thin on top of them
+        axis.plot(a[f"{z}time_s"], a[f"{z}baseline_model_V"], color=BASE, lw=2.4, alpha=0.45,
+                  label=_label(d, "baseline"))
         if d["final"]["effects"]:
-            axis.plot(
-                a[f"{z}time_s"], a[f"{z}final_model_V"], color=FINAL, lw=0.9, ls="--", label=_label(d, "final")
-            )
+            axis.plot(a[f"{z}time_s"], a[f"{z}final_model_V"], color=FINAL, lw=1.4, ls="--",
+                      label=_label(d, "final"))
+        axis.plot(a[f"{z}time_s"], a[f"{z}voltage_V"], color="k", lw=0.6, label="measured", zorder=3)
         axis.set_ylabel("voltage (V)")
     _shade_impulses(ax, a)
     ax.set_xlim(t[0], t[-1])
@@ -178,7 +178,7 @@ def correlations(a: dict, d: dict) -> Figure:
 
 
 def ranking(d: dict) -> Figure:
-    """BIC drop of each catalogue effect added to the configured model (symmetric log scale)."""
+    """Delta BIC of each catalogue effect added to the configured model (symmetric log scale)."""
     fig = Figure(figsize=(7.0, 3.6))
     ax = fig.subplots()
     r = d["ranking"][::-1]
@@ -196,14 +196,19 @@ def ranking(d: dict) -> Figure:
     ax.axvline(
         d["settings"]["min_delta_bic"], color="red", ls="--", lw=0.8, label="very strong evidence (10)"
     )
-    ax.set_xlabel("BIC drop when added (larger: stronger evidence)")
+    ax.set_xlabel("delta BIC = BIC without - BIC with the effect (> 0 favours it; larger: stronger)")
     ax.legend(fontsize=8, loc="lower right")
     fig.tight_layout()
     return fig
 
 
+#: How many of the ranking's best candidates not kept the ladder shows beside the steps.
+CANDIDATES = 3
+
+
 def ladder(d: dict) -> Figure:
-    """NRMSE after each step, with each model's noise floor."""
+    """NRMSE after each step, with each model's noise floor; beside them, hatched, the NRMSE the best
+    :data:`CANDIDATES` of the first ranking that were not kept would have left."""
     fig = Figure(figsize=(7.0, 3.8))
     ax = fig.subplots()
     labels = ["baseline"]
@@ -219,9 +224,20 @@ def ladder(d: dict) -> Figure:
         labels.append("(+ " + s["added"] + ")\ndropped")
         err.append(s["nrmse"])
         flo.append(s["noise_floor_nrmse"])
-    x = np.arange(len(labels))
     n_kept = len(labels) - len(d.get("dropped_steps", []))
-    ax.bar(x, np.array(err) * 100, color=[FINAL] * n_kept + ["0.8"] * (len(labels) - n_kept), width=0.6)
+    n_shown = len(labels)
+    # the best candidates of the ranking that were not kept: what adding them would have done
+    used = {*d.get("selected", []), *(s["added"] for s in d.get("dropped_steps", []))}
+    for r in [r for r in d.get("ranking", []) if r["effect"] not in used][:CANDIDATES]:
+        labels.append("(+ " + r["effect"] + ")\nnot kept")
+        err.append(r["nrmse"])
+        flo.append(r["noise_floor_nrmse"])
+    x = np.arange(len(labels))
+    colours = [FINAL] * n_kept + ["0.8"] * (n_shown - n_kept) + ["white"] * (len(labels) - n_shown)
+    bars = ax.bar(x, np.array(err) * 100, color=colours, edgecolor=["none"] * n_shown + ["0.5"] * (len(labels) - n_shown),
+                  width=0.6)
+    for b in bars[n_shown:]:
+        b.set_hatch("//")
     ax.hlines(np.array(flo) * 100, x - 0.4, x + 0.4, color=FLOOR, lw=1.5, label="noise floor of the model")
     for xi, e in zip(x, err, strict=True):
         ax.annotate(
@@ -236,7 +252,8 @@ def ladder(d: dict) -> Figure:
     ax.set_ylabel("NRMSE (%)")
     ax.set_ylim(0, 1.12 * 100 * max(err))
     ax.legend(fontsize=8, loc="upper right")
-    ax.set_title(f"verdict: {d['verdict']}")
+    extra = "; hatched: the best candidates of the ranking, not kept" if len(labels) > n_shown else ""
+    ax.set_title(f"verdict: {d['verdict']}{extra}", fontsize=9)
     fig.tight_layout()
     return fig
 

@@ -6,6 +6,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
+from . import sensor_comparison
+
 
 def calibration_circuit(df: pd.DataFrame):
     """Impulse sensitivity, onset of linearity and reference sensitivity against R, one line per cable."""
@@ -123,9 +125,13 @@ def sensor_design(df: pd.DataFrame):
     paper = _is_paper(df) & np.isclose(df["resistance_ohm"].to_numpy(float), 50e6)
     ax.scatter(bw[paper], sens[paper], s=160, facecolors="none", edgecolors="r", linewidths=1.5, zorder=4,
                label="the paper's stack")
-    for i in range(len(df)):
-        ax.annotate(_design_label(df.iloc[i]), (bw[i], sens[i]), fontsize=5, xytext=(3, 2), textcoords="offset points")
-    ax.set_xlabel("+3 dB band edge [kHz]")
+    # labels on the front and the paper's stack only (every design is a row of summary.csv), alternately above
+    # and below their point, so that neighbours along the front do not overlap
+    labelled = sorted(set(front.tolist()) | set(np.flatnonzero(paper).tolist()), key=lambda i: bw[i])
+    for k, i in enumerate(labelled):
+        ax.annotate(_design_label(df.iloc[i]), (bw[i], sens[i]), fontsize=6, xytext=(4, 5 if k % 2 == 0 else -10),
+                    textcoords="offset points")
+    ax.set_xlabel("+3 dB band edge [kHz]; labelled: the trade-off front and the paper's stack")
     ax.set_ylabel("mid-band sensitivity [V/N]")
     ax.set_yscale("log")
     ax.legend(fontsize=7, loc="upper right")
@@ -206,4 +212,5 @@ SUMMARY_FIGURES = {
     "defect_position": defect_position,
     "fault_type_speed": fault_type_speed,
     "sensor_design": sensor_design,
+    "sensor_comparison": sensor_comparison.summary_figure,
 }

@@ -3,6 +3,7 @@ beside the LPM's, the housing model's and the verification studies'."""
 
 from __future__ import annotations
 
+from ..paper import KINEMATICS, RUNNING
 from ..paper import TABLE as P
 from . import Row
 
@@ -13,16 +14,20 @@ def rows(kin: dict, lpm: dict, tr: dict, conv: dict, samp: dict, b: dict) -> lis
     # longer than 80 lines: a table, one Row literal a paper number, read top to bottom like the scorecard
     chk = tr["healthy"]["direct_check"] or {}
     groove = next((d for d in b["defects"] if d["type"] == "outer_race"), None)  # the paper's defect
+    per_period = 1 / (kin["bpfo_Hz"] * b["time_step_s"])  # FEM steps per roller passage (BPFO period)
     return [
         Row(
             "IV",
-            "BPFO at 1000 rpm",
+            f"BPFO at {b['shaft_speed_rpm']:g} rpm",
             P["bpfo_Hz"].value,
             kin["bpfo_Hz"],
             "Hz",
-            "D_r/D_p = 10/44 (derived from the paper's BPFO; docs/theory/bearing_housing.md); FTF x Z",
+            f"{b['n_rollers']} rollers, D_r/D_p = {b['roller_diameter_m'] * 1e3:g}/{b['pitch_diameter_m'] * 1e3:g} mm "
+            "(the paper's BPFO fixes 10/44; docs/theory/bearing_housing.md); FTF x Z",
+            KINEMATICS,
         ),
-        Row("IV", "rollers", P["n_rollers"].value, float(b["n_rollers"]), "-", "config bearing.n_rollers"),
+        Row("IV", "rollers", P["n_rollers"].value, float(b["n_rollers"]), "-", "config bearing.n_rollers",
+            ("bearing.n_rollers",)),
         Row(
             "IV",
             "radial load",
@@ -30,15 +35,24 @@ def rows(kin: dict, lpm: dict, tr: dict, conv: dict, samp: dict, b: dict) -> lis
             b["radial_load_N"],
             "N",
             f"mean vertical roller load over the healthy record {lpm['healthy']['mean_vertical_load_N']:.2f} N",
+            ("bearing.radial_load_N",),
         ),
-        Row("IV", "shaft speed", P["shaft_speed_rpm"].value, b["shaft_speed_rpm"], "rpm", ""),
+        Row("IV", "shaft speed", P["shaft_speed_rpm"].value, b["shaft_speed_rpm"], "rpm", "",
+            ("bearing.shaft_speed_rpm",)),
         Row(
             "III-A",
             "FEM time step",
             P["time_step_s"].value,
             b["time_step_s"],
             "s",
-            f"= 1/(36 BPFO) = {1 / (36 * kin['bpfo_Hz']):.7g} s: every sample at the same phase of the roller passage",
+            f"1/(36 BPFO) = {1 / (36 * kin['bpfo_Hz']):.7g} s at this run's BPFO of {kin['bpfo_Hz']:.4g} Hz; the "
+            f"configured step gives {per_period:.4g} steps per roller passage"
+            + (
+                ": every sample at the same phase of the passage"
+                if abs(per_period - round(per_period)) < 1e-3
+                else ": the sampling phase drifts from passage to passage"
+            ),
+            ("bearing.time_step_s",),
         ),
         Row(
             "III-A",
@@ -53,6 +67,7 @@ def rows(kin: dict, lpm: dict, tr: dict, conv: dict, samp: dict, b: dict) -> lis
                 if groove
                 else "no outer-race defect configured"
             ),
+            ("bearing.defects",),
         ),
         Row(
             "III-A",
@@ -61,6 +76,7 @@ def rows(kin: dict, lpm: dict, tr: dict, conv: dict, samp: dict, b: dict) -> lis
             groove["depth_m"] if groove else None,
             "m",
             "",
+            ("bearing.defects",),
         ),
         Row(
             "IV",
@@ -71,6 +87,7 @@ def rows(kin: dict, lpm: dict, tr: dict, conv: dict, samp: dict, b: dict) -> lis
             f"{lpm['faulty']['n_impacts']} impacts; paper's BPFO for comparison"
             if "n_impacts" in lpm["faulty"]
             else "the first configured defect is not on the outer race",
+            RUNNING,
         ),
         Row(
             "III-A",
@@ -89,7 +106,8 @@ def rows(kin: dict, lpm: dict, tr: dict, conv: dict, samp: dict, b: dict) -> lis
             None,
             tr["healthy"]["first_natural_frequency_Hz"],
             "Hz",
-            f"above the {0.5 / b['time_step_s']:.0f} Hz Nyquist frequency of the paper's step",
+            f"{'above' if tr['healthy']['first_natural_frequency_Hz'] > 0.5 / b['time_step_s'] else 'below'} the "
+            f"{0.5 / b['time_step_s']:.0f} Hz Nyquist frequency of the FEM time step",
         ),
         Row(
             "IV",

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..paper import CIRCUIT
 from ..paper import TABLE as P
 from ..sensor import calibration as cal
 from . import Row
@@ -31,6 +32,7 @@ def rows(sens: dict, res: dict, lf: dict, c: cal.SensorCircuit, config: dict) ->
             "agreement by construction, not a prediction"
             if synthetic
             else f"measured: {sens['source']}",
+            CIRCUIT,
         ),
         Row(
             "III-B",
@@ -39,7 +41,13 @@ def rows(sens: dict, res: dict, lf: dict, c: cal.SensorCircuit, config: dict) ->
             res["resistance_ohm"],
             "Ohm",
             f"least squares, 95% CI [{lo:.4g}, {hi:.4g}] Ohm, NRMSE {res['nrmse']:.3f}"
-            + ("; the synthetic truth is 50 MOhm, so this checks recovery" if synthetic else ""),
+            + (
+                f"; the synthetic truth is {config['synthesis']['resistance_ohm'] / 1e6:g} MOhm, so this checks "
+                "recovery"
+                if synthetic
+                else ""
+            ),
+            ("synthesis.resistance_ohm",),
         ),
         Row(
             "III-B",
@@ -48,6 +56,7 @@ def rows(sens: dict, res: dict, lf: dict, c: cal.SensorCircuit, config: dict) ->
             config["sensor"]["cable_capacitance_F_per_m"],
             "F/m",
             "input (PCB-003 datasheet, as in the paper)",
+            ("sensor.cable_capacitance_F_per_m",),
         ),
         Row(
             "II",
@@ -55,7 +64,7 @@ def rows(sens: dict, res: dict, lf: dict, c: cal.SensorCircuit, config: dict) ->
             None,
             c.pzt_capacitance_F,
             "F",
-            f"not stated in the paper; with the 2 m cable C = {c.capacitance_F * 1e12:.1f} pF, "
+            f"not stated in the paper; with the {config['sensor']['cable_length_m']:g} m cable C = {c.capacitance_F * 1e12:.1f} pF, "
             f"tau = RC = {c.tau_s * 1e3:.2f} ms, d33/C = {c.open_circuit_gain_V_per_N:.3f} V/N",
         ),
         Row(
@@ -66,6 +75,7 @@ def rows(sens: dict, res: dict, lf: dict, c: cal.SensorCircuit, config: dict) ->
             "Hz",
             "deviation = relative change to the next sweep frequency; within 5% of the asymptote d33/C only "
             f"from {lf['asymptote_within_threshold_from_Hz']:.1f} Hz",
+            (*CIRCUIT, "lowfreq.deviation_threshold"),
         ),
         Row(
             "III-C",
@@ -74,6 +84,7 @@ def rows(sens: dict, res: dict, lf: dict, c: cal.SensorCircuit, config: dict) ->
             lf["deviation_threshold"],
             "-",
             "input",
+            ("lowfreq.deviation_threshold",),
         ),
         Row(
             "III-C",
@@ -85,5 +96,6 @@ def rows(sens: dict, res: dict, lf: dict, c: cal.SensorCircuit, config: dict) ->
             f"0.36 V/N would need C = {c_needed * 1e12:.0f} pF at the same tau, or R = {r_needed / 1e6:.1f} MOhm "
             "(and then the response would not be linear at 30 Hz): the paper's 0.36 V/N, 50 MOhm and "
             "C = Cp + 180 pF cannot all hold",
+            (*CIRCUIT, "lowfreq.deviation_threshold"),
         ),
     ]

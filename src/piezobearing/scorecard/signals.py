@@ -3,6 +3,7 @@ indicator's and the SNR study's."""
 
 from __future__ import annotations
 
+from ..paper import DETECTION, KINEMATICS
 from ..paper import TABLE as P
 from . import Row
 
@@ -16,18 +17,20 @@ def rows(ind: dict, st: dict, kin: dict) -> list[Row]:
     snr = st["snr_dB"]
     h, f = ind["healthy"], ind["faulty"]
     n = st["n_seeds"]
+    rollers = round(kin["bpfo_Hz"] / kin["ftf_Hz"])  # BPFO = Z x FTF
     return [
-        Row("IV", "BPFO (11 rollers, 1000 rpm)", P["bpfo_Hz"].value, kin["bpfo_Hz"], "Hz",
-            "from the bearing's kinematics (results/bearing/kinematics.json)"),
+        Row("IV", f"BPFO ({rollers} rollers, {60 * kin['shaft_Hz']:g} rpm)", P["bpfo_Hz"].value, kin["bpfo_Hz"],
+            "Hz", "from the bearing's kinematics (bearing/kinematics.json)", KINEMATICS),
         Row("IV", "SNR of the added white noise", P["snr"].value, snr, "dB",
             "the paper's 'SNR of 10' read as a power ratio of 10 = 10 dB (as an amplitude ratio it would be "
             "20 dB: also detected, see the study); SNR = mean square of the whole noiseless voltage record over "
-            "the noise variance"),
+            "the noise variance", ("signals.snr_dB",)),
         Row("IV", "outer-ring fault detected, faulty bearing (1 = yes)", 1.0, float(f["detected"]), "-",
             f"envelope-spectrum indicator {f['indicator']:.1f} against threshold {f['threshold']:.1f} "
-            f"(pfa {f['false_alarm_probability']:g}), band {f['band_Hz'][0]:.0f}-{f['band_Hz'][1]:.0f} Hz"),
+            f"(pfa {f['false_alarm_probability']:g}), band {f['band_Hz'][0]:.0f}-{f['band_Hz'][1]:.0f} Hz", DETECTION),
         Row("IV", "outer-ring fault detected, healthy bearing (1 = yes)", 0.0, float(h["detected"]), "-",
-            f"indicator {h['indicator']:.1f} against threshold {h['threshold']:.1f}"),
+            f"indicator {h['indicator']:.1f} against threshold {h['threshold']:.1f}",
+            tuple(k for k in DETECTION if k != "bearing.defects")),
         Row("IV", f"detection rate, faulty, {n} noise seeds at the SNR", None,
             st["faulty"]["detection_rate_at_snr"], "-", "the paper shows one noise realisation"),
         Row("IV", f"false-alarm rate, healthy, {n} noise seeds at the SNR", None,

@@ -71,6 +71,10 @@ import scipy.sparse.linalg as spla
 from scipy.linalg import eigh
 from scipy.optimize import brentq, minimize_scalar
 from scipy.spatial import cKDTree
+
+from piezobearing import sfepy_setup  # noqa: F401  (before sfepy: without its JAX terms where JAX is absent)
+
+# isort: split
 from sfepy.base.base import output
 from sfepy.discrete import Equation, Equations, FieldVariable, Integral, Material, Problem
 from sfepy.discrete.fem import FEDomain, Field, Mesh

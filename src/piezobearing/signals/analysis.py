@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from . import detection as sig
+from . import detection
+from .envelope import EnvelopeSettings, amplitude_spectrum, band_power_V2, envelope_spectrum
 
 
 def envelope_analysis(y: np.ndarray, v: np.ndarray, dt: float, f0: float, s: dict) -> tuple[pd.DataFrame, dict]:
@@ -20,14 +21,14 @@ def envelope_analysis(y: np.ndarray, v: np.ndarray, dt: float, f0: float, s: dic
     Returns the spectrum table (frequency_Hz, amplitude_V, noiseless_amplitude_V) and the record (band,
     resolution, in-band SNR, the naive test on the raw spectrum, the kurtogram).
     """
-    es = sig.EnvelopeSettings.from_config(s)
-    a = sig.analyse(y, dt, f0, es, sig.IndicatorSettings.from_config(s))
+    es = EnvelopeSettings.from_config(s)
+    a = detection.analyse(y, dt, f0, es, detection.IndicatorSettings.from_config(s))
     spec = a.spectrum
     n = spec.n_samples
-    clean = sig.envelope_spectrum(v[:n], dt, spec.band_Hz, es.filter_order)
-    p_clean = sig.band_power_V2(v[:n], dt, spec.band_Hz, es.filter_order)
-    p_noise = sig.band_power_V2(y[:n] - v[:n], dt, spec.band_Hz, es.filter_order)
-    naive = sig.fault_indicator(sig.amplitude_spectrum(y[:n], dt), f0, sig.IndicatorSettings.from_config(s))
+    clean = envelope_spectrum(v[:n], dt, spec.band_Hz, es.filter_order)
+    p_clean = band_power_V2(v[:n], dt, spec.band_Hz, es.filter_order)
+    p_noise = band_power_V2(y[:n] - v[:n], dt, spec.band_Hz, es.filter_order)
+    naive = detection.fault_indicator(amplitude_spectrum(y[:n], dt), f0, detection.IndicatorSettings.from_config(s))
     table = pd.DataFrame(
         {"frequency_Hz": spec.frequency_Hz, "amplitude_V": spec.amplitude_V,
          "noiseless_amplitude_V": clean.amplitude_V}
@@ -114,7 +115,7 @@ def snr_study_record(df: pd.DataFrame, summ: pd.DataFrame, cases, grid: list[flo
                 "detection_rate_at_snr": float(df[at]["detected"].mean()),
                 "detected_all_seeds_at_snr": bool(df[at]["detected"].all()),
                 "detected_no_seed_at_snr": bool(not df[at]["detected"].any()),
-                "detection_limit_dB": sig.detection_limit_dB(snr, rate, need),
+                "detection_limit_dB": detection.detection_limit_dB(snr, rate, need),
                 "snr_50pct_dB": crossing(snr, rate, 0.5),
                 "first_snr_rate_above_dB": first_above(snr, rate, 1 - need),
                 "max_rate": float(rate.max()),

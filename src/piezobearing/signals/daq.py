@@ -31,6 +31,8 @@ from fractions import Fraction
 
 import numpy as np
 
+from .detection import noise_std_for_snr
+
 NOISE_MODELS = ("relative", "absolute")
 #: A model step within this relative distance of the DAQ's is taken as the DAQ clock (100 ppm, the order of
 #: a crystal's tolerance): the paper's 0.392156 ms is 2550.0026 Hz against its 2550 Hz.
@@ -254,7 +256,7 @@ def add_noise(x: np.ndarray, dt_s: float, settings: NoiseSettings, rng: np.rando
     x = np.asarray(x, dtype=float)
     z = rng.standard_normal(x.size) if shape is None else np.asarray(shape, dtype=float)
     if settings.model == "relative":
-        sigma = float(np.sqrt(np.mean(x * x) / 10.0 ** (settings.snr_dB / 10.0)))
+        sigma = noise_std_for_snr(x, settings.snr_dB)
         return Acquired(x + sigma * z, sigma, 0, 0.0, 0.0)
     sigma = absolute_noise_std_V(settings, 1.0 / dt_s)
     analog = x + sigma * z + interference_V(np.arange(x.size) * dt_s, settings, rng)

@@ -46,21 +46,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import fdtri
 
-# the envelope functions live in .envelope; the chain's callers still reach them here (detection.X)
-from .envelope import (  # noqa: F401
+from .envelope import (
     EnvelopeSettings,
     EnvelopeSpectrum,
     Kurtogram,
-    amplitude_spectrum,
-    analytic_band_signal,
     band_gain,
-    band_power_V2,
     choose_band,
-    envelope,
     envelope_spectrum,
-    kurtogram,
     kurtogram_bands,
-    spectral_kurtosis,
 )
 
 #: Stable codes of the cases, used to derive independent noise streams (the fault types: the
@@ -119,21 +112,6 @@ def noise_std_for_snr(x: np.ndarray, snr_dB: float) -> float:
 def noise_rng(master_seed: int, case: str, replicate: int) -> np.random.Generator:
     """The noise generator of one record: independent streams per case and replicate."""
     return np.random.default_rng([int(master_seed), 6, CASE_CODES[case], int(replicate)])
-
-
-def add_white_noise(x: np.ndarray, snr_dB: float, rng: np.random.Generator) -> tuple[np.ndarray, float]:
-    """Add white Gaussian noise at ``snr_dB`` (signal power of the whole record over noise power).
-
-    Returns
-    -------
-    noisy : ndarray
-        x + n [V].
-    sigma : float
-        Standard deviation of the added noise [V].
-    """
-    x = np.asarray(x, dtype=float)
-    sigma = noise_std_for_snr(x, snr_dB)
-    return x + sigma * rng.standard_normal(x.size), sigma
 
 
 # --------------------------------------------------------------------------- record length
@@ -433,32 +411,7 @@ def detection_limit_dB(snr_dB: np.ndarray, rate: np.ndarray, required_rate: floa
     return float(s[i])
 
 
-# --------------------------------------------------------------------------- sensor model and events
-
-
-def fem_correction(frequency_Hz: np.ndarray, fem_V_per_N: np.ndarray, rc_V_per_N: np.ndarray, f_max_Hz: float) -> dict:
-    """Constant gain that carries the RC model over to the sensor FEM in the analysed band.
-
-    The ratio |H_FEM| / |H_RC| is taken at the FEM frequencies up to
-    ``f_max_Hz`` (the Nyquist frequency of the signal); if fewer than two lie
-    there, at the two lowest FEM frequencies. Returns the median ratio
-    ("factor") and its spread (min, max) over those frequencies, so a
-    frequency-dependent correction would show as a wide spread.
-    """
-    f = np.asarray(frequency_Hz, dtype=float)
-    ratio = np.abs(np.asarray(fem_V_per_N, dtype=float)) / np.abs(np.asarray(rc_V_per_N))
-    sel = f <= f_max_Hz
-    if sel.sum() < 2:
-        sel = np.zeros(f.size, dtype=bool)
-        sel[np.argsort(f)[:2]] = True
-    r = ratio[sel]
-    return {
-        "factor": float(np.median(r)),
-        "min": float(r.min()),
-        "max": float(r.max()),
-        "frequencies_Hz": [float(f[sel].min()), float(f[sel].max())],
-        "n_frequencies": int(sel.sum()),
-    }
+# --------------------------------------------------------------------------- defect events (Fig. 9)
 
 
 def defect_event_times(

@@ -58,7 +58,6 @@ from .fault_bands import FaultLine, fault_bands, fault_lines, window_bins
 
 #: The fault types the classifier chooses among (plus "none").
 CLASSIFIED_TYPES = ("outer_race", "inner_race", "rolling_element")
-CLASSES = CLASSIFIED_TYPES + ("none",)
 #: What fault_indicator.json's detector entries mean.
 DEFINITION = (
     "fault_types: per fault type the search detector on the noisy record's whole Hann-windowed envelope "
@@ -408,37 +407,3 @@ def analyse_record(x: np.ndarray, dt_s: float, kinematics: dict, envelope_settin
     band, _ = det.choose_band(x, dt_s, envelope_settings)
     spec = envelope.envelope_spectrum(x, dt_s, band, envelope_settings.filter_order, settings.window)
     return spec, detect(spec, kinematics, settings)
-
-
-# --------------------------------------------------------------------------- summaries over seeds
-
-
-def confusion_matrix(true_types: list[str], classified: list[str], classes: tuple[str, ...] = CLASSES) -> dict:
-    """Counts with rows the true type and columns the classified type, and the per-class rates."""
-    idx = {c: i for i, c in enumerate(classes)}
-    m = np.zeros((len(classes), len(classes)), dtype=int)
-    for t, c in zip(true_types, classified, strict=True):
-        m[idx[t], idx[c]] += 1
-    n = m.sum(axis=1)
-    correct = {c: (float(m[i, i] / n[i]) if n[i] else None) for i, c in enumerate(classes)}
-    return {"classes": list(classes), "rows": "true type", "columns": "classified type", "counts": m.tolist(),
-            "correct_rate": correct}
-
-
-def roc_points(faulty_scores: np.ndarray, healthy_scores: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Detection rate against false-alarm rate over every threshold on a score [-], [-].
-
-    Scores are e.g. I / threshold of a type; the curve runs from (1, 1) to (0, 0).
-    """
-    f, h = np.asarray(faulty_scores, float), np.asarray(healthy_scores, float)
-    levels = np.concatenate([[-np.inf], np.unique(np.concatenate([f, h])), [np.inf]])
-    pd_ = np.array([(f > c).mean() for c in levels])
-    pfa = np.array([(h > c).mean() for c in levels])
-    return pfa, pd_
-
-
-def roc_auc(pfa: np.ndarray, pd_: np.ndarray) -> float:
-    """Area under the ROC curve [-] (0.5: chance, 1: perfect)."""
-    o = np.lexsort((pd_, pfa))
-    x, y = pfa[o], pd_[o]
-    return float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(x)))

@@ -37,8 +37,8 @@ The Gauss-Newton step on f0 (:func:`refine_period`) is the last coefficient
 of the least squares on [A, dp/df0]; by Frisch-Waugh-Lovell it is
 <M d, r> / <M d, M d>, M the projection off the harmonics, r the residual:
 one more fit with the same factorisation. :func:`refine_period_qr` is the
-method until 2026-11-23 (explicit matrices, three pivoted QRs), kept as the
-reference of the tests and the benchmark.
+same fit with explicit matrices and three pivoted QRs, kept as the reference
+of the tests and the benchmark.
 """
 
 from __future__ import annotations
@@ -259,8 +259,7 @@ def refine_period(x: np.ndarray, dt_s: float, f0_Hz: float, alias_folds: float =
     the minimum-norm split of coincident harmonics was noise (+-0.003 Hz
     where the QR method's is 2e-8 Hz) and called healthy records at a DAQ's
     micro-volt noise outer-race faults (3 of 10 seeds,
-    ``tests/test_signals_detector_stages.py``; found by another session on
-    merged main, fixed the same day).
+    ``tests/test_signals_detector_stages.py``).
     """
     x = np.asarray(x, float)
     k = n_fitted(dt_s, f0_Hz, alias_folds)
@@ -282,8 +281,8 @@ def refine_period(x: np.ndarray, dt_s: float, f0_Hz: float, alias_folds: float =
 
 
 def refine_period_qr(x: np.ndarray, dt_s: float, f0_Hz: float, alias_folds: float = 1.0) -> tuple[float, np.ndarray]:
-    """:func:`refine_period` with explicit matrices and three pivoted QRs (the method until 2026-11-23:
-    13 s of CPU per record at 25.6 kHz); the reference of the tests and ``benchmarks/bench_detector.py``."""
+    """:func:`refine_period` with explicit matrices and three pivoted QRs (13 s of CPU per record at
+    25.6 kHz); the reference of the tests and ``benchmarks/bench_detector.py``."""
     x = np.asarray(x, float)
     k = n_fitted(dt_s, f0_Hz, alias_folds)
     a = harmonic_matrix(x.size, dt_s, f0_Hz, k)

@@ -27,14 +27,11 @@ for the N 305), so in the shaft-angle domain the lines stay sharp:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy.interpolate import CubicSpline, PchipInterpolator
 
-from . import detection as det
-
-if TYPE_CHECKING:  # scipy.interpolate is imported where it is used (issue 14: every job's start)
-    from scipy.interpolate import CubicSpline, PchipInterpolator
+from .envelope import EnvelopeSpectrum, envelope
 
 
 def tachometer_signal(angle_rad: np.ndarray, pulses_per_rev: int, high_V: float = 5.0, duty: float = 0.5) -> np.ndarray:
@@ -71,7 +68,6 @@ def shaft_angle(pulse_times_s: np.ndarray, pulses_per_rev: int) -> CubicSpline |
     tachometer's sampling: a square wave's edge is known to about half a
     sample, an angle error of up to pi f_r dt.
     """
-    from scipy.interpolate import CubicSpline, PchipInterpolator
 
     tp = np.asarray(pulse_times_s, dtype=float)
     if tp.size < 4:
@@ -115,7 +111,6 @@ def angular_resample(x: np.ndarray, dt_s: float, angle: CubicSpline | PchipInter
     table of theta and linear interpolation of its inverse, then one Newton
     step on the PCHIP); x is interpolated there by a cubic spline.
     """
-    from scipy.interpolate import CubicSpline
 
     x = np.asarray(x, dtype=float)
     t = t0_s + np.arange(x.size) * dt_s
@@ -134,14 +129,14 @@ def angular_resample(x: np.ndarray, dt_s: float, angle: CubicSpline | PchipInter
 
 def order_envelope_spectrum(x: np.ndarray, dt_s: float, band_Hz: tuple[float, float], angle: CubicSpline | PchipInterpolator,
                             samples_per_rev: int, order: int = 4, window: str = "hann",
-                            t0_s: float = 0.0) -> det.EnvelopeSpectrum:
+                            t0_s: float = 0.0) -> EnvelopeSpectrum:
     """Envelope (band-pass, Hilbert, in time) resampled in angle, and its spectrum in orders.
 
     The returned spectrum's ``frequency_Hz`` holds orders [cycles/rev] with
     resolution 1 / n_revolutions; amplitudes as in
     :func:`.envelope.envelope_spectrum` with ``window`` [V].
     """
-    e = det.envelope(x, dt_s, band_Hz, order)
+    e = envelope(x, dt_s, band_Hz, order)
     rec = angular_resample(e, dt_s, angle, samples_per_rev, t0_s)
     v = rec.values
     n = v.size
@@ -149,7 +144,7 @@ def order_envelope_spectrum(x: np.ndarray, dt_s: float, band_Hz: tuple[float, fl
     amp = 2.0 * np.abs(np.fft.rfft(w * (v - v.mean()))) / w.sum()
     if n % 2 == 0:
         amp[-1] /= 2.0
-    return det.EnvelopeSpectrum(np.fft.rfftfreq(n, 1.0 / samples_per_rev), amp, (float(band_Hz[0]),
+    return EnvelopeSpectrum(np.fft.rfftfreq(n, 1.0 / samples_per_rev), amp, (float(band_Hz[0]),
                                 float(band_Hz[1])), n)
 
 

@@ -1,7 +1,7 @@
 """The baseline detector's outer-race test: a record's roller-passage harmonics against the healthy baseline's.
 
-Moved from :mod:`.baseline` (which re-exports its functions) and batched over
-records on 2026-11-23: the test minimises over the phase of the roller train
+Its functions are re-exported by :mod:`.baseline`; they are batched over
+records: the test minimises over the phase of the roller train
 (inside) and over the fundamental (outside, from up to four starts), and a
 Monte Carlo or a classification runs it on hundreds of records. One record at
 a time, the Python around the thousands of small evaluations cost more than
@@ -146,7 +146,7 @@ def harmonic_test(x: np.ndarray, dt_s: float, f0_Hz: float, baseline, sigma: flo
     against the free one (any harmonics, f fitted too), q = LR - (RSS(f) -
     min RSS) / sigma^2 <= LR ~ chi^2_{2K-1} (Wilks: the search over f is in
     both models). Two alternatives were measured on the LPM records and
-    dropped (README): f from the free fit alone, whose error inflates q at
+    not taken (docs/theory/detection.md): f from the free fit alone, whose error inflates q at
     low SNR (the healthy bearing called faulty in 8 of 50 seeds at -10 dB);
     and the minimum of q over f, which never exceeds q at the true f but
     lets the search average the fault's harmonics away (the 0.9 mm

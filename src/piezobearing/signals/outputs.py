@@ -11,20 +11,15 @@ Warnings go to stderr (the rule's log).
 from __future__ import annotations
 
 import sys
-from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 
 from ..bearing.lpm import BearingGeometry, kinematic_frequencies
 from ..io import SignalFileError
-from ..sensor.calibration import SensorCircuit, design_resistance_ohm, frequency_response, rc_voltage
-from . import baseline as sbase
-from . import classification as sclass
-from . import clipped as sclip
-from . import daq
-from . import detection as sig
-from . import detector as sdet
+from ..sensor.calibration import SensorCircuit, design_resistance_ohm, rc_voltage
+from ..sensor.response import sensor_model
+from . import classification, daq, detection, detectors
 from .analysis import INDICATOR_DEFINITION, envelope_analysis
 
 
@@ -78,20 +73,18 @@ def sensor_voltage(t: np.ndarray, force: np.ndarray, dt: float, circuit: SensorC
                    source: str = "the force record") -> tuple[pd.DataFrame, dict]:
     """Rule sensor_voltage_{case}: the sensor force through the calibrated sensor model.
 
-    The RC model of Eq. 6 (``circuit``: the fitted or the DAQ's R, the cable) by :func:`rc_record`, started in
-    its periodic steady state for the sensor force's period (:func:`sensor_force_period_s`), the first ``signals.skip_s`` dropped. ``harmonic``: the sensor FEM's (frequency [Hz], |V/F| [V/N]) where
-    ``signals.sensor_fem_correction``, else None; the voltage is then scaled by the median |H_FEM| / |H_RC|
-    below the Nyquist frequency (the FEM is flat there: its first resonance is near 100 kHz). Returns the
-    table (time_s, force_N, voltage_V) and the record (voltage_{case}.json without ``source``).
+    The one model of the sensor (:func:`piezobearing.sensor.response.sensor_model`, the diagnosis's too): the
+    RC model of Eq. 6 (``circuit``: the fitted or the DAQ's R, the cable) times the sensor FEM's correction,
+    the median |H_FEM| / |H_RC| below the Nyquist frequency (the FEM is flat there: its first resonance is near
+    100 kHz); ``harmonic``: the sensor FEM's (frequency [Hz], |V/F| [V/N]) where ``signals.sensor_fem_correction``,
+    else None. By :func:`rc_record`, started in its periodic steady state for the sensor force's period
+    (:func:`sensor_force_period_s`), the first ``signals.skip_s`` dropped. Returns the table (time_s, force_N,
+    voltage_V) and the record (voltage_{case}.json without ``source``).
     """
     s = config["signals"]
-    t, force, v, skip = rc_record(t, force, dt, circuit.open_circuit_gain_V_per_N, circuit.tau_s, s["skip_s"],
+    model = sensor_model(config, circuit, 0.5 / dt, harmonic)
+    t, force, v, skip = rc_record(t, force, dt, model.gain_V_per_N, model.tau_s, s["skip_s"],
                                   sensor_force_period_s(config["bearing"]), source)
-    corr = None
-    if harmonic is not None:
-        f_fem, h_fem = harmonic
-        corr = sig.fem_correction(f_fem, h_fem, np.abs(frequency_response(f_fem, circuit)), 0.5 / dt)
-        v = v * corr["factor"]
     record = {
         "dt_s": dt,
         "sample_rate_Hz": 1.0 / dt,
@@ -102,7 +95,8 @@ def sensor_voltage(t: np.ndarray, force: np.ndarray, dt: float, circuit: SensorC
         "capacitance_F": circuit.capacitance_F,
         "tau_s": circuit.tau_s,
         "open_circuit_gain_V_per_N": circuit.open_circuit_gain_V_per_N,
-        "fem_correction": corr,
+        "fem_correction": model.correction,
+        "sensor_model": model.describe(),
         "voltage_rms_V": float(np.sqrt(np.mean(v**2))),
         "voltage_peak_to_peak_V": float(np.ptp(v)),
         "force_mean_N": float(force.mean()),
@@ -125,7 +119,7 @@ def noisy(t: np.ndarray, v: np.ndarray, dt: float, case: str, config: dict) -> t
     ns = daq.NoiseSettings.from_config(s)
     smp = daq.sample(v, dt, s["sample_rate_Hz"])
     vs, dts = smp.voltage_V, smp.dt_s
-    acq = daq.add_noise(vs, dts, ns, sig.noise_rng(config["seed"], case, 0))
+    acq = daq.add_noise(vs, dts, ns, detection.noise_rng(config["seed"], case, 0))
     y = acq.voltage_V
     if acq.n_clipped:
         print(f"noisy: warning: {case}: {acq.n_clipped} of {y.size} samples ({100 * acq.clipped_fraction:.2g}%) "
@@ -141,10 +135,10 @@ def noisy(t: np.ndarray, v: np.ndarray, dt: float, case: str, config: dict) -> t
         "model_sample_rate_Hz": 1.0 / dt,
         "anti_alias": smp.anti_alias,
         "daq": acq.report(),
-        "signal_power_V2": sig.signal_power_V2(vs),
+        "signal_power_V2": detection.signal_power_V2(vs),
         "noise_std_V": acq.noise_std_V,
-        "realised_snr_dB": float(10 * np.log10(sig.signal_power_V2(vs) / np.mean(n**2))),
-        "seed": [config["seed"], 6, sig.CASE_CODES[case], 0],
+        "realised_snr_dB": float(10 * np.log10(detection.signal_power_V2(vs) / np.mean(n**2))),
+        "seed": [config["seed"], 6, detection.CASE_CODES[case], 0],
         "config": {"seed": config["seed"], "signals": s},
     }
     return table, record
@@ -158,44 +152,49 @@ def envelope(y: np.ndarray, v: np.ndarray, dt: float, kinematics: dict, config: 
     return table, {**record, "config": {"signals": s}}
 
 
-def spectrum(table: pd.DataFrame, record: dict, column: str = "amplitude_V") -> sig.EnvelopeSpectrum:
-    """An envelope spectrum from the envelope rule's table and record."""
-    return sig.EnvelopeSpectrum(
-        table["frequency_Hz"].to_numpy(float), table[column].to_numpy(float), tuple(record["band_Hz"]),
-        record["n_samples"],
-    )
+#: What fault_indicator.json's ``detection`` entries hold, by method (signals.detector.statistic).
+DETECTION_DEFINITIONS = {
+    "envelope": (
+        "detection (statistic envelope, piezobearing.signals.detectors.envelope): the Hann squared envelope "
+        "spectrum of the configured band; per family the sum over its lines (k x carrier + m x sideband, searched "
+        "over the slip range) of the largest power ratio over the local-median floor; threshold: the sum's "
+        "(1 - pfa / n_families) quantile under noise alone; margin_dB = 10 log10(statistic / threshold); "
+        "fault_type: none if no family is detected, else the detected family of largest margin"
+    ),
+    "baseline": detectors.baseline.DEFINITION + "; " + detectors.baseline.CLIPPED_DEFINITION,
+}
 
 
-def fault_indicator(envelopes: dict, kinematics: dict, noisy_records: dict, config: dict,
-                    healthy: tuple[np.ndarray, float] | None = None) -> dict:
-    """Rule fault_indicator: envelope amplitudes at k BPFO over the local floor, indicator, threshold.
+def fault_indicator(envelopes: dict, kinematics: dict, noisy_records: dict, config: dict) -> dict:
+    """Rule fault_indicator: the paper's indicator and the configured detector on each case's noisy record.
 
-    ``envelopes`` maps each case to its envelope (table, record); ``noisy_records`` each case to its noisy
-    record (y [V], dt [s], record). Per case also the detector of signals.detector.statistic: ``envelope``, the
-    search detector (:mod:`..detector`) on the noisy record in the envelope's band; ``baseline``
-    (:mod:`..baseline`) against the ``healthy`` noiseless record on the DAQ clock (v [V], dt [s]): ``fault_type``
-    (the classification) and ``fault_types``, per type its indicator, threshold and ``detected``.
+    ``envelopes`` maps each case to its envelope record (envelope_{case}.json: the band, in-band SNR and the raw
+    spectrum's test); ``noisy_records`` each case to its noisy record (y [V], the sampled noiseless v [V],
+    dt [s], noisy_{case}.json). Per case: the ``paper`` detector's indicator record (k BPFO over the local floor,
+    indicator, threshold, detected; :mod:`.detectors.paper`) on y, and on v in y's band (``noiseless``,
+    reference only); ``fault_type`` and ``detection`` (:class:`.detectors.Detection`) of the method of
+    ``signals.detector.statistic`` on y, as it judges any record (``baseline``: against the healthy case's
+    noiseless record).
     """
     s = config["signals"]
-    ins = sig.IndicatorSettings.from_config(s)
-    base = sclass.analyser(s, kinematics, healthy)
+    paper = detectors.paper.Settings.from_config(s)
+    healthy = noisy_records.get("healthy")
+    chosen = classification.configured_detector(s, kinematics, None if healthy is None else healthy[1:3])
     out = {}
-    for case, (table, meta) in envelopes.items():
-        y, dt, nrec = noisy_records[case]
-        es = sig.EnvelopeSettings(band_rule="fixed", band_Hz=tuple(meta["band_Hz"]), filter_order=s["filter_order"])
-        found = replace(base, envelope_settings=es)(y, dt, kinematics).to_dict()
-        r = sig.fault_indicator(spectrum(table, meta), kinematics["bpfo_Hz"], ins)
-        r["noiseless"] = sig.fault_indicator(spectrum(table, meta, "noiseless_amplitude_V"), kinematics["bpfo_Hz"],
-                                             ins)
+    for case, meta in envelopes.items():
+        y, v, dt, nrec = noisy_records[case]
+        band = tuple(meta["band_Hz"])
+        r = dict(detectors.detect(y, 1.0 / dt, kinematics, "paper", paper).details)
+        r["noiseless"] = detectors.detect(v, 1.0 / dt, kinematics, "paper", paper.in_band(band)).details
         r["snr_dB"] = nrec["snr_dB"]
         r["in_band_snr_dB"] = meta["in_band_snr_dB"]
         r["raw_spectrum_test"] = meta["raw_spectrum_test"]
         r["daq"] = nrec.get("daq")
-        r["fault_type"] = found["fault_type"]
-        r["fault_types"] = {t: dict(v, lines=found["lines"][t]) for t, v in found["per_type"].items()}
+        found = chosen.many([y], dt, kinematics)[0]
+        r["fault_type"] = found.fault_type
+        r["detection"] = found.to_dict()
         out[case] = r
-    out["definition"] = INDICATOR_DEFINITION + "; " + (sdet.DEFINITION if base.statistic == "envelope"
-                                                       else sbase.DEFINITION + "; " + sclip.DEFINITION)
+    out["definition"] = INDICATOR_DEFINITION + "; " + DETECTION_DEFINITIONS[chosen.method]
     out["kinematics"] = kinematics
     out["config"] = {"seed": config["seed"], "signals": s}
     return out
@@ -254,16 +253,17 @@ def fault_classification(voltages: dict, kinematics: dict, config: dict,
         smp = daq.sample(v, dt, s["sample_rate_Hz"])
         records[case] = (truth[case], smp.voltage_V, smp.dt_s)
     ns = daq.NoiseSettings.from_config(s)
-    analyse = sclass.analyser(s, kinematics, records["healthy"][1:])
+    chosen = classification.configured_detector(s, kinematics, records["healthy"][1:])
     n = s["study_n_seeds"]
-    rng = lambda case, j: sig.noise_rng(config["seed"], case, j)  # noqa: E731
+    rng = lambda case, j: detection.noise_rng(config["seed"], case, j)  # noqa: E731
     print(f"classification: {len(records)} cases x {n} seeds", file=sys.stderr, flush=True)
-    cm, rows = sclass.classify_seeds(records, kinematics, analyse, ns, rng, n)
+    cm, rows = classification.classify_seeds(records, kinematics, chosen, ns, rng, n)
     roc = []
     if truth["faulty"] != "none":
         print(f"classification: ROC at {len(s['detector']['roc_snr_dB'])} SNRs", file=sys.stderr, flush=True)
-        roc = sclass.roc_over_snr((truth["faulty"], records["faulty"][1]), records["healthy"][1],
-                                  records["faulty"][2], kinematics, analyse, s["detector"]["roc_snr_dB"], rng, n)
+        roc = classification.roc_over_snr((truth["faulty"], records["faulty"][1]), records["healthy"][1],
+                                          records["faulty"][2], kinematics, chosen, s["detector"]["roc_snr_dB"], rng,
+                                          n)
     roc_table = pd.DataFrame([{"snr_dB": r["snr_dB"], "pfa": p, "pd": d} for r in roc
                               for p, d in zip(r["pfa"], r["pd"], strict=True)])
     record = {
@@ -273,7 +273,7 @@ def fault_classification(voltages: dict, kinematics: dict, config: dict,
         "snr_dB": s["snr_dB"] if ns.model == "relative" else None,
         "sample_rate_Hz": 1.0 / records["faulty"][2],
         "false_alarm_probability": s["false_alarm_probability"],
-        "statistic": analyse.statistic,
+        "statistic": chosen.method,
         "true_types": truth,
         "roc": [{k: r[k] for k in ("snr_dB", "fault_type", "auc", "detection_rate", "false_alarm_rate")}
                 for r in roc],

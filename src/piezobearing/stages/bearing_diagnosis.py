@@ -21,7 +21,7 @@ from ..bearing.housing_mesh import build_housing_mesh
 from ..bearing.surrogate import InfluenceLine
 from ..diagnosis import engine
 from ..diagnosis.bearing.subject import SUBJECT, synthesise
-from ..io import ResultFileError, write_bearing_record, write_json
+from ..io import ResultFileError, read_harmonic, write_bearing_record, write_json
 from ..plotting import save, use_style
 from ..plotting.bearing_diagnosis import all_figures
 
@@ -48,9 +48,16 @@ def influence_from_config(config: dict) -> InfluenceLine:
     return InfluenceLine(mesh.raceway_psi, radial)
 
 
-def synthesize_bearing_record(influence_csv: str, out_csv: str, config: dict) -> None:
-    """Write the synthetic running-bearing record with ``bearing.hidden_effects`` (seeded by ``seed``)."""
-    rec = synthesise(config, config["seed"], config["bearing"]["hidden_effects"], read_influence(influence_csv))
+def harmonic_of(path: str | Path | None):
+    """The sensor FEM's (frequency [Hz], |V/F| [V/N]) from ``path`` (results/sensor/harmonic.csv), or None."""
+    return read_harmonic(path) if path else None
+
+
+def synthesize_bearing_record(influence_csv: str, out_csv: str, config: dict, harmonic_csv: str | None = None) -> None:
+    """Write the synthetic running-bearing record with ``bearing.hidden_effects`` (seeded by ``seed``); the sensor
+    model with the FEM response ``harmonic_csv`` (the workflow's), else the paper sensor's."""
+    rec = synthesise(config, config["seed"], config["bearing"]["hidden_effects"], read_influence(influence_csv),
+                     harmonic_of(harmonic_csv))
     write_bearing_record(rec, out_csv)
 
 
@@ -59,17 +66,21 @@ def run(
     influence: InfluenceLine | Callable[[], InfluenceLine],
     config: dict,
     progress: Callable[[str], None] | None = None,
+    harmonic: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> tuple[dict, dict]:
     """Diagnose one running-bearing record; returns (JSON-ready dict, arrays).
 
     ``influence`` may be a function that gives the line: it is called after the config and the record
-    were checked, so a bad record or key is reported before the housing is solved (seconds of FEM)."""
+    were checked, so a bad record or key is reported before the housing is solved (seconds of FEM).
+    ``harmonic``: the sensor FEM's response of this configuration (else the paper sensor's); the dict's
+    ``sensor_model`` says which model turned force into voltage."""
     SUBJECT.check_config(config)
     rec = SUBJECT.read(record_path, config)
     if not isinstance(influence, InfluenceLine):
         influence = influence()
-    d, diag = SUBJECT.diagnose((rec, influence), config, progress)
-    out = {"source": rec.source, "record_warnings": list(rec.warnings), **diag}
+    d, diag = SUBJECT.diagnose((rec, influence, harmonic), config, progress)
+    out = {"source": rec.source, "record_warnings": list(rec.warnings),
+           "sensor_model": d.record.rig.sensor.to_dict(), **diag}
     used = {k: config[k] for k in CONFIG_KEYS if k in config}
     if not config["bearing"].get("measurement"):
         used["seed"] = config["seed"]
@@ -93,12 +104,14 @@ def diagnose_bearing(
     config: dict,
     influence_csv: str | None = None,
     progress: Callable[[str], None] | None = None,
+    harmonic_csv: str | None = None,
 ) -> dict:
-    """Write diagnosis.json, diagnosis.npz, figures/ and report.md into ``out_dir``; returns the dict."""
+    """Write diagnosis.json, diagnosis.npz, figures/ and report.md into ``out_dir``; returns the dict.
+    ``harmonic_csv``: the sensor FEM's response (results/sensor/harmonic.csv), else the paper sensor's."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     influence = read_influence(influence_csv) if influence_csv else (lambda: influence_from_config(config))
-    diag, arrays = run(record_path, influence, config, progress)
+    diag, arrays = run(record_path, influence, config, progress, harmonic_of(harmonic_csv))
     write_json(diag, out_dir / "diagnosis.json")
     np.savez_compressed(out_dir / "diagnosis.npz", **arrays)
     figs = write_figures(arrays, diag, out_dir / "figures")

@@ -2,7 +2,8 @@
 
 sensor_voltage (force -> voltage through the calibrated RC model, optionally
 scaled to the sensor FEM), noisy (the DAQ: sampling, noise), envelope (band,
-envelope spectrum), indicator (fault_indicator.json), classification,
+envelope spectrum), indicator (fault_indicator.json: the paper's indicator and
+the configured detector, :mod:`piezobearing.signals.detectors`), classification,
 snr_study (detection against SNR over noise seeds) and defect_events (Fig. 9
 markers). Each reads its files, calls one function (the chain's are in
 :mod:`piezobearing.signals.outputs`, which the parameter studies call too) and
@@ -17,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..bearing.outputs import fault_type_force
 from ..io import (
     SERIES_UNIFORM_RTOL,
     SignalFileError,
@@ -29,9 +31,9 @@ from ..io import (
     write_json,
 )
 from ..sensor.calibration import SensorCircuit
-from ..signals import detection as sig
-from ..signals import outputs
+from ..signals import detection, outputs
 from ..signals.analysis import band_rules, snr_grid, snr_study_record, snr_summary
+from ..signals.envelope import EnvelopeSettings
 from ..signals.outputs import true_fault_type  # noqa: F401 (the stage's name for it)
 
 #: Largest relative deviation of a time step from the mean step of a record.
@@ -89,27 +91,22 @@ def envelope(
     write_json(record, out_json)
 
 
-def read_spectrum(csv: str, json_path: str, column: str = "amplitude_V") -> sig.EnvelopeSpectrum:
-    return outputs.spectrum(pd.read_csv(csv), read_json(json_path), column)
-
-
-def indicator(envelopes: dict, kinematics_json: str, noisy_jsons: dict, out_json: str, config: dict,
-              noisy_csvs: dict | None = None) -> None:
-    """Envelope amplitudes at k BPFO over the local floor, indicator, threshold, fault type → fault_indicator.json
+def indicator(envelope_jsons: dict, kinematics_json: str, noisy_csvs: dict, noisy_jsons: dict, out_json: str,
+              config: dict) -> None:
+    """The paper's indicator and the configured detector on each case's noisy record → fault_indicator.json
     (:func:`piezobearing.signals.outputs.fault_indicator`).
 
-    ``envelopes`` maps each case to its (csv, json) pair; the noisy records are ``noisy_csvs``, default beside
-    ``noisy_jsons``.
+    ``envelope_jsons``, ``noisy_csvs`` and ``noisy_jsons`` map each case to its envelope record, its noisy
+    table (voltage_V, noiseless_V) and its noisy record.
     """
-    spectra, records, healthy = {}, {}, None
-    for case, (csv, js) in envelopes.items():
-        ncsv = noisy_csvs[case] if noisy_csvs else str(Path(noisy_jsons[case]).with_suffix(".csv"))
-        _, y, dt = read_series(ncsv, "voltage_V")
-        if case == "healthy":  # the baseline detector's healthy record: the sampled noiseless one
-            healthy = read_series(ncsv, "noiseless_V")[1:]
-        spectra[case] = (pd.read_csv(csv), read_json(js))
-        records[case] = (y, dt, read_json(noisy_jsons[case]))
-    write_json(outputs.fault_indicator(spectra, kinematics(kinematics_json), records, config, healthy), out_json)
+    records = {}
+    for case, csv in noisy_csvs.items():
+        df = pd.read_csv(csv)
+        _, y, dt = table_series(df, "voltage_V", csv)
+        _, v, _ = table_series(df, "noiseless_V", csv)
+        records[case] = (y, v, dt, read_json(noisy_jsons[case]))
+    envelopes = {case: read_json(js) for case, js in envelope_jsons.items()}
+    write_json(outputs.fault_indicator(envelopes, kinematics(kinematics_json), records, config), out_json)
 
 
 # --------------------------------------------------------------------------- SNR study
@@ -123,17 +120,17 @@ def snr_study(voltages: dict, kinematics_json: str, out_csv: str, out_summary: s
     """
     s = config["signals"]
     f0 = kinematics(kinematics_json)["bpfo_Hz"]
-    ins = sig.IndicatorSettings.from_config(s)
+    ins = detection.IndicatorSettings.from_config(s)
     grid = snr_grid(s)
     rows = []
     for rule in band_rules(s):
-        es = sig.EnvelopeSettings.from_config(dict(s, band_rule=rule))
+        es = EnvelopeSettings.from_config(dict(s, band_rule=rule))
         for case, path in voltages.items():
             _, v, dt = read_series(path, "voltage_V")
             print(f"snr_study: {rule}, {case}, {len(grid)} SNRs x {s['study_n_seeds']} seeds", file=sys.stderr,
                   flush=True)
             rows += [dict(r, band_rule=rule)
-                     for r in sig.snr_sweep(v, dt, f0, case, grid, s["study_n_seeds"], config["seed"], es, ins)]
+                     for r in detection.snr_sweep(v, dt, f0, case, grid, s["study_n_seeds"], config["seed"], es, ins)]
     df = pd.DataFrame(rows)
     write_csv(df, out_csv)
     summ = snr_summary(df)
@@ -145,6 +142,7 @@ def snr_study(voltages: dict, kinematics_json: str, out_csv: str, out_summary: s
 
 def snr_study_figure(summary_csv: str, study_json: str, out_png: str) -> None:
     """Plot the detection rate against SNR → results/figures/snr_study.png."""
+    # matplotlib's import (2 s) only in the job that plots
     from ..plotting import save, use_style
     from ..plotting.signals import snr_study as plot
 
@@ -162,7 +160,7 @@ def defect_events(healthy_csv: str, faulty_csv: str, kinematics_json: str, out_c
     if th.size != tf.size or abs(th[0] - tf[0]) > UNIFORM_RTOL * dt:
         raise SignalFileError(f"{faulty_csv}: time base differs from {healthy_csv}; simulate both cases alike")
     f0 = kinematics(kinematics_json)["bpfo_Hz"]
-    times = sig.defect_event_times(vf, vh, dt, f0, th[0])
+    times = detection.defect_event_times(vf, vh, dt, f0, th[0])
     idx = np.round((times - th[0]) / dt).astype(int)
     write_csv(pd.DataFrame({"time_s": times, "voltage_V": vf[idx], "difference_V": vf[idx] - vh[idx]}), out_csv)
 
@@ -192,8 +190,6 @@ def fault_type_voltage(fault_type: str, resistance_json: str, harmonic_csv: str 
     through the bearing chain's functions (:func:`piezobearing.bearing.outputs.fault_type_force`: LPM, housing
     mesh, reduced housing solve) and the sensor_voltage rule's function.
     """
-    from ..bearing.outputs import fault_type_force
-
     cfg = outputs.fault_type_config(config, fault_type)
     force = fault_type_force(cfg)
     write_csv(force, out_force_csv, "%.9g")

@@ -45,7 +45,9 @@ from ..sensor.calibration import design_resistance_ohm
 from ..sensor.mesh import stack_mesh
 from ..signals import daq, detection
 from ..signals import outputs as sout
+from ..signals.envelope import EnvelopeSettings
 from ..studies import case_config
+from .sensor_comparison import study_case as sensor_comparison_case
 
 
 def calibration_circuit_case(config: dict, outdir: Path) -> dict:
@@ -81,7 +83,7 @@ def workflow_chain(config: dict, resistance: dict, harmonic=None, resistance_sou
     ``signals.sensor_fem_correction``, else None.
 
     Returns the records by rule (``kinematics``, ``lpm``, per case ``transient``, ``voltage`` (t, v, dt),
-    ``noisy`` (y, dt, record), ``envelope`` (table, record)) and ``indicator`` (fault_indicator.json).
+    ``noisy`` (y, v, dt, record), ``envelope`` (table, record)) and ``indicator`` (fault_indicator.json).
     """
     lpm = bout.bearing_lpm(config)
     kin = kinematics_of(json_as_read(lpm["kinematics"]), "kinematics.json")
@@ -100,13 +102,11 @@ def workflow_chain(config: dict, resistance: dict, harmonic=None, resistance_sou
         table = as_read(table)
         _, y, dt = table_series(table, "voltage_V", f"noisy_{c}.csv")
         _, v, _ = table_series(table, "noiseless_V", f"noisy_{c}.csv")
-        out["noisy"][c] = (y, dt, json_as_read(record))
-        if c == "healthy":
-            out["baseline"] = (v, dt)  # the baseline detector's healthy record
+        out["noisy"][c] = (y, v, dt, json_as_read(record))
         env, env_record = sout.envelope(y, v, dt, kin, config)
         out["envelope"][c] = (as_read(env), json_as_read(env_record))
-    out["indicator"] = json_as_read(sout.fault_indicator(out["envelope"], kin, out["noisy"], config,
-                                                         out.get("baseline")))
+    out["indicator"] = json_as_read(sout.fault_indicator({c: rec for c, (_, rec) in out["envelope"].items()}, kin,
+                                                         out["noisy"], config))
     return out
 
 
@@ -144,7 +144,7 @@ def _fault_detection_row(cfg: dict, run: dict) -> dict:
     crossing_s = b["defects"][0]["width_m"] / (
         BearingGeometry.from_config(b).outer_raceway_radius_m * 2 * np.pi * kin["ftf_Hz"]
     )
-    es, ins = detection.EnvelopeSettings.from_config(s), detection.IndicatorSettings.from_config(s)
+    es, ins = EnvelopeSettings.from_config(s), detection.IndicatorSettings.from_config(s)
     rows = []
     for c in CASES:
         _, v, dt = run["voltage"][c]
@@ -240,7 +240,7 @@ def sensor_design_case(
         voltages[case], dt_daq = smp.voltage_V, smp.dt_s
     det = sensor_design.detection_at_noise(
         voltages, dt_daq, kin["bpfo_Hz"], noise_settings(config), sg["study_n_seeds"], config["seed"],
-        detection.EnvelopeSettings.from_config(sg), detection.IndicatorSettings.from_config(sg),
+        EnvelopeSettings.from_config(sg), detection.IndicatorSettings.from_config(sg),
         sg["study_required_detection_rate"],
     )
     return {
@@ -318,6 +318,7 @@ KINDS = {
     "defect_position": detector_case,
     "fault_type_speed": detector_case,
     "sensor_design": sensor_design_case,
+    "sensor_comparison": sensor_comparison_case,
 }
 
 
@@ -342,7 +343,9 @@ def summarize(study: str, case_jsons: list[str], out_csv: str, out_png: str) -> 
     rows = []
     for p in case_jsons:
         d = read_json(p)
-        rows.append({**d["overrides"], **{k: v for k, v in d["summary"].items() if not isinstance(v, list)}})
+        case = {**d["overrides"], **{k: v for k, v in d["summary"].items() if not isinstance(v, list)}}
+        # a kind with several rows per case (one per sensor) lists them under "rows"
+        rows.extend([{**case, **r} for r in d["summary"]["rows"]] if "rows" in d["summary"] else [case])
     df = pd.DataFrame(rows)
     Path(out_csv).parent.mkdir(parents=True, exist_ok=True)
     df.to_csv(out_csv, index=False)

@@ -8,9 +8,11 @@ F_s is the quasi-static sensor force of :mod:`piezobearing.bearing.surrogate`
 averaged over each sample window (the roller loads Q_j of the rings'
 equilibrium with any defect's drop, times the housing's influence line g),
 s the share of that force the sensor's mounting passes (1 nominal), and C
-the sensor circuit of Eq. 6 (gain d33/C times the FEM correction, time
-constant RC), integrated exactly for a force linear between samples from a
-steady state (a pre-roll of 8 RC time constants is simulated and dropped).
+the sensor model (:class:`~piezobearing.sensor.response.SensorModel`, the
+workflow's too: the circuit of Eq. 6 with gain d33/C times the sensor FEM's
+correction, time constant RC; times ``bearing_diagnosis.gain_factor``, a
+DAQ amplifier's gain), integrated exactly for a force linear between samples
+from a steady state (a pre-roll of 8 RC time constants is simulated and dropped).
 V_dc is the DAQ's offset, V_add additive interference (mains).
 
 The cage turns at 2 pi FTF (1 - slip) with the shaft speed f_r (a constant,
@@ -39,7 +41,7 @@ from ...bearing.surrogate import (
     phase_edges,
     roller_groove_drop,
 )
-from ...sensor.calibration import rc_voltage
+from ...sensor.response import SensorModel
 from ..record import UniformClock
 
 #: Narrowest groove the fine grid must resolve (3 sub-samples across its passage) [m].
@@ -63,10 +65,10 @@ class Rig(UniformClock):
     geometry : BearingGeometry
     influence : InfluenceLine
         Sensor force per newton of radial roller load [N/N].
-    gain_V_per_N : float
-        d33 / C times the sensor FEM's correction [V/N].
-    tau_s : float
-        R C of the circuit [s].
+    sensor : SensorModel
+        Force to voltage: the circuit and the sensor FEM's correction.
+    gain_factor : float
+        A DAQ amplifier's gain on the sensor model's voltage (1: none) [-].
     radial_load_N, radial_clearance_m, shaft_speed_Hz : float
         The nominal operating point [N, m, Hz].
     time_s : ndarray
@@ -77,8 +79,8 @@ class Rig(UniformClock):
 
     geometry: BearingGeometry
     influence: InfluenceLine
-    gain_V_per_N: float
-    tau_s: float
+    sensor: SensorModel
+    gain_factor: float
     radial_load_N: float
     radial_clearance_m: float
     shaft_speed_Hz: float
@@ -90,6 +92,11 @@ class Rig(UniformClock):
     def __post_init__(self):
         if self.surrogate is None:
             object.__setattr__(self, "surrogate", Surrogate(self.geometry, self.influence))
+
+    @property
+    def tau_s(self) -> float:
+        """The sensor circuit's R C [s]."""
+        return self.sensor.tau_s
 
     @property
     def n_pre(self) -> int:
@@ -235,7 +242,7 @@ def unit_voltage(rig: Rig, values: dict) -> np.ndarray:
     if hit is not None:
         return hit
     f, _ = sensor_force(rig, values)
-    v = rc_voltage(f, rig.dt_s, rig.gain_V_per_N, rig.tau_s)[rig.n_pre :]
+    v = rig.gain_factor * rig.sensor.voltage(f, rig.dt_s)[rig.n_pre :]
     v.flags.writeable = False
     rig.cache[key] = v
     while len(rig.cache) > int(np.clip(CACHE_BYTES / (8 * v.size), 2, CACHE_SIZE)):

@@ -9,7 +9,6 @@ orders) and the method's wording. Everything comes from ``diagnosis.json``.
 from __future__ import annotations
 
 from ..report import sections as s
-from ..units import format_value
 
 #: Figures of the report, in order (drawn by piezobearing.plotting.bearing_diagnosis).
 FIGURES = ("overlay", "per_passage", "synchronous_average", "envelope", "spectrum", "ranking", "ladder")
@@ -23,7 +22,7 @@ def measurement(d: dict) -> list[str]:
         f"{d['n_samples']} samples at {d['sample_rate_Hz']:.6g} Hz ({d['duration_s']:.3g} s), "
         f"{d.get('n_passages', 0)} roller passages over the sensor, voltage rms {d['voltage_rms_V']:.4g} V.",
         "",
-        f"Noise floor from the record itself ({fl['method']}): {fl['voltage_noise_V'] * 1e3:.3g} mV rms, "
+        f"Noise floor from the record itself ({fl['method']}): {fl['voltage_noise_V']:.4g} V rms, "
         f"NRMSE {s.pct(base['noise_floor_nrmse'])}. The model has no measured input: a correct model leaves "
         "this white noise alone.",
         "",
@@ -44,10 +43,11 @@ def fault(d: dict) -> list[str]:
         out.append("")
         out += s.param_table(f["params"], f["ci95"])
     out += ["", "Operating conditions (fitted where the search selected the effect, else the nominal value):", ""]
-    out += ["| condition | value | 95% interval | fitted |", "|---|---|---|---|"]
+    out += ["| condition | shown in | value | 95% interval | fitted |", "|---|---|---|---|---|"]
     for k, v in f["operating_conditions"].items():
-        ci = f["operating_conditions_ci95"].get(k)
-        out.append(f"| `{k}` | {format_value(k, v)} | {s.ci(k, ci)} | {'yes' if k in f['fitted_conditions'] else 'no'} |")
+        val, iv = s.value_and_ci(k, v, f["operating_conditions_ci95"].get(k))
+        fitted = "yes" if k in f["fitted_conditions"] else "no"
+        out.append(f"| `{k}` | {s.shown_in(k)} | {val} | {iv} | {fitted} |")
     out += ["", "What this record cannot tell apart, and how each interval was found: section 6.", ""]
     return out
 
@@ -64,7 +64,7 @@ def separability(d: dict) -> list[str]:
             line += " Exact: no record separates them; a fitted `load_share_ratio` is the share times the circuit's gain over the configured one."
         ev = n.get("evidence") or {}
         if len(ev) > 1:
-            line += " This record, each fitted alone (BIC drop): " + ", ".join(
+            line += " This record, each fitted alone (delta BIC): " + ", ".join(
                 f"`{e}` {v:.4g}" for e, v in sorted(ev.items(), key=lambda x: -x[1])
             )
             chosen = [e for e in ev if e in d.get("selected", [])]
@@ -80,13 +80,14 @@ def separability(d: dict) -> list[str]:
             line += f" Final fit: r(`{a}`, `{b}`) = {c['correlation']:+.3f}."
         out.append(line)
     out += ["", "### How each interval of the answer was found", ""]
-    out += ["| quantity | value | 95% interval | found by |", "|---|---|---|---|"]
+    out += ["| quantity | shown in | value | 95% interval | found by |", "|---|---|---|---|---|"]
     values = {**f["params"], **f["operating_conditions"]}
     cis = {**f["ci95"], **f["operating_conditions_ci95"]}
     for k, how in f.get("ci_method", {}).items():
         iv = d.get("identifiability", {}).get("intervals", {}).get(k, {})
         bound = " (reaches the bound: the record does not close it there)" if any(iv.get("at_bound", ())) else ""
-        out.append(f"| `{k}` | {format_value(k, values[k])} | {s.ci(k, cis.get(k))}{bound} | {how} |")
+        val, interval = s.value_and_ci(k, values[k], cis.get(k))
+        out.append(f"| `{k}` | {s.shown_in(k)} | {val} | {interval}{bound} | {how} |")
     out += [
         "",
         "Jacobian (checked): the Gauss-Newton interval, whose ends raise chi2 by the threshold within 25% "
@@ -147,7 +148,7 @@ def views(d: dict, figures: s.Figures) -> list[str]:
 METHOD_FIT = (
     "- Fit: maximum likelihood with the noise floor measured from the record (white), over the DFT bins. "
     "The model: the rings' quasi-static load distribution with any defect's drop, times the housing's "
-    "influence line (the quasi-static surrogate, README), through the RC circuit of Eq. 6 from its steady "
+    "influence line (the quasi-static surrogate, docs/theory/bearing_housing.md), through the RC circuit of Eq. 6 from its steady "
     "state; nuisance parameters fitted in every model: the roller set's phase at the first sample, the "
     "shaft speed within its tolerance (or the tachometer's), the DC level. NRMSE = rms(residual) / rms(measured)."
 )

@@ -20,6 +20,7 @@ from ...bearing.lpm import BearingGeometry
 from ...bearing.surrogate import InfluenceLine, cage_phase
 from ...io import BearingRecord, read_bearing_record
 from ...sensor.calibration import SensorCircuit
+from ...sensor.response import sensor_model
 from ...signals.detection import noise_std_for_snr
 from ...threads import single_blas_thread
 from ..effect import Catalogue, EffectError, StartContext
@@ -44,26 +45,31 @@ ZOOM_PASSAGES = 12
 REMEASURE_BELOW = 0.8
 
 
-def rig_from_config(config: dict, influence: InfluenceLine, time_s: np.ndarray, tach_Hz=None) -> chain.Rig:
-    """The chain's fixed part from the config (bearing, sensor, bearing_diagnosis) and an influence line."""
+def rig_from_config(config: dict, influence: InfluenceLine, time_s: np.ndarray, tach_Hz=None,
+                    harmonic: tuple[np.ndarray, np.ndarray] | None = None) -> chain.Rig:
+    """The chain's fixed part from the config (bearing, sensor, signals.sensor_fem_correction, bearing_diagnosis)
+    and an influence line; ``harmonic``: the sensor FEM's (frequency [Hz], |V/F| [V/N]) of this configuration
+    (the workflow's), else the paper sensor's (:func:`piezobearing.sensor.response.sensor_model`)."""
     b, bd = config["bearing"], config["bearing_diagnosis"]
+    t = np.asarray(time_s, dtype=float)
     circuit = SensorCircuit.from_config(config["sensor"], bd["resistance_ohm"])
+    nyquist = 0.5 / float(np.median(np.diff(t))) if t.size > 1 else np.inf
     return chain.Rig(
         BearingGeometry.from_config(b),
         influence,
-        circuit.open_circuit_gain_V_per_N * bd["gain_factor"],
-        circuit.tau_s,
+        sensor_model(config, circuit, nyquist, harmonic),
+        bd["gain_factor"],
         b["radial_load_N"],
         b["radial_clearance_m"],
         b["shaft_speed_rpm"] / 60.0,
-        np.asarray(time_s, dtype=float),
+        t,
         None if tach_Hz is None else np.asarray(tach_Hz, dtype=float),
     )
 
 
-def rig_record(rec: BearingRecord, config: dict, influence: InfluenceLine) -> RigRecord:
+def rig_record(rec: BearingRecord, config: dict, influence: InfluenceLine, harmonic=None) -> RigRecord:
     tach = None if rec.speed_rpm is None else rec.speed_rpm / 60.0
-    rig = rig_from_config(config, influence, rec.time_s, tach)
+    rig = rig_from_config(config, influence, rec.time_s, tach, harmonic)
     return RigRecord(
         rec.time_s, None, "voltage", "V", rig=rig,
         speed_tolerance_ratio=config["bearing_diagnosis"]["speed_tolerance_ratio"],
@@ -129,9 +135,10 @@ class BearingSubject:
         b = config["bearing"]
         return read_bearing_record(path, b.get("channels"), b.get("wav_full_scale_V"))
 
-    def problem(self, obs: tuple[BearingRecord, InfluenceLine], config: dict) -> Problem:
-        rec, influence = obs
-        rr = rig_record(rec, config, influence)
+    def problem(self, obs: tuple, config: dict) -> Problem:
+        """``obs``: (record, influence line) or (record, influence line, the sensor FEM's harmonic response)."""
+        rec, influence, *rest = obs
+        rr = rig_record(rec, config, influence, rest[0] if rest else None)
         v = np.asarray(rec.voltage_V, dtype=float)
         start, starts = baseline_starts(rr, v)
         configured = tuple(CATALOGUE.resolve(config["bearing_diagnosis"]["effects"], "bearing_diagnosis.effects"))
@@ -141,8 +148,9 @@ class BearingSubject:
             zoom_segments=ZOOM_PASSAGES,
         )
 
-    def synthesise(self, config: dict, seed: int, hidden_effects: list[dict], influence: InfluenceLine) -> BearingRecord:
-        return synthesise(config, seed, hidden_effects, influence)
+    def synthesise(self, config: dict, seed: int, hidden_effects: list[dict], influence: InfluenceLine,
+                   harmonic=None) -> BearingRecord:
+        return synthesise(config, seed, hidden_effects, influence, harmonic)
 
     def answer(self, diagnosis) -> dict:
         return {"fault": fault_answer(diagnosis)}
@@ -273,11 +281,13 @@ def hidden_values(specs: list[dict], record: RigRecord | None, key: str = "beari
     return model, values
 
 
-def synthesise(config: dict, seed: int, hidden_effects: list[dict], influence: InfluenceLine) -> BearingRecord:
+def synthesise(config: dict, seed: int, hidden_effects: list[dict], influence: InfluenceLine,
+               harmonic: tuple[np.ndarray, np.ndarray] | None = None) -> BearingRecord:
     """A synthetic running-bearing record: the chain at the nominal point with the hidden effects, plus noise.
 
     White Gaussian noise at ``bearing_diagnosis.synthetic_snr_dB`` over the
-    noiseless record (seeded by ``seed``); the roller set starts at
+    noiseless record (seeded by ``seed``); the sensor model as the diagnosis's (``harmonic``: the sensor FEM's
+    response of this configuration, :func:`rig_from_config`); the roller set starts at
     ``synthetic_start_phase_deg``; with ``synthetic_tachometer`` the shaft
     speed (times 1 + any hidden ``speed_deviation_ratio``) is written as speed_rpm.
     """
@@ -286,7 +296,7 @@ def synthesise(config: dict, seed: int, hidden_effects: list[dict], influence: I
     t = np.arange(int(round(bd["synthetic_duration_s"] * fs))) / fs
     f0 = config["bearing"]["shaft_speed_rpm"] / 60.0
     tach = np.full(t.size, f0) if bd["synthetic_tachometer"] else None
-    rig = rig_from_config(config, influence, t, tach)
+    rig = rig_from_config(config, influence, t, tach, harmonic)
     rr = RigRecord(t, None, "voltage", "V", rig=rig, speed_tolerance_ratio=bd["speed_tolerance_ratio"])
     model, values = hidden_values(hidden_effects, rr)
     values["start_phase_rad"] = float(np.radians(bd["synthetic_start_phase_deg"]))
@@ -419,16 +429,88 @@ def fault_answer(d) -> dict:
         for k in [*params, *cond]
     }
     how.pop("roller_defect_index", None)  # chosen among the starts, not fitted: no interval
+    remaining = fault_lines_left(d, kind) if kind != "none" else []
     return {
         "type": kind,
         "params": params,
         "ci95": ci95,
+        "statement": fault_statement(kind, params, ci95, remaining),
+        "lines_left": remaining,
         "operating_conditions": cond,
         "operating_conditions_ci95": cond_ci,
         "fitted_conditions": fitted,
         "ci_method": how,
         "non_separable": separability(non_separable(rig.tach_Hz is not None), d.ranking, d.final.result.correlation),
     }
+
+
+#: A residual line belongs to a fault's own line within this share of its frequency, or two bins [-].
+LINE_TOLERANCE = 0.005
+
+
+def family_lines(kind: str, kin: dict, harmonics: int = 3) -> list[tuple[str, float]]:
+    """(label, frequency [Hz]) of the lines a fault of ``kind`` puts into the sensor's spectrum: the harmonics
+    of its passing rate and, for a moving defect, their sidebands at the rate that carries it through the load
+    zone (f_r for the inner race, FTF for a roller)."""
+    if kind == "outer_race":
+        return [(f"{k}xBPFO", k * kin["bpfo_Hz"]) for k in range(1, harmonics + 1)]
+    if kind == "inner_race":
+        base, side, sname, bname = kin["bpfi_Hz"], kin["shaft_Hz"], "fr", "BPFI"
+    else:
+        base, side, sname, bname = 2 * kin["bsf_Hz"], kin["ftf_Hz"], "FTF", "2xBSF"
+    out = []
+    for k in range(1, harmonics + 1):
+        lab = bname if k == 1 else f"{k}x{bname}"
+        out += [(lab, k * base), (f"{lab}-{sname}", k * base - side), (f"{lab}+{sname}", k * base + side)]
+    return out
+
+
+def fault_lines_left(d, kind: str) -> list[dict]:
+    """The residual lines the final model leaves at the found fault's own lines (:func:`family_lines`).
+
+    For each narrowband finding of the verdict within :data:`LINE_TOLERANCE` of one of them: its label and
+    frequency, its level above the noise floor, and the record's line against the model's, 20 log10 of
+    their Hann-windowed amplitude spectra's ratio at the peak (positive: the record's is the stronger) [dB].
+    """
+    values, rig = d.final.values, d.record.rig
+    shaft = float(values.get("shaft_speed_Hz", rig.shaft_speed_Hz) if rig.tach_Hz is None else np.mean(rig.tach_Hz))
+    shaft *= 1.0 + values.get("speed_deviation_ratio", 0.0)
+    lines = family_lines(kind, rig.frequencies(shaft, values.get("cage_slip_ratio", 0.0)))
+    v = np.asarray(d.voltage_V, dtype=float)
+    n = v.size
+    df = 1.0 / (n * d.record.dt_s)
+    w = np.hanning(n)
+    rec_a = np.abs(np.fft.rfft((v - v.mean()) * w))
+    mod = np.asarray(d.final.model_V, dtype=float)
+    mod_a = np.abs(np.fft.rfft((mod - mod.mean()) * w))
+    out = []
+    for u in d.unexplained:
+        if u.get("test") != "spectrum" or u.get("kind") != "narrowband":
+            continue
+        f = u["frequency_Hz"]
+        label, fl = min(lines, key=lambda x: abs(x[1] - f))
+        if abs(fl - f) > max(LINE_TOLERANCE * fl, 2 * df):
+            continue
+        k = int(round(f / df))
+        sl = slice(max(k - 1, 0), k + 2)
+        diff = 20 * np.log10(rec_a[sl].max() / max(mod_a[sl].max(), 1e-300))
+        out.append({"line": label, "frequency_Hz": float(f), "excess_dB": float(u["excess_dB"]),
+                    "record_over_model_dB": float(diff)})
+    return out
+
+
+def fault_statement(kind: str, params: dict, ci95: dict, remaining: list[dict]) -> str:
+    """One line: the fault found with its size and interval, and what of its own lines the model leaves."""
+    if kind == "none":
+        return "no fault"
+    wkey = next(k for k in params if k.endswith("width_m"))
+    lo, hi = ci95.get(wkey) or (float("nan"), float("nan"))
+    text = f"{kind.replace('_', ' ')} {params[wkey] * 1e3:.3g} mm [{lo * 1e3:.3g}, {hi * 1e3:.3g}] (95 %)"
+    if remaining:
+        text += "; its lines differ from the model's: " + ", ".join(
+            f"{r['line']} ({r['frequency_Hz']:.1f} Hz) {r['record_over_model_dB']:+.1f} dB, "
+            f"{r['excess_dB']:.1f} dB above the floor" for r in remaining)
+    return text
 
 
 def start_context(rec: RigRecord, v: np.ndarray, model_v: np.ndarray, values: dict) -> StartContext:

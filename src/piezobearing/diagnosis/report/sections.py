@@ -13,25 +13,98 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 
-from ..units import format_value
+from ..units import unit_of
 from ..verdict import peak_where
+
+#: Significant digits a value and its interval start with; more where fewer would print two ends alike.
+DIGITS = 4
+#: The most significant digits an interval is printed with (its ends may agree to this many: say so).
+MAX_DIGITS = 12
+
+#: What the report's columns mean (the ranking's and the ladder's), said once under each table.
+DEFINITIONS = (
+    "delta BIC = BIC of the model without the effect minus BIC with it (BIC = chi2 + k ln n with the measured "
+    "noise): positive favours the effect (> 10 very strong), negative means its extra parameters are not worth "
+    "the fit they buy. NRMSE = rms(residual) / rms(measured). Share explained = the part of the misfit above the "
+    "floor (chi2 minus its expectation for a correct model) that the effect removes, as a percentage; '-' where "
+    "the effect did not help (delta BIC <= 0) or the model it was added to left no misfit above the floor."
+)
 
 
 def pct(x: float) -> str:
+    """A fraction [-] shown as a percentage."""
     return f"{100 * x:.2f}%"
 
 
-def ci(name: str, ci95) -> str:
+def shown_in(name: str) -> str:
+    """The unit a parameter's values are shown in (the report's column "shown in"), from its name's suffix."""
+    u = unit_of(name)
+    return (u.display or "-") if u is not None else "-"
+
+
+def _scaled(name: str, value: float) -> float:
+    u = unit_of(name)
+    return value / u.display_scale if u is not None else value
+
+
+def numbers(name: str, *values: float | None) -> list[str]:
+    """``values`` of parameter ``name`` in the unit :func:`shown_in` names, with :data:`DIGITS` significant
+    digits or as many more as it takes to print different values differently (an interval's ends, the value
+    inside it)."""
+    x = [None if v is None else _scaled(name, v) for v in values]
+    distinct = len({v for v in x if v is not None})
+    for digits in range(DIGITS, MAX_DIGITS + 1):
+        out = ["-" if v is None else f"{v:.{digits}g}" for v in x]
+        if len({t for t, v in zip(out, x, strict=True) if v is not None}) == distinct:
+            return out
+    return out
+
+
+def ci(name: str, ci95, value: float | None = None) -> str:
+    """The 95% interval ``ci95`` of ``name`` in its shown unit, with enough digits to show its width (and to
+    tell its ends from ``value``)."""
     if not ci95:
         return ""
-    return f"[{format_value(name, ci95[0])}, {format_value(name, ci95[1])}]"
+    lo, hi, *_ = numbers(name, ci95[0], ci95[1], value)
+    return f"[{lo}, {hi}]"
+
+
+def value_and_ci(name: str, value: float | None, ci95) -> tuple[str, str]:
+    """A value and its interval printed with the same digits (:func:`numbers`)."""
+    if not ci95:
+        return numbers(name, value)[0], ""
+    v, lo, hi = numbers(name, value, ci95[0], ci95[1])
+    return v, f"[{lo}, {hi}]"
 
 
 def param_table(params: dict, ci95: dict) -> list[str]:
-    rows = ["| parameter | value | 95% interval |", "|---|---|---|"]
+    """Parameters with their 95% intervals, each in the unit of its "shown in" column."""
+    rows = ["| parameter | shown in | value | 95% interval |", "|---|---|---|---|"]
     for k, v in params.items():
-        rows.append(f"| `{k}` | {format_value(k, v)} | {ci(k, ci95.get(k))} |")
+        val, iv = value_and_ci(k, v, ci95.get(k))
+        rows.append(f"| `{k}` | {shown_in(k)} | {val} | {iv} |")
     return rows
+
+
+def share(r: dict) -> str:
+    """The share of the misfit an effect explains (a ranking entry or a step), or '-' where it means nothing:
+    the effect did not help (delta BIC <= 0) or the model before it had no misfit above its floor."""
+    if r.get("excess_explained") is None or r.get("delta_bic") is None or r["delta_bic"] <= 0:
+        return "-"
+    before, floor = r.get("nrmse_before"), r.get("noise_floor_nrmse")
+    if before is not None and floor is not None and before <= floor:
+        return "-"
+    return pct(r["excess_explained"])
+
+
+def nrmse_after(r: dict) -> str:
+    """A ranking entry's NRMSE with the effect, marked where it is above the NRMSE without it (the refit did
+    not reach the optimum of the model that nests the one before: read the entry as 'did not help')."""
+    text = pct(r["nrmse"])
+    before = r.get("nrmse_before")
+    if before is not None and r["nrmse"] > before * (1 + 1e-3):
+        text += f" (above {pct(before)} without it: the refit did not converge)"
+    return text
 
 
 def tests_line(t: dict, input_name: str = "input") -> str:
@@ -224,21 +297,20 @@ def ranking(d: dict, figures: Figures) -> list[str]:
     out.append(
         "Each effect of the catalogue was added to the "
         + ("configured" if configured_on(d) else "baseline")
-        + " model in turn and refitted. Evidence: the drop of the Bayesian information criterion "
-        "(BIC = chi2 + k ln n with the measured noise; > 10 is very strong), the share of the misfit above "
-        "the floor the effect explains, the NRMSE after, and whether the residual becomes white."
+        + " model in turn and refitted. Evidence: delta BIC, the share of the misfit above the floor the "
+        "effect explains, the NRMSE with the effect, and whether the residual becomes white."
     )
     out += ["", "| rank | effect | delta BIC | share explained | NRMSE after | white after | fitted |"]
     out.append("|---|---|---|---|---|---|---|")
     for i, r in enumerate(d["ranking"]):
         white = "yes" if r["white"] else "no"
         out.append(
-            f"| {i + 1} | `{r['effect']}` | {r['delta_bic']:.4g} | {pct(r['excess_explained'])} | "
-            f"{pct(r['nrmse'])} | {white} | {r['summary'].replace('|', '/')} |"
+            f"| {i + 1} | `{r['effect']}` | {r['delta_bic']:.4g} | {share(r)} | "
+            f"{nrmse_after(r)} | {white} | {r['summary'].replace('|', '/')} |"
         )
-    out.append("")
+    out += ["", DEFINITIONS, ""]
     out += winner(d) + figures.lines(
-        "ranking", "Evidence for each effect of the catalogue (BIC drop when added)."
+        "ranking", "Evidence for each effect of the catalogue (delta BIC when added; > 0 favours it)."
     )
     return out
 
@@ -261,15 +333,15 @@ def winner(d: dict) -> list[str]:
     if best and best["effect"] in tried:
         return [
             f"No effect was kept. The best candidate, `{best['effect']}` (delta BIC {best['delta_bic']:.3g}), "
-            f"explains only {pct(best['excess_explained'])} of the misfit and the residual keeps structure "
+            f"explains only {share(best)} of the misfit and the residual keeps structure "
             "after the search: it would stand in for a mechanism outside the catalogue (see the verdict).",
             "",
         ]
     if best:
         return [
             f"No effect is supported by the evidence (best: `{best['effect']}`, delta BIC "
-            f"{best['delta_bic']:.3g} against the {st.get('min_delta_bic')} needed, share "
-            f"{pct(best['excess_explained'])} against {st.get('min_share')}).",
+            f"{best['delta_bic']:.3g} against the {st.get('min_delta_bic')} needed; share explained: {share(best)}, "
+            f"{_pct_setting(st.get('min_share'))} needed).",
             "",
         ]
     return []
@@ -289,10 +361,10 @@ def ladder(d: dict, figures: Figures) -> list[str]:
             continue
         name = " + ".join(["baseline", *s["effects"]])
         db = "" if s["delta_bic"] is None else f"{s['delta_bic']:.4g}"
-        sh = "" if s["excess_explained"] is None else pct(s["excess_explained"])
+        sh = "" if s["excess_explained"] is None else share(s)
         step = "configured" if i == 0 else str(i)
         out.append(f"| {step} | {name} | {pct(s['nrmse'])} | {pct(s['noise_floor_nrmse'])} | {db} | {sh} |")
-    out.append("")
+    out += ["", "Columns as defined under the ranking (section 3).", ""]
     for s in d.get("dropped_steps", []):
         out.append(f"- Tried and dropped: `{s['added']}` ({s['reason']}).")
     if d.get("dropped_steps"):
@@ -356,8 +428,8 @@ def identifiability(d: dict) -> list[str]:
     if stop:
         out += [
             f"The search stopped: the best further candidate, `{stop['best']}`, changes the BIC by "
-            f"{stop['delta_bic']:.3g} (evidence for it: {stop['strength']}) and explains "
-            f"{pct(stop['excess_explained'])} of the misfit left.",
+            f"{stop['delta_bic']:.3g} (evidence for it: {stop['strength']}); share explained of the misfit left: "
+            f"{share(stop)}.",
             "",
         ]
     for eq in idf.get("equivalences", []):
@@ -404,13 +476,17 @@ def intervals(iv: dict) -> list[str]:
         "",
     ]
     if prof:
-        out += ["| parameter | value | interval | Jacobian's interval | chi2 rise at the Jacobian's ends | method |"]
-        out.append("|---|---|---|---|---|---|")
+        out += [
+            "| parameter | shown in | value | interval | Jacobian's interval | chi2 rise at the Jacobian's ends "
+            "| method |"
+        ]
+        out.append("|---|---|---|---|---|---|---|")
         for k, i in prof.items():
             rise = ", ".join(f"{r:.2f}" for r in i["rise_at_jacobian_ends"])
             bound = " (reaches the bound)" if any(i["at_bound"]) else ""
+            val, iv = value_and_ci(k, i["value"], i["ci"])
             out.append(
-                f"| `{k}` | {format_value(k, i['value'])} | {ci(k, i['ci'])}{bound} | {ci(k, i['jacobian_ci'])} | "
+                f"| `{k}` | {shown_in(k)} | {val} | {iv}{bound} | {ci(k, i['jacobian_ci'], i['value'])} | "
                 f"{rise} x D | {i['method']} |"
             )
         out.append("")
@@ -425,11 +501,17 @@ def method(d: dict, fit_line: str, tests_line_: str) -> list[str]:
         "",
         fit_line,
         tests_line_,
-        f"- Selection: an effect is added when its BIC drop exceeds {st.get('min_delta_bic')} and it explains "
-        f"at least {st.get('min_share')} of the misfit above the floor; if structure remains, additions that "
-        f"explained less than {st.get('min_share_if_unexplained')} at their step are dropped.",
+        f"- Selection: an effect is added when its delta BIC exceeds {st.get('min_delta_bic')} and it explains "
+        f"at least {_pct_setting(st.get('min_share'))} of the misfit above the floor; if structure remains, "
+        f"additions that explained less than {_pct_setting(st.get('min_share_if_unexplained'))} at their step "
+        "are dropped.",
         "",
     ]
+
+
+def _pct_setting(x) -> str:
+    """A fraction setting [-] as a percentage, as the report shows every share ('?' when not recorded)."""
+    return "?" if x is None else f"{100 * x:g}%"
 
 
 def config_used(d: dict) -> list[str]:

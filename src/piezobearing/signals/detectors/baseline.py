@@ -139,15 +139,17 @@ from .result import FAULT_TYPES, Detection, FamilyEvidence, margin_dB
 
 #: What fault_indicator.json's detector entries mean with signals.detector.statistic = baseline.
 DEFINITION = (
-    "fault_types (statistic baseline): the cage slip from the roller-passage lines (k BPFO, k = 1..3); the "
+    "detection (statistic baseline): the cage slip from the roller-passage lines (k BPFO, k = 1..3); the "
     "BPFO-periodic part (every harmonic to alias_folds x f_s) removed by least squares, sigma = 1.4826 MAD of the "
     "rest; outer_race: the roller-passage harmonics below Nyquist against the healthy baseline's, aligned in "
     "phase, at the fundamental of the baseline's waveform fitted to the record over the slip window, chi^2 with "
     "2K-1 degrees of freedom; inner_race, rolling_element: the rest over sigma, squared and "
     "folded on 1/BPFI and 1/(2 BSF), one cell per sample (follow_passage_phase: on the record resampled where its "
     "roller-passage phase theta is uniform, the inner race on Z f_shaft t - theta), the smallest cell chi^2 "
-    "p-value corrected for the search over the cells; indicator = -log10 p, threshold = -log10(pfa / n_types), detected = indicator > "
-    "threshold; fault_type: none if no type is detected, else the detected type of smallest p"
+    "p-value corrected for the search over the cells; per family statistic = -log10 p, threshold = "
+    "-log10(pfa / n_types), detected = statistic > threshold, margin_dB = 10 log10(statistic / threshold) (details: "
+    "per_type, each test's own numbers under tests); fault_type: none if no type is detected, else the detected "
+    "type of smallest p"
 )
 _FOLD_CARRIER = {"inner_race": "bpfi_Hz", "rolling_element": "2bsf_Hz"}
 

@@ -26,6 +26,7 @@ import numpy as np
 from scipy.special import fdtri
 
 from .. import detection
+from ..envelope import EnvelopeSettings
 from .result import Detection, FamilyEvidence, LineEvidence, margin_dB
 
 
@@ -41,13 +42,13 @@ class Settings:
         Harmonics, floor half-width and guard bins, false-alarm probability.
     """
 
-    envelope: detection.EnvelopeSettings
+    envelope: EnvelopeSettings
     indicator: detection.IndicatorSettings
 
     @classmethod
     def from_config(cls, signals: dict) -> "Settings":
         """From the validated config's ``signals`` section."""
-        return cls(detection.EnvelopeSettings.from_config(signals), detection.IndicatorSettings.from_config(signals))
+        return cls(EnvelopeSettings.from_config(signals), detection.IndicatorSettings.from_config(signals))
 
     def in_band(self, band_Hz: tuple[float, float]) -> "Settings":
         """The same settings with the band fixed to ``band_Hz`` [Hz]."""

@@ -1,0 +1,75 @@
+"""The figure of a fault detection on a record: the squared envelope spectrum with every fault band marked,
+and the fast kurtogram with the band used."""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.patches import Rectangle
+
+from . import use_style
+
+#: One colour per family.
+FAMILY_COLOURS = {"outer_race": "tab:blue", "inner_race": "tab:red", "rolling_element": "tab:green"}
+
+
+def detection_figure(detection: dict, title: str = ""):
+    """Squared envelope spectrum (power over the local median, dB) with the families' line windows shaded,
+    and the kurtogram (spectral kurtosis over level and frequency) with the band used.
+
+    Parameters
+    ----------
+    detection : dict
+        A :class:`piezobearing.signals.detectors.Detection` of the envelope detector, as ``to_dict()``.
+    title : str
+        The figure's title (the record).
+    """
+    use_style()
+    details = detection["details"]
+    kurtogram = details.get("kurtogram")
+    fig, axes = plt.subplots(2 if kurtogram else 1, 1, figsize=(9, 7 if kurtogram else 4), squeeze=False)
+    ax = axes[0, 0]
+    f = np.asarray(details["spectrum"]["frequency_Hz"])
+    level = 10 * np.log10(np.maximum(np.asarray(details["spectrum"]["ratio"]), 1e-3))
+    ax.plot(f, level, color="0.2", lw=0.6)
+    top = max(level.max(), 15.0)
+    for family, lines in details["lines"].items():
+        colour = FAMILY_COLOURS.get(family, "0.5")
+        for i, line in enumerate(lines):
+            ax.axvspan(line["low_Hz"], line["high_Hz"], color=colour, alpha=0.25, lw=0,
+                       label=family.replace("_", " ") if i == 0 else None)
+    shaft = details["shaft"]["shaft_Hz"]
+    for k in range(1, int(f[-1] / shaft) + 1):
+        ax.axvline(k * shaft, color="0.6", lw=0.5, ls=":", label="shaft harmonics" if k == 1 else None)
+    threshold = max((ln["threshold_dB"] for fam in detection["families"].values() for ln in fam["lines"]),
+                    default=None)
+    if threshold is not None:
+        ax.axhline(threshold, color="k", lw=0.6, ls="--", label="line threshold")
+    ax.set_xlim(0, f[-1])
+    ax.set_ylim(-5, top + 3)
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("squared envelope over local median [dB]")
+    band = detection["band_Hz"]
+    call = detection["fault_type"].replace("_", " ")
+    ax.set_title(f"{title}  call: {call}  band {band[0]:.0f}-{band[1]:.0f} Hz  shaft {shaft:.3f} Hz".strip())
+    ax.legend(loc="upper right", fontsize=7, ncol=2)
+    if kurtogram:
+        kax = axes[1, 0]
+        levels = np.asarray(kurtogram["level"])
+        sk = np.asarray(kurtogram["kurtosis"])
+        order = sorted(set(levels.round(6)))
+        norm = plt.Normalize(min(0.0, sk.min()), max(sk.max(), 1e-6))
+        cmap = plt.get_cmap("viridis")
+        for lo, hi, lv, value in zip(kurtogram["low_Hz"], kurtogram["high_Hz"], levels, sk, strict=True):
+            row = order.index(round(lv, 6))
+            kax.add_patch(Rectangle((lo, row - 0.5), hi - lo, 1.0, color=cmap(norm(value)), lw=0))
+        kax.add_patch(Rectangle((band[0], -0.5), band[1] - band[0], len(order), fill=False, ec="r", lw=1.2))
+        kax.set_xlim(0, max(kurtogram["high_Hz"]))
+        kax.set_ylim(len(order) - 0.5, -0.5)
+        kax.set_yticks(range(len(order)), [f"{v:.1f}" for v in order])
+        kax.set_xlabel("frequency [Hz]")
+        kax.set_ylabel("level (log2 Nyquist/bandwidth)")
+        kax.set_title("fast kurtogram (spectral kurtosis); red: the band used")
+        fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=kax, label="spectral kurtosis [-]")
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,361 @@
+"""The embedded sensor against a housing accelerometer: one simulated rig observed by both.
+
+One run of the rig at the comparison's model step (``sensor_comparison.time_step_s``):
+
+1. the surroundings: one realisation of the base motion (:mod:`piezobearing.bearing.base_motion`);
+2. the LPM under it (the radial load, and each mass's inertial load -m a_b(t) in ground-relative
+   coordinates: :func:`piezobearing.bearing.lpm.simulate_lpm`), its roller loads at the model step;
+3. the housing FEM's reduced modal model (modes to ``mode_cutoff_ratio`` times the accelerometer DAQ's
+   Nyquist frequency) under the roller loads and the base's inertia -M r a_b: the sensor force and the
+   absolute acceleration at the accelerometer's mounting place
+   (:func:`piezobearing.bearing.housing_fem.response_projected`).
+
+The housing's inertia is counted once. The LPM's pedestal (outer ring and housing as one mass on a spring,
+``bearing.pedestal_*``) sets how the rollers' deflection responds; its inertial load under base motion goes
+to its own spring, to the ground, and reaches the housing FEM only through the roller loads it changes. The
+housing FEM's loads are the roller loads and its own distributed inertia -M r a_b: the housing's mass loads
+the sensor and the accelerometer once, through the FEM.
+
+Then each sensor's chain:
+
+* the PZT: the sensor force through the calibrated RC model (and the sensor FEM's correction) as the
+  sensor_voltage rule does (:func:`piezobearing.signals.outputs.sensor_voltage`), its DAQ at
+  ``pzt_sample_rate_Hz`` with the absolute noise of ``signals.noise`` in volts (density, mains pick-up, ADC);
+* the accelerometer: its transfer function (sensitivity, mounted resonance, high-pass), the first
+  ``signals.skip_s`` dropped as for the PZT, its DAQ's anti-alias filter and sampling at
+  ``accelerometer.daq.sample_rate_Hz``, its own noise (the datasheet's density) and range, its DAQ's noise
+  in volts and ADC.
+
+Both records go to the same detector (:func:`piezobearing.signals.detectors.detect`, method ``envelope``) at
+the same false-alarm probability (``signals.false_alarm_probability``). Absolute noise per channel, not the
+relative-SNR model: a relative SNR would cancel each sensor's gain and hide the question.
+"""
+
+from __future__ import annotations
+
+import copy
+import sys
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..bearing import base_motion as bm
+from ..bearing import housing_fem as fem
+from ..bearing import lpm as brg
+from ..bearing import transient as tr
+from ..bearing.housing_mesh import build_housing_mesh
+from ..signals import daq, detectors
+from ..signals import outputs as sout
+from ..signals.detectors import envelope as envelope_detector
+from . import accelerometer as acc
+
+SENSORS = ("pzt", "accelerometer")
+#: Stream indices of the DAQs' noise draws: default_rng([seed, NOISE_STREAM, sensor, case, replicate]).
+NOISE_STREAM = 30
+
+
+@dataclass(frozen=True)
+class ComparisonSettings:
+    """The comparison's model step, DAQ rates and seeds (config ``sensor_comparison``, ``accelerometer``).
+
+    Parameters
+    ----------
+    time_step_s : float
+        Model step of the LPM's output and the housing FEM [s].
+    substeps : int
+        LPM steps per model step [-].
+    pzt_sample_rate_Hz, accelerometer_sample_rate_Hz : float
+        The two DAQs' rates [Hz].
+    mode_cutoff_ratio : float
+        Housing modes up to this multiple of the accelerometer DAQ's Nyquist frequency [-].
+    n_seeds : int
+        Realisations per case [-].
+    band_rule : str
+        The envelope detector's band rule for both sensors.
+    position : str
+        The accelerometer's mounting place.
+    """
+
+    time_step_s: float
+    substeps: int
+    pzt_sample_rate_Hz: float
+    accelerometer_sample_rate_Hz: float
+    mode_cutoff_ratio: float
+    n_seeds: int
+    band_rule: str
+    position: str
+
+    @classmethod
+    def from_config(cls, config: dict) -> ComparisonSettings:
+        c, a = config["sensor_comparison"], config["accelerometer"]
+        out = cls(c["time_step_s"], c["substeps"], c["pzt_sample_rate_Hz"], a["daq"]["sample_rate_Hz"],
+                  c["mode_cutoff_ratio"], c["n_seeds"], c["band_rule"], a["position"])
+        top = max(out.pzt_sample_rate_Hz, out.accelerometer_sample_rate_Hz)
+        if out.time_step_s * top > 1.0 + 1e-9:
+            raise ValueError(
+                f"config sensor_comparison.time_step_s = {out.time_step_s:g} s is coarser than the faster DAQ "
+                f"({top:g} Hz); set it to at most 1/{top:g} s"
+            )
+        return out
+
+    @property
+    def nyquist_Hz(self) -> float:
+        """The accelerometer DAQ's Nyquist frequency [Hz]."""
+        return 0.5 * self.accelerometer_sample_rate_Hz
+
+
+def rig_config(config: dict, settings: ComparisonSettings) -> dict:
+    """The config with the bearing on the comparison's model step and the envelope detector's band rule."""
+    cfg = copy.deepcopy(config)
+    cfg["bearing"].update(time_step_s=settings.time_step_s, substeps=settings.substeps)
+    cfg["signals"]["band_rule"] = settings.band_rule
+    return cfg
+
+
+def pzt_noise_settings(config: dict) -> daq.NoiseSettings:
+    """The PZT DAQ's noise: ``signals.noise`` in volts (model absolute, whatever the workflow's model), its
+    input range ``sensor_comparison.pzt_range_V``."""
+    n = daq.NoiseSettings.from_config(config["signals"])
+    return replace(n, model="absolute", range_V=config["sensor_comparison"]["pzt_range_V"])
+
+
+def accelerometer_daq_settings(config: dict) -> daq.NoiseSettings:
+    """The accelerometer DAQ's noise and ADC (``accelerometer.daq``): white input noise, no pick-up lines."""
+    d = config["accelerometer"]["daq"]
+    return daq.NoiseSettings(model="absolute", noise_density_V_per_sqrtHz=d["noise_density_V_per_sqrtHz"],
+                             adc_bits=d["adc_bits"], range_V=d["range_V"])
+
+
+# --------------------------------------------------------------------------- the housing, once per case
+
+
+@dataclass(frozen=True)
+class Housing:
+    """The housing model of one case with its modes and the operators of loads, base motion and probe."""
+
+    model: fem.HousingModel
+    modes: fem.Modes
+    ops: fem.ReducedOperators
+    base: fem.BaseMotionOperators
+
+    def record(self) -> dict:
+        """What the results say about it: DOFs, modes kept, the effective mass they carry, the probe."""
+        frac = self.base.effective_mass_fraction()
+        p = self.base.probes[0]
+        return {
+            "n_dofs": self.model.n_dofs,
+            "n_modes": int(self.modes.omega_rad_s.size),
+            "highest_mode_Hz": float(self.modes.frequencies_Hz[-1]),
+            "first_mode_Hz": float(self.modes.frequencies_Hz[0]),
+            "effective_mass_fraction_y": float(frac[0, -1]),
+            "effective_mass_fraction_z": float(frac[1, -1]),
+            "dragged_mass_kg": float(self.base.rigid_mass_kg[0]),
+            "sensor_force_per_base_acceleration_z_N_per_m_per_s2": float(self.base.static_sensor[1]),
+            "accelerometer_node_m": list(p.coordinates_m),
+            "accelerometer_axis": list(p.normal),
+        }
+
+
+def modes_to(model: fem.HousingModel, top_Hz: float, start: int, seed: int) -> fem.Modes:
+    """The housing's modes up to past ``top_Hz``: ``start`` modes, doubled until the highest passes it."""
+    n = max(int(start), 1)
+    while True:
+        modes = fem.compute_modes(model, min(n, model.n_dofs - 2), seed=seed)
+        if modes.frequencies_Hz[-1] >= top_Hz or n >= model.n_dofs - 2:
+            return modes
+        n *= 2
+
+
+def build_housing(config: dict, faulty: bool, settings: ComparisonSettings) -> Housing:
+    """The housing mesh of the case (``housing.mesh_level``), its model, its modes to ``mode_cutoff_ratio``
+    times the Nyquist frequency, the Rayleigh damping, and the probe at ``accelerometer.position``."""
+    h = config["housing"]
+    mesh = build_housing_mesh(tr.housing_geometry(config), faulty, h["mesh_level"])
+    model = tr.make_model(mesh, config)
+    modes = modes_to(model, settings.mode_cutoff_ratio * settings.nyquist_Hz, h["n_modes"], config["seed"])
+    alpha, beta = fem.rayleigh_coefficients(h["damping_ratio"], h["damping_band_Hz"])
+    ops = fem.reduced_operators(model, modes, alpha, beta)
+    base = fem.base_motion_operators(model, modes, (fem.mounting_probe(mesh, settings.position),))
+    return Housing(model, modes, ops, base)
+
+
+# --------------------------------------------------------------------------- one run of the rig
+
+
+def run_rig(config: dict, housing: Housing, faulty: bool, surroundings: bm.BaseMotionSettings,
+            replicate: int) -> dict:
+    """One realisation of the surroundings through the LPM and the housing (``config``: :func:`rig_config`'s).
+
+    Returns ``time_s``, ``force_N`` (the sensor force), ``acceleration_m_per_s2`` (at the probe, along its
+    axis), ``base_m_per_s2`` (n, 2) at the model step, the base's RMS over the record
+    ``disturbance_rms_m_per_s2``, and the kinematics.
+    """
+    b = config["bearing"]
+    motion = bm.realisation(surroundings, config["seed"], replicate) if surroundings.active else None
+    run = tr.run_lpm(b, faulty, "compiled", config["seed"], base_motion=motion)
+    t = run["time_s"]
+    a = run.get("base_acceleration_m_per_s2", np.zeros((t.size, 2)))
+    g, f = fem.project_roller_loads(housing.model, housing.ops, run["load_N"], run["angle_rad"])
+    res = fem.response_projected(housing.ops, housing.base, g, f, a, b["time_step_s"])
+    return {
+        "time_s": t,
+        "force_N": res["force_N"],
+        "acceleration_m_per_s2": res["acceleration_m_per_s2"][0],
+        "base_m_per_s2": a,
+        "disturbance_rms_m_per_s2": bm.rms_m_per_s2(a),
+        "kinematics": brg.kinematic_frequencies(run["params"].geometry, run["params"].shaft_speed_Hz),
+    }
+
+
+def skip_samples(config: dict) -> int:
+    """Samples of the model step dropped at the start (``signals.skip_s``): the RC circuit's and the
+    housing modes' start from the static state."""
+    return int(round(config["signals"]["skip_s"] / config["bearing"]["time_step_s"]))
+
+
+def pzt_clean(run: dict, circuit, harmonic, config: dict, settings: ComparisonSettings) -> daq.Sampled:
+    """The PZT's noiseless voltage on its DAQ clock: the sensor_voltage rule's RC model, then the DAQ's filter."""
+    dt = config["bearing"]["time_step_s"]
+    table, _ = sout.sensor_voltage(run["time_s"], run["force_N"], dt, circuit, harmonic, config)
+    return daq.sample(table["voltage_V"].to_numpy(), dt, settings.pzt_sample_rate_Hz)
+
+
+def accelerometer_clean(run: dict, sensor: acc.AccelerometerSettings, config: dict,
+                        settings: ComparisonSettings) -> daq.Sampled:
+    """The accelerometer's noiseless voltage on its DAQ clock: its transfer function, the skip, the DAQ's filter."""
+    dt = config["bearing"]["time_step_s"]
+    v = acc.transduce(run["acceleration_m_per_s2"], dt, sensor)[skip_samples(config):]
+    return daq.sample(v, dt, settings.accelerometer_sample_rate_Hz)
+
+
+def noise_rng(seed: int, sensor: str, faulty: bool, replicate: int) -> np.random.Generator:
+    """The DAQ noise of one record: independent streams per sensor, case and replicate."""
+    return np.random.default_rng([int(seed), NOISE_STREAM, SENSORS.index(sensor), int(faulty), int(replicate)])
+
+
+def pzt_record(clean: daq.Sampled, noise: daq.NoiseSettings, rng: np.random.Generator) -> daq.Acquired:
+    """The PZT's DAQ record: its absolute noise, pick-up and ADC on the sampled voltage."""
+    return daq.add_noise(clean.voltage_V, clean.dt_s, noise, rng)
+
+
+def accelerometer_record(clean: daq.Sampled, sensor: acc.AccelerometerSettings, noise: daq.NoiseSettings,
+                         rng: np.random.Generator) -> tuple[daq.Acquired, int]:
+    """The accelerometer's DAQ record: its own noise (datasheet density), its range, its DAQ's noise and ADC.
+
+    Returns the record and the samples the transducer's range clipped.
+    """
+    v = clean.voltage_V + acc.transducer_noise_V(clean.voltage_V.size, clean.dt_s, sensor, rng)
+    v, n_sat = acc.saturate(v, sensor)
+    return daq.add_noise(v, clean.dt_s, noise, rng), n_sat
+
+
+def judge(samples: np.ndarray, dt_s: float, kinematics, config: dict) -> detectors.Detection:
+    """The envelope detector on one record, with the config's settings (``signals``)."""
+    settings = envelope_detector.Settings.from_config(config["signals"])
+    return detectors.detect(samples, 1.0 / dt_s, kinematics, "envelope", settings)
+
+
+def true_type(config: dict) -> str:
+    """The faulty case's fault type (the first defect's)."""
+    return config["bearing"]["defects"][0]["type"] if config["bearing"]["defects"] else "none"
+
+
+# --------------------------------------------------------------------------- a case over seeds
+
+
+def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_records: bool = False,
+            log=sys.stderr) -> dict:
+    """Both sensors on the healthy and the faulty bearing over ``sensor_comparison.n_seeds`` realisations.
+
+    ``config``: the workflow's (the comparison's step is applied here). ``circuit``: the PZT's measuring circuit
+    (:func:`piezobearing.signals.outputs.sensor_circuit`); ``harmonic``: the sensor FEM's response where
+    ``signals.sensor_fem_correction``, else None. ``housings``: the healthy and faulty :class:`Housing` when
+    already built. With the base motion at rest the rig runs once per case and the seeds draw the DAQs'
+    noise only; otherwise every seed is a new realisation of the surroundings through the whole rig.
+
+    Returns the per-sensor summary (``sensors``), the disturbance's RMS, the housing's records, and with
+    ``keep_records`` the first replicate's DAQ records (``records``: per sensor and case the samples and
+    their step). Per sensor:
+
+    * ``detection_rate``: share of seeds on the faulty bearing the envelope detector calls the true fault
+      type; ``false_alarm_rate``: share of seeds on the healthy bearing it calls any fault. Its threshold
+      holds its false-alarm probability for records without lines at the fault frequencies; the roller
+      passage puts lines at BPFO into both sensors' healthy records, so the healthy rig's calls are given.
+    * ``margin_dB``: median over seeds of the true family's margin on the faulty bearing;
+      ``margin_over_healthy_dB``: median of that margin minus the largest margin of the same family on the
+      healthy bearing under the same surroundings (seed for seed the same base motion);
+      ``detection_rate_over_healthy``: share of seeds where it is positive: the healthy rig as the
+      reference, a false-alarm probability of at most 1 / (n_seeds + 1) for both sensors alike.
+    """
+    settings = ComparisonSettings.from_config(config)
+    cfg = rig_config(config, settings)
+    surroundings = bm.BaseMotionSettings.from_config(cfg["base_motion"])
+    sensor = acc.AccelerometerSettings.from_config(cfg["accelerometer"])
+    pzt_noise, acc_noise = pzt_noise_settings(cfg), accelerometer_daq_settings(cfg)
+    fault = true_type(cfg)
+    if housings is None:
+        housings = {faulty: build_housing(cfg, faulty, settings) for faulty in (False, True)}
+    rows = {s: {"faulty": [], "healthy": []} for s in SENSORS}
+    records, levels, rms = {}, {s: {} for s in SENSORS}, []
+    for faulty in (False, True):
+        case = "faulty" if faulty else "healthy"
+        run = clean = None
+        for rep in range(settings.n_seeds):
+            if run is None or surroundings.active:
+                run = run_rig(cfg, housings[faulty], faulty, surroundings, rep)
+                clean = {"pzt": pzt_clean(run, circuit, harmonic, cfg, settings),
+                         "accelerometer": accelerometer_clean(run, sensor, cfg, settings)}
+                rms.append(run["disturbance_rms_m_per_s2"])
+                print(f"sensor_comparison: {case} replicate {rep}: base motion "
+                      f"{run['disturbance_rms_m_per_s2']:.3g} m/s^2 rms", file=log)
+            out = {"pzt": pzt_record(clean["pzt"], pzt_noise, noise_rng(cfg["seed"], "pzt", faulty, rep))}
+            out["accelerometer"], n_sat = accelerometer_record(
+                clean["accelerometer"], sensor, acc_noise, noise_rng(cfg["seed"], "accelerometer", faulty, rep))
+            for s in SENSORS:
+                d = judge(out[s].voltage_V, clean[s].dt_s, run["kinematics"], cfg)
+                family = d.families.get(fault) if fault != "none" else None
+                rows[s][case].append({
+                    "called": d.fault_type,
+                    "margin_dB": family.margin_dB if family is not None else d.margin_dB,
+                    "clipped": out[s].n_clipped + (n_sat if s == "accelerometer" else 0),
+                    "detection": d if rep == 0 else None,
+                })
+                if rep == 0:
+                    v = clean[s].voltage_V
+                    levels[s][case] = {"clean_rms_V": float(np.sqrt(np.mean(v * v))),
+                                       "clean_peak_V": float(np.max(np.abs(v))),
+                                       "noise_std_V": out[s].noise_std_V, "sample_rate_Hz": 1.0 / clean[s].dt_s}
+                    if keep_records:
+                        records.setdefault(s, {})[case] = (out[s].voltage_V, clean[s].dt_s)
+    sensors = {}
+    for s in SENSORS:
+        f, h = rows[s]["faulty"], rows[s]["healthy"]
+        healthy_top = max(r["margin_dB"] for r in h)
+        over = [r["margin_dB"] - healthy_top for r in f]
+        sensors[s] = {
+            "detection_rate": float(np.mean([r["called"] == fault for r in f])),
+            "false_alarm_rate": float(np.mean([r["called"] != "none" for r in h])),
+            "margin_dB": float(np.median([r["margin_dB"] for r in f])),
+            "margin_dB_per_seed": [float(r["margin_dB"]) for r in f],
+            "healthy_margin_dB_per_seed": [float(r["margin_dB"]) for r in h],
+            "margin_over_healthy_dB": float(np.median(over)),
+            "detection_rate_over_healthy": float(np.mean([m > 0 for m in over])),
+            "called_faulty": [r["called"] for r in f],
+            "called_healthy": [r["called"] for r in h],
+            "clipped_samples": int(sum(r["clipped"] for r in f + h)),
+            "detection": f[0]["detection"].to_dict(),
+            "detection_healthy": h[0]["detection"].to_dict(),
+            "levels": levels[s],
+        }
+    out = {
+        "fault_type": fault,
+        "n_seeds": settings.n_seeds,
+        "disturbance_rms_m_per_s2": float(np.mean(rms)),
+        "false_alarm_probability": cfg["signals"]["false_alarm_probability"],
+        "accelerometer_position": settings.position,
+        "sensors": sensors,
+        "housing": {("faulty" if k else "healthy"): v.record() for k, v in housings.items()},
+    }
+    if keep_records:
+        out["records"] = records
+    return out

@@ -1,0 +1,119 @@
+"""Stage of the rule sensor_comparison and the study kind of the same name: the embedded sensor against the
+housing accelerometer (:mod:`piezobearing.sensor.comparison`), the results written.
+"""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import pandas as pd
+
+from ..bearing.lpm import BearingGeometry, kinematic_frequencies
+from ..io import read_harmonic, read_json, write_csv, write_json
+from ..sensor import comparison as cmp
+from ..signals import outputs as sout
+
+#: The two conditions of the main workflow's comparison: the frame at rest, and the configured surroundings.
+CONDITIONS = ("without_disturbance", "with_disturbance")
+
+
+def _inputs(config: dict, resistance_json: str, harmonic_csv: str | None):
+    circuit = sout.sensor_circuit(config, read_json(resistance_json), resistance_json)
+    if config["signals"]["sensor_fem_correction"] and not harmonic_csv:
+        raise ValueError("signals.sensor_fem_correction is on but no sensor FEM response was given; "
+                         "pass results/sensor/harmonic.csv as input 'harmonic'")
+    harmonic = read_harmonic(harmonic_csv) if config["signals"]["sensor_fem_correction"] else None
+    return circuit, harmonic
+
+
+def at_rest(config: dict) -> dict:
+    """The config with the machine frame at rest (``base_motion.level`` = 0)."""
+    cfg = copy.deepcopy(config)
+    cfg["base_motion"]["level"] = 0.0
+    return cfg
+
+
+def envelope_spectra(result: dict, condition: str) -> pd.DataFrame:
+    """The faulty bearing's first replicate's squared envelope spectrum of each sensor as the envelope detector
+    tested it (its chosen band; power over the local median, a noise bin's ratio being Exp(1)): a long table
+    of condition, sensor, frequency_Hz, ratio."""
+    rows = []
+    for s in cmp.SENSORS:
+        spec = result["sensors"][s]["detection"]["details"]["spectrum"]
+        rows.append(pd.DataFrame({"condition": condition, "sensor": s, "frequency_Hz": spec["frequency_Hz"],
+                                  "ratio": spec["ratio"]}))
+    return pd.concat(rows, ignore_index=True)
+
+
+def _summary(result: dict) -> dict:
+    """The comparison's JSON record without the records."""
+    return {k: v for k, v in result.items() if k != "records"}
+
+
+def sensor_comparison(resistance_json: str, harmonic_csv: str | None, out_json: str, out_spectra: str,
+                      config: dict) -> None:
+    """Rule sensor_comparison: the paper's case seen by both sensors, with the frame at rest and under the
+    configured base motion; sensor_comparison.json and the envelope spectra for the figure."""
+    circuit, harmonic = _inputs(config, resistance_json, harmonic_csv)
+    settings = cmp.ComparisonSettings.from_config(config)
+    cfg = cmp.rig_config(config, settings)
+    housings = {faulty: cmp.build_housing(cfg, faulty, settings) for faulty in (False, True)}
+    results, spectra = {}, []
+    for condition, c in zip(CONDITIONS, (at_rest(config), config), strict=True):
+        res = cmp.compare(c, circuit, harmonic, housings, keep_records=True)
+        spectra.append(envelope_spectra(res, condition))
+        results[condition] = _summary(res)
+    b = config["bearing"]
+    kin = kinematic_frequencies(BearingGeometry.from_config(b), b["shaft_speed_rpm"] / 60.0)
+    write_json({
+        "definition": (
+            "per condition and sensor: detection_rate = share of seeds on the faulty bearing the envelope "
+            "detector calls the true fault type; false_alarm_rate = share of seeds on the healthy bearing it "
+            "calls any fault; margin_dB = median over seeds of the true family's 10 log10(statistic / threshold); "
+            "detection: the first seed's Detection. Each seed is a new realisation of the base motion (through "
+            "the LPM and the housing) and of both DAQs' noise."
+        ),
+        "kinematics": kin.to_dict(),
+        "shaft_speed_rpm": b["shaft_speed_rpm"],
+        "defect_width_m": b["defects"][0]["width_m"] if b["defects"] else None,
+        "model_time_step_s": settings.time_step_s,
+        "accelerometer_model": config["accelerometer"]["model"],
+        **results,
+        "config": {k: config[k] for k in ("seed", "bearing", "housing", "signals", "base_motion", "accelerometer",
+                                           "sensor_comparison")},
+    }, out_json)
+    write_csv(pd.concat(spectra, ignore_index=True), out_spectra)
+
+
+def study_case(config: dict, outdir: Path, resistance: str, harmonic: str | None = None) -> dict:
+    """Study kind sensor_comparison: one case (speed, fault, disturbance level, mounting place) compared.
+
+    Returns the case's summary with ``rows``: one per sensor (the study's summary.csv rows).
+    """
+    circuit, harmonic_fem = _inputs(config, resistance, harmonic)
+    res = cmp.compare(config, circuit, harmonic_fem)
+    b = config["bearing"]
+    common = {
+        "shaft_speed_rpm": b["shaft_speed_rpm"],
+        "fault_type": res["fault_type"],
+        "defect_width_m": b["defects"][0]["width_m"] if b["defects"] else 0.0,
+        "accelerometer_position": res["accelerometer_position"],
+        "disturbance_level": config["base_motion"]["level"],
+        "disturbance_rms_m_per_s2": res["disturbance_rms_m_per_s2"],
+        "n_seeds": res["n_seeds"],
+        "false_alarm_probability": res["false_alarm_probability"],
+    }
+    rows = []
+    for s in cmp.SENSORS:
+        r = res["sensors"][s]
+        rows.append({"sensor": s, **common, "detection_rate": r["detection_rate"],
+                     "false_alarm_rate": r["false_alarm_rate"], "margin_dB": r["margin_dB"],
+                     "band_low_Hz": r["detection"]["band_Hz"][0], "band_high_Hz": r["detection"]["band_Hz"][1],
+                     "clean_rms_V": r["levels"]["faulty"]["clean_rms_V"],
+                     "noise_std_V": r["levels"]["faulty"]["noise_std_V"],
+                     "clipped_samples": r["clipped_samples"]})
+    housing = res["housing"]["faulty"]
+    return {**common, "rows": rows, "housing_n_modes": housing["n_modes"], "housing_first_mode_Hz": housing["first_mode_Hz"],
+            "housing_effective_mass_fraction_y": housing["effective_mass_fraction_y"],
+            "housing_effective_mass_fraction_z": housing["effective_mass_fraction_z"]}

@@ -1,0 +1,63 @@
+# The embedded sensor against a housing accelerometer on one simulated rig (docs/guides/sensor_comparison.md):
+# the paper's case observed by both sensors, with the machine frame at rest and vibrating (base_motion), both
+# records judged by the envelope detector; the figure of both envelope spectra.
+
+FIGURES.append(f"{RESULTS}/figures/sensor_comparison.png")
+TARGETS.append(f"{RESULTS}/signals/sensor_comparison.json")
+
+
+rule sensor_comparison:
+    input:
+        resistance=f"{RESULTS}/calibration/resistance.json",
+        # the sensor FEM's response, if signals.sensor_fem_correction (else no input)
+        harmonic=(
+            [f"{RESULTS}/sensor/harmonic.csv"]
+            if config["signals"]["sensor_fem_correction"]
+            else []
+        ),
+    output:
+        json=f"{RESULTS}/signals/sensor_comparison.json",
+        spectra=f"{RESULTS}/signals/sensor_comparison_spectra.csv",
+    log:
+        f"{RESULTS}/logs/sensor_comparison.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/sensor_comparison.tsv"
+    conda:
+        "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=3000,
+        runtime=30,
+    params:
+        **stage_params("sensor_comparison", "workflow/scripts/sensor_comparison.py"),
+    script:
+        "../scripts/sensor_comparison.py"
+
+
+rule sensor_comparison_figure:
+    input:
+        notebook="notebooks/sensor_comparison.ipynb",
+        summary=f"{RESULTS}/signals/sensor_comparison.json",
+        spectra=f"{RESULTS}/signals/sensor_comparison_spectra.csv",
+    output:
+        figure=report(
+            f"{RESULTS}/figures/sensor_comparison.png",
+            caption="../report/sensor_comparison.rst",
+            category="Sensor comparison",
+        ),
+        notebook=f"{RESULTS}/notebooks/sensor_comparison.ipynb",
+    log:
+        f"{RESULTS}/logs/sensor_comparison_figure.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/sensor_comparison_figure.tsv"
+    conda:
+        "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=2,
+    params:
+        **stage_params("sensor_comparison_figure", "notebooks/sensor_comparison.ipynb"),
+    shell:
+        "papermill {input.notebook:q} {output.notebook:q} -k python3 -r summary {input.summary:q}"
+        " -r spectra {input.spectra:q} -r figure {output.figure:q} > {log:q} 2>&1"

@@ -1,0 +1,11 @@
+import sys
+
+sys.stderr = open(snakemake.log[0], "w")
+
+from piezobearing.registry import declared_config
+from piezobearing.stages.sensor_comparison import sensor_comparison
+
+config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
+
+i, o = snakemake.input, snakemake.output
+sensor_comparison(i.resistance, i.harmonic[0] if i.harmonic else None, o.json, o.spectra, config)
