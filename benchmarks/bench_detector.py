@@ -1,19 +1,19 @@
-"""Run times of the search detector against today's exact-bin test on one record.
+"""Run times of the search detector against the paper's exact-bin test on one record.
 
 A 1 s record at 2550 Hz (the paper) and at 51.2 kHz: white noise plus a
-slipped outer-race impulse train; the band 500-1250 Hz. Times: today's
+slipped outer-race impulse train; the band 500-1250 Hz. Times: the paper's
 ``detection.analyse`` (whole periods, one bin per harmonic), the search
 detector ``detector.analyse_record`` (three fault types, windows, computed
 null distributions) with its null distributions cached (the usual case: one
 record length per run) and cold (first record), and the DAQ's ``sample``
 from 51.2 kHz to 10.24 kHz; the baseline detector ``baseline.detect`` (slip, roller-passage fit,
 harmonic and fold tests) and ``Baseline.from_record`` at 2550 Hz, 25.6 kHz and 51.2 kHz with the fit to f_s and
-to Nyquist (CPU seconds: one BLAS thread), with today's least squares (``signals/harmonics.py``: the normal
-equations in closed form, Bluestein transforms, Cholesky; since 2026-11-23) and the method before it
+to Nyquist (CPU seconds: one BLAS thread), with the package's least squares (``signals/harmonics.py``: the normal
+equations in closed form, Bluestein transforms, Cholesky) and the plain method
 (``old_*``: explicit matrices and pivoted QR, ``harmonics.refine_period_qr``; scipy's CZT and two inverses in
 the outer-race test; kept here for the comparison), their ratio and the indicators' largest relative
-difference; the outer-race test alone (``baseline.harmonic_test``) at the free fit's fundamental (the method
-until 2026-11-22) and with the healthy model's fundamental fitted over the slip window (since 2026-11-23),
+difference; the outer-race test alone (``baseline.harmonic_test``) at the free fit's fundamental and with the
+healthy model's fundamental fitted over the slip window (the detector's method),
 CPU seconds and their ratio; a record the +-60 V ADC clips (36 V rms of noise) at 2550 and 10240 Hz through
 ``detectors.baseline.detect`` without and with its clipped-noise model, CPU seconds and their ratio.
 Writes results/benchmarks/detector.json.
@@ -47,7 +47,7 @@ def timed(fn, repeat: int) -> float:
 
 
 def old_harmonic_fit(x, dt_s, f0_Hz, n_harmonics):
-    """``baseline.harmonic_fit`` until 2026-11-23: geometric sums with w ** n, scipy's CZT, LU solve."""
+    """The plain harmonic fit: geometric sums with w ** n, scipy's CZT, LU solve."""
     from scipy.signal import CZT
 
     x = np.asarray(x, float)
@@ -72,7 +72,7 @@ def old_harmonic_fit(x, dt_s, f0_Hz, n_harmonics):
 
 
 def old_information(gram, sigma, cb, tolerance):
-    """``baseline._information`` until 2026-11-23: two inverses."""
+    """The plain information matrix: two inverses."""
     cov = sigma**2 * np.linalg.inv(gram)[1:, 1:]
     if tolerance > 0:
         cov = cov + np.diag(tolerance**2 * np.repeat(cb[1::2] ** 2 + cb[2::2] ** 2, 2))
@@ -81,7 +81,7 @@ def old_information(gram, sigma, cb, tolerance):
 
 @baseline.one_blas_thread
 def old_from_record(v, dt_s, kinematics, settings):
-    """``Baseline.from_record`` until 2026-11-23 (explicit matrices, pivoted QR)."""
+    """``Baseline.from_record`` with explicit matrices and pivoted QR."""
     s = baseline.estimate_slip(v, dt_s, kinematics["bpfo_Hz"], settings.slip_max, settings.slip_harmonics)
     f0, _ = harmonics.refine_period_qr(v, dt_s, slipped_frequencies(kinematics, s)["bpfo_Hz"], settings.alias_folds)
     a = harmonics.harmonic_matrix(np.size(v), dt_s, f0, harmonics.below_nyquist(dt_s, f0))
@@ -95,8 +95,8 @@ def old_harmonic_fits(x, dt_s, f0_Hz, n_harmonics):
 
 
 def old_detect(x, dt_s, kinematics, base, settings):
-    """``baseline.detect`` with the least squares until 2026-11-23 (the modules' functions swapped in: the
-    outer-race test's in ``signals/outer_race.py`` since it moved there)."""
+    """``baseline.detect`` with the plain least squares (the modules' functions swapped in: the outer-race
+    test's in ``signals/outer_race.py``)."""
     saved = baseline.refine_period, outer_race.harmonic_fits, outer_race._information
     baseline.refine_period, outer_race.harmonic_fits, outer_race._information = harmonics.refine_period_qr, old_harmonic_fits, old_information
     try:

@@ -1,8 +1,10 @@
 """Run time and peak memory of the sensor_comparison study's cases; the study's SLURM resources come from here.
 
-    python benchmarks/bench_sensor_comparison.py [--configfile config/ci.yaml] [--cases 2]
+    python benchmarks/bench_sensor_comparison.py [--configfile config/ci.yaml] [--cases 2] [--from-rules]
 
-Runs the first ``--cases`` cases of the config's ``sensor_comparison`` table, each in a child process (the
+``--from-rules``: gathers what Snakemake measured for every case of the study's last run instead (the
+study_case rule's benchmark files, results/benchmarks/rules/study_case_sensor_comparison/*.tsv: seconds and
+max RSS per case). Otherwise runs the first ``--cases`` cases of the config's ``sensor_comparison`` table, each in a child process (the
 study_case rule's function, :func:`piezobearing.stages.studies.run_case`, on the workflow's resistance fit and
 sensor FEM response, which must exist: run the workflow on the config first), and records per case the wall
 and CPU seconds and the child's peak RSS. Writes results/benchmarks/sensor_comparison.json beside the rule's
@@ -18,6 +20,8 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+
+import pandas as pd
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -55,6 +59,7 @@ def main() -> None:
     ap.add_argument("--configfile", default="config/ci.yaml")
     ap.add_argument("--cases", type=int, default=2)
     ap.add_argument("--out", default="results/benchmarks/sensor_comparison.json")
+    ap.add_argument("--from-rules", action="store_true", help="gather the study_case rule's benchmark files")
     args = ap.parse_args()
     sys.path.insert(0, str(REPO / "src"))
     from piezobearing import config as cfgmod
@@ -68,6 +73,12 @@ def main() -> None:
         inputs["harmonic"] = str(results / "sensor/harmonic.csv")
     n = min(args.cases, len(check_studies(config)["sensor_comparison"]))
     cases = []
+    if args.from_rules:
+        for tsv in sorted((results / "benchmarks/rules/study_case_sensor_comparison").glob("*.tsv")):
+            row = pd.read_csv(tsv, sep="\t").iloc[0]
+            cases.append({"case": tsv.stem, "wall_s": float(row["s"]), "cpu_s": float(row["cpu_time"]),
+                          "peak_rss_mb": float(row["max_rss"])})
+        n = 0
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(n):
             out = subprocess.run(
@@ -76,8 +87,11 @@ def main() -> None:
             )
             cases.append(json.loads(out.stdout.strip().splitlines()[-1]))
             print(cases[-1], file=sys.stderr)
+    if not cases:
+        raise SystemExit("no cases measured: run the study first (snakemake ... study_all) or drop --from-rules")
     record = {
         "configfile": args.configfile,
+        "source": "the study_case rule's benchmark files" if args.from_rules else "each case in a child process",
         "n_seeds": config["sensor_comparison"]["n_seeds"],
         "cases": cases,
         "max_wall_s": max(c["wall_s"] for c in cases),

@@ -1,4 +1,4 @@
-"""`calibration.channels` for every row of the formats table (docs/guides/calibrate.md, README): a calibration
+"""`calibration.channels` for every row of the formats table (docs/guides/calibrate.md): a calibration
 record written by each format's own library under the channel names a DAQ gives it, read through the workflow's
 calibration loader with the config naming those channels, gives back the record."""
 

@@ -41,7 +41,8 @@ def test_diagnose_bearing_says_which_config_and_model_it_used(monkeypatch, capsy
 
     fit = {"nrmse": 0.03, "noise_floor_nrmse": 0.03}
     answer = {"record_warnings": [], "baseline": fit, "final": fit, "selected": [], "verdict": "explained",
-              "fault": {"type": "none", "params": {}, "ci95": {}}, "unexplained": []}
+              "fault": {"type": "none", "params": {}, "ci95": {}}, "unexplained": [],
+              "sensor_model": {"fem_factor": 0.938, "source": "the sensor FEM"}}
     monkeypatch.setattr(stage, "diagnose_bearing", lambda *args, **kw: answer)
     assert cli.main(["diagnose-bearing", "record.csv", "--out", str(tmp_path / "out"), "--quiet"]) == 0
     lines = capsys.readouterr().out.splitlines()

@@ -46,4 +46,4 @@ def test_the_ladder_shows_the_candidates_not_kept_beside_a_single_step():
     bars = [p for p in ax.patches if isinstance(p, Rectangle) and p.get_height() > 0]
     assert len(bars) == 1 + CANDIDATES
     labels = [t.get_text() for t in ax.get_xticklabels()]
-    assert labels[0] == "baseline" and labels[1] == "(+ effect_0)\nnot kept"
+    assert labels[0] == "baseline" and labels[1] == "(+\neffect_0)\nnot kept"

@@ -64,8 +64,8 @@ def misses(d: dict, name: str) -> list[str]:
     """What the hide-and-find check finds wrong in diagnosis ``d`` of a record with ``name`` hidden (empty: passes).
 
     ``name`` must be ranked first and be the only effect selected, each hidden value inside the 95% interval
-    widened to 99.9% (20 such checks at 95% would miss about one by chance; the README's verified table gives
-    each 95% interval as it is), a defect's fault type named. The benchmark's --verify table uses it too.
+    widened to 99.9% (20 such checks at 95% would miss about one by chance; docs/validation/bearing_diagnosis.md
+    gives each 95% interval as it is), a defect's fault type named. The benchmark's --verify table uses it too.
     """
     first, out = d["ranking"][0], []
     if first["effect"] != name:

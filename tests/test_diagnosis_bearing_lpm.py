@@ -61,7 +61,7 @@ def test_lpm_record_hidden_effect_is_found_with_its_value_in_the_interval(setup,
 def test_workflow_voltage_shows_no_gain_effect(setup):
     """The workflow's sensor_voltage (RC x the sensor FEM's 0.938) on the LPM's force of the paper's groove:
     the diagnosis (the same sensor model) selects the groove and, with room for a second effect, no load_share
-    (with the RC model alone it read the FEM's 0.938 as a share)."""
+    (a diagnosis with the RC model alone reads the FEM's 0.938 as a share)."""
     c, influence = setup
     c = copy.deepcopy(c)
     assert c["signals"]["sensor_fem_correction"]

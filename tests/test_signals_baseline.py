@@ -231,7 +231,7 @@ def test_detect_reports_per_type_keys_and_refuses_another_clock():
 
 def test_fast_roller_passage_fit_equals_the_qr_method():
     """The normal equations in closed form (signals/harmonics.py) against the explicit matrix and pivoted QR
-    (the method until 2026-11-23), every harmonic to f_s at 25.6 kHz (K = 365, 731 columns): the same
+    (refine_period_qr), every harmonic to f_s at 25.6 kHz (K = 365, 731 columns): the same
     Gauss-Newton f0 to 1e-9 Hz and the same periodic part to 1e-10 of the 96 V train; at an f0 with f_s
     exactly 36 f0 (the paper's 2550 Hz without slip: folded harmonics coincide) the fit and step are the QR's."""
     rng = np.random.default_rng(5)
@@ -264,7 +264,7 @@ def test_chirp_sum_is_the_dtft():
 @pytest.mark.parametrize("noise", ["relative_10dB", "daq_3.6e-4V"])
 def test_fast_detector_gives_the_qr_methods_indicators(monkeypatch, noise):
     """detect with the fast least squares and with the pivoted-QR roller-passage fit (refine_period_qr) and
-    the two-inverse information matrix (until 2026-11-23), on an inner-race record at 25.6 kHz (0.25 s):
+    the two-inverse information matrix, on an inner-race record at 25.6 kHz (0.25 s):
     every type's indicator the same to 1e-6 (relative, or absolute below 1)."""
     fs, n = 25600.0, 6400
     dt = 1 / fs

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy.stats import binom
 
-from piezobearing.signals import classification, daq, detection, detector, envelope
+from piezobearing.signals import classification, daq, detection, detector, envelope, order
 from piezobearing.signals.fault_bands import band_metrics, fault_lines, slipped_frequencies
 
 #: No-slip kinematics of the N 305 ECP at 1000 rpm (Z = 11, D_r/D_p = 10/44).
@@ -262,8 +262,6 @@ def test_absolute_noise_level_and_mains_lines():
 
 def ramp_record(rng, fs=10240.0, duration_s=3.0, rpm=(900.0, 1500.0), snr_dB=0.0):
     """Outer-race impacts locked to the shaft angle on a linear speed ramp, a 1-pulse/rev tachometer."""
-    from piezobearing.signals import order as O
-
     n = int(duration_s * fs)
     t = np.arange(n) / fs
     f0, f1 = rpm[0] / 60, rpm[1] / 60
@@ -276,37 +274,33 @@ def ramp_record(rng, fs=10240.0, duration_s=3.0, rpm=(900.0, 1500.0), snr_dB=0.0
         m = (t >= tk) & (t < tk + 0.01)
         x[m] += np.exp(-(t[m] - tk) / 1e-3) * np.sin(2 * np.pi * 2200.0 * (t[m] - tk))
     y = daq.add_noise(x, 1 / fs, daq.NoiseSettings(snr_dB=snr_dB), rng).voltage_V
-    return t, theta, y, O.tachometer_signal(theta, 1)
+    return t, theta, y, order.tachometer_signal(theta, 1)
 
 
 def test_shaft_angle_from_tachometer_pulses():
     """One pulse per revolution on a 900 -> 1500 rpm ramp: the angle between pulses, relative to the first
     pulse, within twice the edge's timing uncertainty of half a sample (2 pi f_r dt = 15 mrad at 1500 rpm,
     10240 Hz)."""
-    from piezobearing.signals import order as O
-
     t, theta, _, tacho = ramp_record(np.random.default_rng(0))
-    tp = O.pulse_times(tacho, t[1])
-    ang = O.shaft_angle(tp, 1)
+    tp = order.pulse_times(tacho, t[1])
+    ang = order.shaft_angle(tp, 1)
     inside = (t > tp[0]) & (t < tp[-1])
     err = (ang(t[inside]) - theta[inside]) - (ang(tp[0]) - np.interp(tp[0], t, theta))
     assert np.max(np.abs(np.mod(err + np.pi, 2 * np.pi) - np.pi)) < 2 * np.pi * 25.0 * t[1]
     with pytest.raises(ValueError, match="at least 4"):
-        O.shaft_angle(tp[:3], 1)
+        order.shaft_angle(tp[:3], 1)
 
 
 def test_order_tracking_finds_the_fault_that_the_ramp_smears():
     """On the ramp the time-domain envelope spreads BPFO over ~20 Hz; the order spectrum detects it sharply."""
-    from piezobearing.signals import order as O
-
     st = detector.DetectorSettings()
     band = (1500.0, 3000.0)
     wins_order, wins_time = 0, 0
     for seed in range(10):
         t, _, y, tacho = ramp_record(np.random.default_rng([21, seed]))
-        ang = O.shaft_angle(O.pulse_times(tacho, t[1]), 1)
-        spec_o = O.order_envelope_spectrum(y, t[1], band, ang, samples_per_rev=64)
-        d_o = detector.detect(spec_o, O.kinematics_in_orders(KIN), st)
+        ang = order.shaft_angle(order.pulse_times(tacho, t[1]), 1)
+        spec_o = order.order_envelope_spectrum(y, t[1], band, ang, samples_per_rev=64)
+        d_o = detector.detect(spec_o, order.kinematics_in_orders(KIN), st)
         mean_speed = dict(KIN, **{k: v * 1.2 for k, v in KIN.items()})  # kinematics at the mean 1200 rpm
         spec_t = envelope.envelope_spectrum(y, t[1], band, window="hann")
         d_t = detector.detect(spec_t, mean_speed, st)

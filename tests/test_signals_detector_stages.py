@@ -10,7 +10,7 @@ import pytest
 from test_signals_stages import inputs, run_chain  # noqa: F401  (the fixture)
 
 from piezobearing.signals.detectors import Detection
-from piezobearing.stages import signals as st
+from piezobearing.stages import signals as signal_stages
 
 CASES = ("healthy", "faulty")
 
@@ -40,7 +40,7 @@ def test_classification_over_seeds(tmp_path, inputs, paper_config):  # noqa: F81
     cfg["signals"]["detector"]["roc_snr_dB"] = [-10.0, 10.0]
     out = run_chain(tmp_path, inputs, cfg, harmonic=False)
     volt = {c: str(out / f"voltage_{c}.csv") for c in CASES}
-    st.classification(volt, inputs["kinematics"], out / "cls.json", out / "cls.csv", out / "roc.csv", cfg)
+    signal_stages.classification(volt, inputs["kinematics"], out / "cls.json", out / "cls.csv", out / "roc.csv", cfg)
     cm = json.loads((out / "cls.json").read_text())
     assert cm["classes"] == ["outer_race", "inner_race", "rolling_element", "none"]
     assert cm["rows"] == "true type" and cm["columns"] == "classified type"
@@ -50,8 +50,8 @@ def test_classification_over_seeds(tmp_path, inputs, paper_config):  # noqa: F81
     assert roc[10.0]["auc"] == pytest.approx(1.0) and roc[-10.0]["auc"] < roc[10.0]["auc"]
     assert len(pd.read_csv(out / "cls.csv")) == 20 and set(pd.read_csv(out / "roc.csv")["snr_dB"]) == {-10.0, 10.0}
     with pytest.raises(ValueError, match="bearing.defects"):
-        st.true_fault_type({"defects": [{"type": "outer_race"}, {"type": "inner_race"}]})
-    assert st.true_fault_type({"defects": [{"type": "inner_race", "width_m": 1e-3, "angle_deg": 0.0}]}) == "inner_race"
+        signal_stages.true_fault_type({"defects": [{"type": "outer_race"}, {"type": "inner_race"}]})
+    assert signal_stages.true_fault_type({"defects": [{"type": "inner_race", "width_m": 1e-3, "angle_deg": 0.0}]}) == "inner_race"
 
 
 def test_absolute_noise_reports_clipping(tmp_path, inputs, paper_config):  # noqa: F811
@@ -59,8 +59,8 @@ def test_absolute_noise_reports_clipping(tmp_path, inputs, paper_config):  # noq
     cfg = copy.deepcopy(paper_config)
     cfg["signals"]["noise"].update(model="absolute", range_V=10.0, adc_bits=16)
     out = tmp_path / "out"
-    st.sensor_voltage(inputs["faulty"], inputs["resistance"], None, out / "v.csv", out / "v.json", cfg)
-    st.noisy(out / "v.csv", "faulty", out / "n.csv", out / "n.json", cfg)
+    signal_stages.sensor_voltage(inputs["faulty"], inputs["resistance"], None, out / "v.csv", out / "v.json", cfg)
+    signal_stages.noisy(out / "v.csv", "faulty", out / "n.csv", out / "n.json", cfg)
     nz = json.loads((out / "n.json").read_text())
     v = json.loads((out / "v.json").read_text())
     assert v["voltage_peak_to_peak_V"] > 20.0
@@ -114,7 +114,7 @@ def test_fault_type_records_and_their_confusion_rows(tmp_path, inputs, ci_config
     types, line = [], {}
     for t in ("outer_race", "inner_race"):
         paths = [tmp_path / f"sensor_force_{t}.csv", tmp_path / f"voltage_{t}.csv", tmp_path / f"voltage_{t}.json"]
-        st.fault_type_voltage(t, inputs["resistance"], None, *paths, cfg)
+        signal_stages.fault_type_voltage(t, inputs["resistance"], None, *paths, cfg)
         f = pd.read_csv(paths[0])["force_N"].to_numpy()
         dt = 1.0 / json.loads(paths[2].read_text())["sample_rate_Hz"]
         w = np.hanning(f.size)
@@ -126,7 +126,7 @@ def test_fault_type_records_and_their_confusion_rows(tmp_path, inputs, ci_config
     out = tmp_path / "out"
     out.mkdir()
     volt = {"healthy": types[0], "faulty": types[0]}  # files stand in for the main chain's (not what is tested)
-    st.classification(volt, inputs["kinematics"], out / "cls.json", out / "cls.csv", out / "roc.csv", cfg, types[1:])
+    signal_stages.classification(volt, inputs["kinematics"], out / "cls.json", out / "cls.csv", out / "roc.csv", cfg, types[1:])
     cm = json.loads((out / "cls.json").read_text())
     assert cm["true_types"]["inner_race"] == "inner_race"
     assert sum(cm["counts"][cm["classes"].index("inner_race")]) == 4
@@ -137,9 +137,8 @@ def test_healthy_stays_healthy_at_a_daq_noise(tmp_path, inputs, paper_config, mo
     stand-in's 44 V swing), the stand-in's roller over the sensor at t = 0 as in the LPM (bearing.start_angle_deg 0):
     the healthy record is classified none and over 10 seeds its folds stay quiet, the fault is outer_race in every
     seed. The sensor circuit starts in its
-    periodic steady state; started at rest (the code before 2026-11-23) the free decay left after signals.skip_s
-    (7.6 tau: 10 mV of 22 V) is what the folds pick up (before 2ddf851 and with 24 bits: a rolling-element fault,
-    4.9 > 3.5; now 2.6, against at most 0.06 over the 10 seeds with the periodic start)."""
+    periodic steady state; started at rest, the free decay left after signals.skip_s (7.6 tau: 10 mV of 22 V)
+    is what the folds pick up (indicator 2.6 against at most 0.06 over the 10 seeds with the periodic start)."""
     import numpy as np
     from test_signals import DT, bearing_force
 
@@ -160,13 +159,12 @@ def test_healthy_stays_healthy_at_a_daq_noise(tmp_path, inputs, paper_config, mo
     ind = json.loads((out / "fault_indicator.json").read_text())
     assert (ind["healthy"]["fault_type"], ind["faulty"]["fault_type"]) == ("none", "outer_race")
     volt = {c: str(out / f"voltage_{c}.csv") for c in CASES}
-    st.classification(volt, inputs["kinematics"], out / "cls.json", out / "cls.csv", out / "roc.csv", cfg)
+    signal_stages.classification(volt, inputs["kinematics"], out / "cls.json", out / "cls.csv", out / "roc.csv", cfg)
     seeds = pd.read_csv(out / "cls.csv")
     healthy = seeds[seeds["case"] == "healthy"]
-    # the start's leftover shows in the folds (its cells at phase 0); the outer-race harmonic test: from 2ddf851
-    # (the closed-form fit) to its fix (refine_period's Gauss-Newton step by QR where the folds coincide, f_s = 36
-    # BPFO exactly) it called 3 of these 10 healthy records an outer-race fault (indicator 5-460); 0 of 10 before
-    # and after
+    # the start's leftover shows in the folds (its cells at phase 0); the outer-race harmonic test needs
+    # refine_period's Gauss-Newton step by QR where the folds coincide (f_s = 36 BPFO exactly): the closed-form
+    # step alone calls 3 of these 10 healthy records an outer-race fault (indicator 5-460)
     assert not healthy["inner_race_detected"].any() and not healthy["rolling_element_detected"].any()
     assert (healthy["fault_type"] == "none").all()
     assert (seeds[seeds["case"] == "faulty"]["fault_type"] == "outer_race").all()

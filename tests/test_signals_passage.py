@@ -14,8 +14,7 @@ import pytest
 from scipy.stats import binom
 from test_signals_baseline import FS, KIN, SLIP
 
-from piezobearing.signals import harmonics
-from piezobearing.signals import passage as P
+from piezobearing.signals import harmonics, passage
 from piezobearing.signals.detectors import baseline
 from piezobearing.signals.fault_bands import slipped_frequencies
 
@@ -63,7 +62,7 @@ def test_kernel_keeps_dc_and_nearly_the_variance_of_white_noise():
     """The Kaiser-windowed sinc (half-width 16, beta 8) passes DC to 4e-5 at every fractional position; the sum of
     its squared weights (white noise's variance after it) is 1 on the grid and 0.938 half-way between samples
     (the band's edge a finite kernel cannot pass)."""
-    w = P.kernel_weights(np.linspace(0.0, 1.0, 101)[:-1])
+    w = passage.kernel_weights(np.linspace(0.0, 1.0, 101)[:-1])
     assert np.abs(w.sum(axis=1) - 1.0).max() < 1e-4
     var = (w**2).sum(axis=1)
     assert var[0] == pytest.approx(1.0, abs=1e-12) and 0.93 < var.min() <= var.max() <= 1.0 + 1e-12
@@ -85,7 +84,7 @@ def test_passage_phase_follows_a_jittered_cage(snr_dB):
 
     wander = off(np.polyval(np.polyfit(t, th, 1), t))
     assert wander > 0.025
-    assert off(P.passage_phase(y, 1 / FS, F["bpfo_Hz"])) < 0.008
+    assert off(passage.passage_phase(y, 1 / FS, F["bpfo_Hz"])) < 0.008
 
 
 def test_on_its_passage_clock_the_jittered_train_is_periodic_again():
@@ -94,15 +93,15 @@ def test_on_its_passage_clock_the_jittered_train_is_periodic_again():
     v, _ = jittered("none", 0.02, np.random.default_rng(4))
     dt = 1 / FS
     f0, p = harmonics.refine_period(v, dt, F["bpfo_Hz"])
-    clock = P.on_passage_clock(v, dt, f0)
+    clock = passage.on_passage_clock(v, dt, f0)
     _, pw = harmonics.refine_period(clock.voltage_V, dt, clock.f0_Hz)
-    assert abs(clock.voltage_V.size - (N - 2 * P.HALF_WIDTH)) <= 2  # the mean rate's samples between the ends
+    assert abs(clock.voltage_V.size - (N - 2 * passage.HALF_WIDTH)) <= 2  # the mean rate's samples between the ends
     assert np.std(clock.voltage_V - pw) < np.std(v - p) / 40
 
 
 def test_a_record_without_a_roller_train_is_refused():
     with pytest.raises(ValueError, match="follow_passage_phase"):
-        P.passage_phase(np.random.default_rng(0).standard_normal(N), 1 / FS, F["bpfo_Hz"])
+        passage.passage_phase(np.random.default_rng(0).standard_normal(N), 1 / FS, F["bpfo_Hz"])
 
 
 def test_folds_on_the_passage_clock_keep_their_false_alarm_rate():

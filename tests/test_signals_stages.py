@@ -12,7 +12,7 @@ from test_signals import BPFO, DT, bearing_force
 
 from piezobearing.sensor.calibration import SensorCircuit, frequency_response
 from piezobearing.signals import envelope
-from piezobearing.stages import signals as st
+from piezobearing.stages import signals as signal_stages
 from piezobearing.stages.scorecard import scorecard_signals
 
 
@@ -43,13 +43,13 @@ def inputs(tmp_path, paper_config):
 def run_chain(tmp_path, inputs, config, harmonic=True):
     out = tmp_path / "out"
     for case in ("healthy", "faulty"):
-        st.sensor_voltage(inputs[case], inputs["resistance"], inputs["harmonic"] if harmonic else None,
+        signal_stages.sensor_voltage(inputs[case], inputs["resistance"], inputs["harmonic"] if harmonic else None,
                           out / f"voltage_{case}.csv", out / f"voltage_{case}.json", config)
-        st.noisy(out / f"voltage_{case}.csv", case, out / f"noisy_{case}.csv", out / f"noisy_{case}.json", config)
-        st.envelope(out / f"noisy_{case}.csv", out / f"voltage_{case}.csv", inputs["kinematics"],
+        signal_stages.noisy(out / f"voltage_{case}.csv", case, out / f"noisy_{case}.csv", out / f"noisy_{case}.json", config)
+        signal_stages.envelope(out / f"noisy_{case}.csv", out / f"voltage_{case}.csv", inputs["kinematics"],
                     out / f"envelope_{case}.csv", out / f"envelope_{case}.json", config)
     cases = ("healthy", "faulty")
-    st.indicator({c: out / f"envelope_{c}.json" for c in cases}, inputs["kinematics"],
+    signal_stages.indicator({c: out / f"envelope_{c}.json" for c in cases}, inputs["kinematics"],
                  {c: str(out / f"noisy_{c}.csv") for c in cases}, {c: out / f"noisy_{c}.json" for c in cases},
                  out / "fault_indicator.json", config)
     return out
@@ -82,7 +82,7 @@ def test_study_events_and_scorecard(tmp_path, inputs, paper_config):
     config["signals"].update(study_snr_min_dB=-10.0, study_snr_max_dB=20.0, study_snr_step_dB=5.0, study_n_seeds=20)
     out = run_chain(tmp_path, inputs, config, harmonic=False)
     volt = {c: out / f"voltage_{c}.csv" for c in ("healthy", "faulty")}
-    st.snr_study(volt, inputs["kinematics"], out / "study.csv", out / "summary.csv", out / "study.json", config)
+    signal_stages.snr_study(volt, inputs["kinematics"], out / "study.csv", out / "summary.csv", out / "study.json", config)
     study = json.loads((out / "study.json").read_text())
     assert study["faulty"]["detected_all_seeds_at_snr"] and study["healthy"]["detected_no_seed_at_snr"]
     assert -10.0 < study["faulty"]["detection_limit_dB"] <= 10.0
@@ -95,7 +95,7 @@ def test_study_events_and_scorecard(tmp_path, inputs, paper_config):
               & (rows["band_rule"] == config["signals"]["band_rule"])]
     ind = json.loads((out / "fault_indicator.json").read_text())
     assert float(r0["indicator"].iloc[0]) == pytest.approx(ind["faulty"]["indicator"], rel=1e-6)
-    st.defect_events(volt["healthy"], volt["faulty"], inputs["kinematics"], out / "events.csv")
+    signal_stages.defect_events(volt["healthy"], volt["faulty"], inputs["kinematics"], out / "events.csv")
     assert len(pd.read_csv(out / "events.csv")) == 65
     scorecard_signals(out / "fault_indicator.json", out / "study.json", inputs["kinematics"], out / "scorecard.csv")
     sc = pd.read_csv(out / "scorecard.csv")
@@ -107,26 +107,26 @@ def test_study_events_and_scorecard(tmp_path, inputs, paper_config):
 def test_bad_files_name_the_problem(tmp_path, inputs, paper_config):
     bad = tmp_path / "bad.csv"
     pd.DataFrame({"time_s": [0, 1, 2], "force": [1, 2, 3]}).to_csv(bad, index=False)
-    with pytest.raises(st.SignalFileError, match="column 'force_N' missing"):
-        st.read_series(bad, "force_N")
+    with pytest.raises(signal_stages.SignalFileError, match="column 'force_N' missing"):
+        signal_stages.read_series(bad, "force_N")
     t = np.arange(20) * DT
     t[10] += 0.3 * DT
     pd.DataFrame({"time_s": t, "force_N": 1.0}).to_csv(bad, index=False)
-    with pytest.raises(st.SignalFileError, match="uneven"):
-        st.read_series(bad, "force_N")
+    with pytest.raises(signal_stages.SignalFileError, match="uneven"):
+        signal_stages.read_series(bad, "force_N")
     k = tmp_path / "k.json"
     k.write_text(json.dumps({"bpfo_Hz": 70.0}))
-    with pytest.raises(st.SignalFileError, match="shaft_Hz"):
-        st.kinematics(k)
+    with pytest.raises(signal_stages.SignalFileError, match="shaft_Hz"):
+        signal_stages.kinematics(k)
     config = copy.deepcopy(paper_config)
     config["signals"]["skip_s"] = 10.0
-    with pytest.raises(st.SignalFileError, match="skip_s"):
-        st.sensor_voltage(inputs["healthy"], inputs["resistance"], None, tmp_path / "v.csv", tmp_path / "v.json", config)
+    with pytest.raises(signal_stages.SignalFileError, match="skip_s"):
+        signal_stages.sensor_voltage(inputs["healthy"], inputs["resistance"], None, tmp_path / "v.csv", tmp_path / "v.json", config)
     with pytest.raises(ValueError, match="band_rule"):
         envelope.choose_band(np.zeros(100), DT, envelope.EnvelopeSettings(band_rule="magic"))
 
 
 def test_snr_grid_always_holds_the_configured_snr(paper_config):
     s = dict(paper_config["signals"], study_snr_min_dB=-9.0, study_snr_max_dB=19.0, study_snr_step_dB=4.0)
-    g = st.snr_grid(s)
+    g = signal_stages.snr_grid(s)
     assert 10.0 in g and g[0] == -9.0 and g[-1] == 19.0

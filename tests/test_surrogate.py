@@ -63,7 +63,7 @@ def test_surrogate_against_the_lpm_through_the_same_influence_line(setup, faulty
     """The LPM has the shaft's inertia (its ~2 kHz mode rings after a defect), the surrogate does not.
 
     Through this narrow stand-in line (measured: 1.3% healthy, 13% with the 0.9 mm defect, of the
-    force's standard deviation); through the housing FEM's line 0.4% and 5.6% (README).
+    force's standard deviation); through the housing FEM's line 0.4% and 5.6% (docs/theory/bearing_housing.md).
     """
     b, geo, infl = setup
     p = lpm.LPMParameters.from_config(b, faulty)
@@ -109,10 +109,10 @@ def test_shaft_on_one_roller_off_the_load_line_is_solved(setup, method):
                                                   (500.0, -8e-6), (232.8, -19.2e-6)])
 def test_healthy_table_has_an_equilibrium_at_light_loads_wide_clearances_and_preloads(setup, load_N, clearance_m):
     """Light loads with any clearance put the shaft on one roller a few microradians off the load line at a few
-    table phases (2-16 of 4097 had no equilibrium in 200 Newton steps of a regularised Hessian); a preload deeper
-    than a roller's deflection under the load (clearance below -6.8 um at 500 N) put the cold start above the
-    centre with a negative longest step (no equilibrium at any phase). Every phase of the table balances the
-    load now, from the cold start and from a nearby table's offsets."""
+    table phases, where the contact stiffness has nothing across that roller (a regularised Newton step creeps
+    12 nm where the shaft slides 3 um); a preload deeper than a roller's deflection under the load (clearance
+    below -6.8 um at 500 N) has its equilibrium within a deflection of the centre. Every phase of the table
+    balances the load, from the cold start and from a nearby table's offsets."""
     _, geo, infl = setup
     s = sg.Surrogate(geo, infl)
     for scale in (1.0, 1.004):

@@ -64,6 +64,8 @@ def run_case(config: dict, influence, name: str, rate_Hz: float, duration_s: flo
         "verdict": d["verdict"],
         "fault_type": d["fault"]["type"],
         "values": found,
+        "shaft_speed_Hz": {"found": final["params"].get("shaft_speed_Hz"), "ci95": final["ci95"].get("shaft_speed_Hz")},
+        "fault_statement": d["fault"].get("statement"),
         "nrmse": final["nrmse"],
         "noise_floor_nrmse": final["noise_floor_nrmse"],
         "unexplained": [u.get("where") for u in d["unexplained"]],

@@ -156,3 +156,14 @@ rule study_summary:
 rule study_all:
     input:
         [f"{RESULTS}/studies/{name}/summary.png" for name in STUDIES],
+
+
+# One target per study: `snakemake --cores 2 study_<name>` runs that study's cases and its summary only.
+for _study in STUDIES:
+
+    rule:
+        name:
+            f"study_{_study}"
+        localrule: True
+        input:
+            f"{RESULTS}/studies/{_study}/summary.png",

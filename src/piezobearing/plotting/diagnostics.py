@@ -209,7 +209,7 @@ CANDIDATES = 3
 def ladder(d: dict) -> Figure:
     """NRMSE after each step, with each model's noise floor; beside them, hatched, the NRMSE the best
     :data:`CANDIDATES` of the first ranking that were not kept would have left."""
-    fig = Figure(figsize=(7.0, 3.8))
+    fig = Figure(figsize=(8.0, 3.8))
     ax = fig.subplots()
     labels = ["baseline"]
     err = [d["baseline"]["nrmse"]]
@@ -217,11 +217,11 @@ def ladder(d: dict) -> Figure:
     for i, s in enumerate(d["steps"]):
         if i == 0 and not s["effects"]:
             continue
-        labels.append("configured\n" + "\n".join(s["effects"]) if i == 0 else "+ " + s["added"])
+        labels.append("configured\n" + "\n".join(s["effects"]) if i == 0 else "+\n" + s["added"])
         err.append(s["nrmse"])
         flo.append(s["noise_floor_nrmse"])
     for s in d.get("dropped_steps", []):
-        labels.append("(+ " + s["added"] + ")\ndropped")
+        labels.append("(+\n" + s["added"] + ")\ndropped")
         err.append(s["nrmse"])
         flo.append(s["noise_floor_nrmse"])
     n_kept = len(labels) - len(d.get("dropped_steps", []))
@@ -229,7 +229,7 @@ def ladder(d: dict) -> Figure:
     # the best candidates of the ranking that were not kept: what adding them would have done
     used = {*d.get("selected", []), *(s["added"] for s in d.get("dropped_steps", []))}
     for r in [r for r in d.get("ranking", []) if r["effect"] not in used][:CANDIDATES]:
-        labels.append("(+ " + r["effect"] + ")\nnot kept")
+        labels.append("(+\n" + r["effect"] + ")\nnot kept")
         err.append(r["nrmse"])
         flo.append(r["noise_floor_nrmse"])
     x = np.arange(len(labels))
@@ -248,7 +248,7 @@ def ladder(d: dict) -> Figure:
             ha="center",
             fontsize=8,
         )
-    ax.set_xticks(x, labels, fontsize=8)
+    ax.set_xticks(x, labels, fontsize=7)  # one effect name a line: long names do not run into each other
     ax.set_ylabel("NRMSE (%)")
     ax.set_ylim(0, 1.12 * 100 * max(err))
     ax.legend(fontsize=8, loc="upper right")

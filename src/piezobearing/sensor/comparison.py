@@ -156,14 +156,19 @@ class Housing:
         }
 
 
+#: Modes asked for first: the housing of the paper's geometry has 15-20 below 32 kHz (2.5 x 12.8 kHz).
+FIRST_MODE_COUNT = 20
+
+
 def modes_to(model: fem.HousingModel, top_Hz: float, start: int, seed: int) -> fem.Modes:
-    """The housing's modes up to past ``top_Hz``: ``start`` modes, doubled until the highest passes it."""
-    n = max(int(start), 1)
+    """The housing's modes up to past ``top_Hz``: max(``start``, 20) modes, 1.5 times as many until the highest
+    passes it (each try one shift-invert Lanczos solve on the factors of K)."""
+    n = max(int(start), FIRST_MODE_COUNT)
     while True:
         modes = fem.compute_modes(model, min(n, model.n_dofs - 2), seed=seed)
         if modes.frequencies_Hz[-1] >= top_Hz or n >= model.n_dofs - 2:
             return modes
-        n *= 2
+        n = int(1.5 * n) + 1
 
 
 def build_housing(config: dict, faulty: bool, settings: ComparisonSettings) -> Housing:

@@ -4,7 +4,7 @@ Why. A cage that slips by a new amount at every roller passage (``bearing.slip_j
 times wander: at 2% jitter per passage the n-th passage is off its mean time by 0.02 sqrt(n) periods, a fifth of
 a period after a second. The baseline detector's fold and roller-passage fit assume a constant period
 (:mod:`.baseline`); the smeared train then no longer matches the healthy baseline's harmonics and an impact no
-longer falls in the same cell of the fold (README, "Slip jitter": the limit lay between 1% and 2%).
+longer falls in the same cell of the fold (docs/validation/detection.md: the limit lies between 1% and 2% jitter).
 
 What. The sensor sees every roller pass, so the record carries its own tachometer: the roller train's
 fundamental. :func:`passage_phase` demodulates the record at the mean BPFO and smooths the product over one
@@ -16,8 +16,7 @@ phase instead of a shaft encoder's) by a Kaiser-windowed sinc, which keeps white
 the roller train is periodic again: the baseline detector's roller-passage fit and rolling-element fold (2 BSF
 turns with the cage: a fixed multiple of theta) run unchanged, and the inner-race fold follows its own phase,
 Z f_shaft t - theta (the defect turns with the shaft, at constant speed on the record's clock). The outer-race
-test stays on the record's clock (the phase's own noise smears the resampled train: README, "Following the
-passages").
+test stays on the record's clock (the phase's own noise smears the resampled train; docs/theory/detection.md).
 """
 
 from __future__ import annotations

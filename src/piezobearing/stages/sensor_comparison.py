@@ -109,6 +109,8 @@ def study_case(config: dict, outdir: Path, resistance: str, harmonic: str | None
         r = res["sensors"][s]
         rows.append({"sensor": s, **common, "detection_rate": r["detection_rate"],
                      "false_alarm_rate": r["false_alarm_rate"], "margin_dB": r["margin_dB"],
+                     "margin_over_healthy_dB": r["margin_over_healthy_dB"],
+                     "detection_rate_over_healthy": r["detection_rate_over_healthy"],
                      "band_low_Hz": r["detection"]["band_Hz"][0], "band_high_Hz": r["detection"]["band_Hz"][1],
                      "clean_rms_V": r["levels"]["faulty"]["clean_rms_V"],
                      "noise_std_V": r["levels"]["faulty"]["noise_std_V"],

@@ -69,7 +69,7 @@ compresses the roller-passage harmonics and makes new ones. The baseline
 detector's outer-race test (:func:`..outer_race.harmonic_test`) compares the
 record's harmonics with the unclipped healthy baseline's and calls the
 healthy bearing an outer-race fault (the ``daq_noise`` study at 1 V/sqrt(Hz):
-20 of 20 seeds at 2550 and at 10240 Hz, README).
+20 of 20 seeds at 2550 and at 10240 Hz; docs/validation/detection.md).
 
 What. For Gaussian noise n of standard deviation sigma (before the ADC) the
 clipped sample Y = clip(mu + n, lo, hi) has the closed-form mean and variance

@@ -74,7 +74,8 @@ class FamilyEvidence:
     margin_dB : float
         10 log10(statistic / threshold) [dB] (:func:`margin_dB`).
     detected : bool
-        statistic > threshold.
+        The detector's decision for the family: statistic > threshold, and where the detector asks more
+        (the envelope detector: enough lines above their own thresholds) that too, documented in its module.
     lines : tuple of LineEvidence
         The lines the statistic is made of, where the detector reads lines (empty where it tests a waveform).
     """
