@@ -48,7 +48,7 @@ def _resources() -> dict:
     out = {}
     for key, name in (("mem_mb", "STUDY_MEM_MB"), ("runtime_min", "STUDY_RUNTIME_MIN")):
         block = text[text.index(f"{name} = {{"):]
-        block = block[: block.index("}")]
+        block = block[: block.index("\n}")]
         m = re.search(r'"sensor_comparison":\s*([0-9.]+)', block)
         out[key] = float(m.group(1)) if m else None
     return out

@@ -66,3 +66,14 @@ def test_help_runs():
     commands = next(a for a in cli._parser()._actions if a.__class__.__name__ == "_SubParsersAction").choices
     for name in commands:
         assert name in run.stdout
+
+
+def test_python_examples_run():
+    """Every ``python`` block of the README runs as written from the repository root."""
+    blocks = re.findall(r"```python\n(.*?)```", (REPO / "README.md").read_text(), flags=re.DOTALL)
+    assert blocks, "the README shows no Python example"
+    for code in blocks:
+        run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO)
+        assert run.returncode == 0, run.stderr[-2000:]
+        for expected in re.findall(r"#\s*(.+)$", code, flags=re.MULTILINE):
+            assert expected.strip() in run.stdout, (expected, run.stdout)

@@ -60,15 +60,15 @@ def fig10_envelope(healthy: pd.DataFrame, faulty: pd.DataFrame, indicator: dict,
     """Envelope spectra of the noisy voltage, healthy above faulty, with k BPFO marked (paper Fig. 10).
 
     The harmonics in the indicator are circled; the noiseless record's
-    envelope spectrum (same band) is drawn thin and grey for reference.
+    envelope spectrum (same band) is drawn thin and black over the noisy one for reference.
     """
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(7.0, 5.2))
     k, unit = _unit(np.concatenate([healthy["amplitude_V"], faulty["amplitude_V"]]))
     for ax, df, case, col in ((axes[0], healthy, "healthy", "C0"), (axes[1], faulty, "faulty", "C1")):
         r = indicator[case]
         m = df["frequency_Hz"] <= fmax_Hz
-        ax.plot(df["frequency_Hz"][m], k * df["noiseless_amplitude_V"][m], color="0.6", lw=0.7,
-                label="noiseless")
+        ax.plot(df["frequency_Hz"][m], k * df["noiseless_amplitude_V"][m], color="k", lw=0.6,
+                label="noiseless", zorder=3)  # over the noisy spectrum, which hid it
         ax.plot(df["frequency_Hz"][m], k * df["amplitude_V"][m], color=col, lw=0.9,
                 label=f"SNR {r['snr_dB']:g} dB")
         for h in r["harmonics"]:

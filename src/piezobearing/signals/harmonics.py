@@ -44,6 +44,9 @@ of the tests and the benchmark.
 from __future__ import annotations
 
 import numpy as np
+import scipy.fft
+from scipy.linalg import LinAlgError, cho_factor, cho_solve, lstsq
+from scipy.linalg.lapack import dpocon
 
 #: Smallest reciprocal condition number of A^T A solved by Cholesky (A's condition number about 100); below: QR.
 RCOND_MIN = 1e-4
@@ -79,8 +82,6 @@ def chirp_sum(u: np.ndarray, nu, m_out: int) -> np.ndarray:
     the chirp's phase nu k^2 / 2 reduced exactly (:func:`frac_cycles`). Batched: ``u`` of shape (P, n) and
     ``nu`` of shape (P,), one sum per row (each row's numbers as alone: the FFTs act per row).
     """
-    from scipy import fft as sfft
-
     u = np.asarray(u, complex)
     nu = np.asarray(nu, float)
     nu_col = nu[..., None]
@@ -88,12 +89,12 @@ def chirp_sum(u: np.ndarray, nu, m_out: int) -> np.ndarray:
     length = max(nj, m_out)
     k = np.arange(length, dtype=np.int64)
     c = np.exp(2j * np.pi * frac_cycles(0.5 * nu_col, k * k))
-    nfft = sfft.next_fast_len(nj + m_out - 1)
+    nfft = scipy.fft.next_fast_len(nj + m_out - 1)
     h = np.zeros(c.shape[:-1] + (nfft,), complex)
     h[..., :m_out] = np.conj(c[..., :m_out])
     if nj > 1:
         h[..., nfft - nj + 1:] = np.conj(c[..., 1:nj])[..., ::-1]
-    y = sfft.ifft(sfft.fft(u * c[..., :nj], nfft) * sfft.fft(h))[..., :m_out]
+    y = scipy.fft.ifft(scipy.fft.fft(u * c[..., :nj], nfft) * scipy.fft.fft(h))[..., :m_out]
     return y * c[..., :m_out]
 
 
@@ -110,8 +111,6 @@ def harmonic_matrix(n: int, dt_s: float, f0_Hz: float, n_harmonics: int) -> np.n
 
 def lstsq_qr(a: np.ndarray, x: np.ndarray) -> np.ndarray:
     """Least squares by pivoted QR (rank-revealing: coincident folded harmonics get the minimum-norm split)."""
-    from scipy.linalg import lstsq
-
     return lstsq(a, x, cond=1e-10, lapack_driver="gelsy", check_finite=False)[0]
 
 
@@ -149,9 +148,6 @@ def gram_from_sums(n: int, sc: np.ndarray, ss: np.ndarray) -> np.ndarray:
 def cholesky_or_none(g: np.ndarray):
     """scipy's ``cho_factor`` of A^T A where its reciprocal condition number (LAPACK ``dpocon``) is at least
     ``RCOND_MIN``; None where it is ill-posed (fall back to QR)."""
-    from scipy.linalg import LinAlgError, cho_factor
-    from scipy.linalg.lapack import dpocon
-
     try:
         cf = cho_factor(g, check_finite=False)
     except LinAlgError:
@@ -196,8 +192,6 @@ class Harmonics:
 
     def fit(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The least-squares coefficients c (mean, then a_k, b_k of a_k cos + b_k sin) and A^T x [units of x]."""
-        from scipy.linalg import cho_solve
-
         xt = self.project(x)
         if self.factor is None:
             return lstsq_qr(self.matrix, np.asarray(x, float)), xt
@@ -321,8 +315,6 @@ def harmonic_fits(x: np.ndarray, dt_s: float, f0_Hz: np.ndarray, n_harmonics: in
     ``BATCH_ENTRIES``; each row's Cholesky solve (or, ill-posed, its pivoted QR) as :class:`Harmonics` does it.
     Each row's numbers are those of the row alone (the per-row FFTs and elementwise arithmetic are the same).
     """
-    from scipy.linalg import cho_solve
-
     x = np.asarray(x, float)
     f0 = np.asarray(f0_Hz, float)
     p, n = x.shape

@@ -1,23 +1,19 @@
 """The baseline detector's outer-race test: a record's roller-passage harmonics against the healthy baseline's.
 
-Its functions are re-exported by :mod:`.baseline`; they are batched over
-records: the test minimises over the phase of the roller train
-(inside) and over the fundamental (outside, from up to four starts), and a
-Monte Carlo or a classification runs it on hundreds of records. One record at
-a time, the Python around the thousands of small evaluations cost more than
-the evaluations; :func:`harmonic_tests` steps every record's and start's
-searches together (:func:`.scalar_search.fminbound_many`: scipy's bounded
-Brent, problem by problem the same steps) and evaluates the harmonic fits
-(:func:`.harmonics.harmonic_fits`) and the phase searches as arrays over all
-of them. :func:`harmonic_test` is the batch of one. Each record's numbers are
-exactly those of the record alone (test) and of the one-record code before
-the batching (31 detections and 20 slip-searched tests byte-identical as JSON,
-``benchmarks/bench_unit_tests.py``).
+The test minimises over the phase of the roller train (inside) and over the
+fundamental (outside, from up to four starts), and a Monte Carlo or a
+classification runs it on hundreds of records. :func:`harmonic_tests` steps
+every record's and start's searches together (:func:`.scalar_search.fminbound_many`:
+scipy's bounded Brent, problem by problem the same steps) and evaluates the
+harmonic fits (:func:`.harmonics.harmonic_fits`) and the phase searches as
+arrays over all of them; :func:`harmonic_test` is the batch of one. Each
+record's numbers are exactly those of the record alone (tests).
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.special import chdtr, chdtrc, gammaincinv, gammaln
 
 from .harmonics import below_nyquist, harmonic_fits
 from .scalar_search import fminbound_many
@@ -27,12 +23,10 @@ def log_chi2_sf(q, dof):
     """ln P(chi^2_dof > q), with the leading asymptotic term where scipy underflows [-] (arrays too).
 
     ``scipy.stats.chi2.logsf`` bit for bit, from its special functions (scipy.special): above the median
-    ln(chdtrc), below it ln(1 - chdtr); 0 for q <= 0, NaN for dof <= 0 or q NaN. Not through scipy.stats,
-    whose import (0.45 CPU s) the jobs that need nothing else of it (fault_classification, fault_indicator)
-    no longer pay; tests/test_signals_detector.py compares the two on a grid.
+    ln(chdtrc), below it ln(1 - chdtr); 0 for q <= 0, NaN for dof <= 0 or q NaN (scipy.special: the
+    workflow's detection jobs need nothing else of scipy.stats); tests/test_signals_detector.py compares the
+    two on a grid.
     """
-    from scipy.special import chdtr, chdtrc, gammaincinv, gammaln
-
     q, dof = np.broadcast_arrays(np.asarray(q, float), np.asarray(dof, float))
     v = np.full(q.shape, -np.inf)
     valid = dof > 0
