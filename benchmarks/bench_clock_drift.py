@@ -1,4 +1,4 @@
-"""The calibration diagnosis's hot path, previous method beside the current one in one process (issue 14).
+"""The calibration diagnosis's hot path, previous method beside the current one in one process.
 
 ``clock_drift`` is a candidate in every calibration diagnosis (and the whole model in the cases that hide
 it), and its windowed-sinc reading and noise gain took most of a diagnosis's time. Previous method:

@@ -14,7 +14,7 @@ effect: ranked first and selected first; an effect exactly equivalent to the
 hidden one, ``Effect.equivalent_to``, counts as found), and the seeds that
 failed, with their findings.
 
-Issue 13 asks: nothing hidden -> ``explained`` in >= 95% of seeds; one
+The targets: nothing hidden -> ``explained`` in >= 95% of seeds; one
 effect hidden -> that effect first and ``explained`` in >= 90%.
 
 Writes results/benchmarks/diagnosis_seeds.json.

@@ -32,6 +32,8 @@ from piezobearing.bearing import housing_fem as fem
 from piezobearing.bearing import transient as st
 from piezobearing.bearing.housing_mesh import build_housing_mesh
 
+CONFIG = Path(__file__).resolve().parents[1] / "config"  # the checkout's configs (ci.yaml)
+
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -39,7 +41,7 @@ def main() -> None:
     ap.add_argument("--duration", type=float, default=None, help="record length [s] (default: the config's)")
     ap.add_argument("--out", default="results/benchmarks/housing.json")
     args = ap.parse_args()
-    config = cfg.load(cfg.CONFIG_DIR / "ci.yaml") if args.ci else cfg.load()
+    config = cfg.load(CONFIG / "ci.yaml") if args.ci else cfg.load()
     if args.duration is not None:
         config["bearing"]["duration_s"] = args.duration
     b, h = config["bearing"], config["housing"]

@@ -29,6 +29,8 @@ from piezobearing.bearing import housing_fem as fem
 from piezobearing.bearing import transient as st
 from piezobearing.bearing.housing_mesh import build_housing_mesh
 
+CONFIG = Path(__file__).resolve().parents[1] / "config"  # the checkout's configs (ci.yaml)
+
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -38,7 +40,7 @@ def main() -> None:
     ap.add_argument("--modes", type=int, nargs="+", default=[12, 24, 40, 60])
     ap.add_argument("--out", default="results/benchmarks/housing_rate.json")
     args = ap.parse_args()
-    config = cfg.load(cfg.CONFIG_DIR / "ci.yaml") if args.ci else cfg.load()
+    config = cfg.load(CONFIG / "ci.yaml") if args.ci else cfg.load()
     b, h = config["bearing"], config["housing"]
     dt = 1.0 / args.rate
     b.update(time_step_s=dt, duration_s=args.duration, substeps=max(1, int(round(dt / 10e-6))))

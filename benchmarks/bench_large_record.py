@@ -35,6 +35,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+CONFIG = Path(__file__).resolve().parents[1] / "config"  # the checkout's configs (ci.yaml)
+
 REPO = Path(__file__).resolve().parents[1]
 OUT = REPO / "results" / "benchmarks" / "large_record.json"
 
@@ -43,7 +45,7 @@ import json, sys, time
 from pathlib import Path
 from piezobearing import config as cfg
 what, record, work = sys.argv[1], sys.argv[2], Path(sys.argv[3])
-c = cfg.load(cfg.CONFIG_DIR / "ci.yaml")
+c = cfg.load(CONFIG / "ci.yaml")
 c["calibration"]["measurement"] = record
 t0 = time.perf_counter()
 extra = {}
@@ -76,7 +78,7 @@ def make_record(rows: int, path: Path) -> float:
     from piezobearing.stages.calibration import nominal_circuit
     from piezobearing.synthesis import PressProtocol, synthesize
 
-    c = cfg.load(cfg.CONFIG_DIR / "ci.yaml")
+    c = cfg.load(CONFIG / "ci.yaml")
     m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"])
     n = m.time_s.size - 1
     reps = -(-rows // n)

@@ -25,7 +25,7 @@ from piezobearing.sensor.analysis import SensorFemParams, harmonic_results, moda
 from piezobearing.sensor.calibration import SensorCircuit
 from piezobearing.sensor.mesh import stack_mesh
 
-BUDGET_S = 120.0  # the budget for modal + harmonic on the default mesh (2 cores)
+BUDGET_S = 120.0  # the budget for modal + harmonic on the default mesh (2 cores)
 
 
 def time_stages(p: SensorFemParams, multiplier: float) -> dict:

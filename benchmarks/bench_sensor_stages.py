@@ -1,8 +1,8 @@
 """The sensor FEM stages (mesh, modal, convergence, harmonic), the previous code beside this checkout's.
 
-Issue 14: ``sensor_modal`` now writes the harmonic analysis's Ritz model and its mesh's convergence row from
-the SS system it factorises anyway, so ``sensor_harmonic`` and ``sensor_convergence`` no longer assemble and
-factorise the modal mesh again. Both sides run the four stages in a fresh process each (``--old-src``: the
+``sensor_modal`` writes the harmonic analysis's Ritz model and its mesh's convergence row from the SS system it
+factorises anyway, so ``sensor_harmonic`` and ``sensor_convergence`` do not assemble and factorise the modal
+mesh again; the previous code did. Both sides run the four stages in a fresh process each (``--old-src``: the
 previous package's ``src``), at the same time, under GNU time (CPU seconds and peak RSS of the process), and
 their result files are compared byte by byte (``bench_workflow.compare_results``).
 
@@ -26,6 +26,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_workflow import compare_results, parse_time_log  # noqa: E402
 
+CONFIG = Path(__file__).resolve().parents[1] / "config"  # the checkout's configs (ci.yaml)
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -36,7 +38,7 @@ def worker(out: Path, config_name: str) -> None:
 
     d = out / "results/sensor"
     d.mkdir(parents=True, exist_ok=True)
-    c = cfg.load() if config_name == "default" else cfg.load(cfg.CONFIG_DIR / f"{config_name}.yaml")
+    c = cfg.load() if config_name == "default" else cfg.load(CONFIG / f"{config_name}.yaml")
     p = st.SensorFemParams.from_config(c)
     meshes = [f"stack_L{k}.vtk" for k in range(1, len(p.multipliers) + 1)]
     os.chdir(d)  # relative paths: the files name no folder, so the two sides' files compare byte by byte

@@ -1,4 +1,4 @@
-"""Old against new methods of issue 14, in one run each, as ratios (timings on a shared machine are noisy).
+"""Sparse solvers and the batched SNR sweep against the methods they replace, in one run each, as ratios.
 
 * housing: factorisation of K and the influence line (one solve) at each mesh level of the
   convergence study, and the shift-invert modes, with SuperLU in the model's nested-dissection
@@ -23,6 +23,8 @@ import numpy as np
 
 from piezobearing import config as cfg
 from piezobearing import sparse_solve
+
+CONFIG = Path(__file__).resolve().parents[1] / "config"  # the checkout's configs (ci.yaml)
 
 
 def _timed(fn):
@@ -140,7 +142,7 @@ def main() -> None:
         "--max-level", type=float, default=10.0, help="skip housing levels above this (SuperLU needs 7.4 GB at 2.0)"
     )
     args = ap.parse_args()
-    config = cfg.load(cfg.CONFIG_DIR / "ci.yaml") if args.ci else cfg.load()
+    config = cfg.load(CONFIG / "ci.yaml") if args.ci else cfg.load()
     out = {
         "cpu_count": os.cpu_count(),
         "load_average_at_start": os.getloadavg()[0],

@@ -22,6 +22,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+CONFIG = Path(__file__).resolve().parents[1] / "config"  # the checkout's configs (ci.yaml)
+
 REPO = Path(__file__).resolve().parents[1]
 OUT = REPO / "results" / "benchmarks" / "study_case.json"
 
@@ -31,7 +33,7 @@ from pathlib import Path
 from piezobearing import config as cfg
 from piezobearing.stages.studies import run_case
 kind, work = sys.argv[1], Path(sys.argv[2])
-c = cfg.load(cfg.CONFIG_DIR / "ci.yaml")
+c = cfg.load(CONFIG / "ci.yaml")
 c["bearing"].update(duration_s=0.35, settle_s=0.01)
 c["housing"].update(mesh_level=0.35, n_modes=4)
 c["signals"].update(study_n_seeds=5, sensor_fem_correction=False)

@@ -29,13 +29,15 @@ from piezobearing.bearing import surrogate as sg
 from piezobearing.bearing import transient as st
 from piezobearing.bearing.housing_mesh import build_housing_mesh
 
+CONFIG = Path(__file__).resolve().parents[1] / "config"  # the checkout's configs (ci.yaml)
+
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--ci", action="store_true", help="use config/ci.yaml (coarse mesh, short record)")
     ap.add_argument("--out", default="results/benchmarks/surrogate.json")
     args = ap.parse_args()
-    config = cfg.load(cfg.CONFIG_DIR / "ci.yaml") if args.ci else cfg.load()
+    config = cfg.load(CONFIG / "ci.yaml") if args.ci else cfg.load()
     b, h = config["bearing"], config["housing"]
     dt = b["time_step_s"]
     geo = lpm.BearingGeometry.from_config(b)

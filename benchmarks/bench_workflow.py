@@ -1,4 +1,4 @@
-"""Whole workflow runs, the previous code beside this checkout's, in one call (issue 14: the whole paper, CI).
+"""Whole workflow runs, the previous code beside this checkout's, in one call (the whole paper, or CI).
 
 For each side (``--old REF``, a git revision of this repository, exported to a temporary folder; and the
 working tree's committed HEAD) a clean ``snakemake --cores 2 [--configfile FILE] TARGETS`` runs in a fresh
@@ -32,11 +32,18 @@ import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from bench_startup import export_revision  # benchmarks/ is on sys.path when run as a script
-
 ROOT = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
 SKIP = ("results/logs", "results/benchmarks", "results/notebooks", "results/.checked")
+
+def export_revision(rev: str, dest: Path) -> Path:
+    """Revision ``rev`` of this repository as a plain folder ``dest`` (with an empty ``data/``)."""
+    dest.mkdir(parents=True)
+    archive = subprocess.run(["git", "archive", rev], cwd=ROOT, capture_output=True, check=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(dest)], input=archive, check=True)
+    (dest / "data").mkdir(exist_ok=True)
+    return dest
+
 
 TIME_FIELDS = {
     "user_s": r"User time \(seconds\): ([\d.]+)",
@@ -119,7 +126,8 @@ def record(name: str, old: str, args: list[str], logs: tuple[Path, Path], dirs: 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--name", required=True, help="the record's name: results/benchmarks/workflow_NAME.json")
+    ap.add_argument("--name", help="the record's name: results/benchmarks/workflow_NAME.json (default: the config "
+                    "file's stem, or paper)")
     ap.add_argument("--old", default="main", help="git revision of the previous code")
     ap.add_argument("--configfile", default=None)
     ap.add_argument("--old-env", action="append", default=[], metavar="NAME=VALUE",
@@ -128,6 +136,7 @@ def main() -> None:
     ap.add_argument("--parse", nargs=4, metavar=("OLD_LOG", "NEW_LOG", "OLD_DIR", "NEW_DIR"))
     a = ap.parse_args()
     args = [*a.targets, *(["--configfile", a.configfile] if a.configfile else [])]
+    a.name = a.name or (Path(a.configfile).stem if a.configfile else "paper")
     if a.parse:
         logs, dirs = (Path(a.parse[0]), Path(a.parse[1])), (Path(a.parse[2]), Path(a.parse[3]))
     else:

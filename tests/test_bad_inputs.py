@@ -10,16 +10,15 @@ import functools
 import hashlib
 import os
 import re
-import subprocess
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 import pytest
+from conftest import CI_CONFIG, copy_repo, snakemake
 
-from piezobearing import cli, runlock
+from piezobearing import cli
 from piezobearing import config as cfg
 from piezobearing.io import write_measurement
 from piezobearing.stages.calibration import nominal_circuit
@@ -57,7 +56,7 @@ _TMP: dict = {}
 def _temporary_folders(tmp_path_factory):
     """The cases' folder goes under pytest's temporary folder (pytest keeps the last three sessions' and removes
     older ones), not a folder of its own in /tmp that nobody removes (4 MB a session). Session-scoped: the module's
-    tests stay free to run on either xdist worker (tests/conftest.py groups tests by module-scoped fixtures)."""
+    tests stay free to run on either xdist worker."""
     _TMP["factory"] = tmp_path_factory
     yield
     _TMP.clear()
@@ -67,7 +66,7 @@ def _temporary_folders(tmp_path_factory):
 def workdir() -> Path:
     """One folder with the good record and every bad file and config of the cases."""
     d = _TMP["factory"].mktemp("bad_inputs")
-    c = cfg.load(cfg.CONFIG_DIR / "ci.yaml")
+    c = cfg.load(CI_CONFIG)
     m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"])
     write_measurement(m, d / "record.csv")
     df = m.to_frame()
@@ -255,9 +254,7 @@ def run_case(case: Case, monkeypatch, capsys) -> tuple[int, str]:
         conf = target if target.suffix == ".yaml" else w / f"measurement_{target.stem}.yaml"
         if conf != target:
             conf.write_text(f"calibration:\n  measurement: {target}\n")
-        from conftest import snakemake_warm
-
-        out = snakemake_warm("-n", "--configfile", "config/ci.yaml", str(conf))
+        out = snakemake("-n", "--configfile", "config/ci.yaml", str(conf))
         assert "Traceback" not in out.stderr + out.stdout
         lines = [ln for ln in out.stderr.splitlines() if ln.startswith("piezobearing:")]
         assert len(lines) == 1, out.stderr[-3000:]
@@ -331,82 +328,20 @@ def test_table_is_current(monkeypatch, capsys):
     )
 
 
-# --------------------------------------------------------------------------- a second run in the same folder
-
-
-def _fake_snakemake(seconds: int) -> subprocess.Popen:
-    """A live process whose command line names snakemake (as a running workflow's does)."""
-    import time
-
-    p = subprocess.Popen([sys.executable, "-c", f"import time; time.sleep({seconds})", "snakemake"])
-    for _ in range(100):  # until it has exec'd (its /proc cmdline is empty before)
-        if Path(f"/proc/{p.pid}/cmdline").read_bytes():
-            break
-        time.sleep(0.05)
-    return p
-
-
-def test_second_run_while_one_is_active_is_stopped(tmp_path):
-    """A live snakemake holding the folder: a second run stops with one line naming it; a dry run
-    gets a note and goes on; a pid file of a dead process is ignored."""
-    sleeper = _fake_snakemake(120)
-    try:
-        pid_file = tmp_path / runlock.PID_FILE
-        pid_file.parent.mkdir()
-        pid_file.write_text(f"{sleeper.pid}\n")
-        assert runlock.active_run(tmp_path) == sleeper.pid
-        assert runlock.inspecting(["snakemake", "-np"]) and runlock.inspecting(["snakemake", "--dry-run"])
-        assert not runlock.inspecting(["snakemake", "--cores", "2", "--configfile", "config/ci.yaml"])
-    finally:
-        sleeper.kill()
-        sleeper.wait()
-    assert runlock.active_run(tmp_path) is None  # dead: Snakemake's own --unlock advice is right again
-    pid_file.write_text(f"{os.getpid()}\n")
-    assert runlock.active_run(tmp_path) is None  # ourselves (a job's subprocess sees its parent)
-
-
-def test_workflow_refuses_a_second_run(tmp_path):
-    from conftest import _copy_repo, snakemake_warm
-
-    work = _copy_repo(tmp_path)
-    sleeper = _fake_snakemake(300)
-    try:
-        (work / runlock.PID_FILE).parent.mkdir(exist_ok=True)
-        (work / runlock.PID_FILE).write_text(f"{sleeper.pid}\n")
-        run = ["--cores", "1", "results/calibration/measurement.csv", "--configfile", "config/ci.yaml"]
-        out = snakemake_warm(*run, cwd=work)
-        lines = [ln for ln in out.stderr.splitlines() if ln.startswith("piezobearing:")]
-        assert out.returncode == 1 and len(lines) == 1, out.stderr[-2000:]
-        assert f"another snakemake run is active in this folder (pid {sleeper.pid})" in lines[0]
-        assert "rerun-incomplete" not in out.stderr.replace(lines[0], "")
-        assert not (work / "results/calibration/measurement.csv").exists()
-        dry = snakemake_warm(*run, "-n", cwd=work)
-        assert dry.returncode == 0 and "piezobearing: note: another snakemake run" in dry.stderr
-    finally:
-        sleeper.kill()
-        sleeper.wait()
-    assert (work / runlock.PID_FILE).read_text().strip() == str(
-        sleeper.pid
-    )  # the refused run did not claim it
-
-
 @pytest.mark.slow
 def test_record_path_with_spaces_reaches_the_figure(tmp_path):
     """A record in 'my records/press test.csv' passes validation, the rules and the papermill figure job.
 
-    A real run of the figure's two jobs (``extract_sensitivity``, a fresh Python process, and ``fig05``, papermill
-    and a kernel), with the environment of :func:`conftest.run_workflow`; Snakemake itself starts as a child of the
-    worker's warm server (its imports done), not as a fresh process."""
-    from conftest import _copy_repo, snakemake_warm, workflow_env
-
-    work = _copy_repo(tmp_path / "checkout")
+    A real run of the figure's two jobs (``extract_sensitivity``, a Python script, and ``fig05``, papermill and a
+    kernel)."""
+    work = copy_repo(tmp_path / "checkout")
     rec = tmp_path / "my records" / "press test.csv"
     rec.parent.mkdir()
     rec.write_text((workdir() / "record.csv").read_text())
     (tmp_path / "user config.yaml").write_text(f"calibration:\n  measurement: {rec}\n")
-    out = snakemake_warm(
+    out = snakemake(
         "--cores", "2", "results/figures/fig05.png", "--configfile", "config/ci.yaml",
-        str(tmp_path / "user config.yaml"), cwd=work, env=workflow_env(),
+        str(tmp_path / "user config.yaml"), cwd=work,
     )
     assert out.returncode == 0, out.stderr[-3000:]
     assert (work / "results/figures/fig05.png").stat().st_size > 10_000

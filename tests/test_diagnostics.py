@@ -126,7 +126,6 @@ def test_residual_tests_pass_white_noise_and_name_a_tone():
 # --------------------------------------------------------------------------- the loop
 
 
-@pytest.mark.xdist_group("clean")  # the same diagnosis as another test: one worker computes it
 def test_clean_measurement_selects_nothing(ci_config):
     """The baseline already fits to the noise floor: no false discovery, verdict explained."""
     d = run(ci_config, [])
@@ -144,7 +143,7 @@ def test_clean_measurement_selects_nothing_other_seeds(ci_config, seed):
     assert d["selected"] == [] and d["verdict"] == "explained"
 
 
-@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xdist_group(n)) for n in HIDDEN])
+@pytest.mark.parametrize("name", list(HIDDEN))
 def test_hidden_effect_is_ranked_first_selected_and_explains_the_misfit(ci_config, name):
     hidden, pname, truth = HIDDEN[name]
     d = run(ci_config, hidden)
@@ -221,7 +220,6 @@ def test_effect_outside_the_catalogue_is_unexplained_at_its_frequency(paper_conf
     assert "reference_lag" not in d["selected"] or d["verdict"] == "unexplained"
 
 
-@pytest.mark.xdist_group("mains_pickup")  # the same diagnosis as another test: one worker computes it
 def test_diagnosis_json_interface(ci_config):
     d = run(ci_config, HIDDEN["mains_pickup"][0])
     assert {"nrmse", "params"} <= set(d["baseline"])
@@ -302,7 +300,6 @@ def test_strength_follows_kass_and_raftery():
     assert strength(-3.0) == "weak" and strength(None) is None
 
 
-@pytest.mark.xdist_group("extra_capacitance")  # the same diagnosis as another test: one worker computes it
 def test_every_step_names_its_runner_up_and_margin(ci_config):
     """Hidden 100 pF: the step that adds it names the second-best candidate and the margin over it,
     the margin is the difference of the two BIC drops of the first ranking, and the final fit's
@@ -326,7 +323,6 @@ def test_every_step_names_its_runner_up_and_margin(ci_config):
     assert "How firmly the record decides" in text and f"`{st['runner_up']}`" in text
 
 
-@pytest.mark.xdist_group("clean")  # the same diagnosis as another test: one worker computes it
 def test_clean_record_says_how_strongly_it_speaks_against_the_best_candidate(ci_config):
     d = run(ci_config, [])
     idf = d["identifiability"]

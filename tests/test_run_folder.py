@@ -5,7 +5,7 @@ import hashlib
 import re
 
 import pytest
-from conftest import REPO, _copy_repo, snakemake_warm, workflow_env
+from conftest import REPO, copy_repo, snakemake
 
 from piezobearing import config as cfg
 
@@ -51,7 +51,7 @@ def _job_paths(dry_run_stdout: str) -> list[str]:
 def test_a_dry_run_of_another_run_writes_only_under_its_folder(tmp_path):
     variant = tmp_path / "speed1500.yaml"
     variant.write_text("run: speed1500\nbearing:\n  shaft_speed_rpm: 1500.0\n")
-    out = snakemake_warm("-n", "all", "study_all", "--configfile", "config/ci.yaml", str(variant))
+    out = snakemake("-n", "all", "study_all", "--configfile", "config/ci.yaml", str(variant))
     assert out.returncode == 0, out.stderr[-3000:]
     paths = _job_paths(out.stdout)
     assert len(paths) > 100, out.stdout[-3000:]
@@ -69,17 +69,17 @@ def _sha256(path) -> str:
 def test_a_variant_run_leaves_the_papers_results_untouched(tmp_path):
     """One cheap job for each run in a fresh copy: the paper's synthetic calibration record, then a variant's with
     another seed and a longer record: the variant's lands in results/<run>/, the paper's keeps its bytes."""
-    work = _copy_repo(tmp_path / "repo")
+    work = copy_repo(tmp_path / "repo")
     (work / "variant.yaml").write_text("run: longer_record\nseed: 8\nsynthesis:\n  duration_s: 14.0\n")
     paper = work / "results/calibration/measurement.csv"
     variant = work / "results/longer_record/calibration/measurement.csv"
 
-    out = snakemake_warm("--cores", "1", str(paper.relative_to(work)), "--configfile", "config/ci.yaml",
-                         cwd=work, env=workflow_env())
+    out = snakemake("--cores", "1", str(paper.relative_to(work)), "--configfile", "config/ci.yaml",
+                    cwd=work)
     assert out.returncode == 0, out.stderr[-3000:]
     before = _sha256(paper)
-    out = snakemake_warm("--cores", "1", str(variant.relative_to(work)), "--configfile", "config/ci.yaml",
-                         "variant.yaml", cwd=work, env=workflow_env())
+    out = snakemake("--cores", "1", str(variant.relative_to(work)), "--configfile", "config/ci.yaml",
+                    "variant.yaml", cwd=work)
     assert out.returncode == 0, out.stderr[-3000:]
     assert variant.is_file()
     assert _sha256(paper) == before

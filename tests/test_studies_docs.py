@@ -2,7 +2,7 @@
 
 import re
 
-from conftest import REPO, snakemake_warm
+from conftest import CI_CONFIG, REPO, snakemake
 
 from piezobearing import config as cfg
 from piezobearing.studies import check_studies
@@ -17,7 +17,7 @@ def test_the_guide_gives_each_studys_target_and_cases():
         if m:
             rows[m.group(1)] = (m.group(2), int(m.group(3)), 0 if m.group(4) == "-" else int(m.group(4)))
     paper = {k: len(v) for k, v in check_studies(cfg.load()).items()}
-    ci = {k: len(v) for k, v in check_studies(cfg.load(cfg.CONFIG_DIR / "ci.yaml")).items()}
+    ci = {k: len(v) for k, v in check_studies(cfg.load(CI_CONFIG)).items()}
     assert set(rows) == set(paper)
     for name, (target, n_paper, n_ci) in rows.items():
         assert target == f"study_{name}" and n_paper == paper[name] and n_ci == ci.get(name, 0), name
@@ -28,7 +28,7 @@ def test_the_guide_gives_each_studys_target_and_cases():
 def test_a_study_target_runs_that_study_only():
     """`snakemake -n study_calibration_circuit` on the CI config: its two cases and its summary, none of the
     other study's jobs."""
-    out = snakemake_warm("-n", "study_calibration_circuit", "--configfile", "config/ci.yaml")
+    out = snakemake("-n", "study_calibration_circuit", "--configfile", "config/ci.yaml")
     assert out.returncode == 0, out.stderr[-3000:]
     blocks = re.split(r"^(?:local)?rule ", out.stdout, flags=re.M)[1:]  # one job each: its name, then its lines
     jobs = [(b.split(":", 1)[0], "".join(re.findall(r"wildcards: (.*)", b))) for b in blocks]

@@ -3,13 +3,10 @@
 import json
 import re
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
-from conftest import REPO, snakemake_warm
-
-BIN = Path(sys.executable).parent
+from conftest import BIN, REPO, snakemake
 
 
 def run(*cmd, cwd=REPO, timeout=300):
@@ -27,12 +24,12 @@ def test_snakefmt_is_clean():
 
 
 def test_snakemake_lint_is_clean():
-    out = snakemake_warm("--lint", "--configfile", "config/ci.yaml")
+    out = snakemake("--lint", "--configfile", "config/ci.yaml")
     assert out.returncode == 0, (out.stdout + out.stderr)[-3000:]
 
 
 def test_slurm_profile_dry_run():
-    out = snakemake_warm(
+    out = snakemake(
         "-n", "--profile", "workflow/profiles/slurm", "--configfile", "config/ci.yaml", "--forceall", "all", "study_all"
     )
     assert out.returncode == 0, out.stderr[-3000:]
@@ -48,7 +45,7 @@ def _jobs(dry_run_stdout: str) -> set[str]:
 def test_changing_one_parameter_reruns_only_what_depends_on_it(ci_run: Path):
     override = ci_run / "threshold.yaml"
     override.write_text("lowfreq:\n  deviation_threshold: 0.04\n")
-    out = snakemake_warm("--cores", "2", "-n", "--configfile", "config/ci.yaml", str(override), cwd=ci_run)
+    out = snakemake("--cores", "2", "-n", "--configfile", "config/ci.yaml", str(override), cwd=ci_run)
     assert out.returncode == 0, out.stderr[-3000:]
     jobs = _jobs(out.stdout)
     assert "lowfreq_sensitivity" in jobs and "fig08a" in jobs
@@ -79,7 +76,7 @@ def test_study_runs_and_gathers_its_summary(ci_run: Path):
 
 @pytest.mark.slow
 def test_report_holds_every_figure_with_its_caption(ci_run: Path):
-    out = snakemake_warm("--configfile", "config/ci.yaml", "--report", "report.html", cwd=ci_run)
+    out = snakemake("--configfile", "config/ci.yaml", "--report", "report.html", cwd=ci_run)
     assert out.returncode == 0, out.stderr[-3000:]
     html = (ci_run / "report.html").read_text()
     assert "System Message" not in html, "a caption is not valid reStructuredText"

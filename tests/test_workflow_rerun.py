@@ -6,9 +6,8 @@ real scripts' imports, unexecuted, for the code hash) and a stand-in papermill; 
 for each rule, after a change to the config keys its stage reads (piezobearing.registry.READS), after an edit of
 a package module in the scratch copy, and after the record is replaced. The rules it lists must be exactly the
 changed rules and the rules downstream of them in the rule graph (``snakemake --rulegraph``). Every Snakemake call
-(the build, the rule graph, the dry runs, the record case's run) goes through warm Snakemake servers
-(tests/warm_snakemake.py: forked ``snakemake`` processes that skip the imports), two at a time from one server; the runs' stand-in
-script jobs are forked warm too (tests/warm_jobs.py).
+(the build, the rule graph, the dry runs, the record case's run) is the environment's ``snakemake`` in a process of
+its own, with the scratch copy's package first on PYTHONPATH; the dry runs go two at a time.
 """
 
 from __future__ import annotations
@@ -23,8 +22,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from warm_jobs import STAND_IN_PRELOAD
-from warm_snakemake import WarmSnakemake
+from conftest import snakemake
 
 from piezobearing import config as cfg
 from piezobearing.registry import READS, RECORD_RULES
@@ -78,15 +76,11 @@ def _jobs(out: str) -> set[str]:
     return {m.group(1) for m in re.finditer(r"^(\w+)\s+\d+\s*$", table, re.M)} - {"all", "job"}
 
 
-def build_scratch(d: Path) -> tuple[Path, dict, dict[str, set[str]], WarmSnakemake]:
-    """Build a scratch copy of the workflow in ``d`` (stand-in stages); its environment, its rule graph and the warm
-    Snakemake server of its dry runs (tests/warm_snakemake.py, in the copy's environment: its package from the
-    copy's ``src``).
+def build_scratch(d: Path) -> tuple[Path, dict, dict[str, set[str]]]:
+    """Build a scratch copy of the workflow in ``d`` (stand-in stages); its environment (its package from the
+    copy's ``src``, the stand-in papermill first on PATH) and its rule graph.
 
-    The build is a real ``snakemake --cores 2`` run (every job of the CI targets, their metadata recorded), in a
-    child of a warm server, whose stand-in script jobs are forked from a job server that imported Snakemake's
-    script preamble modules (tests/warm_jobs.py): a stand-in only writes its outputs, and as a fresh process it
-    spent its time on Python's start and that preamble."""
+    The build is a real ``snakemake --cores 2`` run: every job of the CI targets, their metadata recorded."""
     for name in ("Snakefile", "workflow", "config", "notebooks", "src"):
         src = ROOT / name
         (shutil.copytree if src.is_dir() else shutil.copy)(src, d / name)
@@ -98,32 +92,28 @@ def build_scratch(d: Path) -> tuple[Path, dict, dict[str, set[str]], WarmSnakema
     pm.write_text(PAPERMILL.format(python=sys.executable))
     pm.chmod(0o755)
     env = {**os.environ, "PATH": f"{d / 'bin'}:{os.environ['PATH']}", "PYTHONPATH": str(d / "src")}
-    server = WarmSnakemake(env)
-    out = server.run(["--cores", "2", "--configfile", "config/ci.yaml"], d, warm_jobs=STAND_IN_PRELOAD)
+    out = snakemake("--cores", "2", "--configfile", "config/ci.yaml", cwd=d, env=env)
     assert out.returncode == 0, out.stderr[-3000:]
-    graph = server.run(["--rulegraph", "--configfile", "config/ci.yaml"], d)
+    graph = snakemake("--rulegraph", "--configfile", "config/ci.yaml", cwd=d, env=env)
     assert graph.returncode == 0, graph.stderr[-3000:]
     names = dict(re.findall(r'^\s*(\d+)\[label = "(\w+)"', graph.stdout, re.M))
     children: dict[str, set[str]] = {n: set() for n in names.values()}
     for a, b in re.findall(r"^\s*(\d+) -> (\d+)", graph.stdout, re.M):
         children[names[a]].add(names[b])
-    return d, env, children, server
+    return d, env, children
 
 
 @pytest.fixture(scope="module")
 def scratch(tmp_path_factory):
-    """A built scratch copy of the workflow (stand-in stages), its environment, its rule graph and its server."""
-    built = build_scratch(tmp_path_factory.mktemp("rerun"))
-    yield built
-    built[3].close()
+    """A built scratch copy of the workflow (stand-in stages), its environment and its rule graph."""
+    return build_scratch(tmp_path_factory.mktemp("rerun"))
 
 
 @pytest.fixture(scope="module")
 def dry(scratch):
-    """``dry(args, **kw)``: ``snakemake ARGS`` in the scratch copy through its warm server (threads may call it at
-    once: each call is a child of its own)."""
-    d, server = scratch[0], scratch[3]
-    return lambda args, **kw: server.run(args, d, **kw)
+    """``dry(args)``: ``snakemake ARGS`` in the scratch copy, in its environment (threads may call it at once)."""
+    d, env = scratch[0], scratch[1]
+    return lambda args: snakemake(*args, cwd=d, env=env)
 
 
 def _downstream(rules: set[str], children: dict[str, set[str]]) -> set[str]:
@@ -237,7 +227,7 @@ def test_every_rule_reruns_on_the_keys_its_stage_reads_and_no_other_rule_does(sc
     same changed config, so one dry run answers for all of them (on the CI config 20 dry runs for 25 rules:
     ``bearing_lpm`` and ``bearing_sampling``, ``noisy``, ``fault_indicator`` and ``snr_study``, and the three
     sensor FEM rules share theirs); each rule's assertions are checked on its config's dry run."""
-    d, env, children, _ = scratch
+    d, env, children = scratch
     config = cfg.load(d / "config/ci.yaml")
     keys = {rule: rule_keys(config, rule) for rule in sorted(READS)}
     first = {}  # each distinct key set: the first rule that reads it (names its override file)
@@ -294,7 +284,7 @@ def test_an_undeclared_key_read_raises_naming_the_rule_and_the_fix():
     ],
 )
 def test_a_changed_package_module_reruns_exactly_the_rules_whose_code_imports_it(scratch, dry, module, rules):
-    d, env, children, _ = scratch
+    d, env, children = scratch
     f = d / "src/piezobearing" / module
     original = f.read_text()
     try:
@@ -311,7 +301,7 @@ def test_a_replaced_record_with_an_older_time_reruns_what_reads_it(scratch, dry)
     from piezobearing.stages.calibration import nominal_circuit
     from piezobearing.synthesis import PressProtocol, synthesize
 
-    d, env, children, _ = scratch
+    d, env, children = scratch
     config = cfg.load(d / "config/ci.yaml")
     record = d / "data/record.csv"
 
@@ -322,7 +312,7 @@ def test_a_replaced_record_with_an_older_time_reruns_what_reads_it(scratch, dry)
     write(1)
     (d / "record.yaml").write_text(yaml.safe_dump({"calibration": {"measurement": "data/record.csv"}}))
     args = ["--configfile", "config/ci.yaml", "record.yaml"]
-    out = dry(["--cores", "2", *args], warm_jobs=STAND_IN_PRELOAD)  # a real run: the stand-ins of what reads it
+    out = dry(["--cores", "2", *args])  # a real run: the stand-ins of what reads it
     assert out.returncode == 0, out.stderr[-3000:]
     before = record.stat().st_mtime
     write(2)  # another record, then dated a day back (as cp -p, unzip or rsync -a leave it)

@@ -38,7 +38,7 @@ unusable --out), one line naming the file or key and the fix, never a
 traceback; 2 a usage error (unknown option, missing argument); 3 an internal
 error (a bug: one line asking to report it; PIEZOBEARING_DEBUG=1 shows the
 traceback). Run inside a checkout, the defaults come from its
-config/config.yaml; elsewhere from the checkout the package was installed from.
+config/config.yaml; elsewhere from the default config installed with the package.
 """
 
 from __future__ import annotations
@@ -46,7 +46,14 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
+
+from . import config as cfg
+
+# Each command imports what it runs inside its own function: all of them together take about 2-3 s of CPU to
+# import (SciPy, sfepy, matplotlib, pandas; measured with resource.getrusage), which `piezobearing --help` and
+# every other command would pay.
 
 #: Exit statuses (see the module docstring).
 EXIT_USER, EXIT_USAGE, EXIT_INTERNAL = 1, 2, 3
@@ -63,8 +70,6 @@ def _fail(msg: str) -> int:
 
 def _load_config(args) -> tuple[dict, str]:
     """The config the command uses and a line saying where it came from."""
-    from . import config as cfg
-
     d = cfg.default_config_dir()
     overrides = [args.config] if args.config is not None else []
     config = cfg.load(*overrides, config_dir=d)
@@ -115,12 +120,8 @@ def _bearing_model(config: dict, influence: str | None) -> str:
 
 def _data_dirs() -> list[Path]:
     """The data/ folders that hold users' measurements and are never written."""
-    from . import config as cfg
-
-    roots = {cfg.CONFIG_DIR.parent.resolve()}
-    here = cfg.find_checkout()
-    if here is not None:
-        roots.add(here.resolve())
+    # the checkout around the current folder, and the one holding the package (an editable install)
+    roots = {r.resolve() for r in (cfg.find_checkout(), cfg.find_checkout(Path(cfg.__file__).parent)) if r}
     return [r / "data" for r in sorted(roots)]
 
 
@@ -168,7 +169,6 @@ def _remove_empty(created: list[Path]) -> None:
 
 
 def _validate(args) -> int:
-    from . import config as cfg
     from .io import MeasurementError
     from .stages.calibration import load_record
 
@@ -213,7 +213,6 @@ def _validate(args) -> int:
 def _diagnose(args) -> int:
     from tqdm import tqdm
 
-    from . import config as cfg
     from .diagnosis.calibration.effects import CATALOGUE, EffectError
     from .io import MeasurementError
     from .stages.diagnostics import diagnose
@@ -292,7 +291,6 @@ def _diagnose(args) -> int:
 
 
 def _hide_and_find(args) -> int:
-    from . import config as cfg
     from .diagnosis.calibration.effects import CATALOGUE, EffectError, ForceRecord
     from .diagnosis.calibration.subject import diagnose_record
     from .diagnosis.settings import DiagnosticsSettings
@@ -347,7 +345,6 @@ def _hide_and_find(args) -> int:
 
 
 def _diagnose_bearing(args) -> int:
-    from . import config as cfg
     from .diagnosis.effect import EffectError
     from .io import MeasurementError, ResultFileError, SignalFileError
     from .stages.bearing_diagnosis import diagnose_bearing
@@ -414,8 +411,6 @@ def _detect(args) -> int:
 
 
 def _version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-
     try:
         return version("piezobearing")
     except PackageNotFoundError:

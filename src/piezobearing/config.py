@@ -2,6 +2,11 @@
 
 The workflow (``workflow/rules/common.smk``), the CLI and the tests all validate
 through :func:`validate` against ``config/schema.yaml``.
+
+The default config and its schema ship inside the package (``piezobearing/defaults/``), so an
+installed ``piezobearing`` finds them anywhere. In a checkout those two files are symbolic links to
+``config/config.yaml`` and ``config/schema.yaml``: one file each, which a wheel or ``pip install .``
+copies into the package.
 """
 
 from __future__ import annotations
@@ -12,10 +17,11 @@ import functools
 import math
 from pathlib import Path
 
+import jsonschema
 import yaml
 
-#: The config folder of the checkout the package was installed from (editable install).
-CONFIG_DIR = Path(__file__).resolve().parents[2] / "config"
+#: The default config (config.yaml) and its schema (schema.yaml), the package's own data.
+CONFIG_DIR = Path(__file__).parent / "defaults"
 SCHEMA_PATH = CONFIG_DIR / "schema.yaml"
 DEFAULT_CONFIG = CONFIG_DIR / "config.yaml"
 
@@ -99,8 +105,6 @@ _SCHEMA_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 @functools.lru_cache(maxsize=4)
 def _validator(schema_path: str):
     """The schema's validator, built once per schema file (studies validate one config per case)."""
-    import jsonschema
-
     return jsonschema.Draft202012Validator(yaml.load(Path(schema_path).read_text(), Loader=_SCHEMA_LOADER))
 
 

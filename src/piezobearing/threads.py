@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import functools
 
+import scipy.linalg  # noqa: F401  (loads SciPy's BLAS, so that the controller lists its pools)
+from threadpoolctl import ThreadpoolController
+
 
 @functools.lru_cache(maxsize=1)
-def _blas_pools():
+def _blas_pools() -> ThreadpoolController:
     """The BLAS thread pools of this process, found once."""
-    import scipy.linalg  # noqa: F401  (loads SciPy's BLAS before the pools are listed)
-    from threadpoolctl import ThreadpoolController
-
     return ThreadpoolController()
 
 

@@ -29,7 +29,6 @@ rule bearing_lpm:
         f"{RESULTS}/logs/bearing_lpm.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/bearing_lpm.tsv"
-    priority: PRIORITY["bearing_lpm"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -53,7 +52,6 @@ rule housing_mesh:
         f"{RESULTS}/benchmarks/rules/housing_mesh_{{case}}.tsv"
     wildcard_constraints:
         case="healthy|faulty",
-    priority: PRIORITY["housing_mesh"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -83,7 +81,6 @@ rule housing_transient:
         f"{RESULTS}/benchmarks/rules/housing_transient_{{case}}.tsv"
     wildcard_constraints:
         case="healthy|faulty",
-    priority: PRIORITY["housing_transient"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -108,7 +105,6 @@ rule housing_convergence:
         f"{RESULTS}/logs/housing_convergence.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/housing_convergence.tsv"
-    priority: PRIORITY["housing_convergence"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -131,7 +127,6 @@ rule bearing_sampling:
         f"{RESULTS}/logs/bearing_sampling.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/bearing_sampling.tsv"
-    priority: PRIORITY["bearing_sampling"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1

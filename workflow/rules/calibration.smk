@@ -19,7 +19,6 @@ rule synthesize_calibration:
         f"{RESULTS}/logs/synthesize_calibration.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/synthesize_calibration.tsv"
-    priority: PRIORITY["synthesize_calibration"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -43,7 +42,6 @@ rule extract_sensitivity:
         f"{RESULTS}/logs/extract_sensitivity.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/extract_sensitivity.tsv"
-    priority: PRIORITY["extract_sensitivity"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -66,7 +64,6 @@ rule fit_resistance:
         f"{RESULTS}/logs/fit_resistance.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/fit_resistance.tsv"
-    priority: PRIORITY["fit_resistance"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -89,7 +86,6 @@ rule lowfreq_sensitivity:
         f"{RESULTS}/logs/lowfreq_sensitivity.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/lowfreq_sensitivity.tsv"
-    priority: PRIORITY["lowfreq_sensitivity"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1

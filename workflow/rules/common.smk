@@ -9,7 +9,9 @@ import sys
 from piezobearing.config import ConfigError
 from piezobearing.config import results_folder
 from piezobearing.config import validate as validate_config
+from piezobearing.io import MeasurementError
 from piezobearing.registry import RECORD_RULES, code_hash, rule_params
+from piezobearing.stages.calibration import check_record_once
 
 CONFIG_FILES = [
     "config/config.yaml",
@@ -47,41 +49,6 @@ FIGURES = []  # RESULTS/figures/*.png
 SCORECARD_PARTS = []  # RESULTS/scorecard/<stage>.csv fragments
 TARGETS = []  # other final outputs
 
-# Job order (issue 14). Among the jobs that are ready, Snakemake starts those of the highest `priority:`
-# first; a rule's priority here is the CPU seconds on its longest path to the end of the whole paper
-# (job CPU times of a default-config run, 2026-11-23, results/benchmarks/rules/*.tsv; critical-path list
-# scheduling), so the long chains (sensor_mesh -> sensor_modal -> ..., bearing_lpm -> housing_*) start
-# first and neither core waits at the end for one of them. Rules not listed: 0. The order of jobs changes
-# no result.
-PRIORITY = {
-    "sensor_mesh": 73,
-    "sensor_modal": 71,
-    "bearing_lpm": 58,
-    "housing_mesh": 50,
-    "housing_transient": 49,
-    "synthesize_calibration": 43,
-    "fit_resistance": 40,
-    "lowfreq_sensitivity": 39,
-    "sensor_harmonic": 37,
-    "fault_type_voltage": 35,
-    "sensor_voltage": 31,
-    "fault_classification": 29,
-    "housing_convergence": 27,
-    "diagnose": 15,
-    "synthesize_bearing_record": 12,
-    "sensor_convergence": 10,
-    "diagnose_bearing": 10,
-    "snr_study": 9,
-    "noisy": 8,
-    "diagnosis_notebook": 7,
-    "envelope": 7,
-    "diagnosis_bearing_notebook": 6,
-    "extract_sensitivity": 5,
-    "fault_indicator": 5,
-    "bearing_sampling": 5,
-    "defect_events": 5,
-}
-
 
 def measurement_csv():
     """The calibration record every downstream stage reads: the user's file or the synthetic one."""
@@ -116,9 +83,6 @@ def check_measurement():
     """Stop before any job runs when the configured measurement cannot be used (one line, no traceback)."""
     if not config["calibration"]["measurement"]:
         return
-    from piezobearing.io import MeasurementError
-    from piezobearing.stages.calibration import check_record_once
-
     try:  # once per record content and settings (RESULTS/.checked/), not at every start
         check_record_once(
             config["calibration"]["measurement"], config, f"{RESULTS}/.checked"
@@ -129,25 +93,3 @@ def check_measurement():
 
 
 check_measurement()
-
-
-def check_single_run():
-    """Stop a second run while another snakemake works in this folder (Snakemake would advise
-    --unlock or --rerun-incomplete, which break the live run); claim the folder for this run.
-    """
-    from piezobearing import runlock
-
-    if not workflow.is_main_process:
-        return
-    other = runlock.active_run()
-    if other is None:
-        if not runlock.inspecting(sys.argv):
-            runlock.claim()
-    elif runlock.inspecting(sys.argv):
-        print(f"piezobearing: note: {runlock.message(other)}", file=sys.stderr)
-    else:
-        print(f"piezobearing: {runlock.message(other)}", file=sys.stderr)
-        sys.exit(1)
-
-
-check_single_run()

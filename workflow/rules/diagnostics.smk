@@ -41,7 +41,6 @@ rule diagnose:
         f"{RESULTS}/logs/diagnose.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/diagnose.tsv"
-    priority: PRIORITY["diagnose"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -72,7 +71,6 @@ rule diagnosis_notebook:
         f"{RESULTS}/logs/diagnosis_notebook.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/diagnosis_notebook.tsv"
-    priority: PRIORITY["diagnosis_notebook"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1

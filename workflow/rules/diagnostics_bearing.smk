@@ -32,7 +32,6 @@ rule synthesize_bearing_record:
         f"{RESULTS}/logs/synthesize_bearing_record.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/synthesize_bearing_record.tsv"
-    priority: PRIORITY["synthesize_bearing_record"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -69,7 +68,6 @@ rule diagnose_bearing:
         f"{RESULTS}/logs/diagnose_bearing.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/diagnose_bearing.tsv"
-    priority: PRIORITY["diagnose_bearing"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -101,7 +99,6 @@ rule diagnosis_bearing_notebook:
         f"{RESULTS}/logs/diagnosis_bearing_notebook.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/diagnosis_bearing_notebook.tsv"
-    priority: PRIORITY["diagnosis_bearing_notebook"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1

@@ -29,7 +29,6 @@ rule sensor_mesh:
         f"{RESULTS}/logs/sensor_mesh.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/sensor_mesh.tsv"
-    priority: PRIORITY["sensor_mesh"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -54,7 +53,6 @@ rule sensor_convergence:
         f"{RESULTS}/logs/sensor_convergence.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/sensor_convergence.tsv"
-    priority: PRIORITY["sensor_convergence"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -79,7 +77,6 @@ rule sensor_modal:
         f"{RESULTS}/logs/sensor_modal.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/sensor_modal.tsv"
-    priority: PRIORITY["sensor_modal"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -105,7 +102,6 @@ rule sensor_harmonic:
         f"{RESULTS}/logs/sensor_harmonic.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/sensor_harmonic.tsv"
-    priority: PRIORITY["sensor_harmonic"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1

@@ -35,7 +35,6 @@ rule sensor_voltage:
         f"{RESULTS}/benchmarks/rules/sensor_voltage_{{case}}.tsv"
     wildcard_constraints:
         case="healthy|faulty",
-    priority: PRIORITY["sensor_voltage"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -60,7 +59,6 @@ rule noisy:
         f"{RESULTS}/benchmarks/rules/noisy_{{case}}.tsv"
     wildcard_constraints:
         case="healthy|faulty",
-    priority: PRIORITY["noisy"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -87,7 +85,6 @@ rule envelope:
         f"{RESULTS}/benchmarks/rules/envelope_{{case}}.tsv"
     wildcard_constraints:
         case="healthy|faulty",
-    priority: PRIORITY["envelope"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -115,7 +112,6 @@ rule fault_indicator:
         f"{RESULTS}/logs/fault_indicator.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/fault_indicator.tsv"
-    priority: PRIORITY["fault_indicator"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -141,7 +137,6 @@ rule snr_study:
         f"{RESULTS}/logs/snr_study.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/snr_study.tsv"
-    priority: PRIORITY["snr_study"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -191,7 +186,6 @@ rule defect_events:
         f"{RESULTS}/logs/defect_events.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/defect_events.tsv"
-    priority: PRIORITY["defect_events"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -309,7 +303,6 @@ rule fault_type_voltage:
         f"{RESULTS}/benchmarks/rules/fault_type_voltage_{{fault_type}}.tsv"
     wildcard_constraints:
         fault_type="outer_race|inner_race|rolling_element",
-    priority: PRIORITY["fault_type_voltage"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -341,7 +334,6 @@ rule fault_classification:
         f"{RESULTS}/logs/fault_classification.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/fault_classification.tsv"
-    priority: PRIORITY["fault_classification"]
     conda:
         "../envs/piezobearing.yaml"
     threads: 1

@@ -12,6 +12,7 @@ import time
 
 import numpy as np
 import pandas as pd
+from scipy.signal import find_peaks
 
 from . import housing_fem as fem
 from . import lpm as brg
@@ -27,8 +28,6 @@ log = logging.getLogger("piezobearing.bearing.lpm")
 
 def impact_intervals(t: np.ndarray, qmax: np.ndarray, bpfo: float) -> np.ndarray:
     """Times between the defect's load peaks (largest roller load within each roller period) [s]."""
-    from scipy.signal import find_peaks
-
     dt = t[1] - t[0]
     peaks, _ = find_peaks(
         qmax, distance=max(1, int(0.6 / bpfo / dt)), prominence=0.05 * (qmax.max() - qmax.min())

@@ -43,10 +43,22 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from scipy.linalg import expm
+
+from .. import sfepy_setup  # noqa: F401  (before sfepy: without its JAX terms where JAX is absent)
+
+# isort: split
+from sfepy.base.base import Struct, output
+from sfepy.discrete import Equation, Equations, FieldVariable, Integral, Material, Problem
+from sfepy.discrete.fem import FEDomain, Field, Mesh
+from sfepy.mechanics.matcoefs import stiffness_from_youngpoisson
+from sfepy.solvers.ls import ScipyDirect
+from sfepy.solvers.nls import Newton
+from sfepy.solvers.ts_solvers import GeneralizedAlphaTS
+from sfepy.terms import Term
 
 from .. import sparse_solve
 from ..sensor.materials import IsotropicMaterial, PiezoMaterial
-from ..sfepy_setup import defer_serendipity_bases
 from .housing_mesh import GROUP_HOUSING, GROUP_RING, HousingMesh, nested_dissection_order
 
 # ---------------------------------------------------------------------------
@@ -182,14 +194,7 @@ def assemble_matrices(mesh: HousingMesh, ring: IsotropicMaterial, housing: Isotr
     K, M : scipy.sparse.csr_matrix (3n, 3n)
         [N/m] and [kg]; DOF 3 i + c is component c (x, y, z) of node i.
     """
-    from sfepy.base.base import output
-    from sfepy.discrete import Equation, Equations, FieldVariable, Integral, Material, Problem
-    from sfepy.discrete.fem import FEDomain, Field, Mesh
-    from sfepy.mechanics.matcoefs import stiffness_from_youngpoisson
-    from sfepy.terms import Term
-
     output.set_output(quiet=True)
-    defer_serendipity_bases()  # SymPy's import not paid for an element never used (piezobearing.sfepy_setup)
     sf_mesh = Mesh.from_data(
         "housing",
         mesh.coors,
@@ -509,8 +514,6 @@ def _ramp_recurrence(omega: np.ndarray, zeta: np.ndarray, h: float):
 
     Returns (A (n,2,2), B (n,2,2)) with x_{k+1} = A x_k + B (f_k, f_{k+1}), x = (q, q').
     """
-    from scipy.linalg import expm
-
     a_mat = np.zeros((len(omega), 2, 2))
     b_mat = np.zeros((len(omega), 2, 2))
     for i, (w, z) in enumerate(zip(omega, zeta, strict=True)):
@@ -854,11 +857,6 @@ def sensor_force_direct(
     -------
     dict with ``force_N`` and ``seconds``.
     """
-    from sfepy.base.base import Struct, output
-    from sfepy.solvers.ls import ScipyDirect
-    from sfepy.solvers.nls import Newton
-    from sfepy.solvers.ts_solvers import GeneralizedAlphaTS
-
     output.set_output(quiet=True)
     nt = wy.shape[0]
     nf = model.n_dofs

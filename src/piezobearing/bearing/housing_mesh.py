@@ -40,6 +40,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
 
 #: Cell groups (material ids).
 GROUP_RING, GROUP_HOUSING = 1, 2
@@ -644,7 +645,6 @@ def nested_dissection_order(m: HousingMesh, leaf: int = 64) -> np.ndarray:
     n = m.n_nodes
     i = np.repeat(m.conn, 8, axis=1).ravel()
     j = np.tile(m.conn, (1, 8)).ravel()
-    import scipy.sparse as sp
 
     adj = sp.csr_matrix((np.ones(len(i), np.int8), (i, j)), shape=(n, n))
     adj.data[:] = 1

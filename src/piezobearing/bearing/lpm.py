@@ -25,8 +25,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import brentq
 
 from .kinematics import Kinematics, RollingBearing
+from .lpm_kernel import newmark_lpm
 
 #: The defect types of ``bearing.defects``.
 DEFECT_TYPES = ("outer_race", "inner_race", "rolling_element")
@@ -636,8 +638,6 @@ def harris_discrete_loads(
     delta_r_m : float
         Ring shift along the load [m].
     """
-    from scipy.optimize import brentq
-
     cos = np.cos(psi_rad)
 
     def residual(dr):
@@ -795,8 +795,6 @@ def simulate_lpm(
     up0 = (fext[0, :2] + fext[0, 2:]) / p.pedestal_stiffness_N_per_m
     u = np.r_[up0 + e0, up0]
     if method == "compiled":
-        from .lpm_kernel import newmark_lpm
-
         us, q_out, n_iter, failed = newmark_lpm(
             np.ascontiguousarray(sn), np.ascontiguousarray(cn), gap + drop, m, c, k, fext, u, step_s, kc, tol_m, 50
         )

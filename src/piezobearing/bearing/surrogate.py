@@ -38,6 +38,7 @@ from typing import Callable, NamedTuple
 import numpy as np
 
 from .lpm import BearingGeometry, chord_drop_m, contact_law, kinematic_frequencies, line_contact_stiffness
+from .surrogate_kernel import newton_rows
 
 #: Points of the cage-phase table over one roller pitch.
 TABLE_POINTS = 4096
@@ -299,8 +300,6 @@ def _soft_step(a, b, d, fy, fz, e, si, ci, drop, gap_m, k_contact, radial_load_N
 def _compiled(s, c, drop, e, reach, radial_load_N, gap_m, k_contact, tol_N, return_offset):
     """:func:`quasi_static_loads` by :func:`.surrogate_kernel.newton_rows` (one compiled signature: contiguous,
     writable float arrays)."""
-    from .surrogate_kernel import newton_rows
-
     def arr(x):
         x = np.ascontiguousarray(x, dtype=float)
         return x if x.flags.writeable else x.copy()

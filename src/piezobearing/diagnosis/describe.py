@@ -27,6 +27,7 @@ read where the verdict is ``unexplained``.
 from __future__ import annotations
 
 import numpy as np
+from scipy.stats import spearmanr
 
 from .noise import runs
 from .record import Segments
@@ -81,8 +82,6 @@ def stuck_runs(x: np.ndarray, min_run: int = MIN_STUCK, time_s: np.ndarray | Non
 
 
 def _rank(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
-    from scipy.stats import spearmanr
-
     if x.size < 5 or np.ptp(x) == 0 or np.ptp(y) == 0:
         return float("nan"), 1.0
     r, p = spearmanr(x, y)

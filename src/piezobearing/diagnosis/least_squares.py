@@ -15,6 +15,9 @@ from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
 import numpy as np
+from scipy.optimize import least_squares
+from scipy.optimize._numdiff import approx_derivative
+from scipy.stats import t as student_t
 
 from .params import Param
 
@@ -112,10 +115,6 @@ def fit(
         r = np.asarray(residual_fn(unpack(np.array([]))), dtype=float)
         return FitResult(fixed, {}, {}, {}, r, r.size if n_data is None else n_data, 0, float(r @ r))
 
-    # here, not at the top: scipy.optimize and scipy.stats cost about 1 s of every workflow job's start
-    from scipy.optimize import least_squares
-    from scipy.stats import t as student_t
-
     u0 = np.array([p.to_internal(p.value) for p in free])
     lo = np.array([p.to_internal(p.lower) if np.isfinite(p.lower) else -np.inf for p in free])
     hi = np.array([p.to_internal(p.upper) if np.isfinite(p.upper) else np.inf for p in free])
@@ -159,7 +158,6 @@ def _fun_and_jacobian(residual_fn, free: list[Param], unpack, lo: np.ndarray, hi
     stays where it is for that step). The start point must be feasible.
     """
     columns = getattr(residual_fn, "linear_columns", None)
-    from scipy.optimize._numdiff import approx_derivative
 
     last: list = [None, None]  # the latest point evaluated and its residual: scipy asks the Jacobian there
     size: list = [None]

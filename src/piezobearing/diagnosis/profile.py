@@ -33,6 +33,7 @@ from dataclasses import dataclass, field, replace
 from typing import Callable, Sequence
 
 import numpy as np
+from scipy.stats import t as student_t
 
 from .least_squares import FitResult, InfeasibleError, fit
 from .params import Param
@@ -89,8 +90,6 @@ class _Profile:
     """The cost of a fitted problem as a function of one parameter (internal coordinate u)."""
 
     def __init__(self, residual_fn, params, result, name, level, max_nfev, ftol):
-        from scipy.stats import t as student_t
-
         self.fn, self.result, self.max_nfev, self.ftol = residual_fn, result, max_nfev, ftol
         self.free = [p for p in params if p.vary]
         self.fixed = [p for p in params if not p.vary]
@@ -207,8 +206,6 @@ def profile_interval(
     trial ends. An end that reaches the parameter's bound before chi2 has
     risen by D is reported as the bound (``at_bound``).
     """
-    from scipy.stats import t as student_t
-
     pr = _Profile(residual_fn, params, result, name, level, max_nfev, ftol)
     u0, w, jac = _wald(result, pr.p)
     w = w if np.isfinite(w) and w > 0 else max(abs(u0) * 1e-3, 1e-6)
@@ -275,8 +272,6 @@ def honest_intervals(
     budget)"``), so the cost stays bounded for a model of many parameters
     whose every evaluation runs a long forward model.
     """
-    from scipy.stats import t as student_t
-
     budget = _Budget(residual_fn, max_evaluations)
     residual_fn = budget
     free = [p for p in params if p.vary]

@@ -23,13 +23,15 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.signal import correlate
+from scipy.stats import chi2 as chi2_dist
+from scipy.stats import norm
 
 from .record import Segments
 from .settings import DiagnosticsSettings
 
-#: The 99% two-sided band of a correlation, times 1/sqrt(n): SciPy's ``norm.isf(0.005)`` as a literal (the same
-#: float, test), so that importing this module (the workflow's Snakefile does, through the report) loads no SciPy.
-Z99 = 2.575829303548901
+#: The 99% two-sided band of a correlation, times 1/sqrt(n).
+Z99 = float(norm.isf(0.005))
 
 
 def _flagged_groups(flags: np.ndarray, gap: int = 1) -> list[tuple[int, int]]:
@@ -181,10 +183,6 @@ def residual_tests(
     the share of its window's energy on measured samples, and each time window is judged on its
     measured samples alone (a window with none is not judged: ratio NaN).
     """
-    from scipy.signal import correlate
-    from scipy.stats import chi2 as chi2_dist
-    from scipy.stats import norm
-
     keep = None if filled is None or not np.any(filled) else ~np.asarray(filled, dtype=bool)
     e = np.asarray(whitened, dtype=float)
     if keep is not None:
@@ -239,9 +237,6 @@ def _input_correlation(
     """Lags [s], normalised cross-correlation of the residual with the input at lags -m..m, the
     Bonferroni threshold of one lag and the family's p-value (no input: empty lags, p = 1); ``keep``
     marks the measured samples (the others are zero in ``ec`` and left out of the input's too)."""
-    from scipy.signal import correlate
-    from scipy.stats import norm
-
     n_all = ec.size
     n = n_all if keep is None else int(np.count_nonzero(keep))
     xlags = np.arange(-m, m + 1) * dt_s
@@ -264,8 +259,6 @@ def _spectrum_test(
     """Frequencies [Hz], averaged periodogram of the whitened residual (its ratio to the floor), number
     of segments, threshold ratio and the flags of the bins above it (``keep``: measured samples; each
     segment's periodogram divided by the share of the window's energy on them)."""
-    from scipy.stats import chi2 as chi2_dist
-
     n = ec.size
     seg = int(min(round(segment_s / dt_s), n))
     k = max(n // seg, 1)
@@ -301,8 +294,6 @@ def _window_test(
     flagged groups of windows (named by the segment holding their middle), largest first. With
     ``keep`` (measured samples) a window's mean square and threshold are those of its measured
     samples; a window without any has ratio NaN and is not judged."""
-    from scipy.stats import chi2 as chi2_dist
-
     n = e.size
     lw = max(int(round(window_s / dt_s)), 8)
     nw = n // lw

@@ -10,16 +10,12 @@ correlation with the input, and time windows (with the segment they fall in).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
+from .fit import ModelFit
 from .least_squares import nrmse
 from .record import Segments
 from .residual_tests import ResidualTests
-
-if TYPE_CHECKING:  # an annotation only: the reports (and the diagnosis notebooks) need no SciPy (issue 14)
-    from .fit import ModelFit
 
 
 def peak_where(pk: dict) -> str:

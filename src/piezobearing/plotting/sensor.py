@@ -2,17 +2,13 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
+import pandas as pd
 from matplotlib import cm, colors
 from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from . import plt
-
-if TYPE_CHECKING:  # an annotation only: Fig. 7's notebook reads no table and needs no pandas (issue 14)
-    import pandas as pd
 
 #: Vertex indices of the six faces of a VTK hexahedron, outward.
 _HEX_FACES = np.array([[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]])

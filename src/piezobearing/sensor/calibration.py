@@ -18,6 +18,8 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy.signal import find_peaks, lfilter
+from scipy.stats import t as student_t
 
 from ..diagnosis.least_squares import FitResult, fit
 from ..diagnosis.params import Param
@@ -144,8 +146,6 @@ def rc_voltage(force_N: np.ndarray, dt_s: float, gain_V_per_N: float, tau_s: flo
         exponentially weighted mean over one period, and that error decays as
         exp(-t / tau).
     """
-    from scipy.signal import lfilter  # here, not at the top: scipy.signal costs 0.6 s of every job's start
-
     f = np.asarray(force_N, dtype=float)
     a = np.exp(-dt_s / tau_s)
     b = gain_V_per_N * (tau_s / dt_s) * (-np.expm1(-dt_s / tau_s))
@@ -252,8 +252,6 @@ def detect_impulses(
     from the midpoint after the previous peak to the midpoint before the next,
     and its voltage peak is the voltage maximum in that window.
     """
-    from scipy.signal import find_peaks  # here, not at the top: scipy.signal costs 0.6 s of every job's start
-
     f = np.asarray(force_N, dtype=float)
     v = np.asarray(voltage_V, dtype=float)
     span = float(np.ptp(f))
@@ -298,8 +296,6 @@ def sensitivity_summary(impulses: list[Impulse], time_s: np.ndarray) -> dict:
 
     The interval is the Student-t interval of the mean.
     """
-    from scipy.stats import t as student_t
-
     s = np.array([imp.sensitivity_V_per_N for imp in impulses])
     n = len(s)
     mean = float(s.mean())

@@ -23,10 +23,11 @@ study is chosen by a convergence check (README, "Design your own sensor").
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..signals import daq, detection
 from . import fem
 from .mesh import StackMesh
 
@@ -131,8 +132,6 @@ def design_figures(mesh: StackMesh, materials: fem.StackMaterials, circuit: fem.
 
 def _detect(v: np.ndarray, dt_s: float, f0_Hz: float, noise, shapes: np.ndarray, seeds: list, es, ins) -> dict:
     """Median indicator, detection rate and clipping of record ``v`` under ``noise`` over the noise shapes."""
-    from ..signals import daq, detection
-
     ind, det, clip, thr = [], [], [], []
     for shape, rng_seed in zip(shapes, seeds, strict=True):
         acq = daq.add_noise(v, dt_s, noise, np.random.default_rng(rng_seed), shape=shape)
@@ -158,8 +157,6 @@ def _noise_limit(v: np.ndarray, dt_s: float, f0_Hz: float, noise, shapes, seeds,
                  required_rate: float) -> float:
     """Largest input noise density [V/sqrt(Hz)] at which ``v`` is detected in ``required_rate`` of the
     replicates: bisection on a log scale over 1 nV .. 1 kV/sqrt(Hz) (NaN if not even at 1 nV)."""
-    from dataclasses import replace
-
     def detected(log_density):
         n = replace(noise, noise_density_V_per_sqrtHz=10.0**log_density)
         return _detect(v, dt_s, f0_Hz, n, shapes, seeds, es, ins)["detection_rate"] >= required_rate
@@ -202,10 +199,6 @@ def detection_at_noise(voltages: dict, dt_s: float, f0_Hz: float, noise, n_seeds
     interference): comparable over every design, it scales with the gain exactly.
     ``range_needed_V`` is the noiseless records' peak |v|: the ADC range the design needs.
     """
-    from dataclasses import replace
-
-    from ..signals import detection
-
     out = {}
     draws = {}
     for case, v in voltages.items():

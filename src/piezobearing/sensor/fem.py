@@ -68,11 +68,21 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from scipy.linalg import eigh
+from scipy.optimize import brentq, minimize_scalar
+from scipy.spatial import cKDTree
+
+from piezobearing import sfepy_setup  # noqa: F401  (before sfepy: without its JAX terms where JAX is absent)
+
+# isort: split
+from sfepy.base.base import output
+from sfepy.discrete import Equation, Equations, FieldVariable, Integral, Material, Problem
+from sfepy.discrete.fem import FEDomain, Field, Mesh
+from sfepy.terms import Term
 
 from piezobearing import sparse_solve
 from piezobearing.sensor.materials import IsotropicMaterial, StressChargeForm
 from piezobearing.sensor.mesh import GROUP_ADHESIVE, GROUP_BOTTOM_DISK, GROUP_PZT, GROUP_TOP_DISK, StackMesh
-from piezobearing.sfepy_setup import defer_serendipity_bases
 
 log = logging.getLogger(__name__)
 
@@ -130,8 +140,6 @@ class Assembled:
 
 
 def _sfepy_quiet():
-    from sfepy.base.base import output
-
     output.set_output(quiet=True)
 
 
@@ -154,8 +162,6 @@ def face_load(mesh: StackMesh, u_coors: np.ndarray, order: int, face: str) -> np
     integrand); face nodes are found by their coordinates among ``u_coors``.
     Returns a vector over all displacement DOFs (node-major, z components set).
     """
-    from scipy.spatial import cKDTree
-
     z = mesh.coors[:, 2]
     zf = z.min() if face == "bottom" else z.max()
     local = [0, 1, 2, 3] if face == "bottom" else [4, 5, 6, 7]
@@ -203,12 +209,7 @@ def assemble(mesh: StackMesh, mat: StackMaterials, order: int = 2, load_face: st
         Face carrying the unit force (uniform traction), directed into the
         body: +z on the bottom face, -z on the top face.
     """
-    from sfepy.discrete import Equation, Equations, FieldVariable, Integral, Material, Problem
-    from sfepy.discrete.fem import FEDomain, Field, Mesh
-    from sfepy.terms import Term
-
     _sfepy_quiet()
-    defer_serendipity_bases()  # SymPy's import not paid for an element never used (piezobearing.sfepy_setup)
     smesh = Mesh.from_data(
         "stack", mesh.coors, None, [mesh.cells.astype(np.int32)], [mesh.groups.astype(np.int32)], ["3_8"]
     )
@@ -717,8 +718,6 @@ def reduced_model(rs: ReducedSystem, short_modes: Modes, damping_ratio: float = 
     kr = 0.5 * (t.T @ kt + (t.T @ kt).T)
     mr = t.T @ (rs.M @ t)
     mr = 0.5 * (mr + mr.T)
-    from scipy.linalg import eigh
-
     lam, y = eigh(kr, mr)
     psi = t @ y
     return ReducedModel(
@@ -859,8 +858,6 @@ def loaded_resonance_Hz(
     model: ReducedModel, circuit: MeasuringCircuit, f_lo_Hz: float, f_hi_Hz: float
 ) -> float:
     """Frequency of the largest |V/F| in [f_lo, f_hi]: the first axial resonance with the circuit attached."""
-    from scipy.optimize import minimize_scalar
-
     grid = np.linspace(f_lo_Hz, f_hi_Hz, 2001)
     h = np.abs(model.voltage_per_force(grid, circuit))
     k = int(np.argmax(h))
@@ -883,8 +880,6 @@ def band_edge_Hz(
     f_peak_Hz: float,
 ) -> float:
     """Frequency in (f_lo, f_peak) where |V/F| first reaches ``ratio`` times the reference (root-found)."""
-    from scipy.optimize import brentq
-
     def g(f):
         return abs(model.voltage_per_force(f, circuit)[0]) / reference_V_per_N - ratio
 

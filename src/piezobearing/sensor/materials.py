@@ -15,10 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-
-#: Vacuum permittivity [F/m], CODATA 2022 (= scipy.constants.epsilon_0, checked by tests/test_materials.py);
-#: a literal because importing scipy.constants costs 0.13 s of every workflow job's start (issue 14).
-epsilon_0 = 8.8541878188e-12
+from scipy.constants import epsilon_0  # vacuum permittivity [F/m], CODATA
 
 #: Permutation that takes a datasheet-ordered Voigt index to sfepy's order.
 #: sfepy position k holds datasheet component ``_DATASHEET_TO_SFEPY[k]``.

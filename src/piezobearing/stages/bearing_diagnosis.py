@@ -16,10 +16,14 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
+from ..bearing import transient as bearing_transient
+from ..bearing.housing_mesh import build_housing_mesh
 from ..bearing.surrogate import InfluenceLine
 from ..diagnosis import engine
 from ..diagnosis.bearing.subject import SUBJECT, synthesise
 from ..io import ResultFileError, read_harmonic, write_bearing_record, write_json
+from ..plotting import save, use_style
+from ..plotting.bearing_diagnosis import all_figures
 
 #: Config sections a bearing diagnosis depends on (copied into diagnosis.json).
 CONFIG_KEYS = ("sensor", "bearing", "housing", "bearing_diagnosis", "diagnostics")
@@ -39,11 +43,8 @@ def read_influence(path: str | Path) -> InfluenceLine:
 
 def influence_from_config(config: dict) -> InfluenceLine:
     """Solve the config's healthy housing once for its influence line (mesh, assembly, one solve)."""
-    from ..bearing import transient as st
-    from ..bearing.housing_mesh import build_housing_mesh
-
-    mesh = build_housing_mesh(st.housing_geometry(config), False, config["housing"]["mesh_level"])
-    _, _, radial = st.make_model(mesh, config).influence_line()
+    mesh = build_housing_mesh(bearing_transient.housing_geometry(config), False, config["housing"]["mesh_level"])
+    _, _, radial = bearing_transient.make_model(mesh, config).influence_line()
     return InfluenceLine(mesh.raceway_psi, radial)
 
 
@@ -89,9 +90,6 @@ def run(
 
 
 def write_figures(arrays: dict, diag: dict, fig_dir: str | Path) -> dict[str, str]:
-    from ..plotting import save, use_style
-    from ..plotting.bearing_diagnosis import all_figures
-
     use_style()
     paths = {}
     for name, fig in all_figures(arrays, diag).items():

@@ -4,9 +4,15 @@ it returns."""
 
 from __future__ import annotations
 
+import hashlib
+import json
+from pathlib import Path
+
+from .. import io
+from ..diagnosis.calibration import record
 from ..diagnosis.calibration.record import read_record
-from ..io import Measurement, read_json, write_csv, write_json, write_measurement
-from ..sensor import calibration as cal
+from ..io import Measurement, check_readable, read_json, write_csv, write_json, write_measurement
+from ..sensor import calibration as sensor_calibration
 from ..sensor import outputs
 from ..sensor.outputs import nominal_circuit  # noqa: F401 (the stages' name for it: tests, diagnostics)
 
@@ -16,7 +22,7 @@ def synthesize_calibration(config: dict, out_csv: str) -> None:
     write_measurement(outputs.synthesize_calibration(config), out_csv)
 
 
-def load_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]]:
+def load_record(path: str, config: dict) -> tuple[Measurement, list[sensor_calibration.Impulse]]:
     """Read and check a calibration record and detect its impulses (the calibration subject's reader,
     :func:`piezobearing.diagnosis.calibration.record.read_record`)."""
     return read_record(path, config)
@@ -24,19 +30,11 @@ def load_record(path: str, config: dict) -> tuple[Measurement, list[cal.Impulse]
 
 def _checks_digest(path: str, config: dict) -> str:
     """What a record's check depends on: its content, the settings the checks read, the checking code."""
-    import hashlib
-    import json
-    from pathlib import Path
-
-    from .. import io
-    from ..diagnosis.calibration import record
-    from ..sensor import calibration as sensor_cal
-
     h = hashlib.sha256(io.file_digest(path).encode())
     h.update(
         json.dumps({k: config[k] for k in ("calibration", "sensor")}, sort_keys=True, default=str).encode()
     )
-    for mod in (io, record, sensor_cal):
+    for mod in (io, record, sensor_calibration):
         h.update(Path(mod.__file__).read_bytes())
     h.update(Path(__file__).read_bytes())
     return h.hexdigest()
@@ -51,11 +49,6 @@ def check_record_once(path: str, config: dict, cache_dir: str) -> dict:
     and the checking code, so an unchanged 200 MB record costs one hash per
     start, not a parse. Failures are not cached. Returns the summary.
     """
-    import json
-    from pathlib import Path
-
-    from ..io import check_readable
-
     check_readable(Path(path), text=False)  # a folder or unreadable file: one line before hashing
     key = _checks_digest(path, config)
     memo = Path(cache_dir) / f"{key}.json"

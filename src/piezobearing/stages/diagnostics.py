@@ -21,6 +21,8 @@ import numpy as np
 from ..diagnosis import engine
 from ..diagnosis.calibration.subject import SUBJECT
 from ..io import write_json
+from ..plotting import save, use_style
+from ..plotting.diagnostics import all_figures
 
 #: Config sections a diagnosis depends on (copied into diagnosis.json).
 CONFIG_KEYS = ("sensor", "calibration", "model", "diagnostics")
@@ -50,9 +52,6 @@ def run(
 
 def write_figures(arrays: dict, diag: dict, fig_dir: str | Path) -> dict[str, str]:
     """Draw every figure of the report into ``fig_dir``; returns name -> path."""
-    from ..plotting import save, use_style
-    from ..plotting.diagnostics import all_figures
-
     use_style()
     fig_dir = Path(fig_dir)
     paths = {}

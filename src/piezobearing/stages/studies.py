@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from ..bearing import outputs as bout
+from ..bearing import transient as bearing_transient
 from ..bearing.lpm import BearingGeometry
 from ..bearing.transient import CASES
 from ..diagnosis.calibration.record import check_record
@@ -34,7 +35,14 @@ from ..io import (
     table_series,
     write_json,
 )
+from ..plotting import save, use_style
+from ..plotting.studies import SUMMARY_FIGURES
+from ..sensor import design as sensor_design
+from ..sensor import fem as sensor_fem
 from ..sensor import outputs as cout
+from ..sensor.analysis import SensorFemParams
+from ..sensor.calibration import design_resistance_ohm
+from ..sensor.mesh import stack_mesh
 from ..signals import daq, detection
 from ..signals import outputs as sout
 from ..signals.envelope import EnvelopeSettings
@@ -200,18 +208,12 @@ def sensor_design_case(
        dropped, sampled by the DAQ at ``signals.sample_rate_Hz`` as the noisy rule does (:func:`piezobearing.signals.daq.sample`); the DAQ's absolute noise and ADC
        (:func:`noise_settings`); the envelope indicator over ``signals.study_n_seeds`` replicates.
     """
-    from ..bearing import transient as brs
-    from ..sensor import design as sd
-    from ..sensor import fem
-    from ..sensor.analysis import SensorFemParams
-    from ..sensor.calibration import design_resistance_ohm
-    from ..sensor.mesh import stack_mesh
     s, f = config["sensor"], config["sensor_fem"]
     p = SensorFemParams.from_config(config)
     r_ohm = design_resistance_ohm(s, read_json(resistance)["resistance_ohm"])
-    circuit = fem.MeasuringCircuit(r_ohm, p.cable_capacitance_F)
+    circuit = sensor_fem.MeasuringCircuit(r_ohm, p.cable_capacitance_F)
     mesh = stack_mesh(p.geometry, p.density, f["design_mesh_multiplier"])
-    settings = sd.DesignSettings(
+    settings = sensor_design.DesignSettings(
         order=p.order,
         damping_ratio=p.damping_ratio,
         n_ritz_modes=p.n_ritz_modes,
@@ -219,10 +221,10 @@ def sensor_design_case(
         band_ratio_dB=p.band_ratio_dB,
         linear_tolerance=config["lowfreq"]["deviation_threshold"],
     )
-    figs = sd.design_figures(mesh, p.materials, circuit, settings)
+    figs = sensor_design.design_figures(mesh, p.materials, circuit, settings)
 
     port = read_json(housing)
-    spring = brs.sensor_spring(config)
+    spring = bearing_transient.sensor_spring(config)
     share = bout.design_load_share(config, port, spring)
     kin = read_kinematics(kinematics)
     sg = config["signals"]
@@ -236,7 +238,7 @@ def sensor_design_case(
         # the noisy rule's DAQ: anti-alias filter and sampling at signals.sample_rate_Hz (as is on its clock)
         smp = daq.sample(v, dt, sg["sample_rate_Hz"])
         voltages[case], dt_daq = smp.voltage_V, smp.dt_s
-    det = sd.detection_at_noise(
+    det = sensor_design.detection_at_noise(
         voltages, dt_daq, kin["bpfo_Hz"], noise_settings(config), sg["study_n_seeds"], config["seed"],
         EnvelopeSettings.from_config(sg), detection.IndicatorSettings.from_config(sg),
         sg["study_required_detection_rate"],
@@ -338,9 +340,6 @@ def run_case(
 
 def summarize(study: str, case_jsons: list[str], out_csv: str, out_png: str) -> None:
     """Gather the cases into one table and draw the study's summary figure."""
-    from ..plotting import save, use_style
-    from ..plotting.studies import SUMMARY_FIGURES
-
     rows = []
     for p in case_jsons:
         d = read_json(p)

@@ -122,7 +122,6 @@ def lpm_record(
     tachometer : bool
         Write the shaft speed as ``speed_rpm``.
     """
-    bd = config["bearing_diagnosis"]
     dt = 1.0 / sample_rate_Hz
     t = dt * np.arange(int(round(duration_s * sample_rate_Hz)))
     rig = rig_from_config(config, influence, t, harmonic=harmonic)

@@ -26,7 +26,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.signal import hilbert
+from scipy.stats import chi2 as chi2_dist
+from scipy.stats import norm
 
+from ...bearing.surrogate import cage_phase
+from ..residual_tests import residual_tests
 from ..subject import Judgement
 from . import chain
 
@@ -42,7 +47,6 @@ def fitted_kinematics(values: dict, record) -> dict:
     else:
         speed = rig.tach_Hz * (1 + values.get("speed_deviation_ratio", 0.0))
     slip = values.get("cage_slip_ratio", 0.0)
-    from ...bearing.surrogate import cage_phase
 
     phi = cage_phase(record.time_s, speed, rig.geometry, values.get("start_phase_rad", 0.0), slip)
     f_mean = float(np.mean(speed))
@@ -72,8 +76,6 @@ class PerPassage:
     key: str = "per_passage"
 
     def judge(self, fit, problem, settings) -> Judgement:
-        from scipy.stats import chi2 as chi2_dist
-
         rec = problem.record
         kin = fitted_kinematics(fit.values, rec)
         start, stop, centre = passages(kin["phase_rad"], rec.rig.pitch_rad)
@@ -136,8 +138,6 @@ class SynchronousAverage:
     key: str = "synchronous_average"
 
     def judge(self, fit, problem, settings) -> Judgement:
-        from scipy.stats import norm
-
         rec = problem.record
         kin = fitted_kinematics(fit.values, rec)
         pitch = rec.rig.pitch_rad
@@ -201,8 +201,6 @@ def fault_lines(freqs: dict, f_max: float, n_harm: int = 3) -> list[dict]:
 
 def envelope_spectrum(x: np.ndarray, fs: float, band: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
     """Amplitude spectrum of the Hilbert envelope of x band-passed (ideal, in the DFT) to ``band`` [Hz, V]."""
-    from scipy.signal import hilbert
-
     n = x.size
     spec = np.fft.rfft(x - np.mean(x))
     f = np.fft.rfftfreq(n, 1 / fs)
@@ -294,8 +292,6 @@ class Orders:
     tests_of: object = None
 
     def judge(self, fit, problem, settings) -> Judgement:
-        from ..residual_tests import residual_tests
-
         rec = problem.record
         kin = fitted_kinematics(fit.values, rec)
         t = residual_tests(fit.whitened, rec.input, rec.dt_s, settings, problem.segments, rec.time_s)

@@ -12,6 +12,8 @@ it hides effects in a synthetic record and states the user's answer, the
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from ...bearing.lpm import BearingGeometry
@@ -22,10 +24,14 @@ from ...sensor.response import sensor_model
 from ...signals.detection import noise_std_for_snr
 from ...threads import single_blas_thread
 from ..effect import Catalogue, EffectError, StartContext
+from ..engine import diagnose
+from ..fit import fit_model
 from ..noise import NoiseFloor, robust_diff_std, white_level
 from ..record import Segments
+from ..selection import add_effect, strength
+from ..settings import DiagnosticsSettings
 from ..subject import Problem
-from . import chain
+from . import chain, report
 from .effects import CATALOGUE, FAULT_TYPES
 from .effects.shaft_speed import roller_pass_line_Hz
 from .model import BearingModel, RigRecord
@@ -150,8 +156,6 @@ class BearingSubject:
         return {"fault": fault_answer(diagnosis)}
 
     def report(self, d: dict, figures: dict[str, str]) -> str:
-        from . import report
-
         return report.render(d, figures)
 
     def diagnose(self, obs, config: dict, progress=None):
@@ -166,11 +170,6 @@ class BearingSubject:
         floor is measured again on the final model's residual and the engine
         runs once more; ``noise_floor.method`` says which.
         """
-        from dataclasses import replace
-
-        from ..engine import diagnose
-        from ..settings import DiagnosticsSettings
-
         settings = DiagnosticsSettings.from_config(config.get("diagnostics"))
         # the fits' linear algebra is on matrices of n x (a few) values: a second BLAS thread only waits
         # (each SVD of the trust-region step 70x slower on a loaded 2-core machine, benchmarks/bench_diagnosis_bearing.py)
@@ -218,11 +217,6 @@ def floor_prepass(p: Problem, settings, clipped: np.ndarray | None, progress=Non
     two-pass method, found with four fits instead of a whole run. Where ``p`` is returned unchanged, the
     baseline's fit is put in ``fits["baseline"]`` (the engine's own first fit, the same numbers: not fitted twice).
     """
-    from dataclasses import replace
-
-    from ..fit import fit_model
-    from ..selection import add_effect
-
     v, rec = np.asarray(p.voltage_V, dtype=float), p.record
     note = progress or (lambda _msg: None)
     note("floor pre-pass: baseline")
@@ -378,8 +372,6 @@ def separability(sets: list[dict], ranking: list, correlation: dict) -> list[dic
     parameters that it fitted (near +-1: only a combination is determined).
     An exact set (the gain's) has no evidence to give: no record separates it.
     """
-    from ..selection import strength
-
     first = {c.effect.name: float(c.delta_bic) for c in ranking}
     out = []
     for ns in sets:

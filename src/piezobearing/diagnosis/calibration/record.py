@@ -17,6 +17,7 @@ import numpy as np
 
 from ...io import Measurement, MeasurementError, check_channels, read_measurement
 from ...sensor import calibration as cal
+from ..noise import QUIET_BEFORE_S
 from ..record import Record, Segments
 
 #: A voltage that correlates less than this with the model's prediction from the measured force, for
@@ -55,8 +56,6 @@ def gap_memory_s(quiet_settle_s: float, tau_s: float) -> tuple[float, float]:
     :data:`piezobearing.diagnosis.noise.QUIET_BEFORE_S`, as the floor's quiet mask); after: the circuit
     remembers it for ``quiet_settle_s`` + 5 RC time constants ``tau_s`` (the floor's settling after a press).
     """
-    from ..noise import QUIET_BEFORE_S
-
     return (QUIET_BEFORE_S, quiet_settle_s + 5.0 * tau_s)
 
 

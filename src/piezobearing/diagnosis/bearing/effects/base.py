@@ -15,6 +15,7 @@ import numpy as np
 from ...effect import Effect as EngineEffect
 from ...effect import StartContext
 from .. import chain
+from ..representations import fitted_kinematics
 
 
 class Effect(EngineEffect):
@@ -70,6 +71,4 @@ def fold_peak(x: np.ndarray, coord: np.ndarray, period: float, n_bins: int) -> f
 
 def cage_phase_of(ctx: StartContext) -> np.ndarray:
     """The current fit's cage phase at every sample [rad]."""
-    from ..representations import fitted_kinematics
-
     return fitted_kinematics(ctx.values, ctx.record)["phase_rad"]

@@ -15,13 +15,12 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from ...calibration.effects import mains_pickup
 from .base import Effect
 
 
 def _calib():
     """The calibration subject's mains effect (imported when used: the two catalogues stay independent)."""
-    from ...calibration.effects import mains_pickup
-
     return mains_pickup.EFFECT
 
 

@@ -19,6 +19,8 @@ from __future__ import annotations
 from typing import Any, Callable
 
 import numpy as np
+from scipy import fft as sfft
+from scipy.signal import welch
 
 from ... import effect as engine
 from ...effect import EffectError, StartContext
@@ -38,8 +40,6 @@ def fd_filter(x: np.ndarray, response: Callable[[np.ndarray], np.ndarray], margi
     starts and the held last value after it ends. ``margin`` is the reach
     of the filter in samples.
     """
-    from scipy import fft as sfft
-
     x = np.asarray(x, dtype=float)
     n = x.size
     pad = int(margin) + 64
@@ -60,8 +60,6 @@ def force_band_Hz(record: "ForceRecord", factor: float = 10.0) -> float:
     that must invert a filter of the force channel (``reference_lag``) does so
     only within it.
     """
-    from scipy.signal import welch
-
     if "band" not in record._cache:
         fs = record.sample_rate_Hz
         seg = int(min(record.n, 2 ** np.ceil(np.log2(fs))))

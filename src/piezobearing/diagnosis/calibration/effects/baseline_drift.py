@@ -52,6 +52,8 @@ record's end).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.polynomial import legendre
 
@@ -217,8 +219,6 @@ class BaselineDrift(Effect):
         return out
 
     def summary(self, values):
-        import math
-
         knots = sum(1 for k in values if k.startswith("drift_w"))
         if "drift_kink_s" in values:  # the cubic's and the kink's terms trade off: their sizes are not the drift's
             return (

@@ -28,6 +28,7 @@ Parameter: ``delay_s`` in [-0.1, 0.1] s.
 from __future__ import annotations
 
 import numpy as np
+from scipy.signal import correlate
 
 from ...params import Param
 from .base import Effect, ForceRecord, StartContext, fd_filter
@@ -45,8 +46,6 @@ def best_lag_s(ctx: StartContext) -> float:
 
     Positive: the measured voltage comes later than the model's.
     """
-    from scipy.signal import correlate
-
     m = int(MAX_DELAY_S / ctx.record.dt_s)
     a = ctx.voltage_V - ctx.voltage_V.mean()
     b = ctx.model_V - ctx.model_V.mean()

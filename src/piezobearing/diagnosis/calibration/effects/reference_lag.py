@@ -37,6 +37,7 @@ import numpy as np
 
 from ...params import Param
 from .base import Effect, ForceRecord, StartContext, fd_filter, force_band_Hz
+from .channel_delay import best_lag_s
 
 ORDER = 8
 
@@ -83,8 +84,6 @@ class ReferenceLag(Effect):
 
     def starts(self, ctx: StartContext) -> list[dict[str, float]]:
         """Off, and the lead of the measured voltage over the current model (cross-correlation), if any."""
-        from .channel_delay import best_lag_s
-
         lead = -best_lag_s(ctx)
         on = lead if lead >= 2 * ctx.record.dt_s else 3e-3
         return [{"lag_tau_s": 1e-5}, {"lag_tau_s": float(np.clip(on, 1e-4, 0.05))}]
