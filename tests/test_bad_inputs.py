@@ -55,8 +55,8 @@ _TMP: dict = {}
 @pytest.fixture(scope="session", autouse=True)
 def _temporary_folders(tmp_path_factory):
     """The cases' folder goes under pytest's temporary folder (pytest keeps the last three sessions' and removes
-    older ones), not a folder of its own in /tmp that nobody removes (4 MB a session). Session-scoped: the module's
-    tests stay free to run on either xdist worker."""
+    older ones), not a folder of its own in /tmp that nobody removes (4 MB a test session). Session-scoped: the
+    module's tests stay free to run on either xdist worker."""
     _TMP["factory"] = tmp_path_factory
     yield
     _TMP.clear()
@@ -165,7 +165,7 @@ W = "{w}"  # the cases' folder, filled in when run
 V = ("validate",)
 REC = f"{W}/record.csv"
 CASES = [
-    # the record (point 3, 5, 9 of issue 16 and the earlier checks)
+    # the record: its file, encoding, separators, columns, cells and clock
     Case("record is a folder", (*V, f"{W}/a_folder"), "is a folder, not a file"),
     Case("record cannot be read", (*V, f"{W}/unreadable.csv"), "cannot be read", setup=_unreadable),
     Case("record missing", (*V, f"{W}/nope.csv"), "file not found"),

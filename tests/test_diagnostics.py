@@ -6,7 +6,7 @@ seed 7, R = 50 MOhm, 5 mN force noise, 2 mV voltage noise) with effects injected
 saying why. Each hidden value is a plausible size for the experiment of Sec. III-B, chosen before looking
 at the diagnosis and stated with its reason below; detection must come from the evidence (BIC with the
 measured noise), with the same settings for every effect. The hidden sizes and every assertion are those
-the tests had on the paper's record (issue 14 moved them to the CI record, about a quarter of the CPU): on
+of the paper's record (docs/validation/hide_and_find.md), run on the CI record (about a quarter of the CPU): on
 the CI record each effect is still ranked first and selected, its value within 2.1% (clock drift; the
 others within 0.3%) and inside its interval.
 """
