@@ -14,7 +14,7 @@ script) adds the ratios old / new of the CPU times.
 tests/test_diagnosis_bearing.py does (its values, 0.5 s at 2550 Hz, seed 11,
 the CI mesh's influence line, the first ranking and step), at 30 and 10 dB;
 writes the hidden value, the fitted value with its 95% interval, the rank
-and the NRMSE ladder for the README's table.
+and the NRMSE ladder for docs/validation/bearing_diagnosis.md.
 
 Writes results/benchmarks/diagnosis_bearing.json (and diagnosis_bearing_verified.json).
 ``--coverage N``: the 95% intervals' coverage over N noise seeds (outer groove, clearance; writes

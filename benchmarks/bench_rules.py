@@ -14,7 +14,7 @@
 Writes results/benchmarks/rules_<config>.json with, per rule, the seconds
 (longest job), the benchmark's max RSS and, where measured, the exact peak
 (`peak_rss_mb`). The rules' mem_mb and runtime are set from these with a
-margin (README, "Performance").
+margin (docs/performance.md).
 """
 
 from __future__ import annotations

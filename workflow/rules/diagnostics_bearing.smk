@@ -1,4 +1,4 @@
-# The running bearing held against its model (README, "Hold the model against your running bearing"):
+# The running bearing held against its model (docs/guides/running_bearing.md):
 # the record (bearing.measurement, or a synthetic one with bearing.hidden_effects), the housing's
 # influence line, the diagnosis engine with the bearing subject; report in results/diagnostics_bearing/.
 import sys

@@ -1,7 +1,7 @@
 r"""The fast forward model of the running bearing: quasi-static load distribution times influence line.
 
 Where the housing is quasi-static (its first mode well above the band the
-record holds, see the README), the sensor force is
+record holds, see docs/theory/bearing_housing.md), the sensor force is
 
 .. math::  F_s(t) = \sum_{j=1}^{Z} Q_j(t)\, g(\psi_j(t)),
 
@@ -17,7 +17,7 @@ solved for the shaft offset e by Newton's method, vectorised over all time
 samples at once; d_j is the defect's drop of roller j (0 when healthy). The
 LPM's inertia and damping are left out: its shaft-on-rollers mode (~2 kHz)
 is what this model cannot carry (checked against the full LPM + housing
-chain in ``benchmarks/bench_surrogate.py``, numbers in the README).
+chain in ``benchmarks/bench_surrogate.py``, numbers in docs/theory/bearing_housing.md).
 
 Healthy, and with an outer-race defect (stationary, like the sensor), the
 whole configuration repeats every roller pitch of cage angle, so F_s is a
@@ -173,7 +173,7 @@ def quasi_static_loads(
         sin psi and -cos psi when the caller holds them (a table's fixed grid).
     method : {"compiled", "numpy"}
         ``compiled``: each row's Newton loop in :mod:`.surrogate_kernel` (numba, the same steps; loads within
-        the tolerance, README "The running bearing's equilibrium, compiled"); ``numpy``: vectorised over the
+        the tolerance, benchmarks/bench_surrogate.py); ``numpy``: vectorised over the
         rows (the reference, kept for the benchmark and as the check of the kernel).
     """
     if method not in ("compiled", "numpy"):

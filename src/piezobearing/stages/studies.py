@@ -202,7 +202,7 @@ def sensor_design_case(
        (:func:`piezobearing.bearing.outputs.design_load_share`).
     3. The workflow's sensor force records (``force_healthy``/``force_faulty``, made with the configured
        design) scaled by the ratio of this design's load share to the configured one: exact for the
-       quasi-static force (the dynamic part is below 1e-4 of it, README), approximate for another contact disk.
+       quasi-static force (the dynamic part is below 1e-4 of it, docs/theory/bearing_housing.md), approximate for another contact disk.
     4. Voltage through this design's RC circuit (FEM d33_eff / C and tau, exact for piecewise-linear
        force, started in its periodic steady state for the force's period), the first ``signals.skip_s``
        dropped, sampled by the DAQ at ``signals.sample_rate_Hz`` as the noisy rule does (:func:`piezobearing.signals.daq.sample`); the DAQ's absolute noise and ADC

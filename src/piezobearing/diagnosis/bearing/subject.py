@@ -194,7 +194,7 @@ def quiet_level(residual_V: np.ndarray, clipped: np.ndarray | None = None) -> fl
     events). A fault's dips and bursts fill every bin of the spectrum but few samples: at 2550 Hz and
     30 dB this gives 0.28 x the record's spectral floor for the inner-race and the rolling-element
     records of the tests, 0.95 for the healthy one and 0.90-5.3 for every other catalogue effect
-    (measured, README).
+    (measured).
     """
     r = np.asarray(residual_V, dtype=float)
     return robust_diff_std(r if clipped is None else r[~clipped])
