@@ -33,6 +33,10 @@ otherwise). Spacing is graded towards the sensor and the defect.
     |               |      |s|   ring/defect      |  foot
     |_______________|______|_|____________________|--> y
                          sensor hole (s: sensor)
+
+Size. Over 600 lines as one module: the cross-section, the graded node layout shared by the healthy
+and faulty meshes, the extrusion and the quality and ordering checks are one construction; split, each
+part would import the others' private layout helpers.
 """
 
 from __future__ import annotations

@@ -28,6 +28,10 @@ filter, as the workflow averages the LPM's loads), computed exactly from the
 table's running integral. Defects that move with the shaft or a roller
 (inner race, rolling element) are solved on a fine time grid where they
 touch a roller, the healthy table elsewhere.
+
+Size. Over 600 lines as one module: the equilibrium (Newton's method and its soft-direction step,
+with the compiled kernel's entry), the load tables and the defect geometries are read together when a
+table is wrong; the defect drop functions are candidates to move to a module of their own.
 """
 
 from __future__ import annotations
