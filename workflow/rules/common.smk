@@ -64,7 +64,11 @@ def bearing_record():
 
 def sensor_harmonic():
     """The sensor FEM's response where signals.sensor_fem_correction (the one sensor model's correction), else none."""
-    return [f"{RESULTS}/sensor/harmonic.csv"] if config["signals"]["sensor_fem_correction"] else []
+    return (
+        [f"{RESULTS}/sensor/harmonic.csv"]
+        if config["signals"]["sensor_fem_correction"]
+        else []
+    )
 
 
 def stage_params(rule, entry):

@@ -164,6 +164,6 @@ for _study in STUDIES:
     rule:
         name:
             f"study_{_study}"
-        localrule: True
         input:
             f"{RESULTS}/studies/{_study}/summary.png",
+        localrule: True
