@@ -132,10 +132,10 @@ def baseline_rows(fs: float, rng) -> tuple:
         out[f"from_record_cpu_s_{tag}"] = new_b
         out[f"old_from_record_cpu_s_{tag}"] = old_b
         out[f"from_record_old_over_new_{tag}"] = old_b / new_b
-        out[f"indicators_{tag}"] = {t: new.per_type[t]["indicator"] for t in new.per_type}
+        out[f"indicators_{tag}"] = {t: new.families[t].statistic for t in new.families}
         out[f"indicators_max_rel_diff_{tag}"] = max(
-            abs(new.per_type[t]["indicator"] - old.per_type[t]["indicator"]) / max(abs(old.per_type[t]["indicator"]), 1.0)
-            for t in new.per_type)
+            abs(new.families[t].statistic - old.families[t].statistic) / max(abs(old.families[t].statistic), 1.0)
+            for t in new.families)
     return out, x, base
 
 

@@ -55,7 +55,7 @@ SKIP = {"calibration.measurement", "synthesis.hidden_effects"}
 #: String choices: another valid value.
 OTHER = {"type": "inner_race", "band_rule": "kurtogram", "method": "direct", "sensor_electrical": "short", "resample": "sample",
          "c66_rule": "paper", "material": "pzt5h", "model": "absolute", "window": "rectangular",
-         "classification_types": "rolling_element", "statistic": "envelope"}
+         "classification_types": "rolling_element", "statistic": "envelope", "position": "side"}
 
 
 def _stub(script: Path) -> str:
@@ -152,7 +152,8 @@ def _changed(value, key: str, up: bool = False):
     if isinstance(value, list):
         return [_changed(v, key, up) for v in value]
     if isinstance(value, dict):  # an entry of a list of tables (bearing.defects)
-        return {k: _changed(v, f"{key}.{k}", up) for k, v in value.items()}
+        # an effect's name stays (its params are its own); every other entry changes
+        return {k: v if k == "name" else _changed(v, f"{key}.{k}", up) for k, v in value.items()}
     if isinstance(value, str):
         return OTHER[key.rsplit(".", 1)[-1]]
     raise AssertionError(f"no change rule for {key} = {value!r}")

@@ -326,8 +326,16 @@ def _source_text(path: Path) -> str:
 def _module_imports(f: Path) -> tuple[Path, ...]:
     """The package files module file ``f`` imports directly, parsed once per process (every rule's entry
     reaches the same modules: parsing them once per entry was most of a dry run's time)."""
+    if f == _FACE:
+        return ()
     names = _imports(f.read_text(), _module_name(f), f.name == "__init__.py")
     return tuple(p for p in map(_module_file, sorted(names)) if p is not None)
+
+
+#: The package's face (``piezobearing/__init__.py``): it re-exports the public API for users, and every import of
+#: a module of the package runs it. A stage runs the modules it imports by name, so the face is hashed but its own
+#: imports are not followed; else a change to any module would rerun every rule.
+_FACE = PACKAGE_DIR / "__init__.py"
 
 
 @lru_cache(maxsize=None)

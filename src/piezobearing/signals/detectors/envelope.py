@@ -58,6 +58,9 @@ MIN_MAINS_HARMONICS = 5
 #: Quadrature nodes over the floor's Gamma distribution, and grid points of the null densities.
 _N_QUAD = 32
 _N_GRID = 2**13
+#: The smallest false-alarm probability a family's null distribution reaches, and its grid's growths at most.
+NULL_REACH = 1e-7
+_MAX_GROWTH = 3
 
 
 @dataclass(frozen=True)
@@ -197,8 +200,21 @@ def null_distribution(window_bins: tuple[int, ...], floor_shape: float) -> NullD
     floor_shape : float
         M_f, the floors' effective Gamma shape [-].
     """
-    n_lines = len(window_bins)
-    x = np.linspace(0.0, 40.0 + 25.0 * n_lines, _N_GRID)
+    # The grid spans 40 + 25 per line; where the floors are few (a small M_f gives Z/Y a power-law tail)
+    # that span leaves more than NULL_REACH of the probability beyond it, and it grows fourfold at the same
+    # step until it does not, so that every false-alarm probability down to NULL_REACH has its threshold.
+    span, n_grid = 40.0 + 25.0 * len(window_bins), _N_GRID
+    for _ in range(_MAX_GROWTH):
+        null = _null_on_grid(window_bins, floor_shape, span, n_grid)
+        if null.survival[-1] <= NULL_REACH:
+            break
+        span, n_grid = 4.0 * span, 4 * (n_grid - 1) + 1
+    return null
+
+
+def _null_on_grid(window_bins: tuple[int, ...], floor_shape: float, span: float, n_grid: int) -> NullDistribution:
+    """:func:`null_distribution` on the grid of ``n_grid`` points over [0, ``span``]."""
+    x = np.linspace(0.0, span, n_grid)
     h = x[1]
     y, w = _gamma_nodes(round(floor_shape, 3))
     total = None
