@@ -3,6 +3,7 @@ groove that the diagnosis finds; the healthy record is one run beside it (config
 the ladder shows, beside the steps kept, what the best candidates not kept would have left."""
 
 import copy
+from pathlib import Path
 
 import pytest
 from matplotlib.patches import Rectangle
@@ -14,7 +15,7 @@ from piezobearing.plotting.diagnostics import CANDIDATES, ladder
 def test_the_default_record_hides_a_fault_and_the_healthy_one_is_a_run_beside_it(paper_config):
     hidden = paper_config["bearing"]["hidden_effects"]
     assert [h["name"] for h in hidden] == ["outer_race_defect"]
-    healthy = cfg.load(cfg.CONFIG_DIR / "examples" / "healthy_bearing.yaml")
+    healthy = cfg.load(Path(__file__).resolve().parents[1] / "config" / "examples" / "healthy_bearing.yaml")
     assert healthy["bearing"]["hidden_effects"] == [] and cfg.results_folder(healthy) == "results/healthy_bearing"
 
 
