@@ -276,11 +276,11 @@ def test_an_undeclared_key_read_raises_naming_the_rule_and_the_fix():
     [
         # a leaf of the plotting package: only the figure that draws with it
         ("plotting/bearing.py", {"fig03"}),
-        # the envelope analysis and SNR statistics: every rule of the signals stage module, not the bearing's
+        # the envelope analysis and SNR statistics: every rule of the signals stage module, not the bearing's; the sensor comparison (its chain is signals.outputs)
         (
             "signals/analysis.py",
             {"sensor_voltage", "noisy", "envelope", "fault_indicator", "snr_study", "snr_study_figure",
-             "defect_events", "fault_type_voltage"},
+             "defect_events", "fault_type_voltage", "sensor_comparison", "sensor_comparison_figure"},
         ),
     ],
 )
