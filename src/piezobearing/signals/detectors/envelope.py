@@ -174,14 +174,29 @@ class NullDistribution:
 
     x: np.ndarray
     survival: np.ndarray
+    window_bins: tuple[int, ...] = ()
+    floor_shape: float = 0.0
 
     def threshold(self, alpha: float) -> float:
-        """The (1 - alpha) quantile [-]."""
+        """The (1 - alpha) quantile [-]; beyond the grid's reach, :meth:`union_bound`'s threshold."""
         s = self.survival
         if alpha <= s[-1]:
-            raise ValueError(f"false-alarm probability {alpha:g} below the grid's reach {s[-1]:.3g}")
+            if not self.window_bins:
+                raise ValueError(f"false-alarm probability {alpha:g} below the grid's reach {s[-1]:.3g}")
+            return self.union_bound(alpha)
         i = int(np.flatnonzero(s > alpha)[-1])
         return float(self.x[i] + (s[i] - alpha) * (self.x[i + 1] - self.x[i]) / (s[i] - s[i + 1]))
+
+    def union_bound(self, alpha: float) -> float:
+        """A threshold t with P(sum_l R_l > t) <= alpha, conservative, for probabilities the grid cannot reach
+        (few floor bins put the smallest quadrature node's mass beyond any grid) [-].
+
+        P(sum of L ratios > t) <= sum_l P(R_l > t / L), and P(Z/Y > r) <= M E[exp(-r Y)] = M (1 + r / M_f)^-M_f
+        for Z the largest of M Exp(1) bins over a Gamma(M_f, 1/M_f) floor Y; equal to alpha at
+        t = L M_f ((sum_l M_l / alpha)^(1 / M_f) - 1).
+        """
+        n, m_f = len(self.window_bins), self.floor_shape
+        return float(n * m_f * ((sum(self.window_bins) / alpha) ** (1.0 / m_f) - 1.0))
 
     def p_value(self, value: float) -> float:
         """P(statistic > value) under noise alone (0 beyond the grid) [-]."""
@@ -224,7 +239,7 @@ def _null_on_grid(window_bins: tuple[int, ...], floor_shape: float, span: float,
         total = g if total is None else fftconvolve(total, g)[: x.size] * h
     total = np.clip(total, 0.0, None)
     cdf = np.concatenate([[0.0], np.cumsum(0.5 * (total[1:] + total[:-1]) * h)])
-    return NullDistribution(x, np.clip(1.0 - cdf / max(cdf[-1], 1.0), 0.0, 1.0))
+    return NullDistribution(x, np.clip(1.0 - cdf / max(cdf[-1], 1.0), 0.0, 1.0), tuple(window_bins), float(floor_shape))
 
 
 def line_threshold(alpha: float, n_bins: int) -> float:
