@@ -121,7 +121,7 @@ def shared_run(tmp_path_factory, name: str, build: Callable[[Path], None]) -> Pa
     reports its own failure."""
     shared = tmp_path_factory.getbasetemp()
     if os.environ.get("PYTEST_XDIST_WORKER"):
-        shared = shared.parent  # the session's folder, above the worker's own
+        shared = shared.parent  # pytest's base temporary folder, above the worker's own
     work, done = shared / name, shared / f"{name}.done"
     with open(shared / f"{name}.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)

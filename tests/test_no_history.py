@@ -51,8 +51,8 @@ PATTERNS = {
     # 7 to 40 hex digits with at least one letter and one digit, as a word: a commit id
     "a commit id": re.compile(r"(?<![\w./-])(?=[0-9a-f]*[a-f])(?=[0-9a-f]*[0-9])[0-9a-f]{7,40}(?![\w-])"),
     "a date": re.compile(r"\b20\d\d-[01]\d-[0-3]\d\b"),
-    # "at load 14-17", "load ~20", "load average 20-24", "(load 12)", "load 10-15"; not "a radial load of 500 N",
-    # "load 100-2000 N" or "load 7" as a count
+    # a machine's load figure in prose (a number after "load" or "load average", in brackets or after "at"); not a
+    # force ("a radial load of 500 N", "load 100-2000 N") or a count ("load 7")
     "a machine load": re.compile(
         r"\bat (?:a )?load(?: of)? ~?\d+(?:\.\d+)?(?:\s*[-–]\s*\d+)?(?![\d.])(?!\s*(?:k?N\b|N/|%))|\bload ~\d|\bload average\b|\(load ~?\d+(?:[-–]\d+)?\)|, load ~?\d+\)"
         r"|\bload \d+(?:\.\d+)?\s*[-–]\s*\d+(?:\.\d+)?(?![\d.])(?!\s*(?:k?N\b|N/|%|µ|um\b|mm\b|m\b))"

@@ -1,6 +1,6 @@
 """The sensor FEM stages end to end on the CI config (coarse meshes), and their input checks.
 
-The files are those of the test session's CI workflow run (``ci_run``, tests/conftest.py): the stages ran there once,
+The files are those of the suite's one CI workflow run (``ci_run``, tests/conftest.py): the stages ran there once,
 not again here.
 """
 
@@ -43,7 +43,7 @@ class _Results:
 
 @pytest.fixture(scope="module")
 def sensor_run(ci_run):
-    """Mesh, convergence, modal, harmonic and scorecard as the CI workflow ran them (the test session's one run;
+    """Mesh, convergence, modal, harmonic and scorecard as the CI workflow ran them (the suite's one run;
     the harmonic with the fitted R and the low-frequency stage's band edge, 30 Hz on this config)."""
     return _Results(ci_run)
 
