@@ -22,6 +22,11 @@ def measurement(d: dict) -> list[str]:
         f"{d['n_samples']} samples at {d['sample_rate_Hz']:.6g} Hz ({d['duration_s']:.3g} s), "
         f"{d.get('n_passages', 0)} roller passages over the sensor, voltage rms {d['voltage_rms_V']:.4g} V.",
         "",
+    ]
+    sp = d.get("shaft_speed")
+    if sp:
+        out += [f"Nominal shaft speed {sp['rpm']:g} rpm ({sp['source']}).", ""]
+    out += [
         f"Noise floor from the record itself ({fl['method']}): {fl['voltage_noise_V']:.4g} V rms, "
         f"NRMSE {s.pct(base['noise_floor_nrmse'])}. The model has no measured input: a correct model leaves "
         "this white noise alone.",
