@@ -11,13 +11,14 @@ import copy
 import numpy as np
 import pytest
 
+from piezobearing.diagnosis.bearing import report
 from piezobearing.diagnosis.bearing.lpm_records import lpm_record, lpm_sensor_force
 from piezobearing.diagnosis.bearing.subject import SUBJECT
-from piezobearing.io import BearingRecord
+from piezobearing.io import BearingRecord, write_bearing_record
 from piezobearing.sensor.calibration import SensorCircuit
 from piezobearing.signals.detection import noise_std_for_snr
 from piezobearing.signals.outputs import sensor_voltage
-from piezobearing.stages.bearing_diagnosis import influence_from_config
+from piezobearing.stages.bearing_diagnosis import influence_from_config, run
 
 #: name -> hidden catalogue values (the catalogue's examples, the groove 0.9 mm over the sensor as the paper's)
 SUBSET = {
@@ -80,3 +81,29 @@ def test_workflow_voltage_shows_no_gain_effect(setup):
     d = SUBJECT.diagnose((rec, influence), c)[1]
     assert "load_share" not in d["selected"], d["selected"]
     assert d["fault"]["type"] == "outer_race"
+
+
+def test_inner_race_statement_names_its_sidebands_and_the_report_shows_it(setup, tmp_path):
+    """A 0.6 mm inner-race groove on a 0.5 s LPM record: the fault is stated with how its sidebands at
+    BPFI -/+ f_r and its line at BPFI differ from the model's (the LPM's modulation through the load zone is not
+    the surrogate's), and report.md shows that statement and the sensor model (RC x the FEM's correction, and
+    where the correction came from)."""
+    c, influence = setup
+    rec = lpm_record(c, influence, {"inner_defect_width_m": 0.6e-3, "inner_defect_angle_rad": 0.7}, 2550.0, 0.5,
+                     30.0, 26)
+    path = tmp_path / "inner.csv"
+    write_bearing_record(rec, path)
+    d, _ = run(str(path), influence, copy.deepcopy(c))
+    f = d["fault"]
+    assert f["type"] == "inner_race"
+    assert abs(f["params"]["inner_defect_width_m"] / 0.6e-3 - 1) < 0.05
+    assert [s["line"] for s in f["sidebands"]] == ["BPFI", "BPFI-fr", "BPFI+fr"]
+    assert "its sidebands at BPFI ± fr differ from the model's by" in f["statement"]
+    for side in f["sidebands"]:
+        assert f"{side['record_over_model_dB']:+.1f} dB" in f["statement"]
+        assert side["record_above_floor_dB"] > 6.0  # lines of the record, not its noise
+    text = report.render(d, {})
+    assert f"**What it found and what of it remains:** {f['statement']}." in text
+    sensor = text.split("## The sensor model")[1].split("##")[0]
+    assert "times the sensor FEM's correction 0.938" in sensor
+    assert d["sensor_model"]["source"] in sensor and "paper_sensor_fem.csv" in sensor
