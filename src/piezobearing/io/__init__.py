@@ -63,7 +63,7 @@ from .results import (
     write_json,
     write_npz,
 )
-from .vibration import VibrationRecord, read_vibration_record
+from .vibration import VibrationRecord, read_vibration_record, record_rpm
 
 __all__ = [
     "BEARING_COLUMNS",
@@ -109,6 +109,7 @@ __all__ = [
     "read_stack_mesh",
     "read_vibration_record",
     "read_table",
+    "record_rpm",
     "table_series",
     "write_bearing_record",
     "write_csv",

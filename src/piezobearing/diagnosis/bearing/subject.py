@@ -430,12 +430,14 @@ def fault_answer(d) -> dict:
     }
     how.pop("roller_defect_index", None)  # chosen among the starts, not fitted: no interval
     remaining = fault_lines_left(d, kind) if kind != "none" else []
+    sidebands = fault_sidebands(d, kind)
     return {
         "type": kind,
         "params": params,
         "ci95": ci95,
-        "statement": fault_statement(kind, params, ci95, remaining),
+        "statement": fault_statement(kind, params, ci95, remaining, sidebands),
         "lines_left": remaining,
+        "sidebands": sidebands,
         "operating_conditions": cond,
         "operating_conditions_ci95": cond_ci,
         "fitted_conditions": fitted,
@@ -465,6 +467,29 @@ def family_lines(kind: str, kin: dict, harmonics: int = 3) -> list[tuple[str, fl
     return out
 
 
+def _line_spectra(d, kind: str) -> tuple[list[tuple[str, float]], float, np.ndarray, np.ndarray, float]:
+    """The fault's own lines (:func:`family_lines` at the final fit's speeds), the bin width [Hz], the record's
+    and the final model's Hann-windowed amplitude spectra, and the white floor's power in one such bin [V^2]."""
+    values, rig = d.final.values, d.record.rig
+    shaft = float(values.get("shaft_speed_Hz", rig.shaft_speed_Hz) if rig.tach_Hz is None else np.mean(rig.tach_Hz))
+    shaft *= 1.0 + values.get("speed_deviation_ratio", 0.0)
+    lines = family_lines(kind, rig.frequencies(shaft, values.get("cage_slip_ratio", 0.0)))
+    v = np.asarray(d.voltage_V, dtype=float)
+    n = v.size
+    w = np.hanning(n)
+    rec_a = np.abs(np.fft.rfft((v - v.mean()) * w))
+    mod = np.asarray(d.final.model_V, dtype=float)
+    mod_a = np.abs(np.fft.rfft((mod - mod.mean()) * w))
+    floor = d.problem.floor.voltage_noise_V ** 2 * float(np.sum(w**2))
+    return lines, 1.0 / (n * d.record.dt_s), rec_a, mod_a, floor
+
+
+def _peak(a: np.ndarray, f_Hz: float, df_Hz: float) -> float:
+    """The largest of a spectrum's three bins around ``f_Hz``."""
+    k = int(round(f_Hz / df_Hz))
+    return float(a[max(k - 1, 0):k + 2].max())
+
+
 def fault_lines_left(d, kind: str) -> list[dict]:
     """The residual lines the final model leaves at the found fault's own lines (:func:`family_lines`).
 
@@ -472,17 +497,7 @@ def fault_lines_left(d, kind: str) -> list[dict]:
     frequency, its level above the noise floor, and the record's line against the model's, 20 log10 of
     their Hann-windowed amplitude spectra's ratio at the peak (positive: the record's is the stronger) [dB].
     """
-    values, rig = d.final.values, d.record.rig
-    shaft = float(values.get("shaft_speed_Hz", rig.shaft_speed_Hz) if rig.tach_Hz is None else np.mean(rig.tach_Hz))
-    shaft *= 1.0 + values.get("speed_deviation_ratio", 0.0)
-    lines = family_lines(kind, rig.frequencies(shaft, values.get("cage_slip_ratio", 0.0)))
-    v = np.asarray(d.voltage_V, dtype=float)
-    n = v.size
-    df = 1.0 / (n * d.record.dt_s)
-    w = np.hanning(n)
-    rec_a = np.abs(np.fft.rfft((v - v.mean()) * w))
-    mod = np.asarray(d.final.model_V, dtype=float)
-    mod_a = np.abs(np.fft.rfft((mod - mod.mean()) * w))
+    lines, df, rec_a, mod_a, _ = _line_spectra(d, kind)
     out = []
     for u in d.unexplained:
         if u.get("test") != "spectrum" or u.get("kind") != "narrowband":
@@ -491,23 +506,50 @@ def fault_lines_left(d, kind: str) -> list[dict]:
         label, fl = min(lines, key=lambda x: abs(x[1] - f))
         if abs(fl - f) > max(LINE_TOLERANCE * fl, 2 * df):
             continue
-        k = int(round(f / df))
-        sl = slice(max(k - 1, 0), k + 2)
-        diff = 20 * np.log10(rec_a[sl].max() / max(mod_a[sl].max(), 1e-300))
+        diff = 20 * np.log10(_peak(rec_a, f, df) / max(_peak(mod_a, f, df), 1e-300))
         out.append({"line": label, "frequency_Hz": float(f), "excess_dB": float(u["excess_dB"]),
                     "record_over_model_dB": float(diff)})
     return out
 
 
-def fault_statement(kind: str, params: dict, ci95: dict, remaining: list[dict]) -> str:
-    """One line: the fault found with its size and interval, and what of its own lines the model leaves."""
+def fault_sidebands(d, kind: str) -> list[dict]:
+    """A moving defect's first line and its sidebands, record against model: BPFI and BPFI -/+ f_r for the
+    inner race, 2 x BSF and 2 x BSF -/+ FTF for a roller (the modulation through the load zone, where the
+    quasi-static model and a dynamic bearing differ most); empty for the outer race.
+
+    Each: label, frequency [Hz], the record's line over the model's (20 log10 of their Hann-windowed amplitude
+    spectra's ratio at the peak, positive: the record's is the stronger) [dB], and the record's line above the
+    white floor (10 log10 of its power over the floor's in one bin) [dB]: a line near 0 dB above the floor is
+    noise in the record, and its difference from the model's says nothing.
+    """
+    if kind not in ("inner_race", "rolling_element"):
+        return []
+    lines, df, rec_a, mod_a, floor = _line_spectra(d, kind)
+    out = []
+    for label, f in lines[:3]:
+        r, m = _peak(rec_a, f, df), _peak(mod_a, f, df)
+        out.append({"line": label, "frequency_Hz": float(f), "record_over_model_dB": float(20 * np.log10(r / max(m, 1e-300))),
+                    "record_above_floor_dB": float(10 * np.log10(r**2 / floor))})
+    return out
+
+
+def fault_statement(kind: str, params: dict, ci95: dict, remaining: list[dict], sidebands: list[dict] | None = None) -> str:
+    """One line: the fault found with its size and interval, how a moving defect's sidebands differ from the
+    model's (:func:`fault_sidebands`), and what of its own lines the model leaves above the floor."""
     if kind == "none":
         return "no fault"
     wkey = next(k for k in params if k.endswith("width_m"))
     lo, hi = ci95.get(wkey) or (float("nan"), float("nan"))
     text = f"{kind.replace('_', ' ')} {params[wkey] * 1e3:.3g} mm [{lo * 1e3:.3g}, {hi * 1e3:.3g}] (95 %)"
+    if sidebands:
+        carrier, *sides = sidebands
+        name = carrier["line"] + " ± " + sides[0]["line"].split("-")[-1]
+        text += f"; its sidebands at {name} differ from the model's by " + " and ".join(
+            f"{r['record_over_model_dB']:+.1f} dB ({r['line']}, {r['frequency_Hz']:.1f} Hz, "
+            f"{r['record_above_floor_dB']:.1f} dB above the floor)" for r in sides)
+        text += f", the line at {carrier['line']} by {carrier['record_over_model_dB']:+.1f} dB"
     if remaining:
-        text += "; its lines differ from the model's: " + ", ".join(
+        text += ("; left above the floor: " if sidebands else "; its lines differ from the model's: ") + ", ".join(
             f"{r['line']} ({r['frequency_Hz']:.1f} Hz) {r['record_over_model_dB']:+.1f} dB, "
             f"{r['excess_dB']:.1f} dB above the floor" for r in remaining)
     return text
