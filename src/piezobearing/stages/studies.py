@@ -283,7 +283,7 @@ def noise_settings(config: dict):
 
 
 def detector_case(config: dict, outdir: Path, resistance: str, harmonic: str | None = None) -> dict:
-    """The fault_detection case, then the search detector over noise seeds at the configured DAQ.
+    """The fault_detection case, then the configured detector over noise seeds at the configured DAQ.
 
     The fault_detection row (:func:`workflow_chain`; its SNR sweep at the model clock), then the
     fault_classification rule's function (sampling at signals.sample_rate_Hz, the configured noise model,
