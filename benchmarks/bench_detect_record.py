@@ -1,5 +1,5 @@
 """Time of fault detection on a 10 s, 12 kHz record: the envelope detector in-process (CPU) against the
-search detector it replaces with the paper's full-length kurtogram, and the ``piezobearing detect`` command
+search detector it replaces (``benchmarks/baselines/search_detector.py``) with the paper's full-length kurtogram, and the ``piezobearing detect`` command
 (wall, a fresh process: imports, reading the .mat file, detection, report and figure).
 
 The command's wall time depends on the machine's load; its CPU time (user + system of the child) is the
@@ -18,9 +18,9 @@ import time
 from pathlib import Path
 
 import numpy as np
+from baselines import search_detector
 
 from piezobearing.bearing.kinematics import RollingBearing
-from piezobearing.signals import detector as search_detector
 from piezobearing.signals.detectors import envelope as envelope_detector
 from piezobearing.signals.envelope import EnvelopeSettings
 

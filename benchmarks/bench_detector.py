@@ -3,7 +3,7 @@
 A 1 s record at 2550 Hz (the paper) and at 51.2 kHz: white noise plus a
 slipped outer-race impulse train; the band 500-1250 Hz. Times: the paper's
 ``detection.analyse`` (whole periods, one bin per harmonic), the search
-detector ``detector.analyse_record`` (three fault types, windows, computed
+detector ``search_detector.analyse_record`` (``benchmarks/baselines/search_detector.py``) (three fault types, windows, computed
 null distributions) with its null distributions cached (the usual case: one
 record length per run) and cold (first record), and the DAQ's ``sample``
 from 51.2 kHz to 10.24 kHz; the baseline detector ``baseline.detect`` (slip, roller-passage fit,
@@ -28,8 +28,9 @@ import time
 from pathlib import Path
 
 import numpy as np
+from baselines import search_detector
 
-from piezobearing.signals import daq, detection, detector, harmonics, outer_race
+from piezobearing.signals import daq, detection, harmonics, outer_race
 from piezobearing.signals.detectors import baseline
 from piezobearing.signals.envelope import EnvelopeSettings
 from piezobearing.signals.fault_bands import slipped_frequencies
@@ -142,19 +143,19 @@ def baseline_rows(fs: float, rng) -> tuple:
 def main() -> None:
     rng = np.random.default_rng(1)
     env = EnvelopeSettings(band_rule="fixed", band_Hz=(500.0, 1250.0))
-    st = detector.DetectorSettings()
+    st = search_detector.DetectorSettings()
     out = {"cpu_count": os.cpu_count(), "record_s": 1.0}
     for fs in (2550.0, 25600.0, 51200.0):
         n = int(fs)
         t = np.arange(n) / fs
         x = rng.standard_normal(n) + 3.0 * (np.mod(t * 0.985 * KIN["bpfo_Hz"], 1.0) < 2.0 / fs)
-        detector.null_distribution.cache_clear()
-        cold = timed(lambda x=x, fs=fs: detector.analyse_record(x, 1 / fs, KIN, env, st), 1)
+        search_detector.null_distribution.cache_clear()
+        cold = timed(lambda x=x, fs=fs: search_detector.analyse_record(x, 1 / fs, KIN, env, st), 1)
         out[f"{int(fs)}_Hz"] = {
             "exact_bin_s": timed(lambda x=x, fs=fs: detection.analyse(x, 1 / fs, KIN["bpfo_Hz"], env,
                                                                 detection.IndicatorSettings()), 5),
             "search_cold_s": cold,
-            "search_cached_s": timed(lambda x=x, fs=fs: detector.analyse_record(x, 1 / fs, KIN, env, st), 5),
+            "search_cached_s": timed(lambda x=x, fs=fs: search_detector.analyse_record(x, 1 / fs, KIN, env, st), 5),
         }
         out[f"{int(fs)}_Hz"]["search_over_exact"] = (out[f"{int(fs)}_Hz"]["search_cached_s"]
                                                     / out[f"{int(fs)}_Hz"]["exact_bin_s"])

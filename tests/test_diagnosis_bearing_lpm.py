@@ -2,22 +2,26 @@
 
 Hide-and-find on a representative subset of the catalogue (a groove on the outer race, the load, the clearance),
 and the workflow's own voltage (the sensor_voltage rule's function on the LPM's force) diagnosed with the one
-sensor model: no gain effect. The whole catalogue, two effects at once and 25.6 kHz: validation/bearing_diagnosis.py
+sensor model by the standalone command: no gain effect; an inner-race groove stated with its sidebands. The whole catalogue, two effects at once and 25.6 kHz: validation/bearing_diagnosis.py
 (docs/validation/bearing_diagnosis.md). Records of 1 s at 2550 Hz, 30 dB, the CI mesh's influence line.
 """
 
 import copy
+import json
 
 import numpy as np
+import pandas as pd
 import pytest
+import yaml
 
+from piezobearing.cli import main
+from piezobearing.diagnosis.bearing import report
 from piezobearing.diagnosis.bearing.lpm_records import lpm_record, lpm_sensor_force
 from piezobearing.diagnosis.bearing.subject import SUBJECT
-from piezobearing.io import BearingRecord
+from piezobearing.io import write_bearing_record
 from piezobearing.sensor.calibration import SensorCircuit
-from piezobearing.signals.detection import noise_std_for_snr
-from piezobearing.signals.outputs import sensor_voltage
-from piezobearing.stages.bearing_diagnosis import influence_from_config
+from piezobearing.signals.outputs import noisy, sensor_voltage
+from piezobearing.stages.bearing_diagnosis import influence_from_config, run
 
 #: name -> hidden catalogue values (the catalogue's examples, the groove 0.9 mm over the sensor as the paper's)
 SUBSET = {
@@ -58,10 +62,12 @@ def test_lpm_record_hidden_effect_is_found_with_its_value_in_the_interval(setup,
 
 
 @pytest.mark.slow
-def test_workflow_voltage_shows_no_gain_effect(setup):
-    """The workflow's sensor_voltage (RC x the sensor FEM's 0.938) on the LPM's force of the paper's groove:
-    the diagnosis (the same sensor model) selects the groove and, with room for a second effect, no load_share
-    (a diagnosis with the RC model alone reads the FEM's 0.938 as a share)."""
+def test_workflow_voltage_shows_no_gain_effect_in_the_standalone_command(setup, tmp_path):
+    """The workflow's faulty voltage (the sensor_voltage rule's function, RC x the sensor FEM's 0.938, on the
+    LPM's force of the paper's groove; the noisy rule's DAQ and noise) written as a record and diagnosed by
+    ``piezobearing diagnose-bearing``: the command's one sensor model is the workflow's, so it selects the groove
+    and, with room for a second effect, no load_share (a diagnosis with the RC model alone reads the FEM's 0.938
+    as a share)."""
     c, influence = setup
     c = copy.deepcopy(c)
     assert c["signals"]["sensor_fem_correction"]
@@ -71,12 +77,58 @@ def test_workflow_voltage_shows_no_gain_effect(setup):
     circuit = SensorCircuit.from_config(c["sensor"], c["bearing_diagnosis"]["resistance_ohm"])
     table, record = sensor_voltage(t, force, dt, circuit, None, c)
     assert record["fem_correction"]["factor"] == pytest.approx(0.938, abs=1e-3)
-    v = table["voltage_V"].to_numpy()
-    v = v + noise_std_for_snr(v, 30.0) * np.random.default_rng(3).standard_normal(v.size)
-    time = table["time_s"].to_numpy() - table["time_s"].iloc[0]
-    # the workflow's record starts after signals.skip_s: the roller set has turned on
-    rec = BearingRecord(time, v, None, "workflow", (), np.zeros(v.size, dtype=bool))
-    c["diagnostics"]["max_steps"] = 2  # room for a second effect after the groove: no share is to take it
-    d = SUBJECT.diagnose((rec, influence), c)[1]
+    noisy_table, _ = noisy(table["time_s"].to_numpy(), table["voltage_V"].to_numpy(), dt, "faulty", c)
+    path = tmp_path / "noisy_faulty.csv"
+    noisy_table[["time_s", "voltage_V"]].to_csv(path, index=False)
+    inf = tmp_path / "influence.csv"
+    pd.DataFrame({"angle_rad": influence.angle_rad, "sensor_per_radial_load": influence.sensor_per_radial_load}).to_csv(
+        inf, index=False)
+    rig = tmp_path / "rig.yaml"  # the CI mesh's housing is the influence line's; room for a second effect
+    rig.write_text(yaml.safe_dump({"diagnostics": {"max_steps": 2}}))
+    out = tmp_path / "out"
+    assert main(["diagnose-bearing", str(path), "--out", str(out), "--config", str(rig), "--influence", str(inf),
+                 "--quiet"]) == 0
+    d = json.loads((out / "diagnosis.json").read_text())
+    assert d["sensor_model"]["model"] == "rc_times_fem"
+    assert d["sensor_model"]["fem_factor"] == pytest.approx(record["fem_correction"]["factor"], rel=1e-9)
     assert "load_share" not in d["selected"], d["selected"]
     assert d["fault"]["type"] == "outer_race"
+
+
+def test_inner_race_statement_names_its_sidebands_and_the_report_shows_it(setup, tmp_path):
+    """A 0.6 mm inner-race groove on a 0.5 s LPM record: the fault is stated with how its sidebands at
+    BPFI -/+ f_r and its line at BPFI differ from the model's (the LPM's modulation through the load zone is not
+    the surrogate's), and report.md shows that statement and the sensor model (RC x the FEM's correction, and
+    where the correction came from)."""
+    c, influence = setup
+    rec = lpm_record(c, influence, {"inner_defect_width_m": 0.6e-3, "inner_defect_angle_rad": 0.7}, 2550.0, 0.5,
+                     30.0, 26)
+    path = tmp_path / "inner.csv"
+    write_bearing_record(rec, path)
+    d, _ = run(str(path), influence, copy.deepcopy(c))
+    f = d["fault"]
+    assert f["type"] == "inner_race"
+    assert abs(f["params"]["inner_defect_width_m"] / 0.6e-3 - 1) < 0.05
+    assert [s["line"] for s in f["sidebands"]] == ["BPFI", "BPFI-fr", "BPFI+fr"]
+    assert "its sidebands at BPFI ± fr differ from the model's by" in f["statement"]
+    for side in f["sidebands"]:
+        assert f"{side['record_over_model_dB']:+.1f} dB" in f["statement"]
+        assert side["record_above_floor_dB"] > 6.0  # lines of the record, not its noise
+    text = report.render(d, {})
+    assert f"**What it found and what of it remains:** {f['statement']}." in text
+    sensor = text.split("## The sensor model")[1].split("##")[0]
+    assert "times the sensor FEM's correction 0.938" in sensor
+    assert d["sensor_model"]["source"] in sensor and "paper_sensor_fem.csv" in sensor
+
+
+def test_fast_record_is_averaged_to_the_models_rate_and_its_groove_found(setup):
+    """The paper's 0.9 mm groove over the sensor on a 0.5 s LPM record at 25.6 kHz, where the shaft's resonance
+    near 2.5 kHz (beyond the quasi-static model) is in the record: the diagnosis averages it in blocks of 10
+    samples to 2560 Hz (the DAQ model's box filter) and finds the groove."""
+    c, influence = setup
+    rec = lpm_record(c, influence, SUBSET["outer_race_defect"], 25600.0, 0.5, 30.0, 26)
+    d = SUBJECT.diagnose((rec, influence), c)[1]
+    assert d["model_rate"]["block_samples"] == 10 and d["model_rate"]["model_rate_Hz"] == pytest.approx(2560.0)
+    assert d["sample_rate_Hz"] == pytest.approx(2560.0)
+    assert d["selected"] == ["outer_race_defect"], d["selected"]
+    assert abs(d["final"]["params"]["outer_defect_width_m"] / 0.9e-3 - 1) < 0.05

@@ -1,4 +1,4 @@
-"""The DAQ and the search detector in the signal stages, on files of a stand-in bearing."""
+"""The DAQ and the configured detector in the signal stages, on files of a stand-in bearing."""
 
 from __future__ import annotations
 

@@ -5,7 +5,7 @@
     tests, effect ranking, stepwise selection, verdict; writes
     DIR/diagnosis.json, DIR/report.md, DIR/figures/ and DIR/diagnosis.npz.
 
-``piezobearing diagnose-bearing RECORD --out DIR [--config FILE] [--influence CSV]``
+``piezobearing diagnose-bearing RECORD --out DIR [--config FILE] [--influence CSV] [--sensor-response CSV] [--rpm R]``
     Hold the bearing model against a running-bearing record (time_s,
     voltage_V[, speed_rpm]): baseline, bearing views, catalogue ranking,
     stepwise selection, verdict and the fault (type, size, position with
@@ -354,6 +354,11 @@ def _diagnose_bearing(args) -> int:
     except (cfg.ConfigError, OSError) as e:
         return _fail(str(e))
     config["bearing"]["measurement"] = args.record
+    if args.rpm is not None and not args.rpm > 0:
+        return _fail(f"--rpm {args.rpm:g}: give the shaft speed in rpm (> 0)")
+    # the rig file's own speed stands before the record's *RPM variable; the default config's after it
+    rig = cfg.read_yaml(args.config) if args.config is not None else {}
+    rig_speed = "shaft_speed_rpm" in ((rig or {}).get("bearing") or {})
 
     def progress(msg: str) -> None:
         if not args.quiet:
@@ -362,7 +367,8 @@ def _diagnose_bearing(args) -> int:
     try:
         if not args.influence and not args.quiet:
             print("solving the housing's influence line from the config (a few seconds)", file=sys.stderr)
-        d = diagnose_bearing(args.record, args.out, config, args.influence, progress, args.sensor_response)
+        d = diagnose_bearing(args.record, args.out, config, args.influence, progress, args.sensor_response,
+                             args.rpm, rig_speed)
     except (MeasurementError, EffectError, ResultFileError, SignalFileError) as e:
         return _fail(str(e))
     print(f"config: {used}")
@@ -370,8 +376,11 @@ def _diagnose_bearing(args) -> int:
     for w in d["record_warnings"]:
         print(f"warning: {w}")
     base, final, f = d["baseline"], d["final"], d["fault"]
-    sm = d["sensor_model"]
+    sm, sp = d["sensor_model"], d["shaft_speed"]
+    print(f"shaft speed: {sp['rpm']:g} rpm from {sp['source']}, fitted within "
+          f"{100 * config['bearing_diagnosis']['speed_tolerance_ratio']:g} % (or a speed_rpm column's)")
     print(f"sensor model: d33/C x FEM correction {sm['fem_factor']:.4g} ({sm['source']})")
+    print(f"rate: {d['model_rate']['reason']}")
     print(f"baseline NRMSE {100 * base['nrmse']:.2f}% (noise floor {100 * base['noise_floor_nrmse']:.2f}%)")
     print(
         f"selected: {', '.join(d['selected']) or 'nothing'}; final NRMSE {100 * final['nrmse']:.2f}% "
@@ -474,6 +483,13 @@ def _parser() -> argparse.ArgumentParser:
         metavar="CSV",
         help="the sensor FEM's harmonic response (results/sensor/harmonic.csv) for the FEM correction of the sensor "
         "model; default: the paper sensor's, shipped with the package",
+    )
+    b.add_argument(
+        "--rpm",
+        type=float,
+        metavar="R",
+        help="the nominal shaft speed [rpm] (fitted within bearing_diagnosis.speed_tolerance_ratio); default: the "
+        "rig file's bearing.shaft_speed_rpm, else the record's scalar *RPM variable (.mat), else config/config.yaml's",
     )
     b.add_argument("--quiet", action="store_true", help="no progress lines")
     b.set_defaults(func=_diagnose_bearing)

@@ -34,6 +34,7 @@ from .records import (
     UNIFORM_RTOL,
     BearingRecord,
     Measurement,
+    average_blocks,
     check_channels,
     clipping_runs,
     file_digest,
@@ -63,7 +64,7 @@ from .results import (
     write_json,
     write_npz,
 )
-from .vibration import VibrationRecord, read_vibration_record
+from .vibration import VibrationRecord, read_vibration_record, record_rpm
 
 __all__ = [
     "BEARING_COLUMNS",
@@ -90,6 +91,7 @@ __all__ = [
     "SignalFileError",
     "VibrationRecord",
     "as_read",
+    "average_blocks",
     "check_channels",
     "check_readable",
     "clipping_runs",
@@ -109,6 +111,7 @@ __all__ = [
     "read_stack_mesh",
     "read_vibration_record",
     "read_table",
+    "record_rpm",
     "table_series",
     "write_bearing_record",
     "write_csv",

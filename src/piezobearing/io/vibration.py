@@ -80,13 +80,37 @@ def pick_channel(path: Path, names: list[str], channel: str | None) -> str:
     raise MeasurementError(f"{path}: channel '{channel}' not found (the file holds: {listed}); give one of those")
 
 
+def scalar_rpm(arrays: dict[str, np.ndarray]) -> tuple[float, str] | None:
+    """The shaft speed a MATLAB file states: its scalar variable whose name ends in ``RPM`` (any case), as
+    (speed [rpm], the variable's name); None where it has none (the first such variable where it has several)."""
+    for name, a in arrays.items():
+        if a.size == 1 and name.lower().endswith("rpm"):
+            return float(a.ravel()[0]), name
+    return None
+
+
+def record_rpm(path: str | Path) -> tuple[float, str] | None:
+    """The shaft speed a record file states (:func:`scalar_rpm` of a ``.mat`` file), as (speed [rpm], the
+    variable's name); None for a file without one or of another format."""
+    path = Path(path)
+    if path.suffix.lower() != ".mat" or not path.exists():
+        return None
+    try:
+        arrays = mat_arrays(path)
+    except Exception:  # noqa: BLE001 - an unreadable file: the record's reader says why, with its fix
+        return None
+    return scalar_rpm(arrays)
+
+
 def _mat_record(path: Path) -> tuple[dict[str, np.ndarray], float | None, float | None]:
     arrays = mat_arrays(path)
-    channels, rate, rpm = {}, None, None
+    channels, rate = {}, None
+    stated = scalar_rpm(arrays)
+    rpm = None if stated is None else stated[0]
     for name, a in arrays.items():
         if a.size == 1:
             if name.lower().endswith("rpm"):
-                rpm = float(a.ravel()[0])
+                continue
             elif name in ("sample_rate_Hz", "fs", "Fs"):
                 rate = float(a.ravel()[0])
             continue

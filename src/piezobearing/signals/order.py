@@ -18,10 +18,17 @@ for the N 305), so in the shaft-angle domain the lines stay sharp:
 3. **Angular resampling** (:func:`angular_resample`): the envelope at
    uniform angle steps 2 pi / samples_per_rev, by cubic interpolation at the
    times where the shaft reaches each angle (inverse of the angle curve).
-4. **Order spectrum** of the resampled envelope: uniform in orders
-   (cycles per revolution) with resolution 1/n_revolutions; the detector of
-   :mod:`.detector` runs on it unchanged with the kinematics in orders
-   (:func:`kinematics_in_orders`).
+4. **Order spectrum** of the resampled envelope (:func:`order_envelope_spectrum`):
+   uniform in orders (cycles per revolution) with resolution 1/n_revolutions.
+
+To detect a fault on a ramp, resample the record itself (:func:`angular_resample`)
+and give it to the envelope detector
+(``piezobearing.signals.detectors.detect(values, samples_per_rev, kinematics_in_orders(k), "envelope", settings)``)
+with its rate in samples per revolution, the kinematics in orders
+(:func:`kinematics_in_orders`) and a fixed band in orders that holds the
+resonance over the whole speed range (its frequency over the slowest and the
+fastest shaft rate): the band-pass then runs in the angle domain, where the
+resonance sweeps; the fault's lines stay sharp.
 """
 
 from __future__ import annotations

@@ -24,7 +24,7 @@ def log_chi2_sf(q, dof):
 
     ``scipy.stats.chi2.logsf`` bit for bit, from its special functions (scipy.special): above the median
     ln(chdtrc), below it ln(1 - chdtr); 0 for q <= 0, NaN for dof <= 0 or q NaN (scipy.special: the
-    workflow's detection jobs need nothing else of scipy.stats); tests/test_signals_detector.py compares the
+    workflow's detection jobs need nothing else of scipy.stats); tests/test_signals_synthetic.py compares the
     two on a grid.
     """
     q, dof = np.broadcast_arrays(np.asarray(q, float), np.asarray(dof, float))

@@ -41,7 +41,7 @@ from ..sensor import design as sensor_design
 from ..sensor import fem as sensor_fem
 from ..sensor import outputs as cout
 from ..sensor.analysis import SensorFemParams
-from ..sensor.calibration import design_resistance_ohm
+from ..sensor.calibration import SensorCircuit, design_resistance_ohm
 from ..sensor.mesh import stack_mesh
 from ..signals import daq, detection
 from ..signals import outputs as sout
@@ -203,7 +203,12 @@ def sensor_design_case(
     3. The workflow's sensor force records (``force_healthy``/``force_faulty``, made with the configured
        design) scaled by the ratio of this design's load share to the configured one: exact for the
        quasi-static force (the dynamic part is below 1e-4 of it, docs/theory/bearing_housing.md), approximate for another contact disk.
-    4. Voltage through this design's RC circuit (FEM d33_eff / C and tau, exact for piecewise-linear
+    4. Voltage through this design's RC circuit with its own FEM's gain and time constant (d33_eff /
+       (C_FEM + C_circuit), tau = R (C_FEM + C_circuit): the static limit of the design's harmonic response;
+       the row's ``sensor_model`` says so and ``fem_factor`` gives that gain over the design's RC gain
+       d33 / C, the number the workflow's one sensor model, :mod:`piezobearing.sensor.response`, multiplies
+       the RC gain by; for the configured design the two gains agree within 0.2 %,
+       tests/test_sensor_design.py), exact for piecewise-linear
        force, started in its periodic steady state for the force's period), the first ``signals.skip_s``
        dropped, sampled by the DAQ at ``signals.sample_rate_Hz`` as the noisy rule does (:func:`piezobearing.signals.daq.sample`); the DAQ's absolute noise and ADC
        (:func:`noise_settings`); the envelope indicator over ``signals.study_n_seeds`` replicates.
@@ -223,6 +228,7 @@ def sensor_design_case(
     )
     figs = sensor_design.design_figures(mesh, p.materials, circuit, settings)
 
+    rc_gain = SensorCircuit.from_config(s, r_ohm).open_circuit_gain_V_per_N
     port = read_json(housing)
     spring = bearing_transient.sensor_spring(config)
     share = bout.design_load_share(config, port, spring)
@@ -255,6 +261,8 @@ def sensor_design_case(
         "cable_length_m": s["cable_length_m"],
         "daq_capacitance_F": s["daq_capacitance_F"],
         **figs,
+        "sensor_model": "this design's stack FEM: gain d33_eff / (C_FEM + C_circuit), tau = R (C_FEM + C_circuit)",
+        "fem_factor": figs["open_circuit_gain_V_per_N"] / rc_gain,
         "sensor_spring_N_per_m": spring,
         "load_share": share,
         "load_share_configured": port["load_share"],
@@ -275,7 +283,7 @@ def noise_settings(config: dict):
 
 
 def detector_case(config: dict, outdir: Path, resistance: str, harmonic: str | None = None) -> dict:
-    """The fault_detection case, then the search detector over noise seeds at the configured DAQ.
+    """The fault_detection case, then the configured detector over noise seeds at the configured DAQ.
 
     The fault_detection row (:func:`workflow_chain`; its SNR sweep at the model clock), then the
     fault_classification rule's function (sampling at signals.sample_rate_Hz, the configured noise model,

@@ -22,6 +22,14 @@ def measurement(d: dict) -> list[str]:
         f"{d['n_samples']} samples at {d['sample_rate_Hz']:.6g} Hz ({d['duration_s']:.3g} s), "
         f"{d.get('n_passages', 0)} roller passages over the sensor, voltage rms {d['voltage_rms_V']:.4g} V.",
         "",
+    ]
+    rate = d.get("model_rate")
+    if rate:
+        out += [f"The model is held against the record at {rate['model_rate_Hz']:.6g} Hz: {rate['reason']}.", ""]
+    sp = d.get("shaft_speed")
+    if sp:
+        out += [f"Nominal shaft speed {sp['rpm']:g} rpm ({sp['source']}).", ""]
+    out += [
         f"Noise floor from the record itself ({fl['method']}): {fl['voltage_noise_V']:.4g} V rms, "
         f"NRMSE {s.pct(base['noise_floor_nrmse'])}. The model has no measured input: a correct model leaves "
         "this white noise alone.",
@@ -42,6 +50,7 @@ def fault(d: dict) -> list[str]:
         out.append(f"**Fault: {f['type'].replace('_', ' ')}.**")
         out.append("")
         out += s.param_table(f["params"], f["ci95"])
+        out += ["", *found_and_left(f)]
     out += ["", "Operating conditions (fitted where the search selected the effect, else the nominal value):", ""]
     out += ["| condition | shown in | value | 95% interval | fitted |", "|---|---|---|---|---|"]
     for k, v in f["operating_conditions"].items():
@@ -50,6 +59,47 @@ def fault(d: dict) -> list[str]:
         out.append(f"| `{k}` | {s.shown_in(k)} | {val} | {iv} | {fitted} |")
     out += ["", "What this record cannot tell apart, and how each interval was found: section 6.", ""]
     return out
+
+
+def found_and_left(f: dict) -> list[str]:
+    """What the diagnosis found and what of the fault's own lines its model leaves (``fault.statement``,
+    ``fault.lines_left``): each line with the record's level against the model's and above the floor."""
+    out = [f"**What it found and what of it remains:** {f.get('statement') or 'no statement'}.", ""]
+    left = f.get("lines_left") or []
+    if not left:
+        return out + ["None of the fault's own lines (its passing rate's harmonics and their sidebands) is left "
+                      "above the floor by the final model.", ""]
+    out += [
+        "The fault's own lines the final model leaves above the floor (record against model: the ratio of their "
+        "Hann-windowed amplitude spectra at the line; positive: the record's line is the stronger):",
+        "",
+        "| line | frequency (Hz) | record over model (dB) | above the floor (dB) |",
+        "|---|---|---|---|",
+    ]
+    for r in left:
+        out.append(f"| {r['line']} | {r['frequency_Hz']:.2f} | {r['record_over_model_dB']:+.1f} | "
+                   f"{r['excess_dB']:.1f} |")
+    return out + [""]
+
+
+def sensor_model(d: dict) -> list[str]:
+    """Which model turned the force into voltage: the RC circuit alone or times the sensor FEM's correction,
+    and where the correction came from (``sensor_model`` of diagnosis.json)."""
+    m = d.get("sensor_model")
+    if not m:
+        return []
+    rc = (f"the RC circuit of Eq. 6 (R = {m['resistance_ohm'] / 1e6:.4g} MOhm, C = {m['capacitance_F'] * 1e9:.4g} "
+          f"nF, tau = RC = {m['tau_s']:.4g} s, d33/C = {m['open_circuit_gain_V_per_N']:.4g} V/N)")
+    c = m.get("fem_correction")
+    if m.get("model") == "rc" or not c:
+        text = f"Force to voltage: {rc} alone, gain {m['gain_V_per_N']:.4g} V/N ({m['source']})."
+    else:
+        lo, hi = c["frequencies_Hz"]
+        text = (f"Force to voltage: {rc} times the sensor FEM's correction {m['fem_factor']:.4g} (the median of "
+                f"|H_FEM| / |H_RC| at {c['n_frequencies']} frequencies, {lo:.4g}-{hi:.4g} Hz, below the record's "
+                f"Nyquist frequency; spread {c['min']:.4g}-{c['max']:.4g}), gain {m['gain_V_per_N']:.4g} V/N. "
+                f"The correction comes from {m['source']}.")
+    return ["## The sensor model", "", text, ""]
 
 
 def separability(d: dict) -> list[str]:
@@ -148,8 +198,8 @@ def views(d: dict, figures: s.Figures) -> list[str]:
 METHOD_FIT = (
     "- Fit: maximum likelihood with the noise floor measured from the record (white), over the DFT bins. "
     "The model: the rings' quasi-static load distribution with any defect's drop, times the housing's "
-    "influence line (the quasi-static surrogate, docs/theory/bearing_housing.md), through the RC circuit of Eq. 6 from its steady "
-    "state; nuisance parameters fitted in every model: the roller set's phase at the first sample, the "
+    "influence line (the quasi-static surrogate, docs/theory/bearing_housing.md), through the sensor model (its "
+    "section) from the circuit's steady state; nuisance parameters fitted in every model: the roller set's phase at the first sample, the "
     "shaft speed within its tolerance (or the tachometer's), the DC level. NRMSE = rms(residual) / rms(measured)."
 )
 METHOD_TESTS = (
@@ -177,6 +227,7 @@ def render(d: dict, figures: dict[str, str] | None = None) -> str:
             s.verdict_paragraph(d, "voltage"),
             fault(d),
             measurement(d),
+            sensor_model(d),
             s.compare(
                 d,
                 fig,

@@ -18,7 +18,7 @@ import numpy as np
 
 from ...bearing.lpm import BearingGeometry
 from ...bearing.surrogate import InfluenceLine, cage_phase
-from ...io import BearingRecord, read_bearing_record
+from ...io import MIN_BEARING_RATE_HZ, BearingRecord, average_blocks, read_bearing_record
 from ...sensor.calibration import SensorCircuit
 from ...sensor.response import sensor_model
 from ...signals.detection import noise_std_for_snr
@@ -74,6 +74,36 @@ def rig_record(rec: BearingRecord, config: dict, influence: InfluenceLine, harmo
         rec.time_s, None, "voltage", "V", rig=rig,
         speed_tolerance_ratio=config["bearing_diagnosis"]["speed_tolerance_ratio"],
     )
+
+
+def model_rate(rec: BearingRecord, max_rate_Hz: float) -> tuple[BearingRecord, dict]:
+    """The record at the rate the model is held at, and what was done (``model_rate`` of diagnosis.json).
+
+    The quasi-static model holds the rings' equilibrium at every instant, not the shaft's mass on its rollers:
+    the shaft-on-rollers mode (near 2.5 kHz for the paper's rig in the dynamic LPM), which every roller
+    passage and every groove's edge excites, is beyond it. A record sampled faster than ``max_rate_Hz``
+    (``bearing_diagnosis.max_model_rate_Hz``) is averaged in blocks of n = ceil(f_s / max_rate_Hz) samples
+    (:func:`piezobearing.io.average_blocks`: the box filter the model assumes for one DAQ sample, so the model
+    is exact for the averaged record); n is lowered where f_s / n would fall below the slowest rate a record may
+    have (:data:`piezobearing.io.MIN_BEARING_RATE_HZ`). Returns the record and ``{"record_rate_Hz",
+    "model_rate_Hz", "block_samples", "max_model_rate_Hz", "reason"}``.
+    """
+    fs = rec.sample_rate_Hz
+    n = max(int(np.ceil(fs / max_rate_Hz * (1 - 1e-9))), 1)
+    while n > 1 and fs / n < MIN_BEARING_RATE_HZ:
+        n -= 1
+    if n == 1:
+        reason = (f"recorded at {fs:.6g} Hz, held as it is (bearing_diagnosis.max_model_rate_Hz = {max_rate_Hz:g} Hz"
+                  + (")" if fs <= max_rate_Hz * (1 + 1e-9) else
+                     f"; no block of whole samples brings it below that and above {MIN_BEARING_RATE_HZ:g} Hz: the "
+                     "model may miss the shaft's resonance in it)"))
+    else:
+        reason = (f"recorded at {fs:.6g} Hz, above bearing_diagnosis.max_model_rate_Hz = {max_rate_Hz:g} Hz: averaged "
+                  f"in blocks of {n} samples to {fs / n:.6g} Hz (the box filter the model assumes for one DAQ sample), "
+                  "which takes out the shaft-on-rollers resonance near 2.5 kHz that the quasi-static model does not hold")
+    out = average_blocks(rec, n)
+    return out, {"record_rate_Hz": float(fs), "model_rate_Hz": float(out.sample_rate_Hz), "block_samples": n,
+                 "max_model_rate_Hz": float(max_rate_Hz), "reason": reason}
 
 
 def noise_floor(v: np.ndarray, dt_s: float, clipped: np.ndarray | None = None) -> NoiseFloor:
@@ -161,6 +191,9 @@ class BearingSubject:
     def diagnose(self, obs, config: dict, progress=None):
         """Run the engine on ``(record, influence line)``; returns the diagnosis and its JSON-ready dict.
 
+        A record sampled faster than ``bearing_diagnosis.max_model_rate_Hz`` is first averaged in blocks of
+        whole samples down to a rate the model holds (:func:`model_rate`; the dict's ``model_rate`` says so).
+
         The record's own spectrum gives an upper bound of the floor: a fault
         whose lines (BPFI with shaft sidebands, 2 x BSF with cage sidebands)
         fill every bin lifts it. :func:`floor_prepass` measures the floor
@@ -171,10 +204,11 @@ class BearingSubject:
         runs once more; ``noise_floor.method`` says which.
         """
         settings = DiagnosticsSettings.from_config(config.get("diagnostics"))
+        rec, rate = model_rate(obs[0], config["bearing_diagnosis"]["max_model_rate_Hz"])
+        obs = (rec, *obs[1:])
         # the fits' linear algebra is on matrices of n x (a few) values: a second BLAS thread only waits
         # (each SVD of the trust-region step 70x slower on a loaded 2-core machine, benchmarks/bench_diagnosis_bearing.py)
         with single_blas_thread():
-            rec = obs[0]
             fits: dict = {}
             problem = floor_prepass(self.problem(obs, config), settings, rec.clipped, progress, fits)
             d = diagnose(problem, settings, progress, fits.get("baseline"))
@@ -183,7 +217,7 @@ class BearingSubject:
                 fl = replace(fl, method=f"{fl.method}, of the final model's residual: the record's own "
                              f"({problem.floor.voltage_noise_V:.4g} V) was lifted by the fault's lines")
                 d = diagnose(replace(problem, floor=fl), settings, progress)
-        return d, d.to_dict(self.answer(d))
+        return d, {**d.to_dict(self.answer(d)), "model_rate": rate}
 
 
 def quiet_level(residual_V: np.ndarray, clipped: np.ndarray | None = None) -> float:
@@ -430,12 +464,14 @@ def fault_answer(d) -> dict:
     }
     how.pop("roller_defect_index", None)  # chosen among the starts, not fitted: no interval
     remaining = fault_lines_left(d, kind) if kind != "none" else []
+    sidebands = fault_sidebands(d, kind)
     return {
         "type": kind,
         "params": params,
         "ci95": ci95,
-        "statement": fault_statement(kind, params, ci95, remaining),
+        "statement": fault_statement(kind, params, ci95, remaining, sidebands),
         "lines_left": remaining,
+        "sidebands": sidebands,
         "operating_conditions": cond,
         "operating_conditions_ci95": cond_ci,
         "fitted_conditions": fitted,
@@ -465,6 +501,29 @@ def family_lines(kind: str, kin: dict, harmonics: int = 3) -> list[tuple[str, fl
     return out
 
 
+def _line_spectra(d, kind: str) -> tuple[list[tuple[str, float]], float, np.ndarray, np.ndarray, float]:
+    """The fault's own lines (:func:`family_lines` at the final fit's speeds), the bin width [Hz], the record's
+    and the final model's Hann-windowed amplitude spectra, and the white floor's power in one such bin [V^2]."""
+    values, rig = d.final.values, d.record.rig
+    shaft = float(values.get("shaft_speed_Hz", rig.shaft_speed_Hz) if rig.tach_Hz is None else np.mean(rig.tach_Hz))
+    shaft *= 1.0 + values.get("speed_deviation_ratio", 0.0)
+    lines = family_lines(kind, rig.frequencies(shaft, values.get("cage_slip_ratio", 0.0)))
+    v = np.asarray(d.voltage_V, dtype=float)
+    n = v.size
+    w = np.hanning(n)
+    rec_a = np.abs(np.fft.rfft((v - v.mean()) * w))
+    mod = np.asarray(d.final.model_V, dtype=float)
+    mod_a = np.abs(np.fft.rfft((mod - mod.mean()) * w))
+    floor = d.problem.floor.voltage_noise_V ** 2 * float(np.sum(w**2))
+    return lines, 1.0 / (n * d.record.dt_s), rec_a, mod_a, floor
+
+
+def _peak(a: np.ndarray, f_Hz: float, df_Hz: float) -> float:
+    """The largest of a spectrum's three bins around ``f_Hz``."""
+    k = int(round(f_Hz / df_Hz))
+    return float(a[max(k - 1, 0):k + 2].max())
+
+
 def fault_lines_left(d, kind: str) -> list[dict]:
     """The residual lines the final model leaves at the found fault's own lines (:func:`family_lines`).
 
@@ -472,17 +531,7 @@ def fault_lines_left(d, kind: str) -> list[dict]:
     frequency, its level above the noise floor, and the record's line against the model's, 20 log10 of
     their Hann-windowed amplitude spectra's ratio at the peak (positive: the record's is the stronger) [dB].
     """
-    values, rig = d.final.values, d.record.rig
-    shaft = float(values.get("shaft_speed_Hz", rig.shaft_speed_Hz) if rig.tach_Hz is None else np.mean(rig.tach_Hz))
-    shaft *= 1.0 + values.get("speed_deviation_ratio", 0.0)
-    lines = family_lines(kind, rig.frequencies(shaft, values.get("cage_slip_ratio", 0.0)))
-    v = np.asarray(d.voltage_V, dtype=float)
-    n = v.size
-    df = 1.0 / (n * d.record.dt_s)
-    w = np.hanning(n)
-    rec_a = np.abs(np.fft.rfft((v - v.mean()) * w))
-    mod = np.asarray(d.final.model_V, dtype=float)
-    mod_a = np.abs(np.fft.rfft((mod - mod.mean()) * w))
+    lines, df, rec_a, mod_a, _ = _line_spectra(d, kind)
     out = []
     for u in d.unexplained:
         if u.get("test") != "spectrum" or u.get("kind") != "narrowband":
@@ -491,23 +540,50 @@ def fault_lines_left(d, kind: str) -> list[dict]:
         label, fl = min(lines, key=lambda x: abs(x[1] - f))
         if abs(fl - f) > max(LINE_TOLERANCE * fl, 2 * df):
             continue
-        k = int(round(f / df))
-        sl = slice(max(k - 1, 0), k + 2)
-        diff = 20 * np.log10(rec_a[sl].max() / max(mod_a[sl].max(), 1e-300))
+        diff = 20 * np.log10(_peak(rec_a, f, df) / max(_peak(mod_a, f, df), 1e-300))
         out.append({"line": label, "frequency_Hz": float(f), "excess_dB": float(u["excess_dB"]),
                     "record_over_model_dB": float(diff)})
     return out
 
 
-def fault_statement(kind: str, params: dict, ci95: dict, remaining: list[dict]) -> str:
-    """One line: the fault found with its size and interval, and what of its own lines the model leaves."""
+def fault_sidebands(d, kind: str) -> list[dict]:
+    """A moving defect's first line and its sidebands, record against model: BPFI and BPFI -/+ f_r for the
+    inner race, 2 x BSF and 2 x BSF -/+ FTF for a roller (the modulation through the load zone, where the
+    quasi-static model and a dynamic bearing differ most); empty for the outer race.
+
+    Each: label, frequency [Hz], the record's line over the model's (20 log10 of their Hann-windowed amplitude
+    spectra's ratio at the peak, positive: the record's is the stronger) [dB], and the record's line above the
+    white floor (10 log10 of its power over the floor's in one bin) [dB]: a line near 0 dB above the floor is
+    noise in the record, and its difference from the model's says nothing.
+    """
+    if kind not in ("inner_race", "rolling_element"):
+        return []
+    lines, df, rec_a, mod_a, floor = _line_spectra(d, kind)
+    out = []
+    for label, f in lines[:3]:
+        r, m = _peak(rec_a, f, df), _peak(mod_a, f, df)
+        out.append({"line": label, "frequency_Hz": float(f), "record_over_model_dB": float(20 * np.log10(r / max(m, 1e-300))),
+                    "record_above_floor_dB": float(10 * np.log10(r**2 / floor))})
+    return out
+
+
+def fault_statement(kind: str, params: dict, ci95: dict, remaining: list[dict], sidebands: list[dict] | None = None) -> str:
+    """One line: the fault found with its size and interval, how a moving defect's sidebands differ from the
+    model's (:func:`fault_sidebands`), and what of its own lines the model leaves above the floor."""
     if kind == "none":
         return "no fault"
     wkey = next(k for k in params if k.endswith("width_m"))
     lo, hi = ci95.get(wkey) or (float("nan"), float("nan"))
     text = f"{kind.replace('_', ' ')} {params[wkey] * 1e3:.3g} mm [{lo * 1e3:.3g}, {hi * 1e3:.3g}] (95 %)"
+    if sidebands:
+        carrier, *sides = sidebands
+        name = carrier["line"] + " ± " + sides[0]["line"].split("-")[-1]
+        text += f"; its sidebands at {name} differ from the model's by " + " and ".join(
+            f"{r['record_over_model_dB']:+.1f} dB ({r['line']}, {r['frequency_Hz']:.1f} Hz, "
+            f"{r['record_above_floor_dB']:.1f} dB above the floor)" for r in sides)
+        text += f", the line at {carrier['line']} by {carrier['record_over_model_dB']:+.1f} dB"
     if remaining:
-        text += "; its lines differ from the model's: " + ", ".join(
+        text += ("; left above the floor: " if sidebands else "; its lines differ from the model's: ") + ", ".join(
             f"{r['line']} ({r['frequency_Hz']:.1f} Hz) {r['record_over_model_dB']:+.1f} dB, "
             f"{r['excess_dB']:.1f} dB above the floor" for r in remaining)
     return text

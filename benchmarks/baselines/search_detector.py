@@ -1,14 +1,18 @@
-"""A fault detector for real bearings: search windows, a search-corrected threshold, classification.
+"""The benchmarks' baseline: the search detector, which the envelope detector replaced.
 
-Today's test (:func:`..detection.fault_indicator`) reads the one envelope
+``benchmarks/bench_detect_record.py`` and ``benchmarks/bench_detector.py``
+time it beside the package's detectors for their ratios; the package does
+not import it (its detectors are :mod:`piezobearing.signals.detectors`).
+
+The paper's test (:func:`piezobearing.signals.detection.fault_indicator`) reads the one envelope
 bin at the kinematic BPFO. A cage that slips 1.5 % moves the line by more
 than a bin and the test loses it. Here every line of every fault type
-(:mod:`.fault_bands`) is searched over the bins its band covers for slip in
+(:mod:`piezobearing.signals.fault_bands`) is searched over the bins its band covers for slip in
 [0, s_max], and the threshold is raised for that search.
 
 Statistic. A single-sided envelope spectrum A_j [V] of noise alone has, bin
 by bin, A_j^2 = sigma^2 X_j with X_j ~ Exp(1) independent (circular complex
-Gaussian bins, as in :func:`..detection.indicator_threshold`). The local
+Gaussian bins, as in :func:`piezobearing.signals.detection.indicator_threshold`). The local
 floor of harmonic k is the mean A^2 of M_f bins around k x carrier (all
 windows of all analysed types and ``guard_bins`` around them left out):
 sigma^2 Y_k with Y_k ~ Gamma(M_f, 1/M_f). Line l of harmonic k, searched
@@ -51,10 +55,13 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
+from scipy.optimize import brentq
+from scipy.signal import fftconvolve
+from scipy.special import roots_legendre
+from scipy.stats import gamma as gamma_distribution
 
-from . import detection as det
-from . import envelope
-from .fault_bands import FaultLine, fault_bands, fault_lines, window_bins
+from piezobearing.signals import detection, envelope
+from piezobearing.signals.fault_bands import FaultLine, fault_bands, fault_lines, window_bins
 
 #: The fault types the classifier chooses among (plus "none").
 CLASSIFIED_TYPES = ("outer_race", "inner_race", "rolling_element")
@@ -150,11 +157,9 @@ def _gamma_nodes(n_floor_bins: float) -> tuple[np.ndarray, np.ndarray]:
     generalised Laguerre rule overflows beyond M_f ~ 150), and its nodes
     crowd towards u = 0, the small floors that make the tail of R.
     """
-    from scipy.special import roots_legendre
-    from scipy.stats import gamma as gamma_dist
 
     u, w = roots_legendre(_N_QUAD)
-    return gamma_dist.ppf(0.5 * (u + 1.0), n_floor_bins, scale=1.0 / n_floor_bins), 0.5 * w
+    return gamma_distribution.ppf(0.5 * (u + 1.0), n_floor_bins, scale=1.0 / n_floor_bins), 0.5 * w
 
 
 def window_survival(t: np.ndarray, n_bins: int, n_floor_bins: int) -> np.ndarray:
@@ -166,7 +171,6 @@ def window_survival(t: np.ndarray, n_bins: int, n_floor_bins: int) -> np.ndarray
 
 def window_threshold(probability: float, n_bins: int, n_floor_bins: int) -> float:
     """Level t of R = max_j A_j^2 / floor with P(R > t) = ``probability`` under noise alone [-]."""
-    from scipy.optimize import brentq
 
     if not 0 < probability < 1:
         raise ValueError("false-alarm probability must lie in (0, 1)")
@@ -214,7 +218,6 @@ def null_distribution(groups: tuple[tuple[tuple[int, ...], float], ...]) -> Null
     groups : tuple
         Per harmonic: (window sizes M_l of its lines, floor bins M_f).
     """
-    from scipy.signal import fftconvolve
 
     n_lines = sum(len(ms) for ms, _ in groups)
     xmax = 40.0 + 30.0 * n_lines
@@ -260,7 +263,7 @@ def _floors_mask(freq: np.ndarray, df: float, all_lines: list[FaultLine], guard:
     return ok
 
 
-def search_lines(spec: det.EnvelopeSpectrum, lines: list[FaultLine], excluded: list[FaultLine],
+def search_lines(spec: detection.EnvelopeSpectrum, lines: list[FaultLine], excluded: list[FaultLine],
                  carrier_Hz: float, settings: DetectorSettings) -> list[LineResult]:
     """The largest floor ratio in each line's window.
 
@@ -353,7 +356,7 @@ class Detection:
         return out
 
 
-def detect(spec: det.EnvelopeSpectrum, kinematics: dict, settings: DetectorSettings) -> Detection:
+def detect(spec: detection.EnvelopeSpectrum, kinematics: dict, settings: DetectorSettings) -> Detection:
     """Test every fault type in an envelope spectrum and classify the fault.
 
     Parameters
@@ -396,14 +399,14 @@ def classify(per_type: dict, detected: list[str]) -> str:
     return max(detected, key=lambda t: per_type[t]["margin"])
 
 
-def analyse_record(x: np.ndarray, dt_s: float, kinematics: dict, envelope_settings: det.EnvelopeSettings,
-                   settings: DetectorSettings) -> tuple[det.EnvelopeSpectrum, Detection]:
+def analyse_record(x: np.ndarray, dt_s: float, kinematics: dict, envelope_settings: detection.EnvelopeSettings,
+                   settings: DetectorSettings) -> tuple[detection.EnvelopeSpectrum, Detection]:
     """Band (fixed or kurtogram), envelope spectrum of the whole record, and :func:`detect`.
 
     The whole record is used: with slip there is no exact fault period to cut
     it to; the search windows absorb the leakage of a line between bins.
     """
     x = np.asarray(x, dtype=float)
-    band, _ = det.choose_band(x, dt_s, envelope_settings)
+    band, _ = detection.choose_band(x, dt_s, envelope_settings)
     spec = envelope.envelope_spectrum(x, dt_s, band, envelope_settings.filter_order, settings.window)
     return spec, detect(spec, kinematics, settings)
