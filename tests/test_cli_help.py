@@ -42,7 +42,8 @@ def test_diagnose_bearing_says_which_config_and_model_it_used(monkeypatch, capsy
     answer = {"record_warnings": [], "baseline": fit, "final": fit, "selected": [], "verdict": "explained",
               "fault": {"type": "none", "params": {}, "ci95": {}}, "unexplained": [],
               "sensor_model": {"fem_factor": 0.938, "source": "the sensor FEM"},
-              "shaft_speed": {"rpm": 1000.0, "source": "bearing.shaft_speed_rpm of the config (the default)"}}
+              "shaft_speed": {"rpm": 1000.0, "source": "bearing.shaft_speed_rpm of the config (the default)"},
+              "model_rate": {"reason": "recorded at 2550 Hz, held as it is"}}
     monkeypatch.setattr(stage, "diagnose_bearing", lambda *args, **kw: answer)
     assert cli.main(["diagnose-bearing", "record.csv", "--out", str(tmp_path / "out"), "--quiet"]) == 0
     lines = capsys.readouterr().out.splitlines()

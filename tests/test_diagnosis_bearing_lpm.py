@@ -119,3 +119,16 @@ def test_inner_race_statement_names_its_sidebands_and_the_report_shows_it(setup,
     sensor = text.split("## The sensor model")[1].split("##")[0]
     assert "times the sensor FEM's correction 0.938" in sensor
     assert d["sensor_model"]["source"] in sensor and "paper_sensor_fem.csv" in sensor
+
+
+def test_fast_record_is_averaged_to_the_models_rate_and_its_groove_found(setup):
+    """The paper's 0.9 mm groove over the sensor on a 0.5 s LPM record at 25.6 kHz, where the shaft's resonance
+    near 2.5 kHz (beyond the quasi-static model) is in the record: the diagnosis averages it in blocks of 10
+    samples to 2560 Hz (the DAQ model's box filter) and finds the groove."""
+    c, influence = setup
+    rec = lpm_record(c, influence, SUBSET["outer_race_defect"], 25600.0, 0.5, 30.0, 26)
+    d = SUBJECT.diagnose((rec, influence), c)[1]
+    assert d["model_rate"]["block_samples"] == 10 and d["model_rate"]["model_rate_Hz"] == pytest.approx(2560.0)
+    assert d["sample_rate_Hz"] == pytest.approx(2560.0)
+    assert d["selected"] == ["outer_race_defect"], d["selected"]
+    assert abs(d["final"]["params"]["outer_defect_width_m"] / 0.9e-3 - 1) < 0.05

@@ -380,6 +380,7 @@ def _diagnose_bearing(args) -> int:
     print(f"shaft speed: {sp['rpm']:g} rpm from {sp['source']}, fitted within "
           f"{100 * config['bearing_diagnosis']['speed_tolerance_ratio']:g} % (or a speed_rpm column's)")
     print(f"sensor model: d33/C x FEM correction {sm['fem_factor']:.4g} ({sm['source']})")
+    print(f"rate: {d['model_rate']['reason']}")
     print(f"baseline NRMSE {100 * base['nrmse']:.2f}% (noise floor {100 * base['noise_floor_nrmse']:.2f}%)")
     print(
         f"selected: {', '.join(d['selected']) or 'nothing'}; final NRMSE {100 * final['nrmse']:.2f}% "

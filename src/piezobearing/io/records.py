@@ -387,6 +387,25 @@ def read_bearing_record(
     return BearingRecord(t, v, speed, str(path), tuple(warnings), clipped)
 
 
+def average_blocks(rec: BearingRecord, n: int) -> BearingRecord:
+    """The record averaged over blocks of ``n`` consecutive samples (the last incomplete block dropped).
+
+    Each sample of a DAQ record stands for the mean over its window [t - dt/2, t + dt/2]; the mean of ``n`` of
+    them is the mean over their joined window, stamped at its centre (the block's mean time): a record at
+    rate f_s / n with the same box-filter sample a DAQ at that rate gives. A tachometer speed is averaged the
+    same way; a block holding a clipped sample is clipped.
+    """
+    if n <= 1:
+        return rec
+    m = (rec.time_s.size // n) * n
+
+    def mean(x):
+        return None if x is None else np.asarray(x, dtype=float)[:m].reshape(-1, n).mean(axis=1)
+
+    clipped = None if rec.clipped is None else np.asarray(rec.clipped)[:m].reshape(-1, n).any(axis=1)
+    return BearingRecord(mean(rec.time_s), mean(rec.voltage_V), mean(rec.speed_rpm), rec.source, rec.warnings, clipped)
+
+
 def write_bearing_record(rec: BearingRecord, path: str | Path) -> None:
     """Write a running-bearing record as CSV (the synthetic record under results/)."""
     Path(path).parent.mkdir(parents=True, exist_ok=True)

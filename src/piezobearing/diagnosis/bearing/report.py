@@ -23,6 +23,9 @@ def measurement(d: dict) -> list[str]:
         f"{d.get('n_passages', 0)} roller passages over the sensor, voltage rms {d['voltage_rms_V']:.4g} V.",
         "",
     ]
+    rate = d.get("model_rate")
+    if rate:
+        out += [f"The model is held against the record at {rate['model_rate_Hz']:.6g} Hz: {rate['reason']}.", ""]
     sp = d.get("shaft_speed")
     if sp:
         out += [f"Nominal shaft speed {sp['rpm']:g} rpm ({sp['source']}).", ""]

@@ -18,7 +18,7 @@ import numpy as np
 
 from ...bearing.lpm import BearingGeometry
 from ...bearing.surrogate import InfluenceLine, cage_phase
-from ...io import BearingRecord, read_bearing_record
+from ...io import MIN_BEARING_RATE_HZ, BearingRecord, average_blocks, read_bearing_record
 from ...sensor.calibration import SensorCircuit
 from ...sensor.response import sensor_model
 from ...signals.detection import noise_std_for_snr
@@ -74,6 +74,36 @@ def rig_record(rec: BearingRecord, config: dict, influence: InfluenceLine, harmo
         rec.time_s, None, "voltage", "V", rig=rig,
         speed_tolerance_ratio=config["bearing_diagnosis"]["speed_tolerance_ratio"],
     )
+
+
+def model_rate(rec: BearingRecord, max_rate_Hz: float) -> tuple[BearingRecord, dict]:
+    """The record at the rate the model is held at, and what was done (``model_rate`` of diagnosis.json).
+
+    The quasi-static model holds the rings' equilibrium at every instant, not the shaft's mass on its rollers:
+    the shaft-on-rollers mode (near 2.5 kHz for the paper's rig in the dynamic LPM), which every roller
+    passage and every groove's edge excites, is beyond it. A record sampled faster than ``max_rate_Hz``
+    (``bearing_diagnosis.max_model_rate_Hz``) is averaged in blocks of n = ceil(f_s / max_rate_Hz) samples
+    (:func:`piezobearing.io.average_blocks`: the box filter the model assumes for one DAQ sample, so the model
+    is exact for the averaged record); n is lowered where f_s / n would fall below the slowest rate a record may
+    have (:data:`piezobearing.io.MIN_BEARING_RATE_HZ`). Returns the record and ``{"record_rate_Hz",
+    "model_rate_Hz", "block_samples", "max_model_rate_Hz", "reason"}``.
+    """
+    fs = rec.sample_rate_Hz
+    n = max(int(np.ceil(fs / max_rate_Hz * (1 - 1e-9))), 1)
+    while n > 1 and fs / n < MIN_BEARING_RATE_HZ:
+        n -= 1
+    if n == 1:
+        reason = (f"recorded at {fs:.6g} Hz, held as it is (bearing_diagnosis.max_model_rate_Hz = {max_rate_Hz:g} Hz"
+                  + (")" if fs <= max_rate_Hz * (1 + 1e-9) else
+                     f"; no block of whole samples brings it below that and above {MIN_BEARING_RATE_HZ:g} Hz: the "
+                     "model may miss the shaft's resonance in it)"))
+    else:
+        reason = (f"recorded at {fs:.6g} Hz, above bearing_diagnosis.max_model_rate_Hz = {max_rate_Hz:g} Hz: averaged "
+                  f"in blocks of {n} samples to {fs / n:.6g} Hz (the box filter the model assumes for one DAQ sample), "
+                  "which takes out the shaft-on-rollers resonance near 2.5 kHz that the quasi-static model does not hold")
+    out = average_blocks(rec, n)
+    return out, {"record_rate_Hz": float(fs), "model_rate_Hz": float(out.sample_rate_Hz), "block_samples": n,
+                 "max_model_rate_Hz": float(max_rate_Hz), "reason": reason}
 
 
 def noise_floor(v: np.ndarray, dt_s: float, clipped: np.ndarray | None = None) -> NoiseFloor:
@@ -161,6 +191,9 @@ class BearingSubject:
     def diagnose(self, obs, config: dict, progress=None):
         """Run the engine on ``(record, influence line)``; returns the diagnosis and its JSON-ready dict.
 
+        A record sampled faster than ``bearing_diagnosis.max_model_rate_Hz`` is first averaged in blocks of
+        whole samples down to a rate the model holds (:func:`model_rate`; the dict's ``model_rate`` says so).
+
         The record's own spectrum gives an upper bound of the floor: a fault
         whose lines (BPFI with shaft sidebands, 2 x BSF with cage sidebands)
         fill every bin lifts it. :func:`floor_prepass` measures the floor
@@ -171,10 +204,11 @@ class BearingSubject:
         runs once more; ``noise_floor.method`` says which.
         """
         settings = DiagnosticsSettings.from_config(config.get("diagnostics"))
+        rec, rate = model_rate(obs[0], config["bearing_diagnosis"]["max_model_rate_Hz"])
+        obs = (rec, *obs[1:])
         # the fits' linear algebra is on matrices of n x (a few) values: a second BLAS thread only waits
         # (each SVD of the trust-region step 70x slower on a loaded 2-core machine, benchmarks/bench_diagnosis_bearing.py)
         with single_blas_thread():
-            rec = obs[0]
             fits: dict = {}
             problem = floor_prepass(self.problem(obs, config), settings, rec.clipped, progress, fits)
             d = diagnose(problem, settings, progress, fits.get("baseline"))
@@ -183,7 +217,7 @@ class BearingSubject:
                 fl = replace(fl, method=f"{fl.method}, of the final model's residual: the record's own "
                              f"({problem.floor.voltage_noise_V:.4g} V) was lifted by the fault's lines")
                 d = diagnose(replace(problem, floor=fl), settings, progress)
-        return d, d.to_dict(self.answer(d))
+        return d, {**d.to_dict(self.answer(d)), "model_rate": rate}
 
 
 def quiet_level(residual_V: np.ndarray, clipped: np.ndarray | None = None) -> float:
