@@ -233,14 +233,14 @@ def test_compiled_modal_recurrence_against_the_loop():
     omega = 2 * np.pi * np.sort(rng.uniform(3e3, 4e4, n))
     zeta = rng.uniform(0.01, 0.05, n)
     f = 100.0 * rng.standard_normal((nt, n))
-    a_mat, b_mat = fem._ramp_recurrence(omega, zeta, h)
+    a_mat, b_mat = housing_fem._ramp_recurrence(omega, zeta, h)
     x = np.stack([f[0] / omega**2, np.zeros(n)], axis=1)
     q_ref, qd_ref = np.empty((nt, n)), np.zeros((nt, n))
     q_ref[0] = x[:, 0]
     for k in range(nt - 1):
         x = np.einsum("nij,nj->ni", a_mat, x) + np.einsum("nij,nj->ni", b_mat, np.stack([f[k], f[k + 1]], 1))
         q_ref[k + 1], qd_ref[k + 1] = x[:, 0], x[:, 1]
-    q, qd = fem.modal_response(f, omega, zeta, h, velocity=True)
+    q, qd = housing_fem.modal_response(f, omega, zeta, h, velocity=True)
     np.testing.assert_allclose(q, q_ref, rtol=1e-12, atol=1e-12 * np.abs(q_ref).max())
     np.testing.assert_allclose(qd, qd_ref, rtol=1e-12, atol=1e-12 * np.abs(qd_ref).max())
 
