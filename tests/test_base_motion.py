@@ -11,6 +11,7 @@ import pytest
 from piezobearing.bearing import base_motion as bm
 from piezobearing.bearing import housing_fem as fem
 from piezobearing.bearing import lpm as brg
+from piezobearing.bearing import reduced_housing as rh
 from piezobearing.bearing import transient as st
 from piezobearing.bearing.housing_mesh import build_housing_mesh
 from piezobearing.sensor import accelerometer as acc
@@ -121,6 +122,48 @@ def test_mounting_places_lie_on_their_surfaces(housing, paper_config):
     assert by["foot"].coordinates_m[2] == pytest.approx(-g.body_bottom_m)
     with pytest.raises(ValueError, match="accelerometer.position"):
         fem.mounting_probe(housing["mesh"], "bottom")
+
+
+def test_windowed_roller_loads_equal_the_column_loads(housing):
+    """The roller loads projected over each patch's few columns equal the column loads' projection over every
+    column (HousingModel.column_loads), across the raceway's ends (psi = +-pi) and at the columns themselves."""
+    model, ops = housing["model"], housing["ops"]
+    columns = fem.RacewayColumns.of(model)
+    rng = np.random.default_rng(5)
+    nt, z = 3000, 11
+    psi = np.mod(rng.uniform(0, 2 * np.pi, (1, z)) + np.linspace(0, 30, nt)[:, None], 2 * np.pi) - np.pi
+    psi[0, :4] = model.mesh.raceway_psi[:4]
+    psi[1, :2] = (np.pi, -np.pi)
+    q = rng.uniform(0.0, 300.0, (nt, z))
+    wy, wz = model.column_loads(q, psi)
+    g, f = fem.project_roller_loads(columns, ops, q, psi, chunk=1000)
+    np.testing.assert_allclose(g, wy @ ops.static_y + wz @ ops.static_z, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(f, wy @ ops.modal_y + wz @ ops.modal_z, rtol=1e-12, atol=0)
+    # the window's weights are the dense weights, and the window holds all that are not zero
+    cols, w = columns.patch_window(psi.ravel(), columns.window())
+    dense = np.zeros((psi.size, columns.psi_rad.size))
+    np.put_along_axis(dense, cols, w, axis=1)
+    np.testing.assert_allclose(dense, model.patch_weights(psi.ravel()), rtol=1e-12, atol=0)
+
+
+def test_housing_file_round_trip(housing, tmp_path, paper_config):
+    """A housing model written by the rule sensor_comparison_housing reads back the same; a file of another
+    config or mesh stops the comparison."""
+    h = rh.Housing(fem.RacewayColumns.of(housing["model"]), housing["ops"], housing["base"], housing["model"].n_dofs)
+    reads = rh.housing_reads(paper_config)
+    rh.save_housing(h, False, reads, tmp_path / "h.npz")
+    back = rh.load_housing(tmp_path / "h.npz", False, reads)
+    assert back.at("side").record() == h.at("side").record()
+    for name in ("modal_y", "static_z", "sensor_modal", "omega", "zeta"):
+        np.testing.assert_array_equal(getattr(back.ops, name), getattr(h.ops, name))
+    np.testing.assert_array_equal(back.base.probe_modal, h.base.probe_modal)
+    np.testing.assert_array_equal(back.columns.psi_rad, h.columns.psi_rad)
+    with pytest.raises(ValueError, match="sensor_comparison_housing"):
+        rh.load_housing(tmp_path / "h.npz", True, reads)
+    other = copy.deepcopy(paper_config)
+    other["housing"]["mesh_level"] = 0.5
+    with pytest.raises(ValueError, match="another"):
+        rh.load_housing(tmp_path / "h.npz", False, rh.housing_reads(other))
 
 
 def test_effective_mass_grows_to_the_dragged_mass(housing):

@@ -180,6 +180,11 @@ READS: dict[str, list[str]] = {
         "signals.skip_s", "signals.sensor_fem_correction", *_CIRCUIT,
     ],
     # sensor_comparison.smk
+    "sensor_comparison_housing": [  # the housing's reduced model (piezobearing.sensor.comparison.build_housing)
+        "seed", *_HOUSING_GEOMETRY, "housing.mesh_level", "housing.n_modes", "housing.damping_ratio",
+        "housing.damping_band_Hz", "housing.patch_width_m", "housing.sensor_electrical", *_PZT, *_ALUMINA_DISK,
+        "sensor_comparison.mode_cutoff_ratio", "accelerometer.daq.sample_rate_Hz",
+    ],
     "sensor_comparison": [
         "seed", *_BEARING, *_HOUSING_GEOMETRY, "housing", *_PZT, *_ALUMINA_DISK, *_CIRCUIT, "signals",
         "base_motion", "accelerometer", "sensor_comparison",
@@ -238,6 +243,13 @@ def declared(config: dict, rule: str) -> dict:
             node = node.setdefault(k, {})
         node[keys[-1]] = json.loads(json.dumps(_get(config, path)))
     return out
+
+
+def reads_digest(config: dict, rule: str) -> str:
+    """The first 12 hex digits of the SHA-256 of ``rule``'s declared config values (:func:`declared`, as sorted
+    JSON): a name for an output that depends on those values alone, one file per distinct set."""
+    text = json.dumps(declared(config, rule), sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:12]
 
 
 def declared_config(reads: dict, rule: str) -> DeclaredConfig:

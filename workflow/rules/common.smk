@@ -10,7 +10,13 @@ from piezobearing.config import ConfigError
 from piezobearing.config import results_folder
 from piezobearing.config import validate as validate_config
 from piezobearing.io import MeasurementError
-from piezobearing.registry import RECORD_RULES, code_hash, rule_params
+from piezobearing.registry import (
+    RECORD_RULES,
+    code_hash,
+    declared,
+    reads_digest,
+    rule_params,
+)
 from piezobearing.stages.calibration import check_record_once
 
 CONFIG_FILES = [
@@ -77,6 +83,23 @@ def stage_params(rule, entry):
     a rule reading the calibration record, the record's checksum (``record``)."""
     record = config["calibration"]["measurement"] if rule in RECORD_RULES else None
     return rule_params(rule, config, f"{workflow.basedir}/{entry}", record)
+
+
+# The housing's reduced model (mesh, modes, operators) depends on the housing's config values alone
+# (piezobearing.registry.READS["sensor_comparison_housing"]), not on the speed, the surroundings or the seeds:
+# one file per healthy or faulty mesh, named by the digest of those values, which every comparison on that
+# mesh reads (the main workflow's and the study's cases). COMPARISON_HOUSINGS maps digest to values.
+COMPARISON_HOUSINGS = {}
+
+
+def comparison_housings(cfg):
+    """The housing model files a comparison on config ``cfg`` reads: input names housing_healthy, housing_faulty."""
+    digest = reads_digest(cfg, "sensor_comparison_housing")
+    COMPARISON_HOUSINGS[digest] = declared(cfg, "sensor_comparison_housing")
+    return {
+        f"housing_{mesh}": f"{RESULTS}/sensor_comparison/housing/{mesh}_{digest}.npz"
+        for mesh in ("healthy", "faulty")
+    }
 
 
 def final_outputs():

@@ -1,13 +1,42 @@
 # The embedded sensor against a housing accelerometer on one simulated rig (docs/guides/sensor_comparison.md):
 # the paper's case observed by both sensors, with the machine frame at rest and vibrating (base_motion), both
 # records judged by the envelope detector; the figure of both envelope spectra.
+from piezobearing.registry import short_param
 
 FIGURES.append(f"{RESULTS}/figures/sensor_comparison.png")
 TARGETS.append(f"{RESULTS}/signals/sensor_comparison.json")
 
 
+# The housing's reduced model, one file per healthy or faulty mesh, which every comparison on that mesh reads
+# (the main rule and the study's cases): comparison_housings in common.smk.
+rule sensor_comparison_housing:
+    output:
+        npz=f"{RESULTS}/sensor_comparison/housing/{{mesh}}_{{digest}}.npz",
+    log:
+        f"{RESULTS}/logs/sensor_comparison_housing/{{mesh}}_{{digest}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/sensor_comparison_housing/{{mesh}}_{{digest}}.tsv"
+    wildcard_constraints:
+        mesh="healthy|faulty",
+        digest="[0-9a-f]{12}",
+    conda:
+        "../envs/piezobearing.yaml"
+    threads: 1
+    resources:
+        mem_mb=3000,
+        runtime=30,
+    params:
+        reads=lambda wc: short_param(COMPARISON_HOUSINGS[wc.digest]),
+        code=code_hash(
+            f"{workflow.basedir}/workflow/scripts/sensor_comparison_housing.py"
+        ),
+    script:
+        "../scripts/sensor_comparison_housing.py"
+
+
 rule sensor_comparison:
     input:
+        **comparison_housings(config),
         resistance=f"{RESULTS}/calibration/resistance.json",
         # the sensor FEM's response, if signals.sensor_fem_correction (else no input)
         harmonic=(

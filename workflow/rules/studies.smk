@@ -10,7 +10,7 @@ from snakemake.utils import Paramspace
 
 from piezobearing.config import ConfigError
 from piezobearing.registry import short_param
-from piezobearing.studies import check_studies
+from piezobearing.studies import case_config, check_studies
 
 try:  # a bad study table or case value stops before any job, in one line
     STUDY_TABLES = check_studies(config)
@@ -22,6 +22,19 @@ STUDIES = {
     name: Paramspace(df, filename_params="*", single_wildcard="case")
     for name, df in STUDY_TABLES.items()
 }
+# Workflow results one case reads, by (study, case): a sensor_comparison case's housing models
+# (rule sensor_comparison_housing: one file per distinct mesh).
+CASE_INPUTS = (
+    {
+        ("sensor_comparison", case): comparison_housings(case_config(config, overrides))
+        for case, overrides in zip(
+            STUDIES["sensor_comparison"].instance_patterns,
+            STUDY_TABLES["sensor_comparison"].to_dict("records"),
+        )
+    }
+    if "sensor_comparison" in STUDIES
+    else {}
+)
 
 # Workflow results a study kind reads that its varied keys do not affect, by kind
 # (keyword arguments of its function in piezobearing.stages.studies.KINDS).
@@ -79,7 +92,12 @@ STUDY_SECTIONS = {
 
 rule study_case:
     input:
-        unpack(lambda wc: STUDY_INPUTS.get(wc.study, {})),
+        unpack(
+            lambda wc: {
+                **STUDY_INPUTS.get(wc.study, {}),
+                **CASE_INPUTS.get((wc.study, wc.case), {}),
+            }
+        ),
     output:
         json=f"{RESULTS}/studies/{{study}}/{{case}}/summary.json",
     log:

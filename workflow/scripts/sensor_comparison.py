@@ -8,4 +8,5 @@ from piezobearing.stages.sensor_comparison import sensor_comparison
 config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
 
 i, o = snakemake.input, snakemake.output
-sensor_comparison(i.resistance, i.harmonic[0] if i.harmonic else None, o.json, o.spectra, config)
+sensor_comparison(i.resistance, i.harmonic[0] if i.harmonic else None, i.housing_healthy, i.housing_faulty,
+                  o.json, o.spectra, config)

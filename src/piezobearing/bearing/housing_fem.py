@@ -48,6 +48,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from numba import njit
 from scipy.linalg import expm
 
 from .. import sfepy_setup  # noqa: F401  (before sfepy: without its JAX terms where JAX is absent)
@@ -162,7 +163,6 @@ def box_weights(nodes: np.ndarray, lo: np.ndarray, hi: np.ndarray, period: float
         left = np.r_[s[0], s[:-1]]
         right = np.r_[s[1:], s[-1]]
         node, lft, rgt = s[None, :], left[None, :], right[None, :]
-        a, b = lo[:, None], hi[:, None]
     else:
         left = np.r_[s[-1] - period, s[:-1]]
         right = np.r_[s[1:], s[0] + period]
@@ -170,7 +170,11 @@ def box_weights(nodes: np.ndarray, lo: np.ndarray, hi: np.ndarray, period: float
         # node positions relative to each interval's centre, wrapped into [-P/2, P/2)
         shift = np.mod(s[None, :] - c[:, None] + period / 2, period) - period / 2 - (s[None, :] - c[:, None])
         node, lft, rgt = s[None, :] + shift, left[None, :] + shift, right[None, :] + shift
-        a, b = lo[:, None], hi[:, None]
+    return _box_weights(node, lft, rgt, lo[:, None], hi[:, None])
+
+
+def _box_weights(node: np.ndarray, lft: np.ndarray, rgt: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """:func:`box_weights` elementwise: the weight of the hat (lft, node, rgt) for the interval [a, b]."""
     width = b - a
     point = width <= 1e-15
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -184,6 +188,58 @@ def box_weights(nodes: np.ndarray, lo: np.ndarray, hi: np.ndarray, period: float
             np.where(hr > 0, np.clip((rgt - a) / hr, 0, 1), 0.0),
         )
     return np.where(point, hat, box)
+
+
+def box_window(nodes: np.ndarray, width: float, period: float) -> int:
+    """Columns a window of :func:`box_weights_window` needs on each side of an interval's centre [-]: the most
+    nodes any interval of ``width`` [m] holds on the closed line of ``period`` [m], plus two (the hats that
+    reach into it from outside)."""
+    s = np.asarray(nodes, dtype=float)
+    ext = np.r_[s, s + period]
+    return int(np.max(np.searchsorted(ext, s + width, side="right") - np.arange(s.size))) + 2
+
+
+def box_weights_window(nodes: np.ndarray, lo: np.ndarray, hi: np.ndarray, period: float,
+                       half: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`box_weights` on a closed line, only on the ``2 half`` columns around each interval's centre.
+
+    The weights are those of :func:`box_weights` bit for bit at the window's columns, and every column
+    outside the window has weight zero there when ``half`` >= :func:`box_window` (the intervals no wider
+    than its ``width``): a load patch touches a few columns of the raceway, so a record's patches need
+    (n, 2 half) numbers instead of (n, n_columns).
+
+    Parameters
+    ----------
+    nodes : ndarray (nk,)
+        Sorted node positions [m].
+    lo, hi : ndarray (n,)
+        Intervals [m].
+    period : float
+        Length of the closed line [m].
+    half : int
+        Columns on each side of each interval's centre [-].
+
+    Returns
+    -------
+    columns : ndarray (n, 2 half) of int
+        Column indices of each interval's window.
+    weights : ndarray (n, 2 half)
+        Their weights [-].
+    """
+    s = np.asarray(nodes, dtype=float)
+    lo = np.atleast_1d(np.asarray(lo, dtype=float))
+    hi = np.atleast_1d(np.asarray(hi, dtype=float))
+    nk = s.size
+    left = np.r_[s[-1] - period, s[:-1]]
+    right = np.r_[s[1:], s[0] + period]
+    c = 0.5 * (lo + hi)
+    # the first node at or after the centre, the centre taken onto [s_0, s_0 + P)
+    first = np.searchsorted(s, s[0] + np.mod(c - s[0], period))
+    cols = np.mod(first[:, None] + np.arange(-half, half)[None, :], nk)
+    sk = s[cols]
+    shift = np.mod(sk - c[:, None] + period / 2, period) - period / 2 - (sk - c[:, None])
+    weights = _box_weights(sk + shift, left[cols] + shift, right[cols] + shift, lo[:, None], hi[:, None])
+    return cols, weights
 
 
 # ---------------------------------------------------------------------------
@@ -544,22 +600,42 @@ def modal_response(
     """Modal coordinates q (n_t, n) under modal forces (n_t, n) linear between samples, exactly.
 
     Starts from the static response to the first sample (q = f_0 / w^2, q' = 0). With ``velocity``
-    the modal velocities q' (n_t, n) too, as ``(q, q')``.
+    the modal velocities q' (n_t, n) too, as ``(q, q')``. The recurrence runs compiled
+    (:func:`_modal_steps`).
     """
     a_mat, b_mat = _ramp_recurrence(omega, zeta, h)
+    forces = np.ascontiguousarray(forces, dtype=float)
+    n = forces.shape[1]
+    x = np.stack([forces[0] / omega**2, np.zeros(n)], axis=1)  # (n, 2)
+    q, qd = _modal_steps(a_mat, b_mat, forces, x)
+    return (q, qd) if velocity else q
+
+
+@njit(cache=True)
+def _modal_steps(a_mat, b_mat, forces, x0):  # pragma: no cover - compiled
+    """The recurrence x_{k+1} = A x_k + B (f_k, f_{k+1}) of every mode from x_0 (n, 2): q and q' (n_t, n).
+
+    Scalar loops in the order of ``einsum("nij,nj->ni", A, x) + einsum("nij,nj->ni", B, (f_k, f_{k+1}))``
+    (the same numbers to the last bit), compiled: a Python loop over the samples costs numpy's per-call
+    overhead on arrays of a few modes at each of a record's tens of thousands of samples.
+    """
     nt, n = forces.shape
     q = np.empty((nt, n))
-    qd = np.zeros((nt, n)) if velocity else None
-    x = np.stack([forces[0] / omega**2, np.zeros(n)], axis=1)  # (n, 2)
-    q[0] = x[:, 0]
+    qd = np.zeros((nt, n))
+    x = x0.copy()
+    for i in range(n):
+        q[0, i] = x[i, 0]
     for k in range(nt - 1):
-        x = np.einsum("nij,nj->ni", a_mat, x) + np.einsum(
-            "nij,nj->ni", b_mat, np.stack([forces[k], forces[k + 1]], 1)
-        )
-        q[k + 1] = x[:, 0]
-        if velocity:
-            qd[k + 1] = x[:, 1]
-    return (q, qd) if velocity else q
+        for i in range(n):
+            p0 = a_mat[i, 0, 0] * x[i, 0] + a_mat[i, 0, 1] * x[i, 1]
+            p1 = a_mat[i, 1, 0] * x[i, 0] + a_mat[i, 1, 1] * x[i, 1]
+            r0 = b_mat[i, 0, 0] * forces[k, i] + b_mat[i, 0, 1] * forces[k + 1, i]
+            r1 = b_mat[i, 1, 0] * forces[k, i] + b_mat[i, 1, 1] * forces[k + 1, i]
+            x[i, 0] = p0 + r0
+            x[i, 1] = p1 + r1
+            q[k + 1, i] = x[i, 0]
+            qd[k + 1, i] = x[i, 1]
+    return q, qd
 
 
 @dataclass(frozen=True)
@@ -789,19 +865,74 @@ def response_reduced(
                               base_acceleration, h)
 
 
-def project_roller_loads(model: HousingModel, ops: ReducedOperators, load_N: np.ndarray, angle_rad: np.ndarray,
-                         chunk: int = 2048) -> tuple[np.ndarray, np.ndarray]:
-    """The roller loads' quasi-static sensor force g (n_t,) [N] and modal forces (n_t, n) [N], in chunks of time.
+@dataclass(frozen=True)
+class RacewayColumns:
+    """The raceway's node columns, where the roller loads enter the housing model.
 
-    The same numbers as ``wy @ ops.static_y + wz @ ops.static_z`` and ``wy @ ops.modal_y + wz @ ops.modal_z``
-    of :meth:`HousingModel.column_loads`, without holding the (n_t Z, n_columns) patch weights of a long
-    record at a DAQ rate at once.
+    Attributes
+    ----------
+    psi_rad : ndarray (nc,)
+        Angle of each column, increasing [rad].
+    radius_m : float
+        Raceway radius [m].
+    patch_width_m : float
+        Circumferential width of a roller's load patch [m].
     """
-    nt = load_N.shape[0]
+
+    psi_rad: np.ndarray
+    radius_m: float
+    patch_width_m: float
+
+    @classmethod
+    def of(cls, model: HousingModel) -> RacewayColumns:
+        """The columns of a housing model (its mesh's raceway and its patch width)."""
+        return cls(model.mesh.raceway_psi, model.mesh.geometry.raceway_radius_m, model.patch_width_m)
+
+    def window(self) -> int:
+        """Columns on each side of a patch's centre that hold all its weights (:func:`box_window`) [-]."""
+        return box_window(self.psi_rad * self.radius_m, self.patch_width_m, 2 * np.pi * self.radius_m)
+
+    def patch_window(self, psi_rad: np.ndarray, half: int) -> tuple[np.ndarray, np.ndarray]:
+        """The columns (n, 2 half) and weights of load patches centred at psi: :meth:`HousingModel.patch_weights`
+        at the columns it does not leave zero (:func:`box_weights_window`)."""
+        r = self.radius_m
+        s = np.atleast_1d(psi_rad).ravel() * r
+        half_width = 0.5 * self.patch_width_m
+        return box_weights_window(self.psi_rad * r, s - half_width, s + half_width, 2 * np.pi * r, half)
+
+
+def project_roller_loads(columns: RacewayColumns, ops: ReducedOperators, load_N: np.ndarray, angle_rad: np.ndarray,
+                         chunk: int = 8192) -> tuple[np.ndarray, np.ndarray]:
+    """The roller loads' quasi-static sensor force g (n_t,) [N] and modal forces (n_t, n) [N].
+
+    ``wy @ ops.static_y + wz @ ops.static_z`` and ``wy @ ops.modal_y + wz @ ops.modal_z`` with the column loads
+    wy, wz of :meth:`HousingModel.column_loads`, each roller's force spread over the few columns its patch
+    touches (:meth:`RacewayColumns.patch_window`) instead of weighting every column, in time chunks of
+    ``chunk`` samples.
+    """
+    q = np.asarray(load_N, dtype=float)
+    psi = np.asarray(angle_rad, dtype=float)
+    nt, z = q.shape
+    nc = columns.psi_rad.size
+    half = columns.window()
+    if 2 * half > nc:
+        raise ValueError(
+            f"config housing.patch_width_m = {columns.patch_width_m:g} m spans half the raceway's {nc} columns; "
+            "a roller's load patch must be narrower"
+        )
     g = np.empty(nt)
     f = np.empty((nt, ops.omega.size))
     for k in range(0, nt, chunk):
-        wy, wz = model.column_loads(load_N[k:k + chunk], angle_rad[k:k + chunk])
+        qk, pk = q[k:k + chunk], psi[k:k + chunk]
+        n = qk.shape[0]
+        cols, w = columns.patch_window(pk, half)
+        cols, w = cols.reshape(n, z, -1), w.reshape(n, z, -1)
+        rows = np.arange(n)[:, None]
+        fy, fz = qk * np.sin(pk), -qk * np.cos(pk)  # each roller's force Q n(psi), n = (sin psi, -cos psi)
+        wy, wz = np.zeros((n, nc)), np.zeros((n, nc))
+        for j in range(z):  # the rollers in turn, as the column loads' sum over them runs
+            wy[rows, cols[:, j]] += fy[:, j, None] * w[:, j]
+            wz[rows, cols[:, j]] += fz[:, j, None] * w[:, j]
         g[k:k + chunk] = wy @ ops.static_y + wz @ ops.static_z
         f[k:k + chunk] = wy @ ops.modal_y + wz @ ops.modal_z
     return g, f

@@ -43,7 +43,7 @@ from ..bearing import base_motion as bm
 from ..bearing import housing_fem as fem
 from ..bearing import lpm as brg
 from ..bearing import transient as tr
-from ..bearing.housing_mesh import build_housing_mesh
+from ..bearing.reduced_housing import Housing, build_housing
 from ..signals import daq, detectors
 from ..signals import outputs as sout
 from ..signals.detectors import envelope as envelope_detector
@@ -126,64 +126,6 @@ def accelerometer_daq_settings(config: dict) -> daq.NoiseSettings:
                              adc_bits=d["adc_bits"], range_V=d["range_V"])
 
 
-# --------------------------------------------------------------------------- the housing, once per case
-
-
-@dataclass(frozen=True)
-class Housing:
-    """The housing model of one case with its modes and the operators of loads, base motion and probe."""
-
-    model: fem.HousingModel
-    modes: fem.Modes
-    ops: fem.ReducedOperators
-    base: fem.BaseMotionOperators
-
-    def record(self) -> dict:
-        """What the results say about it: DOFs, modes kept, the effective mass they carry, the probe."""
-        frac = self.base.effective_mass_fraction()
-        p = self.base.probes[0]
-        return {
-            "n_dofs": self.model.n_dofs,
-            "n_modes": int(self.modes.omega_rad_s.size),
-            "highest_mode_Hz": float(self.modes.frequencies_Hz[-1]),
-            "first_mode_Hz": float(self.modes.frequencies_Hz[0]),
-            "effective_mass_fraction_y": float(frac[0, -1]),
-            "effective_mass_fraction_z": float(frac[1, -1]),
-            "dragged_mass_kg": float(self.base.rigid_mass_kg[0]),
-            "sensor_force_per_base_acceleration_z_N_per_m_per_s2": float(self.base.static_sensor[1]),
-            "accelerometer_node_m": list(p.coordinates_m),
-            "accelerometer_axis": list(p.normal),
-        }
-
-
-#: Modes asked for first: the housing of the paper's geometry has 15-20 below 32 kHz (2.5 x 12.8 kHz).
-FIRST_MODE_COUNT = 20
-
-
-def modes_to(model: fem.HousingModel, top_Hz: float, start: int, seed: int) -> fem.Modes:
-    """The housing's modes up to past ``top_Hz``: max(``start``, 20) modes, 1.5 times as many until the highest
-    passes it (each try one shift-invert Lanczos solve on the factors of K)."""
-    n = max(int(start), FIRST_MODE_COUNT)
-    while True:
-        modes = fem.compute_modes(model, min(n, model.n_dofs - 2), seed=seed)
-        if modes.frequencies_Hz[-1] >= top_Hz or n >= model.n_dofs - 2:
-            return modes
-        n = int(1.5 * n) + 1
-
-
-def build_housing(config: dict, faulty: bool, settings: ComparisonSettings) -> Housing:
-    """The housing mesh of the case (``housing.mesh_level``), its model, its modes to ``mode_cutoff_ratio``
-    times the Nyquist frequency, the Rayleigh damping, and the probe at ``accelerometer.position``."""
-    h = config["housing"]
-    mesh = build_housing_mesh(tr.housing_geometry(config), faulty, h["mesh_level"])
-    model = tr.make_model(mesh, config)
-    modes = modes_to(model, settings.mode_cutoff_ratio * settings.nyquist_Hz, h["n_modes"], config["seed"])
-    alpha, beta = fem.rayleigh_coefficients(h["damping_ratio"], h["damping_band_Hz"])
-    ops = fem.reduced_operators(model, modes, alpha, beta)
-    base = fem.base_motion_operators(model, modes, (fem.mounting_probe(mesh, settings.position),))
-    return Housing(model, modes, ops, base)
-
-
 # --------------------------------------------------------------------------- one run of the rig
 
 
@@ -200,7 +142,7 @@ def run_rig(config: dict, housing: Housing, faulty: bool, surroundings: bm.BaseM
     run = tr.run_lpm(b, faulty, "compiled", config["seed"], base_motion=motion)
     t = run["time_s"]
     a = run.get("base_acceleration_m_per_s2", np.zeros((t.size, 2)))
-    g, f = fem.project_roller_loads(housing.model, housing.ops, run["load_N"], run["angle_rad"])
+    g, f = fem.project_roller_loads(housing.columns, housing.ops, run["load_N"], run["angle_rad"])
     res = fem.response_projected(housing.ops, housing.base, g, f, a, b["time_step_s"])
     return {
         "time_s": t,
@@ -299,7 +241,8 @@ def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_
     pzt_noise, acc_noise = pzt_noise_settings(cfg), accelerometer_daq_settings(cfg)
     fault = true_type(cfg)
     if housings is None:
-        housings = {faulty: build_housing(cfg, faulty, settings) for faulty in (False, True)}
+        housings = {faulty: build_housing(cfg, faulty) for faulty in (False, True)}
+    housings = {faulty: h.at(settings.position) for faulty, h in housings.items()}
     rows = {s: {"faulty": [], "healthy": []} for s in SENSORS}
     records, levels, rms = {}, {s: {} for s in SENSORS}, []
     for faulty in (False, True):

@@ -1,5 +1,6 @@
 """Stage of the rule sensor_comparison and the study kind of the same name: the embedded sensor against the
-housing accelerometer (:mod:`piezobearing.sensor.comparison`), the results written.
+housing accelerometer (:mod:`piezobearing.sensor.comparison`) on the housing models of the rule
+sensor_comparison_housing (:mod:`piezobearing.bearing.reduced_housing`), the results written.
 """
 
 from __future__ import annotations
@@ -9,6 +10,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from ..bearing import reduced_housing as rh
 from ..bearing.lpm import BearingGeometry, kinematic_frequencies
 from ..io import read_harmonic, read_json, write_csv, write_json
 from ..sensor import comparison as cmp
@@ -51,14 +53,23 @@ def _summary(result: dict) -> dict:
     return {k: v for k, v in result.items() if k != "records"}
 
 
-def sensor_comparison(resistance_json: str, harmonic_csv: str | None, out_json: str, out_spectra: str,
-                      config: dict) -> None:
+def read_housings(config: dict, healthy_npz: str | None, faulty_npz: str | None) -> dict | None:
+    """The healthy and faulty housing models of rule sensor_comparison_housing, checked against ``config``; None
+    without files (the comparison then builds them itself)."""
+    if healthy_npz is None and faulty_npz is None:
+        return None
+    reads = rh.housing_reads(config)
+    return {False: rh.load_housing(healthy_npz, False, reads), True: rh.load_housing(faulty_npz, True, reads)}
+
+
+def sensor_comparison(resistance_json: str, harmonic_csv: str | None, housing_healthy: str, housing_faulty: str,
+                      out_json: str, out_spectra: str, config: dict) -> None:
     """Rule sensor_comparison: the paper's case seen by both sensors, with the frame at rest and under the
-    configured base motion; sensor_comparison.json and the envelope spectra for the figure."""
+    configured base motion; sensor_comparison.json and the envelope spectra for the figure. ``housing_*``: the
+    housing's models (rule sensor_comparison_housing)."""
     circuit, harmonic = _inputs(config, resistance_json, harmonic_csv)
     settings = cmp.ComparisonSettings.from_config(config)
-    cfg = cmp.rig_config(config, settings)
-    housings = {faulty: cmp.build_housing(cfg, faulty, settings) for faulty in (False, True)}
+    housings = read_housings(config, housing_healthy, housing_faulty)
     results, spectra = {}, []
     for condition, c in zip(CONDITIONS, (at_rest(config), config), strict=True):
         res = cmp.compare(c, circuit, harmonic, housings, keep_records=True)
@@ -86,13 +97,15 @@ def sensor_comparison(resistance_json: str, harmonic_csv: str | None, out_json: 
     write_csv(pd.concat(spectra, ignore_index=True), out_spectra)
 
 
-def study_case(config: dict, outdir: Path, resistance: str, harmonic: str | None = None) -> dict:
+def study_case(config: dict, outdir: Path, resistance: str, harmonic: str | None = None,
+               housing_healthy: str | None = None, housing_faulty: str | None = None) -> dict:
     """Study kind sensor_comparison: one case (speed, fault, disturbance level, mounting place) compared.
 
-    Returns the case's summary with ``rows``: one per sensor (the study's summary.csv rows).
+    ``housing_*``: the case's housing models (rule sensor_comparison_housing); without them the case builds
+    its own. Returns the case's summary with ``rows``: one per sensor (the study's summary.csv rows).
     """
     circuit, harmonic_fem = _inputs(config, resistance, harmonic)
-    res = cmp.compare(config, circuit, harmonic_fem)
+    res = cmp.compare(config, circuit, harmonic_fem, read_housings(config, housing_healthy, housing_faulty))
     b = config["bearing"]
     common = {
         "shaft_speed_rpm": b["shaft_speed_rpm"],

@@ -1,0 +1,179 @@
+"""The housing's reduced model as the sensor comparison's runs use it, computed once per mesh and stored.
+
+The mesh, the model, its modes to the cutoff (``sensor_comparison.mode_cutoff_ratio`` times the
+accelerometer DAQ's Nyquist frequency) and the modal operators of the roller loads, the base motion and the
+accelerometer's mounting places depend on the housing's config values alone (its geometry and defect, the mesh
+level, the sensor's spring, the damping, the cutoff: ``piezobearing.registry.READS["sensor_comparison_housing"]``),
+not on the speed, the surroundings or the seeds. The workflow computes them once per healthy or faulty mesh
+(rule ``sensor_comparison_housing``, :func:`write_housing`) and every comparison on that mesh, the main rule's
+and the study's cases, reads them (:func:`load_housing`): the same arrays, to the bit, as building them in the
+case.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..registry import declared
+from . import housing_fem as fem
+from . import transient as tr
+from .housing_mesh import build_housing_mesh
+
+
+@dataclass(frozen=True)
+class Housing:
+    """The housing's reduced model as the rig's runs use it: the raceway's columns, the modal operators of the
+    roller loads, of the base motion and of the accelerometer's mounting places.
+
+    It depends on the housing's mesh (geometry, defect, level), the sensor's spring, the damping and the
+    modes' cutoff, not on the speed, the surroundings or the seeds: :func:`build_housing` computes it once per
+    mesh (the workflow's rule ``sensor_comparison_housing``, :func:`save_housing`), every case on that mesh
+    reads it (:func:`load_housing`).
+
+    Attributes
+    ----------
+    columns : RacewayColumns
+        Where the roller loads enter.
+    ops : ReducedOperators
+        Modes, damping, and the sensor's and roller loads' modal operators.
+    base : BaseMotionOperators
+        The base motion's operators and one probe per mounting place (:data:`fem.MOUNTING_POSITIONS`) or, after
+        :meth:`at`, the accelerometer's one.
+    n_dofs : int
+        Free DOFs of the half model [-].
+    """
+
+    columns: fem.RacewayColumns
+    ops: fem.ReducedOperators
+    base: fem.BaseMotionOperators
+    n_dofs: int
+
+    def at(self, position: str) -> Housing:
+        """The housing with the probe at ``position`` alone (``accelerometer.position``)."""
+        names = [p.position for p in self.base.probes]
+        if position not in names:
+            raise ValueError(f"config accelerometer.position must be one of {', '.join(names)}, got {position!r}")
+        i = names.index(position)
+        b = self.base
+        one = replace(b, probes=b.probes[i:i + 1], probe_rows=b.probe_rows[i:i + 1],
+                      probe_modal=b.probe_modal[i:i + 1], probe_base=b.probe_base[i:i + 1])
+        return replace(self, base=one)
+
+    def record(self) -> dict:
+        """What the results say about it: DOFs, modes kept, the effective mass they carry, the (first) probe."""
+        frac = self.base.effective_mass_fraction()
+        p = self.base.probes[0]
+        f = self.ops.omega / (2 * np.pi)
+        return {
+            "n_dofs": self.n_dofs,
+            "n_modes": int(f.size),
+            "highest_mode_Hz": float(f[-1]),
+            "first_mode_Hz": float(f[0]),
+            "effective_mass_fraction_y": float(frac[0, -1]),
+            "effective_mass_fraction_z": float(frac[1, -1]),
+            "dragged_mass_kg": float(self.base.rigid_mass_kg[0]),
+            "sensor_force_per_base_acceleration_z_N_per_m_per_s2": float(self.base.static_sensor[1]),
+            "accelerometer_node_m": list(p.coordinates_m),
+            "accelerometer_axis": list(p.normal),
+        }
+
+
+#: Modes asked for first: the housing of the paper's geometry has 15-20 below 32 kHz (2.5 x 12.8 kHz).
+FIRST_MODE_COUNT = 20
+#: The rule that builds a housing model (its config keys: piezobearing.registry.READS).
+HOUSING_RULE = "sensor_comparison_housing"
+
+
+def modes_to(model: fem.HousingModel, top_Hz: float, start: int, seed: int) -> fem.Modes:
+    """The housing's modes up to past ``top_Hz``: max(``start``, 20) modes, 1.5 times as many until the highest
+    passes it (each try one shift-invert Lanczos solve on the factors of K)."""
+    n = max(int(start), FIRST_MODE_COUNT)
+    while True:
+        modes = fem.compute_modes(model, min(n, model.n_dofs - 2), seed=seed)
+        if modes.frequencies_Hz[-1] >= top_Hz or n >= model.n_dofs - 2:
+            return modes
+        n = int(1.5 * n) + 1
+
+
+def mode_top_Hz(config: dict) -> float:
+    """The modes' cutoff: ``sensor_comparison.mode_cutoff_ratio`` times the accelerometer DAQ's Nyquist frequency
+    [Hz]."""
+    return config["sensor_comparison"]["mode_cutoff_ratio"] * (0.5 * config["accelerometer"]["daq"]["sample_rate_Hz"])
+
+
+def build_housing(config: dict, faulty: bool) -> Housing:
+    """The housing mesh of the case (``housing.mesh_level``), its model, its modes to :func:`mode_top_Hz`, the
+    Rayleigh damping, and a probe at every mounting place."""
+    h = config["housing"]
+    mesh = build_housing_mesh(tr.housing_geometry(config), faulty, h["mesh_level"])
+    model = tr.make_model(mesh, config)
+    modes = modes_to(model, mode_top_Hz(config), h["n_modes"], config["seed"])
+    alpha, beta = fem.rayleigh_coefficients(h["damping_ratio"], h["damping_band_Hz"])
+    ops = fem.reduced_operators(model, modes, alpha, beta)
+    probes = tuple(fem.mounting_probe(mesh, p) for p in fem.MOUNTING_POSITIONS)
+    base = fem.base_motion_operators(model, modes, probes)
+    return Housing(fem.RacewayColumns.of(model), ops, base, model.n_dofs)
+
+
+def housing_reads(config: dict) -> dict:
+    """The config values a housing model depends on (the rule ``sensor_comparison_housing``'s), JSON-ready."""
+    return declared(config, HOUSING_RULE)
+
+
+def save_housing(housing: Housing, faulty: bool, reads: dict, path: str | Path) -> None:
+    """Write a housing model to ``path`` (.npz), with the config values it was built from."""
+    o, b, c = housing.ops, housing.base, housing.columns
+    rows = b.probe_rows.tocsr()
+    np.savez(
+        path,
+        reads_json=np.array(json.dumps(reads, sort_keys=True)),
+        faulty=np.array(bool(faulty)),
+        n_dofs=np.array(housing.n_dofs),
+        columns_psi_rad=c.psi_rad, columns_radius_m=np.array(c.radius_m),
+        columns_patch_width_m=np.array(c.patch_width_m),
+        **{f"ops_{k}": getattr(o, k) for k in fem.ReducedOperators.__dataclass_fields__},
+        base_rigid=b.rigid, base_participation=b.participation, base_rigid_mass_kg=b.rigid_mass_kg,
+        base_static_sensor=b.static_sensor, base_probe_modal=b.probe_modal, base_probe_base=b.probe_base,
+        probe_rows_data=rows.data, probe_rows_indices=rows.indices, probe_rows_indptr=rows.indptr,
+        probe_rows_shape=np.array(rows.shape),
+        probe_position=np.array([p.position for p in b.probes]),
+        probe_node=np.array([p.node for p in b.probes]),
+        probe_coordinates_m=np.array([p.coordinates_m for p in b.probes]),
+        probe_normal=np.array([p.normal for p in b.probes]),
+    )
+
+
+def load_housing(path: str | Path, faulty: bool, reads: dict) -> Housing:
+    """The housing model in ``path`` (:func:`save_housing`); stops if it was built for another case or config."""
+    with np.load(path, allow_pickle=False) as d:
+        if bool(d["faulty"]) != bool(faulty) or json.loads(str(d["reads_json"])) != json.loads(json.dumps(reads)):
+            raise ValueError(
+                f"{path}: this housing model was built for another {'faulty' if faulty else 'healthy'} mesh or "
+                f"config; rebuild it (snakemake rule {HOUSING_RULE})"
+            )
+        ops = fem.ReducedOperators(**{k: d[f"ops_{k}"] for k in fem.ReducedOperators.__dataclass_fields__})
+        probes = tuple(
+            fem.Probe(str(pos), int(node), tuple(float(v) for v in xyz), tuple(float(v) for v in n))
+            for pos, node, xyz, n in zip(d["probe_position"], d["probe_node"], d["probe_coordinates_m"],
+                                         d["probe_normal"], strict=True)
+        )
+        rows = sp.csr_matrix((d["probe_rows_data"], d["probe_rows_indices"], d["probe_rows_indptr"]),
+                             shape=tuple(d["probe_rows_shape"]))
+        base = fem.BaseMotionOperators(
+            rigid=d["base_rigid"], participation=d["base_participation"], rigid_mass_kg=d["base_rigid_mass_kg"],
+            static_sensor=d["base_static_sensor"], probes=probes, probe_rows=rows, probe_modal=d["base_probe_modal"],
+            probe_base=d["base_probe_base"],
+        )
+        columns = fem.RacewayColumns(d["columns_psi_rad"], float(d["columns_radius_m"]),
+                                     float(d["columns_patch_width_m"]))
+        return Housing(columns, ops, base, int(d["n_dofs"]))
+
+
+def write_housing(config: dict, faulty: bool, out_npz: str | Path) -> None:
+    """Rule sensor_comparison_housing: the housing model of one mesh (healthy or faulty), built and written."""
+    save_housing(build_housing(config, faulty), faulty, housing_reads(config), out_npz)
