@@ -43,6 +43,9 @@ def main() -> None:
     parser.add_argument("--out", default="results/validation")
     args = parser.parse_args()
     data, out = Path(args.data), Path(args.out)
+    if not (data / "labels.csv").is_file():
+        parser.error(f"{data}: no labels.csv here; give the CWRU fan-end folder (its README, feNN.mat, feNN.yaml, "
+                     "labels.csv) as the first argument")
     labels = list(csv.DictReader((data / "labels.csv").open()))
     rows, cpu = [], 0.0
     for lab in labels:
