@@ -13,7 +13,8 @@ margin, margin over the healthy rig and clean RMS. Everything but the mesh level
         --resistance results/calibration/resistance.json --harmonic results/sensor/harmonic.csv \
         --out results/validation/sensor_comparison_mesh.json
 
-``--resistance`` and ``--harmonic``: the workflow's resistance fit and sensor FEM response on that config
+``--duration``: another record length [s] (the mesh's effect against the record's). ``--resistance`` and
+``--harmonic``: the workflow's resistance fit and sensor FEM response on that config
 (run the workflow first); without ``--harmonic`` the sensor FEM's correction is off.
 """
 
@@ -56,6 +57,7 @@ def main() -> None:
     ap.add_argument("--configfile", default=None, help="merged over config/config.yaml (default: the paper's)")
     ap.add_argument("--levels", type=float, nargs="*", default=None)
     ap.add_argument("--positions", nargs="*", default=list(fem.MOUNTING_POSITIONS))
+    ap.add_argument("--duration", type=float, default=None, help="record length [s] (default: bearing.duration_s)")
     ap.add_argument("--resistance", required=True)
     ap.add_argument("--harmonic", default=None)
     ap.add_argument("--out", default="results/validation/sensor_comparison_mesh.json")
@@ -64,6 +66,8 @@ def main() -> None:
     h = config["housing"]
     levels = args.levels or sorted({*h["convergence_levels"], h["mesh_level"]})
     config["signals"]["sensor_fem_correction"] = args.harmonic is not None
+    if args.duration is not None:
+        config["bearing"]["duration_s"] = args.duration
     circuit = sout.sensor_circuit(config, read_json(args.resistance), args.resistance)
     harmonic = read_harmonic(args.harmonic) if args.harmonic else None
     band_top = 0.5 * config["accelerometer"]["daq"]["sample_rate_Hz"]

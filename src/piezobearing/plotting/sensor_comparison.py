@@ -89,7 +89,7 @@ def summary_figure(df: pd.DataFrame):
                 continue
             p, a = wide.loc[(row, level), "pzt"], wide.loc[(row, level), "accelerometer"]
             ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 1, 1, color=OUTCOME_COLOURS[_outcome(p, a)]))
-            ax.text(j, i, f"P {p:+.0f}\nA {a:+.0f}", ha="center", va="center", fontsize=6.5)
+            ax.text(j, i, f"P {p:+.1f}\nA {a:+.1f}", ha="center", va="center", fontsize=6.5)
     ax.set_xlim(-0.5, len(levels) - 0.5)
     ax.set_ylim(len(rows) - 0.5, -0.5)
     ax.set_xticks(range(len(levels)))
