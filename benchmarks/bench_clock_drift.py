@@ -27,10 +27,12 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-from piezobearing import config as cfg  # noqa: E402
+import piezobearing.config  # noqa: E402
 from piezobearing.diagnosis import fit as fit_module  # noqa: E402
-from piezobearing.diagnosis.calibration.effects import ForceRecord  # noqa: E402
-from piezobearing.diagnosis.calibration.effects import clock_drift as cd  # noqa: E402
+from piezobearing.diagnosis.calibration.effects import (
+    ForceRecord,  # noqa: E402
+    clock_drift,  # noqa: E402
+)
 from piezobearing.diagnosis.calibration.subject import diagnose_record  # noqa: E402
 from piezobearing.diagnosis.settings import DiagnosticsSettings  # noqa: E402
 from piezobearing.sensor.calibration import detect_impulses  # noqa: E402
@@ -46,9 +48,9 @@ HIDDEN = {
 
 def kernel_previous(frac: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The previous taps: numpy's i0 and sinc for every tap."""
-    m = np.arange(-cd.HALF + 1, cd.HALF + 1)
+    m = np.arange(-clock_drift.HALF + 1, clock_drift.HALF + 1)
     t = np.asarray(frac, dtype=float)[:, None] - m[None, :]
-    win = np.i0(cd.BETA * np.sqrt(np.clip(1 - (t / cd.HALF) ** 2, 0, None))) / np.i0(cd.BETA)
+    win = np.i0(clock_drift.BETA * np.sqrt(np.clip(1 - (t / clock_drift.HALF) ** 2, 0, None))) / np.i0(clock_drift.BETA)
     h = np.sinc(t) * win
     return m, h / h.sum(axis=1, keepdims=True)
 
@@ -59,21 +61,21 @@ def noise_gain_previous(f_per_sample: np.ndarray, epsilon: float, n: int, k: int
     m, h = kernel_previous(shift - np.floor(shift))
     f = np.asarray(f_per_sample, dtype=float)
     out = np.empty(f.shape)
-    for a in range(0, f.size, cd.CHUNK):
-        e = np.exp(-2j * np.pi * np.outer(m, f[a : a + cd.CHUNK]))
-        out[a : a + cd.CHUNK] = np.sqrt(np.mean(np.abs(h @ e) ** 2, axis=0))
+    for a in range(0, f.size, clock_drift.CHUNK):
+        e = np.exp(-2j * np.pi * np.outer(m, f[a : a + clock_drift.CHUNK]))
+        out[a : a + clock_drift.CHUNK] = np.sqrt(np.mean(np.abs(h @ e) ** 2, axis=0))
     return out
 
 
 @contextlib.contextmanager
 def previous_method():
     """clock_drift's previous kernel and gain, numpy's FFT in the likelihood."""
-    saved = cd.kernel, cd.noise_gain, fit_module.sfft
-    cd.kernel, cd.noise_gain, fit_module.sfft = kernel_previous, noise_gain_previous, np.fft
+    saved = clock_drift.kernel, clock_drift.noise_gain, fit_module.sfft
+    clock_drift.kernel, clock_drift.noise_gain, fit_module.sfft = kernel_previous, noise_gain_previous, np.fft
     try:
         yield
     finally:
-        cd.kernel, cd.noise_gain, fit_module.sfft = saved
+        clock_drift.kernel, clock_drift.noise_gain, fit_module.sfft = saved
 
 
 def cpu(fn, repeat: int) -> tuple[float, object]:
@@ -105,19 +107,20 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--cases", nargs="*", default=list(HIDDEN), choices=list(HIDDEN))
     a = ap.parse_args()
-    config = cfg.load()
+    config = piezobearing.config.load()
     n = 25001
     x = np.random.default_rng(3).normal(size=n + 16)
     f = np.fft.rfftfreq(n)
     parts = {}
     for name, new, old in (
-        ("reading (drifted), 25001 samples", lambda: cd.drifted(x, 1e-4, 16), None),
-        ("noise gain, 12501 frequencies", lambda: cd.noise_gain(f, 1e-4, n), lambda: noise_gain_previous(f, 1e-4, n)),
+        ("reading (drifted), 25001 samples", lambda: clock_drift.drifted(x, 1e-4, 16), None),
+        ("noise gain, 12501 frequencies", lambda: clock_drift.noise_gain(f, 1e-4, n),
+         lambda: noise_gain_previous(f, 1e-4, n)),
     ):
         if old is None:
             def old():
                 with previous_method():
-                    return cd.drifted(x, 1e-4, 16)
+                    return clock_drift.drifted(x, 1e-4, 16)
         t_old, y_old = cpu(old, a.repeat)
         t_new, y_new = cpu(new, a.repeat)
         parts[name] = {"previous_cpu_s": t_old, "current_cpu_s": t_new, "ratio_previous_over_current": t_old / t_new,

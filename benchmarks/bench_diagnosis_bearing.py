@@ -36,7 +36,7 @@ import sys
 import time
 from pathlib import Path
 
-from piezobearing import config as cfg
+from piezobearing import config
 from piezobearing.diagnosis.bearing.subject import SUBJECT, synthesise
 from piezobearing.stages.bearing_diagnosis import influence_from_config
 
@@ -72,7 +72,7 @@ def coverage(seeds: int, names=("outer_race_defect", "clearance"), snr: float = 
     from piezobearing.diagnosis.selection import add_effect
     from piezobearing.diagnosis.settings import DiagnosticsSettings
 
-    c = copy.deepcopy(cfg.load(CONFIG / "ci.yaml"))
+    c = copy.deepcopy(config.load(CONFIG / "ci.yaml"))
     c["bearing_diagnosis"].update(synthetic_duration_s=0.5, synthetic_sample_rate_Hz=2550.0, synthetic_snr_dB=snr)
     infl = influence_from_config(c)
     st = DiagnosticsSettings.from_config(c["diagnostics"])
@@ -140,7 +140,7 @@ def main() -> None:
         from piezobearing.diagnosis.bearing import subject
 
         subject.floor_prepass = lambda problem, *_args, **_kw: problem
-    c = cfg.load(CONFIG / "ci.yaml") if args.ci or args.verify_only else cfg.load()
+    c = config.load(CONFIG / "ci.yaml") if args.ci or args.verify_only else config.load()
     t0 = time.perf_counter()
     influence = influence_from_config(c)
     out = {"cpu_count": os.cpu_count(), "load_average_1min": os.getloadavg()[0], "influence_line_s": time.perf_counter() - t0,
@@ -168,7 +168,7 @@ def main() -> None:
         Path(args.out).write_text(json.dumps(out, indent=2) + "\n")
     if args.verify or args.verify_only:
         rows = []
-        cv = copy.deepcopy(cfg.load(CONFIG / "ci.yaml"))
+        cv = copy.deepcopy(config.load(CONFIG / "ci.yaml"))
         cv["diagnostics"]["max_steps"] = 1
         infl_v = influence if args.ci or args.verify_only else influence_from_config(cv)
         for snr in args.snr:

@@ -31,7 +31,7 @@ import json
 import time
 from pathlib import Path
 
-from piezobearing import config as cfg
+import piezobearing.config
 from piezobearing.diagnosis.calibration.effects import CATALOGUE, ForceRecord
 from piezobearing.diagnosis.calibration.subject import diagnose_record
 from piezobearing.diagnosis.settings import DiagnosticsSettings
@@ -109,7 +109,7 @@ def main() -> None:
     ap.add_argument("--rate-Hz", type=float, default=None)
     ap.add_argument("--out", default="results/benchmarks/diagnosis_seeds.json")
     args = ap.parse_args()
-    config = cfg.load()
+    config = piezobearing.config.load()
     syn = config["synthesis"]
     if args.duration_s is not None:  # as many presses per second as the default record
         syn["n_impulses"] = max(2, int(round(syn["n_impulses"] * args.duration_s / syn["duration_s"])))

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from piezobearing import config as cfg
+import piezobearing.config
 from piezobearing.diagnosis.calibration.effects import CATALOGUE, ForceRecord
 from piezobearing.diagnosis.calibration.subject import diagnose_record
 from piezobearing.diagnosis.settings import DiagnosticsSettings
@@ -64,7 +64,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=2)
     ap.add_argument("--out", default="results/benchmarks/diagnostics.json")
     args = ap.parse_args()
-    config = cfg.load()
+    config = piezobearing.config.load()
     settings = DiagnosticsSettings.from_config(config["diagnostics"])
     circuit = nominal_circuit(config, config["calibration"]["initial_resistance_ohm"])
     p = PressProtocol.from_config(config["synthesis"])

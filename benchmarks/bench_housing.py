@@ -27,9 +27,8 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse.linalg as spla
 
-from piezobearing import config as cfg
-from piezobearing.bearing import housing_fem as fem
-from piezobearing.bearing import transient as st
+import piezobearing.config
+from piezobearing.bearing import housing_fem, transient
 from piezobearing.bearing.housing_mesh import build_housing_mesh
 
 CONFIG = Path(__file__).resolve().parents[1] / "config"  # the checkout's configs (ci.yaml)
@@ -41,7 +40,7 @@ def main() -> None:
     ap.add_argument("--duration", type=float, default=None, help="record length [s] (default: the config's)")
     ap.add_argument("--out", default="results/benchmarks/housing.json")
     args = ap.parse_args()
-    config = cfg.load(CONFIG / "ci.yaml") if args.ci else cfg.load()
+    config = piezobearing.config.load(CONFIG / "ci.yaml") if args.ci else piezobearing.config.load()
     if args.duration is not None:
         config["bearing"]["duration_s"] = args.duration
     b, h = config["bearing"], config["housing"]
@@ -55,24 +54,24 @@ def main() -> None:
     }
 
     t0 = time.perf_counter()
-    run = st.run_lpm(b, faulty=False)
+    run = transient.run_lpm(b, faulty=False)
     out["lpm_s"] = time.perf_counter() - t0
-    mesh = build_housing_mesh(st.housing_geometry(config), False, h["mesh_level"])
+    mesh = build_housing_mesh(transient.housing_geometry(config), False, h["mesh_level"])
     t0 = time.perf_counter()
-    model = st.make_model(mesh, config)
+    model = transient.make_model(mesh, config)
     out["assemble_s"] = time.perf_counter() - t0
     out["n_dofs"] = model.n_dofs
     wy, wz = model.column_loads(run["load_N"], run["angle_rad"])
     out["n_steps"] = len(run["time_s"])
-    alpha, beta = fem.rayleigh_coefficients(h["damping_ratio"], h["damping_band_Hz"])
+    alpha, beta = housing_fem.rayleigh_coefficients(h["damping_ratio"], h["damping_band_Hz"])
 
     t0 = time.perf_counter()
     model.factor()
-    modes = fem.compute_modes(model, h["n_modes"], seed=config["seed"])
-    red = fem.sensor_force_reduced(fem.reduced_operators(model, modes, alpha, beta), wy, wz, dt)
+    modes = housing_fem.compute_modes(model, h["n_modes"], seed=config["seed"])
+    red = housing_fem.sensor_force_reduced(housing_fem.reduced_operators(model, modes, alpha, beta), wy, wz, dt)
     out["reduced_s"] = time.perf_counter() - t0
 
-    d = fem.sensor_force_direct(model, wy, wz, dt, alpha, beta, h["rho_inf"])
+    d = housing_fem.sensor_force_direct(model, wy, wz, dt, alpha, beta, h["rho_inf"])
     out["direct_s"] = d["seconds"]
     out["speedup"] = out["direct_s"] / out["reduced_s"]
     diff = d["force_N"] - red["force_N"]

@@ -24,9 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from piezobearing import config as cfg
-from piezobearing.bearing import housing_fem as fem
-from piezobearing.bearing import transient as st
+import piezobearing.config
+from piezobearing.bearing import housing_fem, transient
 from piezobearing.bearing.housing_mesh import build_housing_mesh
 
 CONFIG = Path(__file__).resolve().parents[1] / "config"  # the checkout's configs (ci.yaml)
@@ -40,23 +39,23 @@ def main() -> None:
     ap.add_argument("--modes", type=int, nargs="+", default=[12, 24, 40, 60])
     ap.add_argument("--out", default="results/benchmarks/housing_rate.json")
     args = ap.parse_args()
-    config = cfg.load(CONFIG / "ci.yaml") if args.ci else cfg.load()
+    config = piezobearing.config.load(CONFIG / "ci.yaml") if args.ci else piezobearing.config.load()
     b, h = config["bearing"], config["housing"]
     dt = 1.0 / args.rate
     b.update(time_step_s=dt, duration_s=args.duration, substeps=max(1, int(round(dt / 10e-6))))
     out: dict = {"cpu_count": os.cpu_count(), "config": "ci" if args.ci else "paper", "rate_Hz": args.rate,
                  "nyquist_Hz": 0.5 * args.rate, "duration_s": args.duration, "mesh_level": h["mesh_level"]}
     t0 = time.perf_counter()
-    run = st.run_lpm(b, faulty=True)
+    run = transient.run_lpm(b, faulty=True)
     out["lpm_s"] = time.perf_counter() - t0
-    mesh = build_housing_mesh(st.housing_geometry(config), True, h["mesh_level"])
-    model = st.make_model(mesh, config)
+    mesh = build_housing_mesh(transient.housing_geometry(config), True, h["mesh_level"])
+    model = transient.make_model(mesh, config)
     out["n_dofs"] = model.n_dofs
     wy, wz = model.column_loads(run["load_N"], run["angle_rad"])
     out["n_steps"] = len(run["time_s"])
-    alpha, beta = fem.rayleigh_coefficients(h["damping_ratio"], h["damping_band_Hz"])
+    alpha, beta = housing_fem.rayleigh_coefficients(h["damping_ratio"], h["damping_band_Hz"])
     t0 = time.perf_counter()
-    d = fem.sensor_force_direct(model, wy, wz, dt, alpha, beta, h["rho_inf"])
+    d = housing_fem.sensor_force_direct(model, wy, wz, dt, alpha, beta, h["rho_inf"])
     out["direct_s"] = time.perf_counter() - t0
     ref = d["force_N"]
     out["sensor_force_peak_to_peak_N"] = float(np.ptp(ref))
@@ -64,8 +63,8 @@ def main() -> None:
     runs = []
     for n in args.modes:
         t0 = time.perf_counter()
-        modes = fem.compute_modes(model, n, seed=config["seed"])
-        red = fem.sensor_force_reduced(fem.reduced_operators(model, modes, alpha, beta), wy, wz, dt)
+        modes = housing_fem.compute_modes(model, n, seed=config["seed"])
+        red = housing_fem.sensor_force_reduced(housing_fem.reduced_operators(model, modes, alpha, beta), wy, wz, dt)
         sec = time.perf_counter() - t0
         diff = ref - red["force_N"]
         f = modes.frequencies_Hz

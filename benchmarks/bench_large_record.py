@@ -43,9 +43,9 @@ OUT = REPO / "results" / "benchmarks" / "large_record.json"
 CHILD = r"""
 import json, sys, time
 from pathlib import Path
-from piezobearing import config as cfg
+from piezobearing import config
 what, record, work = sys.argv[1], sys.argv[2], Path(sys.argv[3])
-c = cfg.load(CONFIG / "ci.yaml")
+c = config.load(CONFIG / "ci.yaml")
 c["calibration"]["measurement"] = record
 t0 = time.perf_counter()
 extra = {}
@@ -74,11 +74,11 @@ print(json.dumps({"seconds": time.perf_counter() - t0, "cpu_seconds": ru.ru_utim
 
 def make_record(rows: int, path: Path) -> float:
     """A record of ``rows`` samples from the CI synthetic record repeated; its size [MB]."""
-    from piezobearing import config as cfg
+    from piezobearing import config
     from piezobearing.stages.calibration import nominal_circuit
     from piezobearing.synthesis import PressProtocol, synthesize
 
-    c = cfg.load(CONFIG / "ci.yaml")
+    c = config.load(CONFIG / "ci.yaml")
     m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"])
     n = m.time_s.size - 1
     reps = -(-rows // n)

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from piezobearing.bearing import lpm as brg
+from piezobearing.bearing import lpm
 from piezobearing.config import load as load_config
 from piezobearing.stages import bearing as stage
 
@@ -33,21 +33,21 @@ FRESH = """
 import time
 t0 = time.perf_counter()
 import numpy as np
-from piezobearing.bearing import lpm as brg
+from piezobearing.bearing import lpm
 from piezobearing.config import load as load_config
 b = load_config()['bearing']
-p = brg.LPMParameters.from_config(b, True)
+p = lpm.LPMParameters.from_config(b, True)
 h = b['time_step_s'] / b['substeps']
-brg.simulate_lpm(p, 0.0, int(round(1.0 / h)), h, method='compiled')
+lpm.simulate_lpm(p, 0.0, int(round(1.0 / h)), h, method='compiled')
 print(time.perf_counter() - t0)
 """
 
 
-def one_run(bearing: dict, method: str) -> tuple[float, brg.LPMResult]:
-    p = brg.LPMParameters.from_config(bearing, True)
+def one_run(bearing: dict, method: str) -> tuple[float, lpm.LPMResult]:
+    p = lpm.LPMParameters.from_config(bearing, True)
     h = bearing["time_step_s"] / bearing["substeps"]
     t0 = time.perf_counter()
-    res = brg.simulate_lpm(p, 0.0, int(round(1.0 / h)), h, method=method)
+    res = lpm.simulate_lpm(p, 0.0, int(round(1.0 / h)), h, method=method)
     return time.perf_counter() - t0, res
 
 

@@ -18,8 +18,8 @@ import os
 import time
 from pathlib import Path
 
-from piezobearing import config as cfg
-from piezobearing.sensor import design as sd
+import piezobearing.config
+from piezobearing.sensor import design as sensor_design
 from piezobearing.sensor import fem
 from piezobearing.sensor.mesh import stack_mesh
 from piezobearing.stages.sensor_fem import SensorFemParams
@@ -34,11 +34,11 @@ DESIGNS = {
 
 def one_design(config: dict, multiplier: float) -> dict:
     p = SensorFemParams.from_config(config)
-    st = sd.DesignSettings(p.order, p.damping_ratio, p.n_ritz_modes, p.reference_frequency_Hz, p.band_ratio_dB,
-                           config["lowfreq"]["deviation_threshold"])
+    st = sensor_design.DesignSettings(p.order, p.damping_ratio, p.n_ritz_modes, p.reference_frequency_Hz,
+                                      p.band_ratio_dB, config["lowfreq"]["deviation_threshold"])
     t0 = time.perf_counter()
     mesh = stack_mesh(p.geometry, p.density, multiplier)
-    out = sd.design_figures(mesh, p.materials, fem.MeasuringCircuit(50e6, p.cable_capacitance_F), st)
+    out = sensor_design.design_figures(mesh, p.materials, fem.MeasuringCircuit(50e6, p.cable_capacitance_F), st)
     return {"multiplier": multiplier, "seconds": time.perf_counter() - t0, "n_dof": out["n_dof"],
             **{k: out[k] for k in KEYS}}
 
@@ -49,7 +49,7 @@ def main() -> None:
     ap.add_argument("--multipliers", type=float, nargs="+", default=[0.5, 0.75, 1.0, 1.5, 2.0])
     ap.add_argument("--out", default="results/benchmarks/sensor_design.json")
     a = ap.parse_args()
-    base = cfg.load(*a.config)
+    base = piezobearing.config.load(*a.config)
     one_design(base, a.multipliers[0])  # warm-up: imports and sfepy's first assembly
     result = {"threads": os.environ.get("OMP_NUM_THREADS", "unset"), "designs": {}}
     for name, over in DESIGNS.items():

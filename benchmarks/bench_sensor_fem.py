@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from piezobearing import config as cfg
-from piezobearing.sensor import fem as fem
+from piezobearing import config
+from piezobearing.sensor import fem
 from piezobearing.sensor.analysis import SensorFemParams, harmonic_results, modal_results
 from piezobearing.sensor.calibration import SensorCircuit
 from piezobearing.sensor.mesh import stack_mesh
@@ -84,7 +84,7 @@ def main() -> None:
     ap.add_argument("--config", default=None, help="override file merged over config/config.yaml")
     ap.add_argument("--out", default="results/benchmarks/sensor_fem.json")
     args = ap.parse_args()
-    c = cfg.load(*([args.config] if args.config else []))
+    c = config.load(*([args.config] if args.config else []))
     p = SensorFemParams.from_config(c)
     default = time_stages(p, p.multiplier)
     coarse = time_stages(p, p.multipliers[0])

@@ -33,29 +33,31 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def worker(out: Path, config_name: str) -> None:
     """The four stages with whichever package is importable, into ``out/results/sensor``."""
-    from piezobearing import config as cfg
-    from piezobearing.stages import sensor_fem as st
+    from piezobearing import config
+    from piezobearing.stages import sensor_fem as sensor_fem_stages
 
     d = out / "results/sensor"
     d.mkdir(parents=True, exist_ok=True)
-    c = cfg.load() if config_name == "default" else cfg.load(CONFIG / f"{config_name}.yaml")
-    p = st.SensorFemParams.from_config(c)
+    c = config.load() if config_name == "default" else config.load(CONFIG / f"{config_name}.yaml")
+    p = sensor_fem_stages.SensorFemParams.from_config(c)
     meshes = [f"stack_L{k}.vtk" for k in range(1, len(p.multipliers) + 1)]
     os.chdir(d)  # relative paths: the files name no folder, so the two sides' files compare byte by byte
-    st.sensor_mesh(meshes, "mesh.json", c)
+    sensor_fem_stages.sensor_mesh(meshes, "mesh.json", c)
     (d / "resistance.json").write_text(json.dumps({"resistance_ohm": 50.3e6}))
     (d / "lowfreq.json").write_text(json.dumps({"linear_from_Hz": 30.0}))
     mesh = meshes[p.mesh_level - 1]
-    if "out_ritz_npz" in inspect.signature(st.sensor_modal).parameters:  # this checkout
-        st.sensor_modal(mesh, "modal.json", "mode.npz", "ritz.npz", "row.json", c)
-        st.sensor_convergence(meshes, "row.json", "convergence.csv", c)
-        st.sensor_harmonic("ritz.npz", "modal.json", "resistance.json", "lowfreq.json", "harmonic.csv", "band.json", c)
+    if "out_ritz_npz" in inspect.signature(sensor_fem_stages.sensor_modal).parameters:  # this checkout
+        sensor_fem_stages.sensor_modal(mesh, "modal.json", "mode.npz", "ritz.npz", "row.json", c)
+        sensor_fem_stages.sensor_convergence(meshes, "row.json", "convergence.csv", c)
+        sensor_fem_stages.sensor_harmonic("ritz.npz", "modal.json", "resistance.json", "lowfreq.json", "harmonic.csv",
+                                          "band.json", c)
         for f in ("ritz.npz", "row.json"):  # what only the new code writes: not a result to compare
             Path(f).rename(f + ".new")
     else:
-        st.sensor_convergence(meshes, "convergence.csv", c)
-        st.sensor_modal(mesh, "modal.json", "mode.npz", c)
-        st.sensor_harmonic(mesh, "modal.json", "resistance.json", "lowfreq.json", "harmonic.csv", "band.json", c)
+        sensor_fem_stages.sensor_convergence(meshes, "convergence.csv", c)
+        sensor_fem_stages.sensor_modal(mesh, "modal.json", "mode.npz", c)
+        sensor_fem_stages.sensor_harmonic(mesh, "modal.json", "resistance.json", "lowfreq.json", "harmonic.csv",
+                                          "band.json", c)
 
 
 def _side(src: Path | None, out: Path, config_name: str) -> Path:

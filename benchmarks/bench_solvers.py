@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from piezobearing import config as cfg
+import piezobearing.config
 from piezobearing import sparse_solve
 
 CONFIG = Path(__file__).resolve().parents[1] / "config"  # the checkout's configs (ci.yaml)
@@ -34,15 +34,14 @@ def _timed(fn):
 
 
 def bench_housing(config: dict, max_level: float) -> dict:
-    from piezobearing.bearing import housing_fem as fem
-    from piezobearing.bearing import transient as st
+    from piezobearing.bearing import housing_fem, transient
     from piezobearing.bearing.housing_mesh import build_housing_mesh
 
     h = config["housing"]
     out = {}
     for level in [lv for lv in h["convergence_levels"] if lv <= max_level]:
-        mesh = build_housing_mesh(st.housing_geometry(config), False, level)
-        model = st.make_model(mesh, config)
+        mesh = build_housing_mesh(transient.housing_geometry(config), False, level)
+        model = transient.make_model(mesh, config)
         row = {"n_dofs": model.n_dofs}
         lines = {}
         for solver in ("superlu", "pardiso"):
@@ -52,7 +51,7 @@ def bench_housing(config: dict, max_level: float) -> dict:
             row[solver] = {"factor_s": secs, "influence_line_s": solve_s, "factor_nnz": int(lu.factor_nnz)}
             if level == h["mesh_level"]:
                 modes, row[solver]["modes_s"] = _timed(
-                    lambda mdl=model: fem.compute_modes(mdl, h["n_modes"], config["seed"])
+                    lambda mdl=model: housing_fem.compute_modes(mdl, h["n_modes"], config["seed"])
                 )
                 lines[solver + "_freq"] = modes.frequencies_Hz
             lines[solver] = radial
@@ -75,12 +74,12 @@ def bench_housing(config: dict, max_level: float) -> dict:
 
 
 def bench_sensor(config: dict) -> dict:
-    from piezobearing.sensor import analysis as st
+    from piezobearing.sensor import analysis as sensor_analysis
     from piezobearing.sensor import fem
     from piezobearing.sensor.mesh import stack_mesh
 
-    p = st.SensorFemParams.from_config(config)
-    asm = st._assemble(stack_mesh(p.geometry, p.density, p.multiplier), p)
+    p = sensor_analysis.SensorFemParams.from_config(config)
+    asm = sensor_analysis._assemble(stack_mesh(p.geometry, p.density, p.multiplier), p)
     out = {"n_dof_displacement": int(asm.n_u)}
     freqs = {}
     for solver in ("superlu", "pardiso"):
@@ -142,7 +141,7 @@ def main() -> None:
         "--max-level", type=float, default=10.0, help="skip housing levels above this (SuperLU needs 7.4 GB at 2.0)"
     )
     args = ap.parse_args()
-    config = cfg.load(CONFIG / "ci.yaml") if args.ci else cfg.load()
+    config = piezobearing.config.load(CONFIG / "ci.yaml") if args.ci else piezobearing.config.load()
     out = {
         "cpu_count": os.cpu_count(),
         "load_average_at_start": os.getloadavg()[0],

@@ -30,10 +30,10 @@ OUT = REPO / "results" / "benchmarks" / "study_case.json"
 CHILD = r"""
 import json, resource, sys, time
 from pathlib import Path
-from piezobearing import config as cfg
+from piezobearing import config
 from piezobearing.stages.studies import run_case
 kind, work = sys.argv[1], Path(sys.argv[2])
-c = cfg.load(CONFIG / "ci.yaml")
+c = config.load(CONFIG / "ci.yaml")
 c["bearing"].update(duration_s=0.35, settle_s=0.01)
 c["housing"].update(mesh_level=0.35, n_modes=4)
 c["signals"].update(study_n_seeds=5, sensor_fem_correction=False)

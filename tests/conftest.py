@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from piezobearing import config as cfg
+from piezobearing import config
 from piezobearing.stages.calibration import nominal_circuit
 from piezobearing.synthesis import PressProtocol, synthesize
 
@@ -38,12 +38,12 @@ sys.dont_write_bytecode = False
 
 @pytest.fixture(scope="session")
 def paper_config() -> dict:
-    return cfg.load()
+    return config.load()
 
 
 @pytest.fixture(scope="session")
 def ci_config() -> dict:
-    return cfg.load(CI_CONFIG)
+    return config.load(CI_CONFIG)
 
 
 @pytest.fixture(scope="session")

@@ -18,8 +18,7 @@ import numpy as np
 import pytest
 from conftest import CI_CONFIG, copy_repo, snakemake
 
-from piezobearing import cli
-from piezobearing import config as cfg
+from piezobearing import cli, config
 from piezobearing.io import write_measurement
 from piezobearing.stages.calibration import nominal_circuit
 from piezobearing.synthesis import PressProtocol, synthesize
@@ -66,7 +65,7 @@ def _temporary_folders(tmp_path_factory):
 def workdir() -> Path:
     """One folder with the good record and every bad file and config of the cases."""
     d = _TMP["factory"].mktemp("bad_inputs")
-    c = cfg.load(CI_CONFIG)
+    c = config.load(CI_CONFIG)
     m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"])
     write_measurement(m, d / "record.csv")
     df = m.to_frame()
@@ -139,7 +138,7 @@ class Case:
 
 
 def _unreadable(monkeypatch):
-    import piezobearing.io.formats as pio
+    from piezobearing.io import formats
 
     real = open
 
@@ -149,7 +148,7 @@ def _unreadable(monkeypatch):
         return real(path, *a, **k)
 
     (workdir() / "unreadable.csv").write_text((workdir() / "record.csv").read_text())
-    monkeypatch.setattr(pio, "open", fake, raising=False)
+    monkeypatch.setattr(formats, "open", fake, raising=False)
 
 
 def _bug(monkeypatch):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from piezobearing.bearing import lpm as brg
+from piezobearing.bearing import lpm
 
 
 @pytest.fixture(scope="module")
@@ -16,11 +16,11 @@ def bcfg(paper_config):
 
 @pytest.fixture(scope="module")
 def geo(bcfg):
-    return brg.BearingGeometry.from_config(bcfg)
+    return lpm.BearingGeometry.from_config(bcfg)
 
 
 def _params(bcfg, faulty=False, **over):
-    p = brg.LPMParameters.from_config(bcfg, faulty)
+    p = lpm.LPMParameters.from_config(bcfg, faulty)
     from dataclasses import replace
 
     if "clearance" in over:
@@ -32,7 +32,7 @@ def _params(bcfg, faulty=False, **over):
 
 
 def test_bpfo_matches_paper(geo):
-    kin = brg.kinematic_frequencies(geo, 1000 / 60)
+    kin = lpm.kinematic_frequencies(geo, 1000 / 60)
     assert kin.bpfo_Hz == pytest.approx(70.8, rel=1e-3)
     # the paper's time step is 1/(36 BPFO) to its 6 digits
     assert 1 / (36 * kin.bpfo_Hz) == pytest.approx(0.392156e-3, abs=1e-9)
@@ -40,7 +40,7 @@ def test_bpfo_matches_paper(geo):
 
 def test_kinematic_identities(geo):
     fr = 23.0
-    kin = brg.kinematic_frequencies(geo, fr)
+    kin = lpm.kinematic_frequencies(geo, fr)
     z, g = geo.n_rollers, geo.roller_diameter_m / geo.pitch_diameter_m
     assert kin.bpfo_Hz + kin.bpfi_Hz == pytest.approx(z * fr)
     assert kin.ftf_Hz == pytest.approx(fr / 2 * (1 - g))
@@ -51,7 +51,7 @@ def test_kinematic_identities(geo):
 def test_bad_geometry_names_the_key(bcfg):
     bad = {**bcfg, "pitch_diameter_m": 60e-3}
     with pytest.raises(ValueError, match="pitch_diameter_m"):
-        brg.BearingGeometry.from_config(bad)
+        lpm.BearingGeometry.from_config(bad)
 
 
 # --- contact law and defect ---------------------------------------------------
@@ -60,32 +60,32 @@ def test_bad_geometry_names_the_key(bcfg):
 def test_contact_stiffness_is_palmgren_twice():
     l_mm, q = 9.76, 500.0
     delta_mm = 2 * 3.84e-5 * q**0.9 / l_mm**0.8  # two contacts in series, Harris Eq. 6.41
-    k = brg.line_contact_stiffness(l_mm * 1e-3)
+    k = lpm.line_contact_stiffness(l_mm * 1e-3)
     assert k * (delta_mm * 1e-3) ** (10 / 9) == pytest.approx(q, rel=1e-12)
 
 
 def test_contact_law_slope():
     k = 6e8
     d = np.array([-1e-6, 0.0, 1e-6, 3e-6])
-    q, dq = brg.contact_law(d, k)
+    q, dq = lpm.contact_law(d, k)
     assert q[0] == q[1] == 0.0
     eps = 1e-12
-    num = (brg.contact_law(d + eps, k)[0] - brg.contact_law(d - eps, k)[0]) / (2 * eps)
+    num = (lpm.contact_law(d + eps, k)[0] - lpm.contact_law(d - eps, k)[0]) / (2 * eps)
     np.testing.assert_allclose(dq[2:], num[2:], rtol=1e-5)
 
 
 def test_defect_drop_limited_by_roller_radius():
     r, w = 5e-3, 0.9e-3
-    d = brg.Defect(0.0, w, 1e-3)
+    d = lpm.Defect(0.0, w, 1e-3)
     expect = r - np.sqrt(r**2 - (w / 2) ** 2)
     assert d.max_drop_m(r) == pytest.approx(expect)
     assert expect == pytest.approx(20.29e-6, rel=1e-3)  # on a flat raceway: tens of um, not the 1 mm depth
     arc = np.linspace(-2 * w, 2 * w, 4001)
-    drop = brg.chord_drop_m(arc, w, 1e-3, r)
+    drop = lpm.chord_drop_m(arc, w, 1e-3, r)
     assert drop.max() == pytest.approx(expect, rel=1e-3)
     np.testing.assert_allclose(drop, drop[::-1], atol=1e-12)  # entry and exit flanks mirror each other
     assert np.all(drop[np.abs(arc) >= w / 2] == 0)
-    assert brg.chord_drop_m(np.array([0.0]), w, 5e-6, r)[0] == pytest.approx(5e-6)  # a shallow groove: its depth
+    assert lpm.chord_drop_m(np.array([0.0]), w, 5e-6, r)[0] == pytest.approx(5e-6)  # a shallow groove: its depth
 
 
 def test_concave_and_convex_raceway_drops(geo):
@@ -97,14 +97,14 @@ def test_concave_and_convex_raceway_drops(geo):
     assert r_out == pytest.approx(6.136e-3, rel=1e-3)
     assert r_in == pytest.approx(1 / (1 / 5e-3 + 1 / 17e-3), rel=1e-12)
     for w, expect in ((0.9e-3, 16.5e-6), (0.3e-3, 1.834e-6)):
-        d = brg.Defect(0.0, w, 1e-3)
+        d = lpm.Defect(0.0, w, 1e-3)
         assert d.max_drop_m(r_out) == pytest.approx(expect, rel=2e-3)
         assert d.max_drop_m(r_out) == pytest.approx(w * w / (8 * r_out), rel=2e-3)  # sagitta
-    assert brg.Defect(0.0, 0.9e-3, 1e-3).max_drop_m(r_in) == pytest.approx(26.3e-6, rel=2e-3)
+    assert lpm.Defect(0.0, 0.9e-3, 1e-3).max_drop_m(r_in) == pytest.approx(26.3e-6, rel=2e-3)
     with pytest.raises(ValueError, match="race"):
         geo.relative_radius_m("cage")
     with pytest.raises(ValueError, match="defect type"):
-        brg.Defect(0.0, 1e-3, 1e-3, "cage")
+        lpm.Defect(0.0, 1e-3, 1e-3, "cage")
 
 
 # --- quasi-static load distribution against Harris -------------------------------
@@ -117,9 +117,9 @@ def test_static_loads_match_harris(bcfg, clearance, psi0_fraction):
     g = p.geometry
     psi = g.roller_pitch_rad * (psi0_fraction + np.arange(g.n_rollers))
     zero = np.zeros_like(psi)
-    e = brg.static_offset(np.array([0.0, -500.0]), psi, p.gap_m, zero, p.k_contact)
-    _, _, q = brg.bearing_force(e, psi, p.gap_m, zero, p.k_contact)
-    qh, dr = brg.harris_discrete_loads(500.0, psi, p.gap_m, p.k_contact)
+    e = lpm.static_offset(np.array([0.0, -500.0]), psi, p.gap_m, zero, p.k_contact)
+    _, _, q = lpm.bearing_force(e, psi, p.gap_m, zero, p.k_contact)
+    qh, dr = lpm.harris_discrete_loads(500.0, psi, p.gap_m, p.k_contact)
     np.testing.assert_allclose(q, qh, atol=1e-6 * qh.max())
     assert e[0] == pytest.approx(0.0, abs=1e-12)
     assert -e[1] == pytest.approx(dr, rel=1e-9)
@@ -133,23 +133,23 @@ def test_dynamic_lpm_quasi_static_matches_harris(bcfg, clearance):
     # half a roller pitch of cage rotation: passes both symmetric positions
     t_end = 0.5 * g.roller_pitch_rad / p.cage_speed_rad_per_s
     n = 4000
-    res = brg.simulate_lpm(p, 0.0, n, t_end / n)
+    res = lpm.simulate_lpm(p, 0.0, n, t_end / n)
     for k in (0, n):
-        qh, _ = brg.harris_discrete_loads(500.0, res.psi_rad[k], p.gap_m, p.k_contact)
+        qh, _ = lpm.harris_discrete_loads(500.0, res.psi_rad[k], p.gap_m, p.k_contact)
         assert np.abs(res.load_N[k] - qh).max() < 0.01 * qh.max()
     # in between, against the static 2D equilibrium at the same angles
     for k in (n // 3, 2 * n // 3):
         zero = np.zeros(g.n_rollers)
-        e = brg.static_offset(np.array([0.0, -500.0]), res.psi_rad[k], p.gap_m, zero, p.k_contact)
-        q = brg.bearing_force(e, res.psi_rad[k], p.gap_m, zero, p.k_contact)[2]
+        e = lpm.static_offset(np.array([0.0, -500.0]), res.psi_rad[k], p.gap_m, zero, p.k_contact)
+        q = lpm.bearing_force(e, res.psi_rad[k], p.gap_m, zero, p.k_contact)[2]
         assert np.abs(res.load_N[k] - q).max() < 0.01 * q.max()
 
 
 def test_clearance_shrinks_the_load_zone(bcfg):
     p0, p1 = _params(bcfg, clearance=0.0), _params(bcfg, clearance=20e-6)
     psi = p0.geometry.roller_pitch_rad * np.arange(11)
-    q0, _ = brg.harris_discrete_loads(500.0, psi, p0.gap_m, p0.k_contact)
-    q1, _ = brg.harris_discrete_loads(500.0, psi, p1.gap_m, p1.k_contact)
+    q0, _ = lpm.harris_discrete_loads(500.0, psi, p0.gap_m, p0.k_contact)
+    q1, _ = lpm.harris_discrete_loads(500.0, psi, p1.gap_m, p1.k_contact)
     assert (q1 > 0).sum() < (q0 > 0).sum()
     assert q1.max() > q0.max()
 
@@ -160,10 +160,10 @@ def test_clearance_shrinks_the_load_zone(bcfg):
 def test_load_equilibrium_over_a_record(bcfg):
     """Averaged over roller passages the rollers carry the radial load (inertia averages out)."""
     p = _params(bcfg)
-    kin = brg.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
+    kin = lpm.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
     h = bcfg["time_step_s"] / bcfg["substeps"]
     n = int(round(5 / kin.bpfo_Hz / h))
-    res = brg.simulate_lpm(p, 0.0, n, h)
+    res = lpm.simulate_lpm(p, 0.0, n, h)
     fz = np.sum(res.load_N * -np.cos(res.psi_rad), axis=1)
     fy = np.sum(res.load_N * np.sin(res.psi_rad), axis=1)
     assert -fz.mean() == pytest.approx(500.0, rel=2e-3)
@@ -176,16 +176,16 @@ def test_defect_impacts_repeat_at_bpfo(bcfg):
     from piezobearing.bearing.checks import impact_intervals
 
     p = _params(bcfg, faulty=True)
-    kin = brg.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
+    kin = lpm.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
     h = bcfg["time_step_s"] / bcfg["substeps"]
     n = int(round(8 / kin.bpfo_Hz / h))
-    res = brg.simulate_lpm(p, 0.0, n, h)
+    res = lpm.simulate_lpm(p, 0.0, n, h)
     iv = impact_intervals(res.time_s, res.load_N.max(axis=1), kin.bpfo_Hz)
     assert len(iv) >= 6
     np.testing.assert_allclose(iv, 1 / kin.bpfo_Hz, rtol=0.01)
     # the healthy bearing has no such impacts: its largest load varies smoothly and far less
     ph = _params(bcfg)
-    rh = brg.simulate_lpm(ph, 0.0, n, h)
+    rh = lpm.simulate_lpm(ph, 0.0, n, h)
     assert np.ptp(rh.load_N.max(axis=1)) < 0.5 * np.ptp(res.load_N.max(axis=1))
 
 
@@ -204,10 +204,10 @@ def test_trapezoidal_rule_agrees_with_radau(bcfg):
     p = _params(bcfg, faulty=True, start_angle_rad=-0.012)
     h = bcfg["time_step_s"] / bcfg["substeps"]
     n = 240  # 2.6 ms: the roller at -0.012 rad crosses the defect at 0
-    fun, jac = brg.lpm_rhs(p)
+    fun, jac = lpm.lpm_rhs(p)
     errors = []
     for div in (1, 2):
-        res = brg.simulate_lpm(p, 0.0, n * div, h / div)
+        res = lpm.simulate_lpm(p, 0.0, n * div, h / div)
         if div == 1:
             y0 = np.r_[res.shaft_m[0], res.pedestal_m[0], np.zeros(4)]
             sol = solve_ivp(
@@ -223,8 +223,8 @@ def test_trapezoidal_rule_agrees_with_radau(bcfg):
             )
             assert sol.success
             e = sol.y[:2] - sol.y[2:4]
-            delta = brg.roller_deflections(e.T, res.psi_rad, p.gap_m, p.drops(p.motion(res.time_s)))
-            q_ref = brg.contact_law(delta, p.k_contact)[0]
+            delta = lpm.roller_deflections(e.T, res.psi_rad, p.gap_m, p.drops(p.motion(res.time_s)))
+            q_ref = lpm.contact_law(delta, p.k_contact)[0]
             assert res.load_N[:, 0].min() == 0.0  # the roller unloads in the defect
         errors.append(np.abs(res.load_N[::div] - q_ref).max())
     assert errors[0] < 0.02 * q_ref.max()
@@ -241,17 +241,17 @@ def test_compiled_kernel_matches_the_python_loop(bcfg):
     different CPUs.
     """
     p = _params(bcfg, faulty=True, start_angle_rad=-0.3)
-    kin = brg.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
+    kin = lpm.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
     h = bcfg["time_step_s"] / bcfg["substeps"]
     n = int(round(2 / kin.bpfo_Hz / h))
-    rc = brg.simulate_lpm(p, 0.0, n, h, method="compiled")
-    rp = brg.simulate_lpm(p, 0.0, n, h, method="python")
+    rc = lpm.simulate_lpm(p, 0.0, n, h, method="compiled")
+    rp = lpm.simulate_lpm(p, 0.0, n, h, method="python")
     assert rp.load_N.max() > 0 and (rc.load_N == 0).any()
     np.testing.assert_allclose(rc.load_N, rp.load_N, rtol=0, atol=1e-9 * rp.load_N.max())
     np.testing.assert_allclose(rc.shaft_m, rp.shaft_m, rtol=0, atol=1e-9 * np.abs(rp.shaft_m).max())
     assert abs(rc.newton_iterations - rp.newton_iterations) <= n // 1000 + 1
     with pytest.raises(ValueError, match="method"):
-        brg.simulate_lpm(p, 0.0, 2, h, method="fortran")
+        lpm.simulate_lpm(p, 0.0, 2, h, method="fortran")
 
 
 def test_average_resampling_keeps_the_impulse():
@@ -259,9 +259,9 @@ def test_average_resampling_keeps_the_impulse():
     q = np.where(np.abs(t - 0.005) < 0.2e-3, 100.0, 0.0)[:, None]
     dt = 0.39e-3
     t_out = np.arange(0.001, 0.009, dt)
-    avg = brg.resample_loads(t, q, t_out, dt, "average")
-    smp = brg.resample_loads(t, q, t_out, dt, "sample")
+    avg = lpm.resample_loads(t, q, t_out, dt, "average")
+    smp = lpm.resample_loads(t, q, t_out, dt, "sample")
     assert avg.sum() * dt == pytest.approx(100.0 * 0.4e-3, rel=0.01)
     np.testing.assert_allclose(smp[:, 0], np.interp(t_out, t, q[:, 0]))
     with pytest.raises(ValueError, match="resample"):
-        brg.resample_loads(t, q, t_out, dt, "nearest")
+        lpm.resample_loads(t, q, t_out, dt, "nearest")

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from scipy.special import gamma
 
-from piezobearing import config as cfg
-from piezobearing.bearing import lpm as brg
+from piezobearing import config
+from piezobearing.bearing import lpm as bearing_lpm
 
 
 @pytest.fixture(scope="module")
@@ -20,7 +20,7 @@ def bcfg(paper_config):
 
 @pytest.fixture(scope="module")
 def base(bcfg):
-    return brg.LPMParameters.from_config(bcfg, False, seed=7)
+    return bearing_lpm.LPMParameters.from_config(bcfg, False, seed=7)
 
 
 def _episodes(active: np.ndarray) -> np.ndarray:
@@ -35,7 +35,7 @@ def _episodes(active: np.ndarray) -> np.ndarray:
 def test_kinematic_frequencies_with_slip(base):
     g, s = base.geometry, 0.015
     fr = 1000 / 60
-    k0, ks = brg.kinematic_frequencies(g, fr), brg.kinematic_frequencies(g, fr, s)
+    k0, ks = bearing_lpm.kinematic_frequencies(g, fr), bearing_lpm.kinematic_frequencies(g, fr, s)
     ratio = g.roller_diameter_m / g.pitch_diameter_m
     assert ks.ftf_Hz == pytest.approx((1 - s) * 0.5 * fr * (1 - ratio), rel=1e-14)
     assert ks.bpfo_Hz == pytest.approx(11 * ks.ftf_Hz, rel=1e-14)
@@ -49,7 +49,7 @@ def test_kinematic_frequencies_with_slip(base):
 def test_cage_slip_and_jitter_in_the_motion(base):
     """The simulated cage turns at the slipped FTF on average; the per-passage jitter spreads the passages."""
     p = replace(base, cage_slip=0.015, slip_jitter=0.005)
-    kin = brg.kinematic_frequencies(p.geometry, p.shaft_speed_Hz, p.cage_slip)
+    kin = bearing_lpm.kinematic_frequencies(p.geometry, p.shaft_speed_Hz, p.cage_slip)
     t = np.linspace(0.0, 10.0, 200001)
     phi = p.cage_angle(t)
     # mean speed over ~700 passages: within a few sigma/sqrt(n) of the slipped cage
@@ -108,8 +108,8 @@ def test_load_zone_follows_harris(base, clearance_um, load_N):
     psi = 2 * np.pi * np.arange(z) / z
     psi = np.where(psi >= np.pi, psi - 2 * np.pi, psi)
     gap, k = 0.5 * clearance_um * 1e-6, base.k_contact
-    e = brg.static_offset(np.array([0.0, -load_N]), psi, gap, np.zeros(z), k)
-    _, _, q = brg.bearing_force(e, psi, gap, np.zeros(z), k)
+    e = bearing_lpm.static_offset(np.array([0.0, -load_N]), psi, gap, np.zeros(z), k)
+    _, _, q = bearing_lpm.bearing_force(e, psi, gap, np.zeros(z), k)
     delta_r = -e[1]
     eps = 0.5 * (1 - gap / delta_r)  # gap = P_d / 2
     psi_l = np.arccos(gap / delta_r)
@@ -139,7 +139,7 @@ def test_load_zone_shrinks_with_clearance_and_grows_with_load(base):
     psi = np.where(psi >= np.pi, psi - 2 * np.pi, psi)
 
     def half_angle(gap, load):
-        e = brg.static_offset(np.array([0.0, -load]), psi, gap, np.zeros(z), base.k_contact)
+        e = bearing_lpm.static_offset(np.array([0.0, -load]), psi, gap, np.zeros(z), base.k_contact)
         return np.arccos(gap / -e[1])
 
     assert half_angle(5e-6, 500) > half_angle(20e-6, 500) > half_angle(40e-6, 500)
@@ -151,9 +151,9 @@ def test_load_zone_shrinks_with_clearance_and_grows_with_load(base):
 
 def test_outer_race_defect_anywhere(base):
     """A fixed groove at 40 deg: every roller sinks when its angle passes 40 deg, by the concave drop."""
-    d = brg.Defect(np.radians(40.0), 0.9e-3, 1e-3, "outer_race")
+    d = bearing_lpm.Defect(np.radians(40.0), 0.9e-3, 1e-3, "outer_race")
     p = replace(base, defects=(d,))
-    kin = brg.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
+    kin = bearing_lpm.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
     t = np.linspace(0, 1, 400001)
     mo = p.motion(t)
     drop = p.drops(mo)
@@ -164,9 +164,9 @@ def test_outer_race_defect_anywhere(base):
 
 
 def test_inner_race_defect_turns_with_the_shaft_and_is_loaded_only_in_the_load_zone(bcfg, base):
-    d = brg.Defect(0.0, 0.9e-3, 1e-3, "inner_race")
+    d = bearing_lpm.Defect(0.0, 0.9e-3, 1e-3, "inner_race")
     p = replace(base, defects=(d,))
-    kin = brg.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
+    kin = bearing_lpm.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
     t = np.linspace(0, 1, 400001)
     mo = p.motion(t)
     drop = p.drops(mo)
@@ -180,7 +180,7 @@ def test_inner_race_defect_turns_with_the_shaft_and_is_loaded_only_in_the_load_z
     # dynamics over one shaft revolution: the loads change only while the groove is in the load zone
     h = bcfg["time_step_s"] / bcfg["substeps"]
     n = int(round(1 / p.shaft_speed_Hz / h))
-    rf, rh = brg.simulate_lpm(p, 0.0, n, h), brg.simulate_lpm(base, 0.0, n, h)
+    rf, rh = bearing_lpm.simulate_lpm(p, 0.0, n, h), bearing_lpm.simulate_lpm(base, 0.0, n, h)
     diff = np.abs(rf.load_N - rh.load_N).max(axis=1)
     where = np.angle(np.exp(1j * (d.angle_rad + p.shaft_angle(rf.time_s))))
     assert diff[np.abs(where) < np.radians(30)].max() > 50.0  # the roller under the load sinks: tens of newtons
@@ -190,9 +190,9 @@ def test_inner_race_defect_turns_with_the_shaft_and_is_loaded_only_in_the_load_z
 def test_rolling_element_flat_strikes_both_races_at_twice_bsf(bcfg, base):
     """A flat on roller 0 meets the outer and the inner race in turn: 2 BSF impacts, alternately the
     concave (16.5 um) and the convex (26.3 um) drop; only roller 0; felt only in the load zone (FTF)."""
-    d = brg.Defect(0.0, 0.9e-3, 1e-3, "rolling_element")
+    d = bearing_lpm.Defect(0.0, 0.9e-3, 1e-3, "rolling_element")
     p = replace(base, defects=(d,))
-    kin = brg.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
+    kin = bearing_lpm.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
     t = np.linspace(0, 2, 800001)
     mo = p.motion(t)
     drop = p.drops(mo)
@@ -208,7 +208,7 @@ def test_rolling_element_flat_strikes_both_races_at_twice_bsf(bcfg, base):
     # dynamics over one cage revolution: roller 0 loses load at its strikes inside the load zone only
     h = bcfg["time_step_s"] / bcfg["substeps"]
     n = int(round(1 / kin.ftf_Hz / h))
-    rf, rh = brg.simulate_lpm(p, 0.0, n, h), brg.simulate_lpm(base, 0.0, n, h)
+    rf, rh = bearing_lpm.simulate_lpm(p, 0.0, n, h), bearing_lpm.simulate_lpm(base, 0.0, n, h)
     dq = rh.load_N[:, 0] - rf.load_N[:, 0]
     in_zone = np.abs(rf.psi_rad[:, 0]) < np.radians(45)
     strike = p.drops(p.motion(rf.time_s))[:, 0] > 0.5 * outer
@@ -223,7 +223,7 @@ def test_flat_on_any_roller_is_roller_0_turned_by_its_pitch(bcfg, base):
     j = 4
     b = {**bcfg, "defects": [{"type": "rolling_element", "width_m": 0.9e-3, "depth_m": 1e-3, "angle_deg": 20.0,
                               "roller": j}]}
-    p = brg.LPMParameters.from_config(b, True, seed=7)
+    p = bearing_lpm.LPMParameters.from_config(b, True, seed=7)
     assert p.defects[0].roller == j
     q = replace(p, defects=(replace(p.defects[0], roller=0),),
                 start_angle_rad=p.start_angle_rad + j * p.geometry.roller_pitch_rad)
@@ -236,9 +236,9 @@ def test_flat_on_any_roller_is_roller_0_turned_by_its_pitch(bcfg, base):
 
 def test_several_defects_superpose(base):
     defects = (
-        brg.Defect(0.0, 0.9e-3, 1e-3, "outer_race"),
-        brg.Defect(1.0, 0.6e-3, 1e-3, "inner_race"),
-        brg.Defect(0.5, 0.3e-3, 1e-3, "rolling_element"),
+        bearing_lpm.Defect(0.0, 0.9e-3, 1e-3, "outer_race"),
+        bearing_lpm.Defect(1.0, 0.6e-3, 1e-3, "inner_race"),
+        bearing_lpm.Defect(0.5, 0.3e-3, 1e-3, "rolling_element"),
     )
     t = np.linspace(-0.05, 0.5, 20001)
     mo = base.motion(t)
@@ -253,34 +253,37 @@ def test_several_defects_superpose(base):
 
 def test_roller_diameter_scatter_from_the_seed(bcfg):
     b = {**bcfg, "roller_diameter_scatter_m": 0.5e-6}
-    p = brg.LPMParameters.from_config(b, True, seed=3)
+    p = bearing_lpm.LPMParameters.from_config(b, True, seed=3)
     dev = np.array(p.roller_diameter_deviation_m)
     assert dev.shape == (11,) and 0.2e-6 < dev.std() < 1.0e-6
-    assert brg.LPMParameters.from_config(b, False, seed=3).roller_diameter_deviation_m == p.roller_diameter_deviation_m
-    assert brg.LPMParameters.from_config(b, True, seed=4).roller_diameter_deviation_m != p.roller_diameter_deviation_m
-    assert brg.LPMParameters.from_config(bcfg, True, seed=3).roller_diameter_deviation_m == ()
+    deviation = p.roller_diameter_deviation_m
+    assert bearing_lpm.LPMParameters.from_config(b, False, seed=3).roller_diameter_deviation_m == deviation
+    assert bearing_lpm.LPMParameters.from_config(b, True, seed=4).roller_diameter_deviation_m != deviation
+    assert bearing_lpm.LPMParameters.from_config(bcfg, True, seed=3).roller_diameter_deviation_m == ()
     # a larger roller at the bottom carries more than its nominal share
     psi = p.roller_angles(np.array([0.0]))[0]
     off = p.contact_offsets(p.motion(np.array([0.0])))[0]
     big = np.zeros(11)
     big[0] = -2e-6
-    q_nom = brg.bearing_force(brg.static_offset(np.array([0, -500.0]), psi, p.gap_m, 0 * off, p.k_contact),
-                              psi, p.gap_m, 0 * off, p.k_contact)[2]
-    q_big = brg.bearing_force(brg.static_offset(np.array([0, -500.0]), psi, p.gap_m, big, p.k_contact),
-                              psi, p.gap_m, big, p.k_contact)[2]
+    q_nom = bearing_lpm.bearing_force(
+        bearing_lpm.static_offset(np.array([0, -500.0]), psi, p.gap_m, 0 * off, p.k_contact),
+        psi, p.gap_m, 0 * off, p.k_contact)[2]
+    q_big = bearing_lpm.bearing_force(
+        bearing_lpm.static_offset(np.array([0, -500.0]), psi, p.gap_m, big, p.k_contact),
+        psi, p.gap_m, big, p.k_contact)[2]
     assert q_big[0] > q_nom[0] * 1.05
 
 
 def test_defects_from_config_and_schema(paper_config):
     b = paper_config["bearing"]
-    (d,) = brg.defects_from_config(b)
+    (d,) = bearing_lpm.defects_from_config(b)
     assert (d.kind, d.width_m, d.depth_m, d.angle_rad) == ("outer_race", 0.9e-3, 1.0e-3, 0.0)  # the paper
-    assert brg.LPMParameters.from_config(b, False).defects == ()
-    assert brg.LPMParameters.from_config({**b, "defects": []}, True).defects == ()
+    assert bearing_lpm.LPMParameters.from_config(b, False).defects == ()
+    assert bearing_lpm.LPMParameters.from_config({**b, "defects": []}, True).defects == ()
     c = copy.deepcopy(paper_config)
     c["bearing"]["defects"] = [{"type": "cage", "width_m": 1e-3, "depth_m": 1e-3, "angle_deg": 0.0}]
-    with pytest.raises(cfg.ConfigError) as e:
-        cfg.validate(c, source="my.yaml")
+    with pytest.raises(config.ConfigError) as e:
+        config.validate(c, source="my.yaml")
     assert "bearing.defects" in str(e.value) and "\n" not in str(e.value)
 
 
@@ -289,7 +292,7 @@ def test_bearing_lpm_stage_with_slip_tachometer_and_two_defects(ci_config, tmp_p
     one entry per defect with its drop and impact rate."""
     import json
 
-    from piezobearing.stages import bearing as st
+    from piezobearing.stages import bearing as bearing_stages
 
     c = copy.deepcopy(ci_config)
     b = c["bearing"]
@@ -298,9 +301,10 @@ def test_bearing_lpm_stage_with_slip_tachometer_and_two_defects(ci_config, tmp_p
         {"type": "outer_race", "width_m": 0.9e-3, "depth_m": 1.0e-3, "angle_deg": 0.0},
         {"type": "rolling_element", "width_m": 0.6e-3, "depth_m": 1.0e-3, "angle_deg": 30.0},
     ]
-    c = cfg.validate(c)
-    npz = {k: tmp_path / f"contact_{k}.npz" for k in st.CASES}
-    st.bearing_lpm(tmp_path / "kin.json", npz, {k: tmp_path / f"cf_{k}.csv" for k in st.CASES}, tmp_path / "l.json", c)
+    c = config.validate(c)
+    npz = {k: tmp_path / f"contact_{k}.npz" for k in bearing_stages.CASES}
+    bearing_stages.bearing_lpm(tmp_path / "kin.json", npz, {k: tmp_path / f"cf_{k}.csv" for k in bearing_stages.CASES},
+                               tmp_path / "l.json", c)
     kin = json.loads((tmp_path / "kin.json").read_text())
     assert kin["bpfo_Hz"] == pytest.approx(70.833, rel=1e-4)  # the kinematic line, as signals.fault_bands expects
     assert kin["with_slip"]["bpfo_Hz"] == pytest.approx(0.985 * kin["bpfo_Hz"], rel=1e-12)

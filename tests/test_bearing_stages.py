@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 
 from piezobearing.bearing.checks import harmonic_amplitudes, off_harmonic_fraction
-from piezobearing.stages import bearing as st
+from piezobearing.stages import bearing as bearing_stages
 
 
 @pytest.fixture(scope="module")
@@ -25,25 +25,25 @@ def run(tmp_path_factory, ci_config):
             k: d / f"{k}_{c}"
             for k in ("npz", "csv", "mesh", "vtk", "meshjson", "force", "modes", "json", "inf")
         }
-        for c in st.CASES
+        for c in bearing_stages.CASES
     }
-    st.bearing_lpm(
+    bearing_stages.bearing_lpm(
         d / "kinematics.json",
-        {c: paths[c]["npz"].with_suffix(".npz") for c in st.CASES},
-        {c: paths[c]["csv"].with_suffix(".csv") for c in st.CASES},
+        {c: paths[c]["npz"].with_suffix(".npz") for c in bearing_stages.CASES},
+        {c: paths[c]["csv"].with_suffix(".csv") for c in bearing_stages.CASES},
         d / "lpm.json",
         cfg,
     )
-    for c in st.CASES:
+    for c in bearing_stages.CASES:
         p = paths[c]
-        st.housing_mesh(
+        bearing_stages.housing_mesh(
             c,
             p["mesh"].with_suffix(".npz"),
             p["vtk"].with_suffix(".vtk"),
             p["meshjson"].with_suffix(".json"),
             cfg,
         )
-        st.housing_transient(
+        bearing_stages.housing_transient(
             c,
             p["mesh"].with_suffix(".npz"),
             p["npz"].with_suffix(".npz"),
@@ -68,7 +68,7 @@ def test_kinematics_file_for_the_signals_stage(run):
 def test_sensor_force_files(run):
     cfg, _, paths = run
     dt = cfg["bearing"]["time_step_s"]
-    for c in st.CASES:
+    for c in bearing_stages.CASES:
         df = pd.read_csv(paths[c]["force"].with_suffix(".csv"))
         assert list(df.columns) == ["time_s", "force_N"]
         np.testing.assert_allclose(np.diff(df["time_s"]), dt, rtol=1e-6)
@@ -86,10 +86,10 @@ def test_spectra_healthy_and_faulty(run):
     cfg, d, paths = run
     bpfo = json.loads((d / "kinematics.json").read_text())["bpfo_Hz"]
     dt = cfg["bearing"]["time_step_s"]
-    f = {c: pd.read_csv(paths[c]["force"].with_suffix(".csv"))["force_N"].to_numpy() for c in st.CASES}
-    for c in st.CASES:
+    f = {c: pd.read_csv(paths[c]["force"].with_suffix(".csv"))["force_N"].to_numpy() for c in bearing_stages.CASES}
+    for c in bearing_stages.CASES:
         assert off_harmonic_fraction(f[c], dt, bpfo) < 1e-3
-    amp = {c: harmonic_amplitudes(f[c], dt, bpfo, 17) for c in st.CASES}
+    amp = {c: harmonic_amplitudes(f[c], dt, bpfo, 17) for c in bearing_stages.CASES}
     # healthy: the roller-passage modulation, dominated by the first harmonic
     assert amp["healthy"][0] > 5 * amp["healthy"][2:].max()
     # faulty: the impulses spread over the harmonics
@@ -113,14 +113,14 @@ def test_a_second_run_writes_identical_files(run, tmp_path):
     """Result files hold no wall-clock times and no unseeded randomness: a rerun is byte-identical."""
     cfg, d, paths = run
     p = paths["healthy"]
-    st.bearing_lpm(
+    bearing_stages.bearing_lpm(
         tmp_path / "kinematics.json",
-        {c: tmp_path / f"contact_{c}.npz" for c in st.CASES},
-        {c: tmp_path / f"contact_{c}.csv" for c in st.CASES},
+        {c: tmp_path / f"contact_{c}.npz" for c in bearing_stages.CASES},
+        {c: tmp_path / f"contact_{c}.csv" for c in bearing_stages.CASES},
         tmp_path / "lpm.json",
         cfg,
     )
-    st.housing_transient(
+    bearing_stages.housing_transient(
         "healthy",
         p["mesh"].with_suffix(".npz"),
         p["npz"].with_suffix(".npz"),
@@ -136,13 +136,13 @@ def test_a_second_run_writes_identical_files(run, tmp_path):
     # b takes the level 0.35 (housing.mesh_level) from the transient's quasi-static force instead of
     # factorising that mesh again: the same bytes as a, which solves every level itself
     for k, qs in (("a", None), ("b", tmp_path / "quasi_static.npz")):
-        st.mesh_convergence(
+        bearing_stages.mesh_convergence(
             p["npz"].with_suffix(".npz"), tmp_path / f"conv_{k}.json", tmp_path / f"conv_{k}.csv", conv, qs
         )
     pairs = [
         (d / "kinematics.json", tmp_path / "kinematics.json"),
         (d / "lpm.json", tmp_path / "lpm.json"),
-        *[(paths[c]["csv"].with_suffix(".csv"), tmp_path / f"contact_{c}.csv") for c in st.CASES],
+        *[(paths[c]["csv"].with_suffix(".csv"), tmp_path / f"contact_{c}.csv") for c in bearing_stages.CASES],
         (p["force"].with_suffix(".csv"), tmp_path / "force.csv"),
         (p["modes"].with_suffix(".json"), tmp_path / "modes.json"),
         (p["json"].with_suffix(".json"), tmp_path / "transient.json"),

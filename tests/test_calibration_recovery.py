@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from piezobearing.sensor import calibration as cal
+from piezobearing.sensor import calibration
 from piezobearing.sensor.lowfreq import asymptote_onset_Hz, lowfreq_sensitivity
 from piezobearing.stages.calibration import nominal_circuit
 from piezobearing.synthesis import PressProtocol, synthesize
@@ -15,7 +15,7 @@ def test_resistance_recovered_within_2_percent_and_ci_contains_truth(paper_confi
     truth = c["synthesis"]["resistance_ohm"]
     circuit = nominal_circuit(c)
     m = synthesize(PressProtocol.from_config(c["synthesis"]), circuit, seed)
-    res = cal.fit_resistance(m.force_N, m.voltage_V, m.dt_s, circuit, initial_ohm=10e6)
+    res = calibration.fit_resistance(m.force_N, m.voltage_V, m.dt_s, circuit, initial_ohm=10e6)
     r = res.values["resistance_ohm"]
     assert r == pytest.approx(truth, rel=0.02)
     lo, hi = res.ci95["resistance_ohm"]
@@ -27,7 +27,7 @@ def test_resistance_recovered_over_decades(paper_config, truth):
     c = paper_config
     circuit = nominal_circuit(c, truth)
     m = synthesize(PressProtocol.from_config(c["synthesis"]), circuit, 11)
-    res = cal.fit_resistance(m.force_N, m.voltage_V, m.dt_s, circuit, initial_ohm=10e6)
+    res = calibration.fit_resistance(m.force_N, m.voltage_V, m.dt_s, circuit, initial_ohm=10e6)
     assert res.values["resistance_ohm"] == pytest.approx(truth, rel=0.05)
 
 
@@ -35,11 +35,11 @@ def test_impulse_sensitivity_near_paper_by_construction(paper_record, paper_conf
     # The synthetic presses were chosen to land near 74.4 mV/N (see synthesis.py); 5% tolerance.
     c = paper_config["calibration"]
     m = paper_record
-    imps = cal.detect_impulses(
+    imps = calibration.detect_impulses(
         m.force_N, m.voltage_V, m.dt_s, c["min_prominence_fraction"], c["min_separation_s"]
     )
     assert len(imps) == paper_config["synthesis"]["n_impulses"]
-    s = cal.sensitivity_summary(imps, m.time_s)
+    s = calibration.sensitivity_summary(imps, m.time_s)
     assert s["sensitivity_V_per_N"] == pytest.approx(74.4e-3, rel=0.05)
     lo, hi = s["sensitivity_ci95_V_per_N"]
     assert lo < s["sensitivity_V_per_N"] < hi
@@ -53,7 +53,7 @@ def test_noise_free_sensitivity_matches_slope_estimate(paper_config):
 
     t = np.arange(0, 2.0, dt)
     f = press_pulse(t, 0.8, 10.0, rise, 0.5)
-    v = cal.circuit_voltage(f, dt, circuit)
+    v = calibration.circuit_voltage(f, dt, circuit)
     estimate = circuit.open_circuit_gain_V_per_N * circuit.tau_s * np.pi / (2 * rise)
     assert v.max() / 10.0 == pytest.approx(estimate, rel=0.03)
 
@@ -67,5 +67,5 @@ def test_lowfreq_linearity_onset_with_paper_constants(paper_config):
         circuit.open_circuit_gain_V_per_N * wt / np.sqrt(1 + wt**2), rel=1e-12
     )
     f95 = asymptote_onset_Hz(circuit, 0.05)
-    s95 = abs(cal.frequency_response([f95], circuit)[0]) / circuit.open_circuit_gain_V_per_N
+    s95 = abs(calibration.frequency_response([f95], circuit)[0]) / circuit.open_circuit_gain_V_per_N
     assert s95 == pytest.approx(0.95, rel=1e-12)

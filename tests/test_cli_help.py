@@ -3,8 +3,7 @@ and every command saying which config and which model it used."""
 
 import pytest
 
-from piezobearing import cli
-from piezobearing import config as cfg
+from piezobearing import cli, config
 from piezobearing.io.formats import RECORD_FORMATS
 
 COMMANDS = ("diagnose", "diagnose-bearing", "validate", "hide-and-find")
@@ -56,7 +55,7 @@ def test_diagnose_bearing_says_which_config_and_model_it_used(monkeypatch, capsy
 
 
 def test_the_model_lines_follow_the_config():
-    c = cfg.load()
+    c = config.load()
     c["bearing"]["shaft_speed_rpm"] = 1500.0
     c["bearing_diagnosis"]["effects"] = ["outer_race_defect"]
     c["model"]["effects"] = ["channel_delay"]

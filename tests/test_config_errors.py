@@ -5,29 +5,30 @@ import copy
 import pytest
 from conftest import dry_run_errors
 
-from piezobearing import config as cfg
+import piezobearing.config
 from piezobearing.studies import check_studies
 
 
 def error(config: dict) -> str:
-    with pytest.raises(cfg.ConfigError) as e:
-        cfg.validate(config, source="my.yaml")
+    with pytest.raises(piezobearing.config.ConfigError) as e:
+        piezobearing.config.validate(config, source="my.yaml")
     msg = str(e.value)
     assert "\n" not in msg and msg.startswith("my.yaml: ")
     return msg
 
 
 def test_the_schema_reads_the_same_with_libyaml_and_sets_no_defaults():
-    """The workflow validates the config once, through ``cfg.validate`` (common.smk), which reads the schema with
-    libyaml's loader: the same schema as PyYAML's pure-Python loader reads. Snakemake's own ``validate`` (no longer
-    called) would have filled a schema ``default`` into the config: the schema has one, a defect's ``depth_m`` (the
-    paper's 1 mm), and ``cfg.validate`` fills it (tests/test_diagnosis_bearing_feasible.py)."""
+    """The workflow validates the config once, through ``piezobearing.config.validate`` (common.smk), which reads
+    the schema with libyaml's loader: the same schema as PyYAML's pure-Python loader reads. Snakemake's own
+    ``validate``, which the workflow does not call, would fill a schema ``default`` into the config: the schema has
+    one, a defect's ``depth_m`` (the paper's 1 mm), and ``piezobearing.config.validate`` fills it
+    (tests/test_diagnosis_bearing_feasible.py)."""
     import yaml
 
-    text = cfg.SCHEMA_PATH.read_text()
-    schema = yaml.load(text, Loader=cfg._SCHEMA_LOADER)
+    text = piezobearing.config.SCHEMA_PATH.read_text()
+    schema = yaml.load(text, Loader=piezobearing.config._SCHEMA_LOADER)
     assert schema == yaml.safe_load(text)
-    assert cfg._validator(str(cfg.SCHEMA_PATH)).schema == schema
+    assert piezobearing.config._validator(str(piezobearing.config.SCHEMA_PATH)).schema == schema
 
     def defaults(node, path=()) -> list:
         if isinstance(node, dict):
@@ -73,7 +74,7 @@ def test_study_case_out_of_range_is_named_before_any_job(paper_config, tmp_path)
     table.write_text("synthesis__resistance_ohm\tsensor__cable_length_m\n50.0e+6\t2.0\n-5.0\t2.0\n")
     c = copy.deepcopy(paper_config)
     c["studies"] = [{"name": "calibration_circuit", "table": str(table)}]
-    with pytest.raises(cfg.ConfigError) as e:
+    with pytest.raises(piezobearing.config.ConfigError) as e:
         check_studies(c)
     msg = str(e.value)
     assert f"{table}, case 2 (study calibration_circuit)" in msg and "synthesis.resistance_ohm" in msg

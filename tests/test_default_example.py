@@ -8,15 +8,15 @@ from pathlib import Path
 import pytest
 from matplotlib.patches import Rectangle
 
-from piezobearing import config as cfg
+from piezobearing import config
 from piezobearing.plotting.diagnostics import CANDIDATES, ladder
 
 
 def test_the_default_record_hides_a_fault_and_the_healthy_one_is_a_run_beside_it(paper_config):
     hidden = paper_config["bearing"]["hidden_effects"]
     assert [h["name"] for h in hidden] == ["outer_race_defect"]
-    healthy = cfg.load(Path(__file__).resolve().parents[1] / "config" / "examples" / "healthy_bearing.yaml")
-    assert healthy["bearing"]["hidden_effects"] == [] and cfg.results_folder(healthy) == "results/healthy_bearing"
+    healthy = config.load(Path(__file__).resolve().parents[1] / "config" / "examples" / "healthy_bearing.yaml")
+    assert healthy["bearing"]["hidden_effects"] == [] and config.results_folder(healthy) == "results/healthy_bearing"
 
 
 @pytest.mark.slow
@@ -27,7 +27,7 @@ def test_the_diagnosis_finds_the_default_records_groove(ci_config):
     from piezobearing.stages.bearing_diagnosis import influence_from_config
 
     c = copy.deepcopy(ci_config)
-    c["bearing_diagnosis"]["synthetic_duration_s"] = cfg.load()["bearing_diagnosis"]["synthetic_duration_s"]
+    c["bearing_diagnosis"]["synthetic_duration_s"] = config.load()["bearing_diagnosis"]["synthetic_duration_s"]
     influence = influence_from_config(c)
     hidden = c["bearing"]["hidden_effects"]
     d = SUBJECT.diagnose((synthesise(c, c["seed"], hidden, influence), influence), c)[1]

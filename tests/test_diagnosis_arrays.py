@@ -98,20 +98,20 @@ def test_clock_drift_interpolates_in_chunks_with_the_same_numbers(monkeypatch):
     are samples x 32: a 600k-sample record took 1.6 GB at once); the result is bit-identical. Its taps are
     the Kaiser-windowed sinc (numpy's sinc and i0) to 1e-13 of the largest tap, and its noise gain (a cosine series of the taps'
     mean autocorrelation) is the rms over the offsets of |sum_m h[m] exp(-2 pi i m f)| to 1e-12 relative."""
-    from piezobearing.diagnosis.calibration.effects import clock_drift as cd
+    from piezobearing.diagnosis.calibration.effects import clock_drift
 
-    x = np.random.default_rng(3).normal(size=3 * cd.CHUNK + 17)
-    chunked = cd.drifted(x, 1e-4, 25)
-    monkeypatch.setattr(cd, "CHUNK", x.size)
-    assert np.array_equal(chunked, cd.drifted(x, 1e-4, 25))
+    x = np.random.default_rng(3).normal(size=3 * clock_drift.CHUNK + 17)
+    chunked = clock_drift.drifted(x, 1e-4, 25)
+    monkeypatch.setattr(clock_drift, "CHUNK", x.size)
+    assert np.array_equal(chunked, clock_drift.drifted(x, 1e-4, 25))
     mu = np.r_[0.0, np.random.default_rng(4).random(50), 0.5, 1 - 1e-9]
-    m, h = cd.kernel(mu)
+    m, h = clock_drift.kernel(mu)
     t = mu[:, None] - m[None, :]
-    ref = np.sinc(t) * np.i0(cd.BETA * np.sqrt(np.clip(1 - (t / cd.HALF) ** 2, 0, None)))
+    ref = np.sinc(t) * np.i0(clock_drift.BETA * np.sqrt(np.clip(1 - (t / clock_drift.HALF) ** 2, 0, None)))
     np.testing.assert_allclose(h, ref / ref.sum(axis=1, keepdims=True), rtol=0, atol=1e-13 * np.abs(h).max())
     assert np.array_equal(h[0], m == 0)  # mu = 0 reads the sample itself
     f = np.fft.rfftfreq(x.size)
     shift = 1e-4 * np.linspace(0, x.size - 1, 16)
-    _, hs = cd.kernel(shift - np.floor(shift))
+    _, hs = clock_drift.kernel(shift - np.floor(shift))
     direct = np.sqrt(np.mean(np.abs(hs @ np.exp(-2j * np.pi * np.outer(m, f))) ** 2, axis=0))
-    np.testing.assert_allclose(cd.noise_gain(f, 1e-4, x.size), direct, rtol=1e-12, atol=1e-14 * direct.max())
+    np.testing.assert_allclose(clock_drift.noise_gain(f, 1e-4, x.size), direct, rtol=1e-12, atol=1e-14 * direct.max())

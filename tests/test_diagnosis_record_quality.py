@@ -222,8 +222,7 @@ def test_wandering_drift_is_found_with_knots_chosen_by_the_evidence(ci_config, m
     """A pyroelectric drift that changes course (a hand warming the fixture, then its cooling: +20 mV then
     -12 mV, Gaussian bumps of 2 s standard deviation) on the CI record: the spline drift, its knot count chosen by BIC, finds it and
     the record is explained; the cubic alone (the drift's form before) leaves it unexplained."""
-    from piezobearing.diagnosis.calibration.effects import ForceRecord
-    from piezobearing.diagnosis.calibration.effects import baseline_drift as bd
+    from piezobearing.diagnosis.calibration.effects import ForceRecord, baseline_drift
     from piezobearing.diagnosis.calibration.subject import diagnose_record
     from piezobearing.stages.calibration import nominal_circuit
     from piezobearing.synthesis import PressProtocol, synthesize
@@ -240,7 +239,7 @@ def test_wandering_drift_is_found_with_knots_chosen_by_the_evidence(ci_config, m
     assert knots and len(knots) <= 4  # a 12 s record: knots at least 2 s apart
     assert "knots" in d["ranking"][0]["summary"]
 
-    monkeypatch.setattr(bd, "KNOTS", (0,))
+    monkeypatch.setattr(baseline_drift, "KNOTS", (0,))
     _, cubic = diagnose_record(ForceRecord(t, m.force_N), v, *args)
     assert cubic["verdict"] == "unexplained"
     assert cubic["final"]["chi2_per_sample"] > d["final"]["chi2_per_sample"]
@@ -251,8 +250,7 @@ def test_kinked_drift_is_found_with_its_kink_time(ci_config, monkeypatch):
     pyroelectric voltage R p A dT/dt rises from zero with a kink (a jump of slope) and peaks 20 mV 5.5 s
     later. The spline with fixed knots (the drift before) leaves it ``unexplained``; the drift's kink
     refinement (a free kink time on the chosen spline, kept by BIC) finds the time and explains the record."""
-    from piezobearing.diagnosis.calibration.effects import ForceRecord
-    from piezobearing.diagnosis.calibration.effects import baseline_drift as bd
+    from piezobearing.diagnosis.calibration.effects import ForceRecord, baseline_drift
     from piezobearing.diagnosis.calibration.subject import diagnose_record
     from piezobearing.stages.calibration import nominal_circuit
     from piezobearing.synthesis import PressProtocol, synthesize
@@ -271,7 +269,7 @@ def test_kinked_drift_is_found_with_its_kink_time(ci_config, monkeypatch):
     assert lo <= t_on <= hi  # measured: 3.323 s, ...
     assert "kink at t = 3.3" in d["ranking"][0]["summary"]
 
-    monkeypatch.setattr(bd.BaselineDrift, "refinements", lambda self, ctx: [])  # fixed knots only
+    monkeypatch.setattr(baseline_drift.BaselineDrift, "refinements", lambda self, ctx: [])  # fixed knots only
     _, fixed = diagnose_record(ForceRecord(t, m.force_N), v, *args)
     assert fixed["verdict"] == "unexplained"
     assert fixed["final"]["chi2_per_sample"] > d["final"]["chi2_per_sample"] + 0.1  # measured 1.179 vs 1.009

@@ -99,9 +99,7 @@ def test_null_distribution_of_one_line_matches_the_closed_form():
 def test_the_null_threshold_beyond_the_grids_reach_is_the_union_bound_and_above_the_exact_quantile():
     """Few floor bins leave the smallest quadrature node's mass beyond any grid: there the threshold is the union
     bound, which is conservative (above the exact quantile wherever the grid reaches both)."""
-    from piezobearing.signals.detectors import envelope as env
-
-    null = env.null_distribution((3, 3, 3, 5, 5, 5), 2.0)
+    null = envelope_detector.null_distribution((3, 3, 3, 5, 5, 5), 2.0)
     assert null.union_bound(1e-3) > null.threshold(1e-3) > 0
     alpha = 0.5 * null.survival[-1]
     assert null.threshold(alpha) == null.union_bound(alpha) > null.x[-1]

@@ -7,9 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from piezobearing.bearing import housing_fem as fem
-from piezobearing.bearing import lpm as brg
-from piezobearing.bearing import transient as st
+from piezobearing.bearing import housing_fem, lpm, transient
 from piezobearing.bearing.housing_mesh import (
     GROUP_HOUSING,
     GROUP_RING,
@@ -24,7 +22,7 @@ LEVEL = 0.35  # a coarse mesh: a few thousand DOFs
 
 @pytest.fixture(scope="module")
 def geo(paper_config):
-    return st.housing_geometry(paper_config)
+    return transient.housing_geometry(paper_config)
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +32,7 @@ def meshes(geo):
 
 @pytest.fixture(scope="module")
 def model(meshes, paper_config):
-    return st.make_model(meshes["healthy"], paper_config)
+    return transient.make_model(meshes["healthy"], paper_config)
 
 
 def _hex_volumes(m):
@@ -66,7 +64,7 @@ def test_box_weights_reproduce_linear_fields():
     nodes = np.sort(rng.uniform(0, 10, 30))
     lo = np.array([2.0, 5.5, 7.0])
     hi = np.array([2.3, 5.5, 9.1])
-    w = fem.box_weights(nodes, lo, hi)
+    w = housing_fem.box_weights(nodes, lo, hi)
     np.testing.assert_allclose(w.sum(axis=1), 1.0, rtol=1e-12)
     np.testing.assert_allclose(w @ nodes, 0.5 * (lo + hi), rtol=1e-12)  # the load's centre
     # a point load is the linear interpolation
@@ -78,7 +76,7 @@ def test_box_weights_reproduce_linear_fields():
 def test_box_weights_periodic_wrap():
     period = 2 * np.pi
     nodes = np.linspace(-np.pi, np.pi, 40, endpoint=False)
-    w = fem.box_weights(nodes, np.array([np.pi - 0.05]), np.array([np.pi + 0.05]), period=period)[0]
+    w = housing_fem.box_weights(nodes, np.array([np.pi - 0.05]), np.array([np.pi + 0.05]), period=period)[0]
     assert w.sum() == pytest.approx(1.0)
     assert w[0] > 0 and w[-1] > 0  # straddles the seam at +-pi
 
@@ -128,7 +126,7 @@ def test_every_outer_race_groove_is_cut(paper_config):
         {"type": "inner_race", "width_m": 0.9e-3, "depth_m": 1.0e-3, "angle_deg": 30.0},
         {"type": "outer_race", "width_m": 0.6e-3, "depth_m": 0.5e-3, "angle_deg": 170.0},
     ]
-    g = st.housing_geometry(dict(paper_config, bearing=b))
+    g = transient.housing_geometry(dict(paper_config, bearing=b))
     assert len(g.grooves) == 2
     vh = _hex_volumes(build_housing_mesh(g, False, LEVEL)).sum()
     m = build_housing_mesh(g, True, LEVEL)
@@ -153,7 +151,7 @@ def test_nested_dissection_is_a_permutation(meshes):
 
 def test_assembly_mass_and_rigid_motion(meshes):
     m = meshes["healthy"]
-    k, mm = fem.assemble_matrices(m, STEEL, CAST_IRON)
+    k, mm = housing_fem.assemble_matrices(m, STEEL, CAST_IRON)
     vol = _hex_volumes(m)
     rho = np.where(m.group == GROUP_RING, STEEL.density_kg_per_m3, CAST_IRON.density_kg_per_m3)
     assert mm[0::3][:, 0::3].sum() == pytest.approx(rho @ vol, rel=1e-9)
@@ -168,8 +166,8 @@ def test_assembly_mass_and_rigid_motion(meshes):
 
 def test_sensor_stiffness_closed_form():
     pzt = paper_pzt()
-    k_open = fem.sensor_stiffness(pzt, 4.7e-3, 3.4e-3, ALUMINA, 3e-3, 1e-3, "open")
-    k_short = fem.sensor_stiffness(pzt, 4.7e-3, 3.4e-3, ALUMINA, 3e-3, 1e-3, "short")
+    k_open = housing_fem.sensor_stiffness(pzt, 4.7e-3, 3.4e-3, ALUMINA, 3e-3, 1e-3, "open")
+    k_short = housing_fem.sensor_stiffness(pzt, 4.7e-3, 3.4e-3, ALUMINA, 3e-3, 1e-3, "short")
     s33 = np.linalg.inv(pzt.c_E_Pa)[2, 2]
     a_pzt, a_tip = np.pi * 4.7e-3**2 / 4, np.pi * 3e-3**2 / 4
     expect = 1 / (1e-3 / (330e9 * a_tip) + 3.4e-3 * s33 / a_pzt)
@@ -178,7 +176,7 @@ def test_sensor_stiffness_closed_form():
     assert 0.4 < k33sq < 0.8  # APC 850 coupling
     assert k_open > k_short
     with pytest.raises(ValueError, match="sensor_electrical"):
-        fem.pzt_axial_modulus(pzt, "floating")
+        housing_fem.pzt_axial_modulus(pzt, "floating")
 
 
 def test_static_balance_and_influence_line(model):
@@ -204,7 +202,7 @@ def test_static_balance_and_influence_line(model):
 
 
 def test_modes_are_mass_normalised_and_above_nyquist(model):
-    modes = fem.compute_modes(model, 4)
+    modes = housing_fem.compute_modes(model, 4)
     phi = modes.shapes
     np.testing.assert_allclose(phi.T @ (model.M @ phi), np.eye(4), atol=1e-8)
     np.testing.assert_allclose(np.einsum("ij,ij->j", phi, model.K @ phi), modes.omega_rad_s**2, rtol=1e-6)
@@ -217,7 +215,7 @@ def test_exact_modal_step_against_closed_form():
     n = 200
     t = h * np.arange(n)
     f = 1e3 * t  # ramp from rest at static equilibrium (f0 = 0)
-    q = fem.modal_response(f[:, None], np.array([w]), np.array([z]), h)[:, 0]
+    q = housing_fem.modal_response(f[:, None], np.array([w]), np.array([z]), h)[:, 0]
     wd = w * np.sqrt(1 - z * z)
     # q'' + 2 z w q' + w^2 q = a t, q(0) = q'(0) = 0
     a = 1e3
@@ -235,14 +233,14 @@ def test_compiled_modal_recurrence_against_the_loop():
     omega = 2 * np.pi * np.sort(rng.uniform(3e3, 4e4, n))
     zeta = rng.uniform(0.01, 0.05, n)
     f = 100.0 * rng.standard_normal((nt, n))
-    a_mat, b_mat = fem._ramp_recurrence(omega, zeta, h)
+    a_mat, b_mat = housing_fem._ramp_recurrence(omega, zeta, h)
     x = np.stack([f[0] / omega**2, np.zeros(n)], axis=1)
     q_ref, qd_ref = np.empty((nt, n)), np.zeros((nt, n))
     q_ref[0] = x[:, 0]
     for k in range(nt - 1):
         x = np.einsum("nij,nj->ni", a_mat, x) + np.einsum("nij,nj->ni", b_mat, np.stack([f[k], f[k + 1]], 1))
         q_ref[k + 1], qd_ref[k + 1] = x[:, 0], x[:, 1]
-    q, qd = fem.modal_response(f, omega, zeta, h, velocity=True)
+    q, qd = housing_fem.modal_response(f, omega, zeta, h, velocity=True)
     np.testing.assert_allclose(q, q_ref, rtol=1e-12, atol=1e-12 * np.abs(q_ref).max())
     np.testing.assert_allclose(qd, qd_ref, rtol=1e-12, atol=1e-12 * np.abs(qd_ref).max())
 
@@ -253,16 +251,16 @@ def test_reduced_agrees_with_sfepy_direct(paper_config, meshes):
     h = paper_config["housing"]
     dt = b["time_step_s"]
     for case in ("healthy", "faulty"):
-        p = brg.LPMParameters.from_config(b, case == "faulty")
+        p = lpm.LPMParameters.from_config(b, case == "faulty")
         t_out = dt * np.arange(60)
-        res = brg.simulate_lpm(replace(p), -dt, int(62 * b["substeps"]), dt / b["substeps"])
-        q = brg.resample_loads(res.time_s, res.load_N, t_out, dt)
-        m = st.make_model(meshes[case], paper_config)
+        res = lpm.simulate_lpm(replace(p), -dt, int(62 * b["substeps"]), dt / b["substeps"])
+        q = lpm.resample_loads(res.time_s, res.load_N, t_out, dt)
+        m = transient.make_model(meshes[case], paper_config)
         wy, wz = m.column_loads(q, p.roller_angles(t_out))
-        alpha, beta = fem.rayleigh_coefficients(h["damping_ratio"], h["damping_band_Hz"])
-        red = fem.sensor_force_reduced(
-            fem.reduced_operators(m, fem.compute_modes(m, 8), alpha, beta), wy, wz, dt
+        alpha, beta = housing_fem.rayleigh_coefficients(h["damping_ratio"], h["damping_band_Hz"])
+        red = housing_fem.sensor_force_reduced(
+            housing_fem.reduced_operators(m, housing_fem.compute_modes(m, 8), alpha, beta), wy, wz, dt
         )
-        d = fem.sensor_force_direct(m, wy, wz, dt, alpha, beta, h["rho_inf"])
+        d = housing_fem.sensor_force_direct(m, wy, wz, dt, alpha, beta, h["rho_inf"])
         rms = np.sqrt(np.mean((d["force_N"] - red["force_N"]) ** 2)) / np.sqrt(np.mean(red["force_N"] ** 2))
         assert rms < 0.01, case

@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 from conftest import CI_CONFIG, REPO, copy_repo
 
-from piezobearing import config as cfg
+from piezobearing import config
 from piezobearing.io import write_measurement
 from piezobearing.stages.calibration import nominal_circuit
 from piezobearing.synthesis import PressProtocol, synthesize
@@ -58,8 +58,8 @@ def installed(tmp_path_factory) -> tuple[Path, Path, dict]:
 
 def test_the_installed_package_is_the_wheels_not_the_checkouts(installed):
     bindir, work, env = installed
-    out = run(bindir / "python", "-c", "import piezobearing.config as c; print(c.__file__); print(c.CONFIG_DIR)",
-              cwd=work, env=env)
+    out = run(bindir / "python", "-c",
+              "from piezobearing import config; print(config.__file__); print(config.CONFIG_DIR)", cwd=work, env=env)
     assert out.returncode == 0, out.stderr[-2000:]
     module, defaults = (Path(line) for line in out.stdout.split())
     assert REPO not in module.parents and bindir.parent in module.parents
@@ -74,7 +74,7 @@ def test_help_validate_and_diagnose_run_outside_the_checkout(installed, tmp_path
     out = run(exe, "--help", cwd=work, env=env)
     assert out.returncode == 0 and "diagnose" in out.stdout, out.stderr[-2000:]
 
-    c = cfg.load(CI_CONFIG)  # a short record (12 s at 500 Hz, 6 presses) keeps the diagnosis quick
+    c = config.load(CI_CONFIG)  # a short record (12 s at 500 Hz, 6 presses) keeps the diagnosis quick
     record = work / "press.csv"
     write_measurement(synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"]), record)
     out = run(exe, "validate", record.name, cwd=work, env=env)

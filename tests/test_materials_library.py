@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from piezobearing.sensor import fem as fem
+from piezobearing.sensor import fem
 from piezobearing.sensor.materials import (
     ALUMINA,
     PIEZO_MATERIALS,

@@ -18,10 +18,10 @@ from piezobearing.bearing.transient import CASES
 from piezobearing.io import as_read, json_as_read, read_harmonic, read_json, read_series
 from piezobearing.registry import declared, declared_config
 from piezobearing.signals import detection
-from piezobearing.signals import outputs as sout
+from piezobearing.signals import outputs as signals_outputs
 from piezobearing.signals.envelope import EnvelopeSettings
-from piezobearing.stages import bearing as brs
-from piezobearing.stages import signals as sgs
+from piezobearing.stages import bearing as bearing_stages
+from piezobearing.stages import signals as signals_stages
 from piezobearing.stages.studies import KINDS, _fault_detection_row, workflow_chain
 
 
@@ -55,22 +55,25 @@ def both(tmp_path_factory, ci_config):
     # the rules, in the workflow's order, through their files
     kin = d / "kinematics.json"
     npz = {c: d / f"contact_forces_{c}.npz" for c in CASES}
-    brs.bearing_lpm(kin, npz, {c: d / f"contact_forces_{c}.csv" for c in CASES}, d / "lpm.json",
-                    _rule(cfg, "bearing_lpm"))
+    bearing_stages.bearing_lpm(kin, npz, {c: d / f"contact_forces_{c}.csv" for c in CASES}, d / "lpm.json",
+                               _rule(cfg, "bearing_lpm"))
     for c in CASES:
-        brs.housing_mesh(c, d / f"mesh_{c}.npz", d / f"mesh_{c}.vtk", d / f"mesh_{c}.json", _rule(cfg, "housing_mesh"))
-        brs.housing_transient(c, d / f"mesh_{c}.npz", npz[c], d / f"sensor_force_{c}.csv", d / f"modes_{c}.json",
-                              d / f"housing_transient_{c}.json", d / f"influence_{c}.csv",
-                              _rule(cfg, "housing_transient"))
-        sgs.sensor_voltage(d / f"sensor_force_{c}.csv", res, harm, d / f"voltage_{c}.csv", d / f"voltage_{c}.json",
-                           _rule(cfg, "sensor_voltage"))
-        sgs.noisy(d / f"voltage_{c}.csv", c, d / f"noisy_{c}.csv", d / f"noisy_{c}.json", _rule(cfg, "noisy"))
-        sgs.envelope(d / f"noisy_{c}.csv", d / f"voltage_{c}.csv", kin, d / f"envelope_{c}.csv",
-                     d / f"envelope_{c}.json", _rule(cfg, "envelope"))
-    sgs.indicator({c: d / f"envelope_{c}.json" for c in CASES}, kin, {c: str(d / f"noisy_{c}.csv") for c in CASES},
-                  {c: d / f"noisy_{c}.json" for c in CASES}, d / "fault_indicator.json", _rule(cfg, "fault_indicator"))
-    sgs.classification({c: d / f"voltage_{c}.csv" for c in CASES}, kin, d / "classification.json",
-                       d / "classification.csv", d / "roc.csv", _rule(cfg, "fault_classification"))
+        bearing_stages.housing_mesh(c, d / f"mesh_{c}.npz", d / f"mesh_{c}.vtk", d / f"mesh_{c}.json",
+                                    _rule(cfg, "housing_mesh"))
+        bearing_stages.housing_transient(c, d / f"mesh_{c}.npz", npz[c], d / f"sensor_force_{c}.csv",
+                                         d / f"modes_{c}.json", d / f"housing_transient_{c}.json",
+                                         d / f"influence_{c}.csv", _rule(cfg, "housing_transient"))
+        signals_stages.sensor_voltage(d / f"sensor_force_{c}.csv", res, harm, d / f"voltage_{c}.csv",
+                                      d / f"voltage_{c}.json", _rule(cfg, "sensor_voltage"))
+        signals_stages.noisy(d / f"voltage_{c}.csv", c, d / f"noisy_{c}.csv", d / f"noisy_{c}.json",
+                             _rule(cfg, "noisy"))
+        signals_stages.envelope(d / f"noisy_{c}.csv", d / f"voltage_{c}.csv", kin, d / f"envelope_{c}.csv",
+                                d / f"envelope_{c}.json", _rule(cfg, "envelope"))
+    signals_stages.indicator({c: d / f"envelope_{c}.json" for c in CASES}, kin,
+                             {c: str(d / f"noisy_{c}.csv") for c in CASES}, {c: d / f"noisy_{c}.json" for c in CASES},
+                             d / "fault_indicator.json", _rule(cfg, "fault_indicator"))
+    signals_stages.classification({c: d / f"voltage_{c}.csv" for c in CASES}, kin, d / "classification.json",
+                                  d / "classification.csv", d / "roc.csv", _rule(cfg, "fault_classification"))
 
     # the study's chain: the same functions, in memory
     run = workflow_chain(cfg, read_json(res), read_harmonic(harm), str(res))
@@ -98,7 +101,8 @@ def test_the_study_chain_equals_the_rules_files_to_the_bit(both):
     # the faulty bearing is detected and the healthy one is not: the chain is the physics, not a stub
     assert run["indicator"]["faulty"]["detected"] and not run["indicator"]["healthy"]["detected"]
     # the classification rule's function on the chain's voltages (as detector_case calls it)
-    record, rows, roc = sout.fault_classification({c: run["voltage"][c][1:] for c in CASES}, run["kinematics"], cfg)
+    voltages = {c: run["voltage"][c][1:] for c in CASES}
+    record, rows, roc = signals_outputs.fault_classification(voltages, run["kinematics"], cfg)
     assert _results(json_as_read(record)) == _results(read_json(d / "classification.json"))
     assert as_read(rows).equals(pd.read_csv(d / "classification.csv"))
     assert as_read(roc).equals(pd.read_csv(d / "roc.csv"))
@@ -127,16 +131,17 @@ def test_a_fault_detection_row_reports_the_rules_values(both):
 
 def test_a_calibration_circuit_case_equals_the_calibration_rules_files(tmp_path, ci_config):
     """The calibration_circuit kind (in memory, no file) reports the calibration rules' numbers to the bit."""
-    from piezobearing.stages import calibration as cal
+    from piezobearing.stages import calibration as calibration_stages
 
     cfg = copy.deepcopy(ci_config)
     cfg["synthesis"]["resistance_ohm"] = 20.0e6
     meas = tmp_path / "measurement.csv"
-    cal.synthesize_calibration(_rule(cfg, "synthesize_calibration"), meas)
-    cal.extract_sensitivity(meas, tmp_path / "sensitivity.json", _rule(cfg, "extract_sensitivity"))
-    cal.fit_resistance(meas, tmp_path / "resistance.json", tmp_path / "fit.csv", _rule(cfg, "fit_resistance"))
-    cal.lowfreq(tmp_path / "resistance.json", tmp_path / "lowfreq.json", tmp_path / "lowfreq.csv",
-                _rule(cfg, "lowfreq_sensitivity"))
+    calibration_stages.synthesize_calibration(_rule(cfg, "synthesize_calibration"), meas)
+    calibration_stages.extract_sensitivity(meas, tmp_path / "sensitivity.json", _rule(cfg, "extract_sensitivity"))
+    calibration_stages.fit_resistance(meas, tmp_path / "resistance.json", tmp_path / "fit.csv",
+                                      _rule(cfg, "fit_resistance"))
+    calibration_stages.lowfreq(tmp_path / "resistance.json", tmp_path / "lowfreq.json", tmp_path / "lowfreq.csv",
+                               _rule(cfg, "lowfreq_sensitivity"))
     case = tmp_path / "case"
     row = KINDS["calibration_circuit"](cfg, case)
     s, r, lf = (read_json(tmp_path / f) for f in ("sensitivity.json", "resistance.json", "lowfreq.json"))

@@ -7,14 +7,14 @@ import re
 import pytest
 from conftest import REPO, copy_repo, snakemake
 
-from piezobearing import config as cfg
+from piezobearing import config
 
 
 def test_the_paper_run_writes_results_and_another_run_a_folder_beside_it(paper_config):
-    assert paper_config["run"] == cfg.PAPER_RUN
-    assert cfg.results_folder(paper_config) == "results"
-    assert cfg.results_folder({**paper_config, "run": "speed1500"}) == "results/speed1500"
-    assert cfg.results_folder({}) == "results"  # a config without the key is the paper's case
+    assert paper_config["run"] == config.PAPER_RUN
+    assert config.results_folder(paper_config) == "results"
+    assert config.results_folder({**paper_config, "run": "speed1500"}) == "results/speed1500"
+    assert config.results_folder({}) == "results"  # a config without the key is the paper's case
 
 
 def test_every_folder_the_rules_write_is_a_reserved_run_name():
@@ -22,20 +22,20 @@ def test_every_folder_the_rules_write_is_a_reserved_run_name():
     for smk in (REPO / "workflow/rules").glob("*.smk"):
         written.update(re.findall(r"\{RESULTS\}/([A-Za-z0-9_]+)/", smk.read_text()))
     assert written, "no {RESULTS}/<folder>/ paths found in workflow/rules"
-    assert written <= cfg.RESULTS_FOLDERS, sorted(written - cfg.RESULTS_FOLDERS)
+    assert written <= config.RESULTS_FOLDERS, sorted(written - config.RESULTS_FOLDERS)
 
 
-@pytest.mark.parametrize("name", sorted(cfg.RESULTS_FOLDERS))
+@pytest.mark.parametrize("name", sorted(config.RESULTS_FOLDERS))
 def test_a_run_named_like_a_results_folder_stops_in_one_line(paper_config, name):
-    with pytest.raises(cfg.ConfigError, match=rf"key 'run': '{name}' is a results folder") as e:
-        cfg.validate({**paper_config, "run": name})
+    with pytest.raises(config.ConfigError, match=rf"key 'run': '{name}' is a results folder") as e:
+        config.validate({**paper_config, "run": name})
     assert "\n" not in str(e.value)
 
 
 @pytest.mark.parametrize("name", ["../elsewhere", "a/b", "", "Paper Case", "-x"])
 def test_a_run_name_that_is_no_folder_name_stops(paper_config, name):
-    with pytest.raises(cfg.ConfigError, match=r"key 'run'"):
-        cfg.validate({**paper_config, "run": name})
+    with pytest.raises(config.ConfigError, match=r"key 'run'"):
+        config.validate({**paper_config, "run": name})
 
 
 def _job_paths(dry_run_stdout: str) -> list[str]:

@@ -9,8 +9,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from piezobearing.sensor import design as sd
-from piezobearing.sensor import fem
+from piezobearing.sensor import design, fem
 from piezobearing.sensor.calibration import SensorCircuit
 from piezobearing.sensor.materials import ALUMINA, EPOXY, piezo_material, stress_charge_form
 from piezobearing.sensor.mesh import (
@@ -33,7 +32,7 @@ MATS = fem.StackMaterials(stress_charge_form(PZT), PZT.density_kg_per_m3, ALUMIN
 def test_linear_from_is_where_the_rc_high_pass_reaches_95_percent():
     c = SensorCircuit(resistance_ohm=50e6)
     f_c = 1 / (2 * np.pi * c.tau_s)
-    f = sd.linear_from_Hz(f_c, 0.05)
+    f = design.linear_from_Hz(f_c, 0.05)
     x = f / f_c
     assert x / np.sqrt(1 + x * x) == pytest.approx(0.95, rel=1e-12)
     assert f == pytest.approx(3.0424 * f_c, rel=1e-4)
@@ -47,7 +46,7 @@ def test_stack_stiffness_of_a_rod_is_EA_over_L_short_and_open(key):
     r, length = 1.0e-3, 3.0e-3
     asm = fem.assemble(cylinder_mesh(r, length, n_core=2, n_ring=1, n_layers=3), mats, order=2)
     rs = fem.reduce(asm, fem.BoundaryConditions("SS", (("top", (2,)),), hot_z_m=0.0, ground_z_m=length))
-    k_short, k_open = sd.stack_stiffness_N_per_m(rs)
+    k_short, k_open = design.stack_stiffness_N_per_m(rs)
     s33_e = np.linalg.inv(pzt.c_E_Pa)[2, 2]
     s33_d = s33_e - pzt.d33_C_per_N**2 / pzt.eps33_T_F_per_m
     area = np.pi * r**2
@@ -63,8 +62,9 @@ def test_design_figures_are_the_sensor_fem_stages_numbers(paper_config):
     mesh = stack_mesh(p.geometry, p.density, 1.0)
     rc = SensorCircuit.from_config(paper_config["sensor"], 50e6)
     sweep, band = harmonic_results(mesh, p, rc, 30.0)
-    st = sd.DesignSettings(p.order, p.damping_ratio, p.n_ritz_modes, p.reference_frequency_Hz, p.band_ratio_dB, 0.05)
-    d = sd.design_figures(mesh, p.materials, fem.MeasuringCircuit(50e6, p.cable_capacitance_F), st)
+    st = design.DesignSettings(p.order, p.damping_ratio, p.n_ritz_modes, p.reference_frequency_Hz, p.band_ratio_dB,
+                               0.05)
+    d = design.design_figures(mesh, p.materials, fem.MeasuringCircuit(50e6, p.cable_capacitance_F), st)
     assert d["first_resonance_short_Hz"] == pytest.approx(band["first_axial_short_Hz"], rel=1e-9)
     assert d["first_resonance_open_Hz"] == pytest.approx(band["first_axial_open_Hz"], rel=1e-9)
     assert d["band_high_Hz"] == pytest.approx(band["band_high_Hz"], rel=1e-9)
@@ -95,10 +95,10 @@ def test_adhesive_layer_meshes_as_a_thin_layer_and_softens_the_stack():
     assert vol[glued.groups == GROUP_ADHESIVE].sum() == pytest.approx(expected, rel=1e-9)
     z = replace(GEO, adhesive_height_m=a).z_interfaces_m
     assert z[1] == pytest.approx(1e-3 + a) and z[2] - z[1] == pytest.approx(3.4e-3)
-    st = sd.DesignSettings(n_ritz_modes=6)
+    st = design.DesignSettings(n_ritz_modes=6)
     circ = fem.MeasuringCircuit(50e6, 180e-12)
-    d0 = sd.design_figures(none, MATS, circ, st)
-    d1 = sd.design_figures(glued, MATS, circ, st)
+    d0 = design.design_figures(none, MATS, circ, st)
+    d1 = design.design_figures(glued, MATS, circ, st)
     assert d1["first_resonance_short_Hz"] < 0.97 * d0["first_resonance_short_Hz"]
     assert d1["stack_stiffness_open_N_per_m"] < 0.9 * d0["stack_stiffness_open_N_per_m"]
     # epoxy in series: 1/k grows by at least the layers' own compliance (a / (E A)), within the 3D spreading
@@ -153,8 +153,8 @@ def test_detection_margin_grows_with_the_gain_by_exactly_the_gain():
     noise = daq.NoiseSettings(model="absolute", noise_density_V_per_sqrtHz=1e-3, adc_bits=48, range_V=1e4)
     es = EnvelopeSettings("fixed", (500.0, 1250.0), 300.0, 4)
     ins = detection.IndicatorSettings(3, 0.5, 2, 1e-3)
-    a = sd.detection_at_noise(v, dt, f0, noise, 8, 3, es, ins, 0.95)
-    b = sd.detection_at_noise({k: 2 * x for k, x in v.items()}, dt, f0, noise, 8, 3, es, ins, 0.95)
+    a = design.detection_at_noise(v, dt, f0, noise, 8, 3, es, ins, 0.95)
+    b = design.detection_at_noise({k: 2 * x for k, x in v.items()}, dt, f0, noise, 8, 3, es, ins, 0.95)
     assert a["detection_rate_faulty"] == 1.0 and a["indicator_faulty"] > a["threshold"]
     assert b["detection_margin_dB"] - a["detection_margin_dB"] == pytest.approx(20 * np.log10(2), abs=1e-3)
     assert not a["clipped"] and not b["clipped"]
@@ -170,15 +170,15 @@ def test_a_clipped_design_is_flagged_and_its_margin_kept_apart():
     ins = detection.IndicatorSettings(3, 0.5, 2, 1e-3)
     narrow = daq.NoiseSettings(model="absolute", noise_density_V_per_sqrtHz=1e-3, adc_bits=24, range_V=30.0)
     wide = replace(narrow, range_V=100.0)
-    d = sd.detection_at_noise(v, dt, f0, narrow, 3, 1, es, ins, 0.95)
+    d = design.detection_at_noise(v, dt, f0, narrow, 3, 1, es, ins, 0.95)
     assert d["clipped"] and d["clipped_fraction"] > 0.1
     assert d["range_needed_V"] == pytest.approx(40.0, rel=1e-6) and d["range_V"] == 30.0
     assert np.isnan(d["detection_margin_dB"]) and np.isfinite(d["detection_margin_as_clipped_dB"])
-    w = sd.detection_at_noise(v, dt, f0, wide, 3, 1, es, ins, 0.95)
+    w = design.detection_at_noise(v, dt, f0, wide, 3, 1, es, ins, 0.95)
     assert not w["clipped"] and np.isnan(w["detection_margin_as_clipped_dB"])
     assert d["detection_margin_ideal_adc_dB"] == w["detection_margin_ideal_adc_dB"]
     assert w["detection_margin_dB"] == pytest.approx(w["detection_margin_ideal_adc_dB"], abs=0.5)
-    g = sd.detection_at_noise({k: 2 * x for k, x in v.items()}, dt, f0, narrow, 3, 1, es, ins, 0.95)
+    g = design.detection_at_noise({k: 2 * x for k, x in v.items()}, dt, f0, narrow, 3, 1, es, ins, 0.95)
     assert g["detection_margin_ideal_adc_dB"] - d["detection_margin_ideal_adc_dB"] == pytest.approx(
         20 * np.log10(2), abs=1e-3)
 

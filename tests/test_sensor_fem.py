@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.constants import epsilon_0
 
-from piezobearing.sensor import fem as fem
+from piezobearing.sensor import fem
 from piezobearing.sensor.calibration import SensorCircuit, frequency_response
 from piezobearing.sensor.materials import ALUMINA, StressChargeForm, paper_pzt, stress_charge_form
 from piezobearing.sensor.mesh import StackGeometry, cross_section, cylinder_mesh, hex_volumes, stack_mesh

@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from piezobearing.stages import sensor_fem as st
+from piezobearing.stages import sensor_fem as sensor_fem_stages
 
 pytestmark = pytest.mark.slow  # the workflow run
 
@@ -102,27 +102,28 @@ def test_convergence_csv(sensor_run):
 def test_bad_config_and_inputs_name_the_key_or_file(ci_config, sensor_run, tmp_path):
     bad = copy.deepcopy(ci_config)
     bad["sensor_fem"]["mesh_level"] = 9
-    with pytest.raises(st.SensorFemError, match="sensor_fem.mesh_level"):
-        st.SensorFemParams.from_config(bad)
+    with pytest.raises(sensor_fem_stages.SensorFemError, match="sensor_fem.mesh_level"):
+        sensor_fem_stages.SensorFemParams.from_config(bad)
     (tmp_path / "r.json").write_text(json.dumps({"R": 1}))
     ritz = str(sensor_run / "ritz_model.npz")
 
     def harmonic(ritz_path):
-        return st.sensor_harmonic(ritz_path, str(sensor_run / "modal.json"), str(tmp_path / "r.json"),
-                                  str(sensor_run / "lowfreq.json"), str(tmp_path / "h.csv"),
-                                  str(tmp_path / "b.json"), ci_config)
+        return sensor_fem_stages.sensor_harmonic(ritz_path, str(sensor_run / "modal.json"), str(tmp_path / "r.json"),
+                                                 str(sensor_run / "lowfreq.json"), str(tmp_path / "h.csv"),
+                                                 str(tmp_path / "b.json"), ci_config)
 
-    with pytest.raises(st.SensorFemError, match="resistance_ohm"):
+    with pytest.raises(sensor_fem_stages.SensorFemError, match="resistance_ohm"):
         harmonic(ritz)
     (tmp_path / "r.json").write_text(json.dumps({"resistance_ohm": 50e6}))
-    with pytest.raises(st.SensorFemError, match="none.npz: file not found; run the rule sensor_modal"):
+    with pytest.raises(sensor_fem_stages.SensorFemError, match="none.npz: file not found; run the rule sensor_modal"):
         harmonic(str(tmp_path / "none.npz"))
     (tmp_path / "row.json").write_text(json.dumps({"row": {"level": 1, "multiplier": 0.5}}))
     meshes = [str(sensor_run.root / f"results/sensor/mesh/stack_L{k}.vtk") for k in (1, 2, 3)]
-    with pytest.raises(st.SensorFemError, match="row.json: the row of level 1 is not this config's sensor_fem.mesh_level"):
-        st.sensor_convergence(meshes, str(tmp_path / "row.json"), str(tmp_path / "c.csv"), ci_config)
-    with pytest.raises(st.SensorFemError, match="mesh file not found"):
-        st.sensor_modal(
+    with pytest.raises(sensor_fem_stages.SensorFemError,
+                       match="row.json: the row of level 1 is not this config's sensor_fem.mesh_level"):
+        sensor_fem_stages.sensor_convergence(meshes, str(tmp_path / "row.json"), str(tmp_path / "c.csv"), ci_config)
+    with pytest.raises(sensor_fem_stages.SensorFemError, match="mesh file not found"):
+        sensor_fem_stages.sensor_modal(
             str(tmp_path / "none.vtk"), str(tmp_path / "m.json"), str(tmp_path / "m.npz"), str(tmp_path / "r.npz"),
             str(tmp_path / "row.json"), ci_config,
         )

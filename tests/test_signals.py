@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from piezobearing.sensor.calibration import SensorCircuit, circuit_voltage, frequency_response
-from piezobearing.sensor.response import fem_ratio
+from piezobearing.sensor.response import fem_ratio, sensor_model
 from piezobearing.signals import daq, detection, envelope
 
 FS = 2550.0  # the paper's sampling rate [Hz]
@@ -266,6 +266,17 @@ def test_fem_correction_factor():
     assert out["factor"] == pytest.approx(0.9) and out["n_frequencies"] == 2
     out = fem_ratio(f[2:], fem[2:] / rc[2:], FS / 2)  # no FEM point below Nyquist: the lowest two
     assert out["frequencies_Hz"] == [5000.0, 1e5]
+
+
+def test_sensor_model_names_the_file_of_its_fem_response():
+    """A FEM response read from a file other than the workflow's (diagnose-bearing --sensor-response) is named."""
+    c = SensorCircuit()
+    f = np.array([500.0, 1000.0, 5000.0])
+    h = 0.94 * np.abs(frequency_response(f, c))
+    config = {"signals": {"sensor_fem_correction": True}}
+    model = sensor_model(config, c, FS / 2, (f, h, "/elsewhere/harmonic.csv"))
+    assert model.fem_factor == pytest.approx(0.94) and "/elsewhere/harmonic.csv" in model.source
+    assert "results/sensor/harmonic.csv" in sensor_model(config, c, FS / 2, (f, h)).source
 
 
 def test_defect_event_times_find_the_impulses():

@@ -15,17 +15,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.stats import binom, chi2
+from test_signals_synthetic import FS, KIN  # the N 305 at 1000 rpm, no slip; the paper's DAQ rate
 
 from piezobearing.signals import harmonics, outer_race
 from piezobearing.signals.detectors import baseline
 from piezobearing.signals.fault_bands import slipped_frequencies
 
-FR = 1000.0 / 60.0
-G = 10.0 / 44.0
-FTF = 0.5 * FR * (1 - G)
-KIN = {"shaft_Hz": FR, "ftf_Hz": FTF, "bpfo_Hz": 11 * FTF, "bpfi_Hz": 11 * (FR - FTF),
-       "bsf_Hz": 0.5 * 44.0 / 10.0 * FR * (1 - G**2)}
-FS = 2550.0
 SLIP = 0.015
 
 

@@ -142,7 +142,7 @@ def test_healthy_stays_healthy_at_a_daq_noise(tmp_path, inputs, paper_config, mo
     import numpy as np
     from test_signals import DT, bearing_force
 
-    from piezobearing.signals import outputs as sout
+    from piezobearing.signals import outputs as signals_outputs
 
     n, shift = 2600, 14  # the stand-in's bump is centred at 0.4 of a roller passage (36 steps): 14 steps earlier
     for case, imp in (("healthy", 0.0), ("faulty", 10.0)):
@@ -173,8 +173,8 @@ def test_healthy_stays_healthy_at_a_daq_noise(tmp_path, inputs, paper_config, mo
         v = pd.read_csv(d / "voltage_healthy.csv")["voltage_V"].to_numpy()
         return np.abs(v[36:72] - v[:36]).max()
 
-    rest = sout.rc_voltage
-    monkeypatch.setattr(sout, "rc_voltage", lambda f, dt, g, tau, period_s: rest(f, dt, g, tau))
+    rest = signals_outputs.rc_voltage
+    monkeypatch.setattr(signals_outputs, "rc_voltage", lambda f, dt, g, tau, period_s: rest(f, dt, g, tau))
     old = run_chain(tmp_path / "rest", inputs, cfg, harmonic=False)
     assert leftover(out) < 1e-6 and leftover(old) > 5e-3  # the free decay over one passage: 10 mV x (1 - e^-1.08)
     folds = json.loads((old / "fault_indicator.json").read_text())["healthy"]["detection"]["families"]

@@ -4,7 +4,7 @@ import re
 
 from conftest import CI_CONFIG, REPO, snakemake
 
-from piezobearing import config as cfg
+from piezobearing import config
 from piezobearing.studies import check_studies
 
 GUIDE = REPO / "docs" / "guides" / "studies.md"
@@ -16,8 +16,8 @@ def test_the_guide_gives_each_studys_target_and_cases():
         m = re.match(r"\| `(\w+)` \| `snakemake --cores 2 (study_\w+)` \| (\d+) \| (\d+|-) \|", line)
         if m:
             rows[m.group(1)] = (m.group(2), int(m.group(3)), 0 if m.group(4) == "-" else int(m.group(4)))
-    paper = {k: len(v) for k, v in check_studies(cfg.load()).items()}
-    ci = {k: len(v) for k, v in check_studies(cfg.load(CI_CONFIG)).items()}
+    paper = {k: len(v) for k, v in check_studies(config.load()).items()}
+    ci = {k: len(v) for k, v in check_studies(config.load(CI_CONFIG)).items()}
     assert set(rows) == set(paper)
     for name, (target, n_paper, n_ci) in rows.items():
         assert target == f"study_{name}" and n_paper == paper[name] and n_ci == ci.get(name, 0), name

@@ -24,7 +24,7 @@ import pytest
 import yaml
 from conftest import snakemake
 
-from piezobearing import config as cfg
+import piezobearing.config
 from piezobearing.registry import READS, RECORD_RULES
 
 pytestmark = pytest.mark.slow
@@ -175,9 +175,9 @@ def _override(config: dict, keys: list[str], directions: dict[str, bool] | None 
     for path in keys:
         _set(out, path, _changed(_value(config, path), path, directions[path]))
     try:
-        cfg.validate(cfg.deep_merge(config, out))
+        piezobearing.config.validate(piezobearing.config.deep_merge(config, out))
         return out
-    except cfg.ConfigError:
+    except piezobearing.config.ConfigError:
         return _override_one_by_one(config, keys)
 
 
@@ -194,9 +194,9 @@ def _direction(config: dict, path: str) -> bool:
         change: dict = {}
         _set(change, path, _changed(_value(config, path), path, up))
         try:
-            cfg.validate(cfg.deep_merge(config, change))
+            piezobearing.config.validate(piezobearing.config.deep_merge(config, change))
             return up
-        except cfg.ConfigError:
+        except piezobearing.config.ConfigError:
             continue
     raise AssertionError(f"no valid change of {path}")
 
@@ -208,9 +208,9 @@ def _override_one_by_one(config: dict, keys: list[str]) -> dict:
         for up in (False, True):
             _set(out, path, _changed(_value(config, path), path, up))
             try:
-                cfg.validate(cfg.deep_merge(config, out))
+                piezobearing.config.validate(piezobearing.config.deep_merge(config, out))
                 break
-            except cfg.ConfigError:
+            except piezobearing.config.ConfigError:
                 continue
         else:
             raise AssertionError(f"no valid change of {path}")
@@ -229,7 +229,7 @@ def test_every_rule_reruns_on_the_keys_its_stage_reads_and_no_other_rule_does(sc
     ``bearing_lpm`` and ``bearing_sampling``, ``noisy``, ``fault_indicator`` and ``snr_study``, and the three
     sensor FEM rules share theirs); each rule's assertions are checked on its config's dry run."""
     d, env, children = scratch
-    config = cfg.load(d / "config/ci.yaml")
+    config = piezobearing.config.load(d / "config/ci.yaml")
     keys = {rule: rule_keys(config, rule) for rule in sorted(READS)}
     first = {}  # each distinct key set: the first rule that reads it (names its override file)
     for rule, k in keys.items():
@@ -264,7 +264,7 @@ def dry_listed(d: Path, dry, name: str, override: dict) -> set[str]:
 def test_an_undeclared_key_read_raises_naming_the_rule_and_the_fix():
     from piezobearing.registry import UndeclaredKeyError, declared, declared_config
 
-    config = cfg.load(ROOT / "config/ci.yaml")
+    config = piezobearing.config.load(ROOT / "config/ci.yaml")
     sub = declared_config(declared(config, "sensor_voltage"), "sensor_voltage")
     assert sub["signals"]["skip_s"] == config["signals"]["skip_s"]
     with pytest.raises(UndeclaredKeyError, match=r"signals\.snr_dB.*READS\['sensor_voltage'\]"):
@@ -303,7 +303,7 @@ def test_a_replaced_record_with_an_older_time_reruns_what_reads_it(scratch, dry)
     from piezobearing.synthesis import PressProtocol, synthesize
 
     d, env, children = scratch
-    config = cfg.load(d / "config/ci.yaml")
+    config = piezobearing.config.load(d / "config/ci.yaml")
     record = d / "data/record.csv"
 
     def write(seed: int) -> None:

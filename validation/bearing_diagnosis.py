@@ -3,7 +3,9 @@
 Each case hides catalogue values in a record of the 4-DOF LPM (:mod:`piezobearing.diagnosis.bearing.lpm_records`,
 not the quasi-static surrogate the diagnosis fits), at 30 dB, and runs the diagnosis of ``diagnose-bearing`` on
 it. The results file holds, per case: the hidden values, what the diagnosis selected, each hidden value's fitted
-value and 95 % interval, the verdict and the lines it left unexplained. A markdown table goes beside it.
+value and 95 % interval, the verdict, the fault's statement and the lines it left unexplained, and the rate the
+model was held at (a record faster than ``bearing_diagnosis.max_model_rate_Hz`` is averaged down by the
+diagnosis itself). A markdown table goes beside it.
 
     python validation/bearing_diagnosis.py --out results/validation/bearing_diagnosis.json \
         [--influence results/bearing/influence_line_healthy.csv] [--rate 2550 --rate 25600] [--case NAME ...]
@@ -14,9 +16,9 @@ from __future__ import annotations
 import argparse
 import copy
 import json
+import shlex
+import sys
 from pathlib import Path
-
-import numpy as np
 
 from piezobearing import config as cfg
 from piezobearing.diagnosis.bearing.lpm_records import lpm_record
@@ -66,6 +68,8 @@ def run_case(config: dict, influence, name: str, rate_Hz: float, duration_s: flo
         "values": found,
         "shaft_speed_Hz": {"found": final["params"].get("shaft_speed_Hz"), "ci95": final["ci95"].get("shaft_speed_Hz")},
         "fault_statement": d["fault"].get("statement"),
+        "fault_sidebands": d["fault"].get("sidebands"),
+        "model_rate": d["model_rate"],
         "nrmse": final["nrmse"],
         "noise_floor_nrmse": final["noise_floor_nrmse"],
         "unexplained": [u.get("where") for u in d["unexplained"]],
@@ -73,14 +77,14 @@ def run_case(config: dict, influence, name: str, rate_Hz: float, duration_s: flo
 
 
 def table(rows: list[dict]) -> str:
-    out = ["| case | rate [Hz] | hidden | found [95 % interval] | selected | verdict |", "|---|---|---|---|---|---|"]
+    out = ["| case | rate [Hz] (model) | hidden | found [95 % interval] | selected | verdict |", "|---|---|---|---|---|---|"]
     for r in rows:
         hid = "; ".join(f"{k} {v['hidden']:.4g}" for k, v in r["values"].items())
         fnd = "; ".join(
             f"{v['found']:.4g} [{v['ci95'][0]:.4g}, {v['ci95'][1]:.4g}]" if v["found"] is not None and v["ci95"]
             else "not fitted" for v in r["values"].values()
         )
-        out.append(f"| {r['case']} | {r['sample_rate_Hz']:.0f} | {hid} | {fnd} | {', '.join(r['selected']) or 'none'} "
+        out.append(f"| {r['case']} | {r['sample_rate_Hz']:.0f} ({r['model_rate']['model_rate_Hz']:.0f}) | {hid} | {fnd} | {', '.join(r['selected']) or 'none'} "
                    f"| {r['verdict']} |")
     return "\n".join(out)
 
@@ -107,7 +111,7 @@ def main() -> None:
                 continue
             c = copy.deepcopy(config)
             rows.append(run_case(c, influence, name, rate, args.duration, args.seed))
-            out.write_text(json.dumps({"command": "python validation/bearing_diagnosis.py", "snr_dB": 30.0,
+            out.write_text(json.dumps({"command": shlex.join(["python", *sys.argv]), "snr_dB": 30.0,
                                        "cases": rows}, indent=1))
             out.with_suffix(".md").write_text(table(rows) + "\n")
             print(table(rows[-1:]).splitlines()[-1], flush=True)

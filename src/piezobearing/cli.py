@@ -49,7 +49,7 @@ import sys
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
-from . import config as cfg
+from .config import ConfigError, default_config_dir, find_checkout, load, read_yaml
 
 # Each command imports what it runs inside its own function: all of them together take about 2-3 s of CPU to
 # import (SciPy, sfepy, matplotlib, pandas; measured with resource.getrusage), which `piezobearing --help` and
@@ -70,9 +70,9 @@ def _fail(msg: str) -> int:
 
 def _load_config(args) -> tuple[dict, str]:
     """The config the command uses and a line saying where it came from."""
-    d = cfg.default_config_dir()
+    d = default_config_dir()
     overrides = [args.config] if args.config is not None else []
-    config = cfg.load(*overrides, config_dir=d)
+    config = load(*overrides, config_dir=d)
     return config, " + ".join([str(d / "config.yaml"), *map(str, overrides)])
 
 
@@ -121,7 +121,7 @@ def _bearing_model(config: dict, influence: str | None) -> str:
 def _data_dirs() -> list[Path]:
     """The data/ folders that hold users' measurements and are never written."""
     # the checkout around the current folder, and the one holding the package (an editable install)
-    roots = {r.resolve() for r in (cfg.find_checkout(), cfg.find_checkout(Path(cfg.__file__).parent)) if r}
+    roots = {r.resolve() for r in (find_checkout(), find_checkout(Path(__file__).parent)) if r}
     return [r / "data" for r in sorted(roots)]
 
 
@@ -174,7 +174,7 @@ def _validate(args) -> int:
 
     try:
         config, used = _load_config(args)
-    except cfg.ConfigError as e:
+    except ConfigError as e:
         return _fail(str(e))
     if args.resample_to_uniform:
         config["calibration"]["resample_to_uniform"] = True
@@ -219,7 +219,7 @@ def _diagnose(args) -> int:
 
     try:
         config, used = _load_config(args)
-    except cfg.ConfigError as e:
+    except ConfigError as e:
         return _fail(str(e))
     try:
         created = _prepare_out(args.out)
@@ -300,7 +300,7 @@ def _hide_and_find(args) -> int:
 
     try:
         config, used = _load_config(args)
-    except cfg.ConfigError as e:
+    except ConfigError as e:
         return _fail(str(e))
     params = {}
     for i, item in enumerate(args.param or []):
@@ -351,13 +351,13 @@ def _diagnose_bearing(args) -> int:
 
     try:
         config, used = _load_config(args)
-    except (cfg.ConfigError, OSError) as e:
+    except (ConfigError, OSError) as e:
         return _fail(str(e))
     config["bearing"]["measurement"] = args.record
     if args.rpm is not None and not args.rpm > 0:
         return _fail(f"--rpm {args.rpm:g}: give the shaft speed in rpm (> 0)")
     # the rig file's own speed stands before the record's *RPM variable; the default config's after it
-    rig = cfg.read_yaml(args.config) if args.config is not None else {}
+    rig = read_yaml(args.config) if args.config is not None else {}
     rig_speed = "shaft_speed_rpm" in ((rig or {}).get("bearing") or {})
 
     def progress(msg: str) -> None:

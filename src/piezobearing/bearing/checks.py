@@ -14,8 +14,7 @@ import numpy as np
 import pandas as pd
 from scipy.signal import find_peaks
 
-from . import housing_fem as fem
-from . import lpm as brg
+from . import housing_fem, lpm
 from .housing_mesh import build_housing_mesh
 from .kinematics import Kinematics
 from .transient import housing_geometry, make_model
@@ -39,17 +38,17 @@ def impact_intervals(t: np.ndarray, qmax: np.ndarray, bpfo: float) -> np.ndarray
 
 def lpm_checks(run: dict, kin: Kinematics) -> dict:
     """Verification numbers of one LPM run: static Harris check, load balance, impact period."""
-    p: brg.LPMParameters = run["params"]
+    p: lpm.LPMParameters = run["params"]
     g = p.geometry
     out = {}
     # quasi-static check in the two symmetric roller positions (healthy bearing)
     for name, psi0 in (("roller_at_bottom", 0.0), ("rollers_straddling", 0.5 * g.roller_pitch_rad)):
         psi = psi0 + g.roller_pitch_rad * np.arange(g.n_rollers)
-        e = brg.static_offset(
+        e = lpm.static_offset(
             np.array([0.0, -p.radial_load_N]), psi, p.gap_m, np.zeros_like(psi), p.k_contact
         )
-        _, _, q = brg.bearing_force(e, psi, p.gap_m, np.zeros_like(psi), p.k_contact)
-        qh, dr = brg.harris_discrete_loads(p.radial_load_N, psi, p.gap_m, p.k_contact)
+        _, _, q = lpm.bearing_force(e, psi, p.gap_m, np.zeros_like(psi), p.k_contact)
+        qh, dr = lpm.harris_discrete_loads(p.radial_load_N, psi, p.gap_m, p.k_contact)
         out[f"harris_{name}"] = {
             "lpm_N": q.tolist(),
             "harris_N": qh.tolist(),
@@ -90,7 +89,7 @@ def lpm_checks(run: dict, kin: Kinematics) -> dict:
 # --------------------------------------------------------------------------- mesh convergence
 
 
-def quasi_static_force(model: fem.HousingModel, load_N: np.ndarray, angle_rad: np.ndarray) -> np.ndarray:
+def quasi_static_force(model: housing_fem.HousingModel, load_N: np.ndarray, angle_rad: np.ndarray) -> np.ndarray:
     """Quasi-static sensor force g(t) = sum_j Q_j (K^-1 c) . p(psi_j) [N]."""
     gy, gz, _ = model.influence_line()
     wy, wz = model.column_loads(load_N, angle_rad)
@@ -135,7 +134,7 @@ def mesh_convergence(contact: dict, config: dict, known: dict | None = None) -> 
     not monotone or the levels not in geometric progression).
     """
     h, b = config["housing"], config["bearing"]
-    kin = brg.kinematic_frequencies(brg.BearingGeometry.from_config(b), b["shaft_speed_rpm"] / 60.0)
+    kin = lpm.kinematic_frequencies(lpm.BearingGeometry.from_config(b), b["shaft_speed_rpm"] / 60.0)
     geo = housing_geometry(config)
     rows = []
     for level in h["convergence_levels"]:
@@ -215,8 +214,8 @@ def sampling_phase(
     at a step of 1/2500 s, not commensurate with the roller passage.
     """
     b = bearing
-    p = brg.LPMParameters.from_config(b, True, seed)
-    kin = brg.kinematic_frequencies(p.geometry, p.shaft_speed_Hz, p.cage_slip)
+    p = lpm.LPMParameters.from_config(b, True, seed)
+    kin = lpm.kinematic_frequencies(p.geometry, p.shaft_speed_Hz, p.cage_slip)
     tf = contact["fine_time_s"]
     psi = p.roller_angles(tf)
     order = np.argsort(angle_rad)

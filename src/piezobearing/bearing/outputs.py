@@ -14,7 +14,7 @@ from dataclasses import asdict
 
 import pandas as pd
 
-from . import lpm as brg
+from . import lpm
 from .checks import lpm_checks
 from .housing_fem import spring_share_factor
 from .housing_mesh import HousingMesh, build_housing_mesh, mesh_quality
@@ -35,11 +35,11 @@ def bearing_lpm(config: dict, method: str = "compiled") -> dict:
     (simulate_lpm), for the benchmark.
     """
     b = config["bearing"]
-    geo = brg.BearingGeometry.from_config(b)
+    geo = lpm.BearingGeometry.from_config(b)
     # top level: the kinematic (no-slip) lines, which signals.fault_bands slips itself; "with_slip": at the
     # configured mean cage slip, what the LPM's cage does on average
-    kin0 = brg.kinematic_frequencies(geo, b["shaft_speed_rpm"] / 60.0)
-    kin = brg.kinematic_frequencies(geo, b["shaft_speed_rpm"] / 60.0, b["cage_slip"])
+    kin0 = lpm.kinematic_frequencies(geo, b["shaft_speed_rpm"] / 60.0)
+    kin = lpm.kinematic_frequencies(geo, b["shaft_speed_rpm"] / 60.0, b["cage_slip"])
     operating = {
         "cage_slip": b["cage_slip"],
         "slip_jitter": b["slip_jitter"],
@@ -51,7 +51,7 @@ def bearing_lpm(config: dict, method: str = "compiled") -> dict:
     summary = {
         "kinematics": kin0.to_dict(),
         "kinematics_with_slip": kin.to_dict(),
-        "contact_stiffness_N_per_m10_9": brg.line_contact_stiffness(geo.roller_length_m),
+        "contact_stiffness_N_per_m10_9": lpm.line_contact_stiffness(geo.roller_length_m),
         "config": {"bearing": b},
     }
     for case in CASES:

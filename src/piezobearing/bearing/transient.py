@@ -13,8 +13,7 @@ import time
 import numpy as np
 
 from ..sensor.materials import CAST_IRON, STEEL, adhesive_from_config, alumina_from_config, pzt_from_config
-from . import housing_fem as fem
-from . import lpm as brg
+from . import housing_fem, lpm
 from .housing_mesh import HousingGeometry, HousingMesh
 
 log = logging.getLogger("piezobearing.bearing.lpm")
@@ -46,7 +45,7 @@ def run_lpm(bearing: dict, faulty: bool, method: str = "compiled", seed: int = 0
     (``fine_base_acceleration_m_per_s2``) and at the FEM step (``base_acceleration_m_per_s2``, treated as the
     roller loads are, ``bearing.resample``), and the displacements are relative to the ground.
     """
-    p = brg.LPMParameters.from_config(bearing, faulty, seed)
+    p = lpm.LPMParameters.from_config(bearing, faulty, seed)
     dt = bearing["time_step_s"]
     h = dt / bearing["substeps"]
     t_out = time_grid(bearing)
@@ -56,12 +55,12 @@ def run_lpm(bearing: dict, faulty: bool, method: str = "compiled", seed: int = 0
     ab = None
     if base_motion is not None:
         ab = np.asarray(base_motion(t_start + h * np.arange(n_steps + 1)), dtype=float)
-    res = brg.simulate_lpm(p, t_start, n_steps, h, method=method, base_acceleration_m_per_s2=ab)
+    res = lpm.simulate_lpm(p, t_start, n_steps, h, method=method, base_acceleration_m_per_s2=ab)
     keep = res.time_s >= -dt / 2 - 1e-12
-    q_out = brg.resample_loads(res.time_s, res.load_N, t_out, dt, bearing["resample"])
+    q_out = lpm.resample_loads(res.time_s, res.load_N, t_out, dt, bearing["resample"])
     if ab is not None:
         extra["fine_base_acceleration_m_per_s2"] = ab[keep]
-        extra["base_acceleration_m_per_s2"] = brg.resample_loads(res.time_s, ab, t_out, dt, bearing["resample"])
+        extra["base_acceleration_m_per_s2"] = lpm.resample_loads(res.time_s, ab, t_out, dt, bearing["resample"])
     if bearing["tachometer_pulses_per_rev"] > 0:
         extra["tachometer_time_s"] = p.tachometer_times(
             -dt / 2, t_out[-1] + dt / 2, bearing["tachometer_pulses_per_rev"]
@@ -90,7 +89,7 @@ def housing_geometry(config: dict) -> HousingGeometry:
 def sensor_spring(config: dict) -> float:
     """Axial stiffness of the sensor stack from the config [N/m] (tip disk, its bond layer, PZT)."""
     s, h, sf = config["sensor"], config["housing"], config["sensor_fem"]
-    return fem.sensor_stiffness(
+    return housing_fem.sensor_stiffness(
         pzt_from_config(s),
         s["pzt_diameter_m"],
         s["pzt_height_m"],
@@ -103,12 +102,12 @@ def sensor_spring(config: dict) -> float:
     )
 
 
-def make_model(m: HousingMesh, config: dict) -> fem.HousingModel:
+def make_model(m: HousingMesh, config: dict) -> housing_fem.HousingModel:
     """The housing model of a mesh: steel ring, cast-iron housing, the configured sensor spring and patch."""
-    return fem.build_model(m, STEEL, CAST_IRON, sensor_spring(config), config["housing"]["patch_width_m"])
+    return housing_fem.build_model(m, STEEL, CAST_IRON, sensor_spring(config), config["housing"]["patch_width_m"])
 
 
-def bearing_seat_stiffness(model: fem.HousingModel, load_N: np.ndarray, angle_rad: np.ndarray) -> float:
+def bearing_seat_stiffness(model: housing_fem.HousingModel, load_N: np.ndarray, angle_rad: np.ndarray) -> float:
     """Stiffness of the housing seen by the bearing: F_r / (load-weighted mean radial displacement) [N/m].
 
     The loads of one time sample are applied; the displacement is the mean
@@ -127,7 +126,7 @@ def bearing_seat_stiffness(model: fem.HousingModel, load_N: np.ndarray, angle_ra
     return resultant / float(w @ ur / w.sum())
 
 
-def mode_direction_shares(model: fem.HousingModel, modes: fem.Modes) -> np.ndarray:
+def mode_direction_shares(model: housing_fem.HousingModel, modes: housing_fem.Modes) -> np.ndarray:
     """Share of each mode's kinetic energy in x (axial), y (horizontal) and z (vertical) motion, (n, 3).
 
     A label of the mode's shape: e.g. (0, 0.9, 0.1) is a sideways rocking of the housing.
@@ -178,7 +177,7 @@ def transient(case: str, m: HousingMesh, contact: dict, config: dict) -> dict:
     log.info("%s: %d DOFs, assembled in %.1f s, factorised in %.1f s", case, model.n_dofs,
              timings["assemble_s"], timings["factor_s"])
     t0 = time.perf_counter()
-    modes = fem.compute_modes(model, h["n_modes"], seed=config["seed"])
+    modes = housing_fem.compute_modes(model, h["n_modes"], seed=config["seed"])
     timings["modes_s"] = time.perf_counter() - t0
     top, nyq = float(modes.frequencies_Hz.max()), 0.5 / dt
     if h["method"] == "reduced" and top < nyq:
@@ -187,19 +186,19 @@ def transient(case: str, m: HousingMesh, contact: dict, config: dict) -> dict:
             f"housing.n_modes = {h['n_modes']}: the highest mode, {top:.0f} Hz, lies below the Nyquist frequency "
             f"{nyq:.0f} Hz of bearing.time_step_s; raise housing.n_modes until it passes {nyq:.0f} Hz"
         )
-    alpha, beta = fem.rayleigh_coefficients(h["damping_ratio"], h["damping_band_Hz"])
+    alpha, beta = housing_fem.rayleigh_coefficients(h["damping_ratio"], h["damping_band_Hz"])
     t, q, psi = contact["time_s"], contact["load_N"], contact["angle_rad"]
     wy, wz = model.column_loads(q, psi)
     t0 = time.perf_counter()
-    ops = fem.reduced_operators(model, modes, alpha, beta)
-    red = fem.sensor_force_reduced(ops, wy, wz, dt)
+    ops = housing_fem.reduced_operators(model, modes, alpha, beta)
+    red = housing_fem.sensor_force_reduced(ops, wy, wz, dt)
     timings["reduced_response_s"] = time.perf_counter() - t0
     check = None
     force = red["force_N"]
     n_check = len(t) if h["method"] == "direct" else min(len(t), int(round(h["direct_check_s"] / dt)) + 1)
     if n_check > 1:
         log.info("%s: direct reference over %d steps", case, n_check)
-        d = fem.sensor_force_direct(
+        d = housing_fem.sensor_force_direct(
             model, wy[:n_check], wz[:n_check], dt, alpha, beta, h["rho_inf"],
             progress=lambda k, n: log.info("  direct step %d / %d", k, n),
         )

@@ -89,6 +89,36 @@ def _check_increasing(t: np.ndarray, path: Path, place) -> None:
         )
 
 
+def _time_series(table, path: Path, columns, record: str) -> tuple[dict[str, np.ndarray], np.ndarray, float]:
+    """A record's columns checked: at least 3 rows, every cell a finite number, time strictly increasing.
+
+    Returns the columns as floats, the time steps [s] and their median [s]; ``record`` names the kind of
+    record in the one-line error.
+    """
+    raw, place = table.raw, table.place
+    if len(raw) < 3:
+        raise MeasurementError(
+            f"{path}: only {len(raw)} data rows below the header; a {record} needs a time series, one row per sample"
+        )
+    data = {col: _finite_column(raw, col, path, place) for col in columns}
+    _check_increasing(data["time_s"], path, place)
+    dt = np.diff(data["time_s"])
+    return data, dt, float(np.median(dt))
+
+
+def _uneven(dt: np.ndarray, step: float, path: Path, place, fix: str | None) -> bool:
+    """Whether a time step lies more than ``UNIFORM_RTOL`` off the median ``step`` [s]; with a ``fix``, that
+    stops with one line naming the first such row and the fix."""
+    off = np.flatnonzero(np.abs(dt - step) > UNIFORM_RTOL * step)
+    if off.size and fix is not None:
+        i = int(off[0]) + 1
+        raise MeasurementError(
+            f"{path}: {place(i)}, column time_s: uneven time step ({dt[i - 1]:g} s against the median "
+            f"{step:g} s, {off.size} such steps); {fix}"
+        )
+    return bool(off.size)
+
+
 def read_measurement(
     path: str | Path,
     resample_to_uniform: bool = False,
@@ -111,30 +141,15 @@ def read_measurement(
         path, COLUMNS, channels=channels, key="calibration", wav_full_scale_V=wav_full_scale_V,
         unit_hint="with values in s, N, V",
     )
-    raw, place = table.raw, table.place
-    if len(raw) < 3:
-        raise MeasurementError(
-            f"{path}: only {len(raw)} data rows below the header; a calibration record needs a time series, "
-            "one row per sample"
-        )
-    data = {col: _finite_column(raw, col, path, place) for col in COLUMNS}
+    data, dt, step = _time_series(table, path, COLUMNS, "calibration record")
     t = data["time_s"]
-    dt = np.diff(t)
-    _check_increasing(t, path, place)
-    step = float(np.median(dt))
     if step > 1.0 / MIN_SAMPLE_RATE_HZ:
         raise MeasurementError(
             f"{path}: column time_s: median step {step:g} s ({1 / step:g} Hz) is too coarse for a calibration "
             f"record (at least {MIN_SAMPLE_RATE_HZ:g} Hz); is time in milliseconds? time_s must be in seconds"
         )
-    off = np.flatnonzero(np.abs(dt - step) > UNIFORM_RTOL * step)
-    if off.size:
-        if not resample_to_uniform:
-            i = int(off[0]) + 1
-            raise MeasurementError(
-                f"{path}: {place(i)}, column time_s: uneven time step ({dt[i - 1]:g} s against the median "
-                f"{step:g} s, {off.size} such steps); set calibration.resample_to_uniform: true to resample"
-            )
+    fix = None if resample_to_uniform else "set calibration.resample_to_uniform: true to resample"
+    if _uneven(dt, step, path, table.place, fix):
         n = int(np.floor((t[-1] - t[0]) / step + 1e-6)) + 1  # the last sample too (12 s / 2 ms = 5999.99..)
         tu = t[0] + step * np.arange(n)
         filled = gap_filled(t, tu, step)
@@ -321,16 +336,9 @@ def read_bearing_record(
     table = read_table(
         path, BEARING_COLUMNS, BEARING_OPTIONAL, channels, key, wav_full_scale_V, "with values in s, V, rpm"
     )
-    raw, place = table.raw, table.place
-    if len(raw) < 3:
-        raise MeasurementError(
-            f"{path}: only {len(raw)} data rows; a running-bearing record needs a time series, one row per sample"
-        )
-    data = {c: _finite_column(raw, c, path, place) for c in raw.columns}
+    place = table.place
+    data, dt, step = _time_series(table, path, table.raw.columns, "running-bearing record")
     t = data["time_s"]
-    _check_increasing(t, path, place)
-    dt = np.diff(t)
-    step = float(np.median(dt))
     if step > 1.0 / MIN_BEARING_RATE_HZ:
         hint = "; is time in milliseconds? time_s must be in seconds" if 1e3 / step >= MIN_BEARING_RATE_HZ else ""
         raise MeasurementError(
@@ -347,13 +355,7 @@ def read_bearing_record(
             f"t = {t[i - 1]:g} s ({gaps.size} gap(s) in the record); the model needs one uninterrupted record: "
             "diagnose the longest piece without a gap"
         )
-    off = np.flatnonzero(np.abs(dt - step) > UNIFORM_RTOL * step)
-    if off.size:
-        i = int(off[0]) + 1
-        raise MeasurementError(
-            f"{path}: {place(i)}, column time_s: uneven time step ({dt[i - 1]:g} s against the median "
-            f"{step:g} s, {off.size} such steps); export the record on the DAQ's sample clock"
-        )
+    _uneven(dt, step, path, place, "export the record on the DAQ's sample clock")
     duration = float(t[-1] - t[0] + step)
     if duration < MIN_BEARING_DURATION_S:
         raise MeasurementError(

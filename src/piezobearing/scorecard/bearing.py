@@ -3,8 +3,7 @@ beside the LPM's, the housing model's and the verification studies'."""
 
 from __future__ import annotations
 
-from ..paper import KINEMATICS, RUNNING
-from ..paper import TABLE as P
+from ..paper import KINEMATICS, RUNNING, TABLE
 from . import Row
 
 
@@ -19,30 +18,30 @@ def rows(kin: dict, lpm: dict, tr: dict, conv: dict, samp: dict, b: dict) -> lis
         Row(
             "IV",
             f"BPFO at {b['shaft_speed_rpm']:g} rpm",
-            P["bpfo_Hz"].value,
+            TABLE["bpfo_Hz"].value,
             kin["bpfo_Hz"],
             "Hz",
             f"{b['n_rollers']} rollers, D_r/D_p = {b['roller_diameter_m'] * 1e3:g}/{b['pitch_diameter_m'] * 1e3:g} mm "
             "(the paper's BPFO fixes 10/44; docs/theory/bearing_housing.md); FTF x Z",
             KINEMATICS,
         ),
-        Row("IV", "rollers", P["n_rollers"].value, float(b["n_rollers"]), "-", "config bearing.n_rollers",
+        Row("IV", "rollers", TABLE["n_rollers"].value, float(b["n_rollers"]), "-", "config bearing.n_rollers",
             ("bearing.n_rollers",)),
         Row(
             "IV",
             "radial load",
-            P["radial_load_N"].value,
+            TABLE["radial_load_N"].value,
             b["radial_load_N"],
             "N",
             f"mean vertical roller load over the healthy record {lpm['healthy']['mean_vertical_load_N']:.2f} N",
             ("bearing.radial_load_N",),
         ),
-        Row("IV", "shaft speed", P["shaft_speed_rpm"].value, b["shaft_speed_rpm"], "rpm", "",
+        Row("IV", "shaft speed", TABLE["shaft_speed_rpm"].value, b["shaft_speed_rpm"], "rpm", "",
             ("bearing.shaft_speed_rpm",)),
         Row(
             "III-A",
             "FEM time step",
-            P["time_step_s"].value,
+            TABLE["time_step_s"].value,
             b["time_step_s"],
             "s",
             f"1/(36 BPFO) = {1 / (36 * kin['bpfo_Hz']):.7g} s at this run's BPFO of {kin['bpfo_Hz']:.4g} Hz; the "
@@ -57,7 +56,7 @@ def rows(kin: dict, lpm: dict, tr: dict, conv: dict, samp: dict, b: dict) -> lis
         Row(
             "III-A",
             "defect width",
-            P["defect_width_m"].value,
+            TABLE["defect_width_m"].value,
             groove["width_m"] if groove else None,
             "m",
             (
@@ -72,7 +71,7 @@ def rows(kin: dict, lpm: dict, tr: dict, conv: dict, samp: dict, b: dict) -> lis
         Row(
             "III-A",
             "defect depth (removed material)",
-            P["defect_depth_m"].value,
+            TABLE["defect_depth_m"].value,
             groove["depth_m"] if groove else None,
             "m",
             "",
@@ -81,7 +80,7 @@ def rows(kin: dict, lpm: dict, tr: dict, conv: dict, samp: dict, b: dict) -> lis
         Row(
             "IV",
             "defect impact frequency (LPM)",
-            P["bpfo_Hz"].value,
+            TABLE["bpfo_Hz"].value,
             lpm["faulty"].get("impact_frequency_Hz"),
             "Hz",
             f"{lpm['faulty']['n_impacts']} impacts; paper's BPFO for comparison"

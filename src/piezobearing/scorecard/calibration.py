@@ -5,27 +5,26 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..paper import CIRCUIT
-from ..paper import TABLE as P
-from ..sensor import calibration as cal
+from ..paper import CIRCUIT, TABLE
+from ..sensor import calibration as sensor_calibration
 from . import Row
 
 
-def rows(sens: dict, res: dict, lf: dict, c: cal.SensorCircuit, config: dict) -> list[Row]:
+def rows(sens: dict, res: dict, lf: dict, c: sensor_calibration.SensorCircuit, config: dict) -> list[Row]:
     """The rows from sensitivity.json, resistance.json, lowfreq.json, the fitted circuit ``c`` and the config
     (``calibration.measurement``: synthetic or measured; ``sensor.cable_capacitance_F_per_m``)."""
     synthetic = config["calibration"]["measurement"] is None
-    f_ref = P["linear_from_Hz"].value
-    x = abs(cal.frequency_response([f_ref], c)[0]) / c.open_circuit_gain_V_per_N
-    c_needed = c.d33_C_per_N * x / P["reference_sensitivity_V_per_N"].value
-    y = P["reference_sensitivity_V_per_N"].value / c.open_circuit_gain_V_per_N
+    f_ref = TABLE["linear_from_Hz"].value
+    x = abs(sensor_calibration.frequency_response([f_ref], c)[0]) / c.open_circuit_gain_V_per_N
+    c_needed = c.d33_C_per_N * x / TABLE["reference_sensitivity_V_per_N"].value
+    y = TABLE["reference_sensitivity_V_per_N"].value / c.open_circuit_gain_V_per_N
     r_needed = y / np.sqrt(1 - y * y) / (2 * np.pi * f_ref) / c.capacitance_F
     lo, hi = res["resistance_ci95_ohm"]
     return [
         Row(
             "III-B",
             "impulse-peak sensitivity at ~0.5 Hz",
-            P["impulse_sensitivity_V_per_N"].value,
+            TABLE["impulse_sensitivity_V_per_N"].value,
             sens["sensitivity_V_per_N"],
             "V/N",
             "synthetic presses with rise times chosen so that (d33/C) tau pi/(2 T_r) is near 74 mV/N: "
@@ -37,7 +36,7 @@ def rows(sens: dict, res: dict, lf: dict, c: cal.SensorCircuit, config: dict) ->
         Row(
             "III-B",
             "circuit resistance R (fitted)",
-            P["resistance_ohm"].value,
+            TABLE["resistance_ohm"].value,
             res["resistance_ohm"],
             "Ohm",
             f"least squares, 95% CI [{lo:.4g}, {hi:.4g}] Ohm, NRMSE {res['nrmse']:.3f}"
@@ -52,7 +51,7 @@ def rows(sens: dict, res: dict, lf: dict, c: cal.SensorCircuit, config: dict) ->
         Row(
             "III-B",
             "cable capacitance",
-            P["cable_capacitance_F_per_m"].value,
+            TABLE["cable_capacitance_F_per_m"].value,
             config["sensor"]["cable_capacitance_F_per_m"],
             "F/m",
             "input (PCB-003 datasheet, as in the paper)",
@@ -70,7 +69,7 @@ def rows(sens: dict, res: dict, lf: dict, c: cal.SensorCircuit, config: dict) ->
         Row(
             "III-C",
             "onset of linearity (deviation < 5%)",
-            P["linear_from_Hz"].value,
+            TABLE["linear_from_Hz"].value,
             lf["linear_from_Hz"],
             "Hz",
             "deviation = relative change to the next sweep frequency; within 5% of the asymptote d33/C only "
@@ -80,7 +79,7 @@ def rows(sens: dict, res: dict, lf: dict, c: cal.SensorCircuit, config: dict) ->
         Row(
             "III-C",
             "deviation threshold",
-            P["deviation_threshold"].value,
+            TABLE["deviation_threshold"].value,
             lf["deviation_threshold"],
             "-",
             "input",
@@ -89,7 +88,7 @@ def rows(sens: dict, res: dict, lf: dict, c: cal.SensorCircuit, config: dict) ->
         Row(
             "III-C",
             "reference sensitivity at the onset",
-            P["reference_sensitivity_V_per_N"].value,
+            TABLE["reference_sensitivity_V_per_N"].value,
             lf["reference_sensitivity_V_per_N"],
             "V/N",
             f"S(30 Hz) = d33/C x omega tau/sqrt(1+(omega tau)^2) = {c.open_circuit_gain_V_per_N:.3f} x {x:.3f}; "

@@ -6,8 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..paper import CIRCUIT, PZT
-from ..paper import TABLE as P
+from ..paper import CIRCUIT, PZT, TABLE
 from . import Row
 
 
@@ -18,11 +17,11 @@ def rows(modal: dict, band: dict, convergence: pd.DataFrame) -> list[Row]:
     pc = modal["placement_check"]
     lower = [m for m in modal["modes"] if m["frequency_short_Hz"] < modal["first_resonance_short_Hz"]]
     lower_txt = ", ".join(f"{m['label']} {m['frequency_short_Hz'] / 1e3:.1f} kHz" for m in lower)
-    fr = P["first_resonance_Hz"].value
+    fr = TABLE["first_resonance_Hz"].value
     x3 = 10 ** (band["band_ratio_dB"] / 20)
     sdof_3db = fr * np.sqrt(1 - 1 / x3)
     sdof_27 = fr * np.sqrt(1 - 1 / (1 + band["band_ratio_percent"] / 100))
-    rise_45 = 1 / (1 - (P["band_high_Hz"].value / fr) ** 2)
+    rise_45 = 1 / (1 - (TABLE["band_high_Hz"].value / fr) ** 2)
     last = convergence.iloc[-1]
     x_low = band["band_low_Hz"] / band["rc_model_corner_Hz"]
     hp_low = x_low / np.sqrt(1 + x_low**2)
@@ -50,7 +49,7 @@ def rows(modal: dict, band: dict, convergence: pd.DataFrame) -> list[Row]:
         Row(
             sec,
             "band low edge",
-            P["linear_from_Hz"].value,
+            TABLE["linear_from_Hz"].value,
             band["band_low_Hz"],
             "Hz",
             "from the low-frequency analysis (lowfreq.json, linear_from_Hz)",
@@ -59,7 +58,7 @@ def rows(modal: dict, band: dict, convergence: pd.DataFrame) -> list[Row]:
         Row(
             sec,
             f"band high edge (+{band['band_ratio_dB']:g} dB over mid-band)",
-            P["band_high_Hz"].value,
+            TABLE["band_high_Hz"].value,
             band["band_high_Hz"],
             "Hz",
             f"reference |V/F| at {band['reference_frequency_Hz']:g} Hz. A single-mode response "
@@ -73,7 +72,7 @@ def rows(modal: dict, band: dict, convergence: pd.DataFrame) -> list[Row]:
         Row(
             sec,
             f"band high edge (+{band['band_ratio_percent']:g}%)",
-            P["band_high_Hz"].value,
+            TABLE["band_high_Hz"].value,
             band["band_high_27_percent_Hz"],
             "Hz",
             f"the paper equates +3 dB with 'about 27%' (+3 dB is +41% in amplitude, +27% is "
@@ -96,7 +95,7 @@ def rows(modal: dict, band: dict, convergence: pd.DataFrame) -> list[Row]:
         Row(
             sec,
             "sensitivity at the band low edge (reference of the paper)",
-            P["reference_sensitivity_V_per_N"].value,
+            TABLE["reference_sensitivity_V_per_N"].value,
             band["sensitivity_at_band_low_V_per_N"],
             "V/N",
             f"the paper's 0.36 V/N cannot hold with its own constants: d33/(Cp + Ccable) = "

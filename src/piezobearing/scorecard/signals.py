@@ -3,8 +3,7 @@ indicator's and the SNR study's."""
 
 from __future__ import annotations
 
-from ..paper import DETECTION, KINEMATICS
-from ..paper import TABLE as P
+from ..paper import DETECTION, KINEMATICS, TABLE
 from . import Row
 
 
@@ -19,9 +18,9 @@ def rows(ind: dict, st: dict, kin: dict) -> list[Row]:
     n = st["n_seeds"]
     rollers = round(kin["bpfo_Hz"] / kin["ftf_Hz"])  # BPFO = Z x FTF
     return [
-        Row("IV", f"BPFO ({rollers} rollers, {60 * kin['shaft_Hz']:g} rpm)", P["bpfo_Hz"].value, kin["bpfo_Hz"],
+        Row("IV", f"BPFO ({rollers} rollers, {60 * kin['shaft_Hz']:g} rpm)", TABLE["bpfo_Hz"].value, kin["bpfo_Hz"],
             "Hz", "from the bearing's kinematics (bearing/kinematics.json)", KINEMATICS),
-        Row("IV", "SNR of the added white noise", P["snr"].value, snr, "dB",
+        Row("IV", "SNR of the added white noise", TABLE["snr"].value, snr, "dB",
             "the paper's 'SNR of 10' read as a power ratio of 10 = 10 dB (as an amplitude ratio it would be "
             "20 dB: also detected, see the study); SNR = mean square of the whole noiseless voltage record over "
             "the noise variance", ("signals.snr_dB",)),

@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 
 from .. import paper
-from . import fem as fem
+from . import fem
 from .calibration import SensorCircuit, frequency_response
 from .materials import (
     adhesive_from_config,

@@ -17,14 +17,14 @@ from ..diagnosis.calibration.record import left_out_samples
 from ..diagnosis.least_squares import nrmse
 from ..io import Measurement
 from ..synthesis import PressProtocol, synthesize
-from . import calibration as cal
+from . import calibration
 from .lowfreq import asymptote_onset_Hz, lowfreq_sensitivity
 
 
-def nominal_circuit(config: dict, resistance_ohm: float | None = None) -> cal.SensorCircuit:
+def nominal_circuit(config: dict, resistance_ohm: float | None = None) -> calibration.SensorCircuit:
     """The sensor circuit of the config, with R from the synthesis truth unless given."""
     r = config["synthesis"]["resistance_ohm"] if resistance_ohm is None else resistance_ohm
-    return cal.SensorCircuit.from_config(config["sensor"], r)
+    return calibration.SensorCircuit.from_config(config["sensor"], r)
 
 
 def synthesize_calibration(config: dict) -> Measurement:
@@ -33,7 +33,7 @@ def synthesize_calibration(config: dict) -> Measurement:
     return synthesize(PressProtocol.from_config(syn), nominal_circuit(config), config["seed"], syn["hidden_effects"])
 
 
-def extract_sensitivity(m: Measurement, imps: list[cal.Impulse], config: dict) -> dict:
+def extract_sensitivity(m: Measurement, imps: list[calibration.Impulse], config: dict) -> dict:
     """Rule extract_sensitivity: peak voltage over peak force per impulse (sensitivity.json) of the record ``m``
     and its impulses ``imps`` (the calibration subject's reader)."""
     # a press whose top was filled across a gap of the clock has the interpolation's peak, not the
@@ -42,7 +42,7 @@ def extract_sensitivity(m: Measurement, imps: list[cal.Impulse], config: dict) -
     lost = [imp for imp in imps if _peak_filled(m, imp)]
     every = len(lost) == len(imps)
     imps = [imp for imp in imps if not _peak_filled(m, imp)] or imps
-    out = cal.sensitivity_summary(imps, m.time_s)
+    out = calibration.sensitivity_summary(imps, m.time_s)
     if lost:
         out["impulses_left_out"] = [
             {
@@ -62,7 +62,7 @@ def extract_sensitivity(m: Measurement, imps: list[cal.Impulse], config: dict) -
     return out
 
 
-def _peak_filled(m: Measurement, imp: cal.Impulse) -> bool:
+def _peak_filled(m: Measurement, imp: calibration.Impulse) -> bool:
     """Whether a sample filled across a gap of the clock (or a measured one at a gap's edge) lies in the top half
     of the impulse's force or voltage swing: the true peak may then lie in the gap, and the recorded maximum
     is the interpolation's (or a flank's)."""
@@ -83,10 +83,10 @@ def fit_resistance(m: Measurement, config: dict) -> tuple[dict, pd.DataFrame]:
     r0 = config["calibration"]["initial_resistance_ohm"]
     # samples filled across gaps of the clock, and the circuit's memory of them: the diagnosis's mask
     left_out = left_out_samples(m, config["diagnostics"]["quiet_settle_s"], circuit.with_resistance(r0).tau_s)
-    res = cal.fit_resistance(m.force_N, m.voltage_V, m.dt_s, circuit, r0, left_out)
+    res = calibration.fit_resistance(m.force_N, m.voltage_V, m.dt_s, circuit, r0, left_out)
     r = res.values["resistance_ohm"]
     fitted = circuit.with_resistance(r)
-    sim = cal.circuit_voltage(m.force_N, m.dt_s, fitted)
+    sim = calibration.circuit_voltage(m.force_N, m.dt_s, fitted)
     measured = m.voltage_V if left_out is None else m.voltage_V[~left_out]
     record = {
         "resistance_ohm": r,

@@ -130,13 +130,16 @@ def sensor_model(
     """The sensor model of ``config`` for a record whose Nyquist frequency is ``nyquist_Hz``.
 
     ``harmonic``: the sensor FEM's (frequency [Hz], |V/F| [V/N]) of this configuration (the workflow's rule
-    sensor_harmonic, read from ``harmonic_source``); without it the paper sensor's shipped response. With
+    sensor_harmonic, read from ``harmonic_source``; a third item, where given, is the file it was read from and
+    stands for ``harmonic_source``); without it the paper sensor's shipped response. With
     ``signals.sensor_fem_correction: false`` the RC model alone.
     """
     if not config["signals"]["sensor_fem_correction"]:
         return SensorModel(circuit, 1.0, "RC model alone (signals.sensor_fem_correction: false)")
     if harmonic is not None:
-        f, h = (np.asarray(x, dtype=float) for x in harmonic)
+        if len(harmonic) > 2:
+            harmonic_source = str(harmonic[2])
+        f, h = (np.asarray(x, dtype=float) for x in harmonic[:2])
         corr = fem_ratio(f, np.abs(h) / np.abs(frequency_response(f, circuit)), nyquist_Hz)
         return SensorModel(circuit, corr["factor"], f"this configuration's sensor FEM ({harmonic_source})", corr)
     f, ratio = read_paper_sensor_fem()

@@ -56,8 +56,9 @@ def influence_from_config(config: dict) -> InfluenceLine:
 
 
 def harmonic_of(path: str | Path | None):
-    """The sensor FEM's (frequency [Hz], |V/F| [V/N]) from ``path`` (results/sensor/harmonic.csv), or None."""
-    return read_harmonic(path) if path else None
+    """The sensor FEM's (frequency [Hz], |V/F| [V/N], the file) from ``path`` (results/sensor/harmonic.csv), or
+    None; the sensor model names the file it took its correction from."""
+    return (*read_harmonic(path), str(path)) if path else None
 
 
 def synthesize_bearing_record(influence_csv: str, out_csv: str, config: dict, harmonic_csv: str | None = None) -> None:

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..bearing import outputs as bout
+from ..bearing import outputs as bearing_outputs
 from ..bearing import transient as bearing_transient
 from ..bearing.lpm import BearingGeometry
 from ..bearing.transient import CASES
@@ -39,12 +39,12 @@ from ..plotting import save, use_style
 from ..plotting.studies import SUMMARY_FIGURES
 from ..sensor import design as sensor_design
 from ..sensor import fem as sensor_fem
-from ..sensor import outputs as cout
+from ..sensor import outputs as sensor_outputs
 from ..sensor.analysis import SensorFemParams
 from ..sensor.calibration import SensorCircuit, design_resistance_ohm
 from ..sensor.mesh import stack_mesh
 from ..signals import daq, detection
-from ..signals import outputs as sout
+from ..signals import outputs as signals_outputs
 from ..signals.envelope import EnvelopeSettings
 from ..studies import case_config
 from .sensor_comparison import study_case as sensor_comparison_case
@@ -54,11 +54,11 @@ def calibration_circuit_case(config: dict, outdir: Path) -> dict:
     """Synthesis, sensitivity, resistance fit and low-frequency limit for one case: the calibration rules'
     functions (:mod:`piezobearing.sensor.outputs`) in memory, the synthetic record as extract_sensitivity and
     fit_resistance read it back from measurement.csv (with the reader's checks)."""
-    m = measurement_as_read(cout.synthesize_calibration(config), "measurement.csv")
+    m = measurement_as_read(sensor_outputs.synthesize_calibration(config), "measurement.csv")
     imps = check_record(m, config, m.source)
-    s = json_as_read(cout.extract_sensitivity(m, imps, config))
-    r = json_as_read(cout.fit_resistance(m, config)[0])
-    lf = json_as_read(cout.lowfreq(r["resistance_ohm"], config)[0])
+    s = json_as_read(sensor_outputs.extract_sensitivity(m, imps, config))
+    r = json_as_read(sensor_outputs.fit_resistance(m, config)[0])
+    lf = json_as_read(sensor_outputs.lowfreq(r["resistance_ohm"], config)[0])
     return {
         "impulse_sensitivity_V_per_N": s["sensitivity_V_per_N"],
         "resistance_fitted_ohm": r["resistance_ohm"],
@@ -85,28 +85,28 @@ def workflow_chain(config: dict, resistance: dict, harmonic=None, resistance_sou
     Returns the records by rule (``kinematics``, ``lpm``, per case ``transient``, ``voltage`` (t, v, dt),
     ``noisy`` (y, v, dt, record), ``envelope`` (table, record)) and ``indicator`` (fault_indicator.json).
     """
-    lpm = bout.bearing_lpm(config)
+    lpm = bearing_outputs.bearing_lpm(config)
     kin = kinematics_of(json_as_read(lpm["kinematics"]), "kinematics.json")
-    circuit = sout.sensor_circuit(config, resistance, resistance_source)
+    circuit = signals_outputs.sensor_circuit(config, resistance, resistance_source)
     out = {"kinematics": kin, "lpm": json_as_read(lpm["summary"]), "transient": {}, "voltage": {}, "noisy": {},
            "envelope": {}}
     for c in CASES:
-        mesh, _ = bout.housing_mesh(c, config)
-        tr = bout.housing_transient(c, mesh, lpm["contact"][c], config)
+        mesh, _ = bearing_outputs.housing_mesh(c, config)
+        tr = bearing_outputs.housing_transient(c, mesh, lpm["contact"][c], config)
         del mesh
         out["transient"][c] = json_as_read(tr["summary"])
         force = table_series(as_read(tr["force"], FORCE_CSV_FORMAT), "force_N", f"sensor_force_{c}.csv")
-        volt, _ = sout.sensor_voltage(*force, circuit, harmonic, config, f"sensor_force_{c}.csv")
+        volt, _ = signals_outputs.sensor_voltage(*force, circuit, harmonic, config, f"sensor_force_{c}.csv")
         out["voltage"][c] = table_series(as_read(volt), "voltage_V", f"voltage_{c}.csv")
-        table, record = sout.noisy(*out["voltage"][c], c, config)
+        table, record = signals_outputs.noisy(*out["voltage"][c], c, config)
         table = as_read(table)
         _, y, dt = table_series(table, "voltage_V", f"noisy_{c}.csv")
         _, v, _ = table_series(table, "noiseless_V", f"noisy_{c}.csv")
         out["noisy"][c] = (y, v, dt, json_as_read(record))
-        env, env_record = sout.envelope(y, v, dt, kin, config)
+        env, env_record = signals_outputs.envelope(y, v, dt, kin, config)
         out["envelope"][c] = (as_read(env), json_as_read(env_record))
-    out["indicator"] = json_as_read(sout.fault_indicator({c: rec for c, (_, rec) in out["envelope"].items()}, kin,
-                                                         out["noisy"], config))
+    envelopes = {c: rec for c, (_, rec) in out["envelope"].items()}
+    out["indicator"] = json_as_read(signals_outputs.fault_indicator(envelopes, kin, out["noisy"], config))
     return out
 
 
@@ -178,7 +178,7 @@ def _fault_detection_row(cfg: dict, run: dict) -> dict:
 
 def sensor_design_housing(out_json: str, config: dict) -> None:
     """Rule sensor_design_housing: :func:`piezobearing.bearing.outputs.sensor_port`, written."""
-    write_json(bout.sensor_port(config), out_json)
+    write_json(bearing_outputs.sensor_port(config), out_json)
 
 
 def sensor_design_case(
@@ -231,15 +231,16 @@ def sensor_design_case(
     rc_gain = SensorCircuit.from_config(s, r_ohm).open_circuit_gain_V_per_N
     port = read_json(housing)
     spring = bearing_transient.sensor_spring(config)
-    share = bout.design_load_share(config, port, spring)
+    share = bearing_outputs.design_load_share(config, port, spring)
     kin = read_kinematics(kinematics)
     sg = config["signals"]
     voltages, p2p = {}, {}
     for case, path in (("healthy", force_healthy), ("faulty", force_faulty)):
         t, force, dt = read_series(path, "force_N")
         # the sensor_voltage rule's RC step, with this design's gain and time constant
-        v = sout.rc_record(t, force * (share / port["load_share"]), dt, figs["open_circuit_gain_V_per_N"],
-                           figs["tau_s"], sg["skip_s"], sout.sensor_force_period_s(config["bearing"]), path)[2]
+        v = signals_outputs.rc_record(t, force * (share / port["load_share"]), dt, figs["open_circuit_gain_V_per_N"],
+                                      figs["tau_s"], sg["skip_s"],
+                                      signals_outputs.sensor_force_period_s(config["bearing"]), path)[2]
         p2p[case] = float(np.ptp(v))
         # the noisy rule's DAQ: anti-alias filter and sampling at signals.sample_rate_Hz (as is on its clock)
         smp = daq.sample(v, dt, sg["sample_rate_Hz"])
@@ -295,7 +296,8 @@ def detector_case(config: dict, outdir: Path, resistance: str, harmonic: str | N
     cfg["signals"]["detector"]["roc_snr_dB"] = []
     cfg, run = _chain_of_case(cfg, resistance, harmonic)
     row = _fault_detection_row(cfg, run)
-    record, rows, _ = sout.fault_classification({c: run["voltage"][c][1:] for c in CASES}, run["kinematics"], cfg)
+    voltages = {c: run["voltage"][c][1:] for c in CASES}
+    record, rows, _ = signals_outputs.fault_classification(voltages, run["kinematics"], cfg)
     cm, seeds, ind = json_as_read(record), as_read(rows), run["indicator"]
     faulty = seeds[seeds["case"] == "faulty"]
     true = cm["true_types"]["faulty"]

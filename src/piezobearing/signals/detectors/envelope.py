@@ -188,15 +188,9 @@ class NullDistribution:
         return float(self.x[i] + (s[i] - alpha) * (self.x[i + 1] - self.x[i]) / (s[i] - s[i + 1]))
 
     def union_bound(self, alpha: float) -> float:
-        """A threshold t with P(sum_l R_l > t) <= alpha, conservative, for probabilities the grid cannot reach
-        (few floor bins put the smallest quadrature node's mass beyond any grid) [-].
-
-        P(sum of L ratios > t) <= sum_l P(R_l > t / L), and P(Z/Y > r) <= M E[exp(-r Y)] = M (1 + r / M_f)^-M_f
-        for Z the largest of M Exp(1) bins over a Gamma(M_f, 1/M_f) floor Y; equal to alpha at
-        t = L M_f ((sum_l M_l / alpha)^(1 / M_f) - 1).
-        """
-        n, m_f = len(self.window_bins), self.floor_shape
-        return float(n * m_f * ((sum(self.window_bins) / alpha) ** (1.0 / m_f) - 1.0))
+        """:func:`union_bound_threshold` of this distribution's lines, for probabilities the grid cannot reach
+        (few floor bins put the smallest quadrature node's mass beyond any grid) [-]."""
+        return union_bound_threshold(self.window_bins, self.floor_shape, alpha)
 
     def p_value(self, value: float) -> float:
         """P(statistic > value) under noise alone (0 beyond the grid) [-]."""
@@ -227,19 +221,42 @@ def null_distribution(window_bins: tuple[int, ...], floor_shape: float) -> NullD
     return null
 
 
+def union_bound_threshold(window_bins: tuple[int, ...], floor_shape: float, alpha: float) -> float:
+    """A threshold t with P(sum_l R_l > t) <= alpha, conservative [-].
+
+    P(sum of L ratios > t) <= sum_l P(R_l > t / L), and P(Z/Y > r) <= M E[exp(-r Y)] = M (1 + r / M_f)^-M_f
+    for Z the largest of M Exp(1) bins over a Gamma(M_f, 1/M_f) floor Y; equal to alpha at
+    t = L M_f ((sum_l M_l / alpha)^(1 / M_f) - 1).
+    """
+    n, m_f = len(window_bins), floor_shape
+    return float(n * m_f * ((sum(window_bins) / alpha) ** (1.0 / m_f) - 1.0))
+
+
 def _null_on_grid(window_bins: tuple[int, ...], floor_shape: float, span: float, n_grid: int) -> NullDistribution:
     """:func:`null_distribution` on the grid of ``n_grid`` points over [0, ``span``]."""
     x = np.linspace(0.0, span, n_grid)
     h = x[1]
-    y, w = _gamma_nodes(round(floor_shape, 3))
     total = None
     for m in window_bins:
-        z = m * np.exp(-x) * (-np.expm1(-x)) ** (m - 1)  # density of the largest of m Exp(1)
-        g = np.sum(w[:, None] * y[:, None] * np.interp(x[None, :] * y[:, None], x, z, right=0.0), axis=0)
+        g = _line_ratio_density(m, floor_shape, span, n_grid)
         total = g if total is None else fftconvolve(total, g)[: x.size] * h
     total = np.clip(total, 0.0, None)
     cdf = np.concatenate([[0.0], np.cumsum(0.5 * (total[1:] + total[:-1]) * h)])
     return NullDistribution(x, np.clip(1.0 - cdf / max(cdf[-1], 1.0), 0.0, 1.0), tuple(window_bins), float(floor_shape))
+
+
+@lru_cache(maxsize=256)
+def _line_ratio_density(m: int, floor_shape: float, span: float, n_grid: int) -> np.ndarray:
+    """Density of one line's ratio Z / Y on the grid of ``n_grid`` points over [0, ``span``]: Z the largest of
+    ``m`` Exp(1) bins, density m e^-z (1 - e^-z)^(m-1); Y ~ Gamma(M_f, 1/M_f) by its quadrature nodes,
+    f(r) = E_Y[Y f_Z(r Y)] (read-only: shared by every family with a line of ``m`` bins)."""
+    x = np.linspace(0.0, span, n_grid)
+    y, w = _gamma_nodes(round(floor_shape, 3))
+    u = x[None, :] * y[:, None]
+    z = m * np.exp(-u) * (-np.expm1(-u)) ** (m - 1)
+    g = np.sum((w * y)[:, None] * z, axis=0)
+    g.setflags(write=False)
+    return g
 
 
 def line_threshold(alpha: float, n_bins: int) -> float:
