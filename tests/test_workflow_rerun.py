@@ -13,6 +13,7 @@ its own, with the scratch copy's package first on PYTHONPATH; the dry runs go tw
 from __future__ import annotations
 
 import ast
+import json
 import os
 import re
 import shutil
@@ -22,7 +23,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from conftest import snakemake
+from conftest import shared_run, snakemake
 
 import piezobearing.config
 from piezobearing.registry import READS, RECORD_RULES
@@ -30,6 +31,8 @@ from piezobearing.registry import READS, RECORD_RULES
 pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parents[1]
+#: The scratch copy's rule graph (each rule's children), written by its build.
+RULE_GRAPH = "rulegraph.json"
 
 STUB = """from pathlib import Path
 
@@ -76,9 +79,9 @@ def _jobs(out: str) -> set[str]:
     return {m.group(1) for m in re.finditer(r"^(\w+)\s+\d+\s*$", table, re.M)} - {"all", "job"}
 
 
-def build_scratch(d: Path) -> tuple[Path, dict, dict[str, set[str]]]:
-    """Build a scratch copy of the workflow in ``d`` (stand-in stages); its environment (its package from the
-    copy's ``src``, the stand-in papermill first on PATH) and its rule graph.
+def build_scratch(d: Path) -> None:
+    """Build a scratch copy of the workflow in ``d`` (stand-in stages) and write its rule graph to
+    ``d / RULE_GRAPH`` (each rule's children).
 
     The build is a real ``snakemake --cores 2`` run: every job of the CI targets, their metadata recorded."""
     for name in ("Snakefile", "workflow", "config", "notebooks", "src"):
@@ -91,22 +94,35 @@ def build_scratch(d: Path) -> tuple[Path, dict, dict[str, set[str]]]:
     pm = d / "bin/papermill"
     pm.write_text(PAPERMILL.format(python=sys.executable))
     pm.chmod(0o755)
-    env = {**os.environ, "PATH": f"{d / 'bin'}:{os.environ['PATH']}", "PYTHONPATH": str(d / "src")}
+    env = scratch_env(d)
     out = snakemake("--cores", "2", "--configfile", "config/ci.yaml", cwd=d, env=env)
     assert out.returncode == 0, out.stderr[-3000:]
     graph = snakemake("--rulegraph", "--configfile", "config/ci.yaml", cwd=d, env=env)
     assert graph.returncode == 0, graph.stderr[-3000:]
     names = dict(re.findall(r'^\s*(\d+)\[label = "(\w+)"', graph.stdout, re.M))
-    children: dict[str, set[str]] = {n: set() for n in names.values()}
+    children: dict[str, list[str]] = {n: [] for n in names.values()}
     for a, b in re.findall(r"^\s*(\d+) -> (\d+)", graph.stdout, re.M):
-        children[names[a]].add(names[b])
-    return d, env, children
+        children[names[a]].append(names[b])
+    (d / RULE_GRAPH).write_text(json.dumps(children))
+
+
+def scratch_env(d: Path) -> dict:
+    """The environment of the scratch copy ``d``: its package from the copy's ``src``, the stand-in papermill
+    first on PATH."""
+    return {**os.environ, "PATH": f"{d / 'bin'}:{os.environ['PATH']}", "PYTHONPATH": str(d / "src")}
 
 
 @pytest.fixture(scope="module")
 def scratch(tmp_path_factory):
-    """A built scratch copy of the workflow (stand-in stages), its environment and its rule graph."""
-    return build_scratch(tmp_path_factory.mktemp("rerun"))
+    """A built scratch copy of the workflow (stand-in stages), its environment and its rule graph.
+
+    It is built once per session (``conftest.shared_run``) and copied, modification times and Snakemake's
+    metadata with it, into a folder of this module's own: the tests edit their copy."""
+    built = shared_run(tmp_path_factory, "rerun_scratch", build_scratch)
+    d = tmp_path_factory.mktemp("rerun")
+    shutil.copytree(built, d, symlinks=True, dirs_exist_ok=True)
+    children = {rule: set(c) for rule, c in json.loads((d / RULE_GRAPH).read_text()).items()}
+    return d, scratch_env(d), children
 
 
 @pytest.fixture(scope="module")
