@@ -1,8 +1,8 @@
 """Cost of the sensor_comparison study's cases, before and after sharing the housing model; its SLURM resources.
 
-    python benchmarks/bench_sensor_comparison.py [--configfile config/ci.yaml] [--cases 2] [--from-rules]
+    python benchmarks/bench_sensor_comparison.py [--configfile config/ci.yaml] [--cases 2] [--start 0] [--from-rules]
 
-Runs the first ``--cases`` cases of the config's ``sensor_comparison`` table, each in a child process (the
+Runs ``--cases`` cases from the ``--start``-th of the config's ``sensor_comparison`` table, each in a child process (the
 study_case rule's function, :func:`piezobearing.stages.studies.run_case`, on the workflow's resistance fit and
 sensor FEM response, which must exist: run the workflow on the config first), two ways:
 
@@ -149,6 +149,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--configfile", default="config/ci.yaml")
     ap.add_argument("--cases", type=int, default=2)
+    ap.add_argument("--start", type=int, default=0, help="index of the first case in the table")
     ap.add_argument("--out", default="results/benchmarks/sensor_comparison.json")
     ap.add_argument("--from-rules", action="store_true", help="gather the rules' benchmark files")
     args = ap.parse_args()
@@ -169,10 +170,9 @@ def main() -> None:
         if config["signals"]["sensor_fem_correction"]:
             inputs["harmonic"] = str(results / "sensor/harmonic.csv")
         table = check_studies(config)["sensor_comparison"]
-        n = min(args.cases, len(table))
         cases, housings = [], {}
         with tempfile.TemporaryDirectory() as tmp:
-            for i in range(n):
+            for i in range(args.start, min(args.start + args.cases, len(table))):
                 digest = reads_digest(case_config(config, table.iloc[i].to_dict()), "sensor_comparison_housing")
                 files = {}
                 for mesh in ("healthy", "faulty"):
