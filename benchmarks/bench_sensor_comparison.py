@@ -1,8 +1,8 @@
 """Cost of the sensor_comparison study's cases, before and after sharing the housing model; its SLURM resources.
 
-    python benchmarks/bench_sensor_comparison.py [--configfile config/ci.yaml] [--cases 2] [--from-rules]
+    python benchmarks/bench_sensor_comparison.py [--configfile config/ci.yaml] [--cases 2] [--start 0] [--from-rules]
 
-Runs the first ``--cases`` cases of the config's ``sensor_comparison`` table, each in a child process (the
+Runs ``--cases`` cases from the ``--start``-th of the config's ``sensor_comparison`` table, each in a child process (the
 study_case rule's function, :func:`piezobearing.stages.studies.run_case`, on the workflow's resistance fit and
 sensor FEM response, which must exist: run the workflow on the config first), two ways:
 
@@ -112,17 +112,36 @@ def _child(configfile: str, index: int, mode: str, inputs: dict, out: str) -> di
     return record
 
 
-def _from_rules(results: Path) -> dict:
-    """What Snakemake measured: seconds, CPU seconds and max RSS of each case and housing job."""
+def _from_rules(results: Path, config: dict) -> dict:
+    """What Snakemake measured for the config's cases and housing models: seconds, CPU seconds and max RSS of each
+    job (benchmark files of other configs' cases in the same folder are left out)."""
+    from snakemake.utils import Paramspace
+
+    from piezobearing.registry import reads_digest
+    from piezobearing.studies import case_config, check_studies
+
+    table = check_studies(config)["sensor_comparison"]
+    cases = list(Paramspace(table, filename_params="*", single_wildcard="case").instance_patterns)
+    meshes = [f"{mesh}_{reads_digest(case_config(config, row), 'sensor_comparison_housing')}"
+              for row in table.to_dict("records") for mesh in ("healthy", "faulty")]
     out = {}
-    for key, folder in (("cases", "study_case_sensor_comparison"), ("housings", "sensor_comparison_housing")):
+    for key, folder, names in (("cases", "study_case_sensor_comparison", cases),
+                               ("housings", "sensor_comparison_housing", sorted(set(meshes)))):
         out[key] = []
-        for tsv in sorted((results / "benchmarks/rules" / folder).glob("*.tsv")):
+        for name in names:
+            tsv = results / "benchmarks/rules" / folder / f"{name}.tsv"
+            if not tsv.exists():
+                continue
             row = pd.read_csv(tsv, sep="\t").iloc[0]
-            out[key].append({"name": tsv.stem, "wall_s": float(row["s"]), "cpu_s": float(row["cpu_time"]),
+            out[key].append({"name": name, "wall_s": float(row["s"]), "cpu_s": float(row["cpu_time"]),
                              "peak_rss_mb": float(row["max_rss"])})
     if not out["cases"]:
         raise SystemExit("no cases measured: run the study first (snakemake ... study_all) or drop --from-rules")
+    for key in ("cases", "housings"):
+        for q in ("wall_s", "cpu_s", "peak_rss_mb"):
+            values = [c[q] for c in out[key]]
+            out[f"{key}_{q}_max"] = max(values) if values else None
+            out[f"{key}_{q}_total"] = sum(values) if values and q != "peak_rss_mb" else None
     return out
 
 
@@ -130,6 +149,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--configfile", default="config/ci.yaml")
     ap.add_argument("--cases", type=int, default=2)
+    ap.add_argument("--start", type=int, default=0, help="index of the first case in the table")
     ap.add_argument("--out", default="results/benchmarks/sensor_comparison.json")
     ap.add_argument("--from-rules", action="store_true", help="gather the rules' benchmark files")
     args = ap.parse_args()
@@ -144,16 +164,15 @@ def main() -> None:
     record = {"configfile": args.configfile, "n_seeds": config["sensor_comparison"]["n_seeds"],
               "declared": _resources()}
     if args.from_rules:
-        record.update(source="the rules' benchmark files", **_from_rules(results))
+        record.update(source="the rules' benchmark files", **_from_rules(results, config))
     else:
         inputs = {"resistance": str(results / "calibration/resistance.json")}
         if config["signals"]["sensor_fem_correction"]:
             inputs["harmonic"] = str(results / "sensor/harmonic.csv")
         table = check_studies(config)["sensor_comparison"]
-        n = min(args.cases, len(table))
         cases, housings = [], {}
         with tempfile.TemporaryDirectory() as tmp:
-            for i in range(n):
+            for i in range(args.start, min(args.start + args.cases, len(table))):
                 digest = reads_digest(case_config(config, table.iloc[i].to_dict()), "sensor_comparison_housing")
                 files = {}
                 for mesh in ("healthy", "faulty"):

@@ -11,7 +11,7 @@ import pytest
 from piezobearing.bearing import base_motion as bm
 from piezobearing.bearing import housing_fem as fem
 from piezobearing.bearing import lpm as brg
-from piezobearing.bearing import reduced_housing as rh
+from piezobearing.bearing import reduced_housing
 from piezobearing.bearing import transient as st
 from piezobearing.bearing.housing_mesh import build_housing_mesh
 from piezobearing.sensor import accelerometer as acc
@@ -149,21 +149,21 @@ def test_windowed_roller_loads_equal_the_column_loads(housing):
 def test_housing_file_round_trip(housing, tmp_path, paper_config):
     """A housing model written by the rule sensor_comparison_housing reads back the same; a file of another
     config or mesh stops the comparison."""
-    h = rh.Housing(fem.RacewayColumns.of(housing["model"]), housing["ops"], housing["base"], housing["model"].n_dofs)
-    reads = rh.housing_reads(paper_config)
-    rh.save_housing(h, False, reads, tmp_path / "h.npz")
-    back = rh.load_housing(tmp_path / "h.npz", False, reads)
+    h = reduced_housing.Housing(fem.RacewayColumns.of(housing["model"]), housing["ops"], housing["base"], housing["model"].n_dofs)
+    reads = reduced_housing.housing_reads(paper_config)
+    reduced_housing.save_housing(h, False, reads, tmp_path / "h.npz")
+    back = reduced_housing.load_housing(tmp_path / "h.npz", False, reads)
     assert back.at("side").record() == h.at("side").record()
     for name in ("modal_y", "static_z", "sensor_modal", "omega", "zeta"):
         np.testing.assert_array_equal(getattr(back.ops, name), getattr(h.ops, name))
     np.testing.assert_array_equal(back.base.probe_modal, h.base.probe_modal)
     np.testing.assert_array_equal(back.columns.psi_rad, h.columns.psi_rad)
     with pytest.raises(ValueError, match="sensor_comparison_housing"):
-        rh.load_housing(tmp_path / "h.npz", True, reads)
+        reduced_housing.load_housing(tmp_path / "h.npz", True, reads)
     other = copy.deepcopy(paper_config)
     other["housing"]["mesh_level"] = 0.5
     with pytest.raises(ValueError, match="another"):
-        rh.load_housing(tmp_path / "h.npz", False, rh.housing_reads(other))
+        reduced_housing.load_housing(tmp_path / "h.npz", False, reduced_housing.housing_reads(other))
 
 
 def test_effective_mass_grows_to_the_dragged_mass(housing):

@@ -116,7 +116,7 @@ def scratch_env(d: Path) -> dict:
 def scratch(tmp_path_factory):
     """A built scratch copy of the workflow (stand-in stages), its environment and its rule graph.
 
-    It is built once per session (``conftest.shared_run``) and copied, modification times and Snakemake's
+    It is built once per pytest run (``conftest.shared_run``) and copied, modification times and Snakemake's
     metadata with it, into a folder of this module's own: the tests edit their copy."""
     built = shared_run(tmp_path_factory, "rerun_scratch", build_scratch)
     d = tmp_path_factory.mktemp("rerun")

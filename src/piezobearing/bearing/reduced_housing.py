@@ -20,8 +20,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..registry import declared
-from . import housing_fem as fem
-from . import transient as tr
+from . import housing_fem, transient
 from .housing_mesh import build_housing_mesh
 
 
@@ -42,15 +41,15 @@ class Housing:
     ops : ReducedOperators
         Modes, damping, and the sensor's and roller loads' modal operators.
     base : BaseMotionOperators
-        The base motion's operators and one probe per mounting place (:data:`fem.MOUNTING_POSITIONS`) or, after
+        The base motion's operators and one probe per mounting place (:data:`housing_fem.MOUNTING_POSITIONS`) or, after
         :meth:`at`, the accelerometer's one.
     n_dofs : int
         Free DOFs of the half model [-].
     """
 
-    columns: fem.RacewayColumns
-    ops: fem.ReducedOperators
-    base: fem.BaseMotionOperators
+    columns: housing_fem.RacewayColumns
+    ops: housing_fem.ReducedOperators
+    base: housing_fem.BaseMotionOperators
     n_dofs: int
 
     def at(self, position: str) -> Housing:
@@ -89,12 +88,12 @@ FIRST_MODE_COUNT = 20
 HOUSING_RULE = "sensor_comparison_housing"
 
 
-def modes_to(model: fem.HousingModel, top_Hz: float, start: int, seed: int) -> fem.Modes:
+def modes_to(model: housing_fem.HousingModel, top_Hz: float, start: int, seed: int) -> housing_fem.Modes:
     """The housing's modes up to past ``top_Hz``: max(``start``, 20) modes, 1.5 times as many until the highest
     passes it (each try one shift-invert Lanczos solve on the factors of K)."""
     n = max(int(start), FIRST_MODE_COUNT)
     while True:
-        modes = fem.compute_modes(model, min(n, model.n_dofs - 2), seed=seed)
+        modes = housing_fem.compute_modes(model, min(n, model.n_dofs - 2), seed=seed)
         if modes.frequencies_Hz[-1] >= top_Hz or n >= model.n_dofs - 2:
             return modes
         n = int(1.5 * n) + 1
@@ -110,14 +109,14 @@ def build_housing(config: dict, faulty: bool) -> Housing:
     """The housing mesh of the case (``housing.mesh_level``), its model, its modes to :func:`mode_top_Hz`, the
     Rayleigh damping, and a probe at every mounting place."""
     h = config["housing"]
-    mesh = build_housing_mesh(tr.housing_geometry(config), faulty, h["mesh_level"])
-    model = tr.make_model(mesh, config)
+    mesh = build_housing_mesh(transient.housing_geometry(config), faulty, h["mesh_level"])
+    model = transient.make_model(mesh, config)
     modes = modes_to(model, mode_top_Hz(config), h["n_modes"], config["seed"])
-    alpha, beta = fem.rayleigh_coefficients(h["damping_ratio"], h["damping_band_Hz"])
-    ops = fem.reduced_operators(model, modes, alpha, beta)
-    probes = tuple(fem.mounting_probe(mesh, p) for p in fem.MOUNTING_POSITIONS)
-    base = fem.base_motion_operators(model, modes, probes)
-    return Housing(fem.RacewayColumns.of(model), ops, base, model.n_dofs)
+    alpha, beta = housing_fem.rayleigh_coefficients(h["damping_ratio"], h["damping_band_Hz"])
+    ops = housing_fem.reduced_operators(model, modes, alpha, beta)
+    probes = tuple(housing_fem.mounting_probe(mesh, p) for p in housing_fem.MOUNTING_POSITIONS)
+    base = housing_fem.base_motion_operators(model, modes, probes)
+    return Housing(housing_fem.RacewayColumns.of(model), ops, base, model.n_dofs)
 
 
 def housing_reads(config: dict) -> dict:
@@ -136,7 +135,7 @@ def save_housing(housing: Housing, faulty: bool, reads: dict, path: str | Path) 
         n_dofs=np.array(housing.n_dofs),
         columns_psi_rad=c.psi_rad, columns_radius_m=np.array(c.radius_m),
         columns_patch_width_m=np.array(c.patch_width_m),
-        **{f"ops_{k}": getattr(o, k) for k in fem.ReducedOperators.__dataclass_fields__},
+        **{f"ops_{k}": getattr(o, k) for k in housing_fem.ReducedOperators.__dataclass_fields__},
         base_rigid=b.rigid, base_participation=b.participation, base_rigid_mass_kg=b.rigid_mass_kg,
         base_static_sensor=b.static_sensor, base_probe_modal=b.probe_modal, base_probe_base=b.probe_base,
         probe_rows_data=rows.data, probe_rows_indices=rows.indices, probe_rows_indptr=rows.indptr,
@@ -156,20 +155,20 @@ def load_housing(path: str | Path, faulty: bool, reads: dict) -> Housing:
                 f"{path}: this housing model was built for another {'faulty' if faulty else 'healthy'} mesh or "
                 f"config; rebuild it (snakemake rule {HOUSING_RULE})"
             )
-        ops = fem.ReducedOperators(**{k: d[f"ops_{k}"] for k in fem.ReducedOperators.__dataclass_fields__})
+        ops = housing_fem.ReducedOperators(**{k: d[f"ops_{k}"] for k in housing_fem.ReducedOperators.__dataclass_fields__})
         probes = tuple(
-            fem.Probe(str(pos), int(node), tuple(float(v) for v in xyz), tuple(float(v) for v in n))
+            housing_fem.Probe(str(pos), int(node), tuple(float(v) for v in xyz), tuple(float(v) for v in n))
             for pos, node, xyz, n in zip(d["probe_position"], d["probe_node"], d["probe_coordinates_m"],
                                          d["probe_normal"], strict=True)
         )
         rows = sp.csr_matrix((d["probe_rows_data"], d["probe_rows_indices"], d["probe_rows_indptr"]),
                              shape=tuple(d["probe_rows_shape"]))
-        base = fem.BaseMotionOperators(
+        base = housing_fem.BaseMotionOperators(
             rigid=d["base_rigid"], participation=d["base_participation"], rigid_mass_kg=d["base_rigid_mass_kg"],
             static_sensor=d["base_static_sensor"], probes=probes, probe_rows=rows, probe_modal=d["base_probe_modal"],
             probe_base=d["base_probe_base"],
         )
-        columns = fem.RacewayColumns(d["columns_psi_rad"], float(d["columns_radius_m"]),
+        columns = housing_fem.RacewayColumns(d["columns_psi_rad"], float(d["columns_radius_m"]),
                                      float(d["columns_patch_width_m"]))
         return Housing(columns, ops, base, int(d["n_dofs"]))
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import matplotlib.pyplot as plt
-import numpy as np
 import pandas as pd
 
 #: Panel titles by sensor and condition.
@@ -52,32 +51,53 @@ def envelope_spectra(spectra: pd.DataFrame, summary: dict):
     return fig
 
 
-def summary_figure(df: pd.DataFrame):
-    """The study sensor_comparison: each sensor's margin over the healthy bearing against the disturbance.
+#: Colours of the win map: which sensor sees the fault (its median margin over the healthy rig above 0 dB).
+OUTCOME_COLOURS = {"both": "#c7e9c0", "embedded PZT only": "#6baed6", "accelerometer only": "#fd8d3c",
+                   "neither": "#d9d9d9"}
 
-    One panel per fault case (type and width); x: the base motion's RMS; y: the median margin of the true
-    family over the healthy rig's largest [dB] (above 0: detected); markers by sensor, line per shaft speed
-    and mounting place. Where the PZT's curve lies above the accelerometer's, the embedded sensor wins.
+
+def _outcome(pzt_dB: float, accelerometer_dB: float) -> str:
+    seen = (pzt_dB > 0.0, accelerometer_dB > 0.0)
+    return {(True, True): "both", (True, False): "embedded PZT only", (False, True): "accelerometer only",
+            (False, False): "neither"}[seen]
+
+
+def summary_figure(df: pd.DataFrame):
+    """The study sensor_comparison as a win map: where each sensor sees the fault.
+
+    One row per case without its disturbance (shaft speed, fault type and width, mounting place), one column
+    per disturbance level (the base motion's RMS beneath it). Each cell is coloured by which sensor's median
+    margin over the healthy rig's largest is above 0 dB (both, the embedded PZT only, the accelerometer
+    only, neither) and gives both margins [dB]: P for the embedded PZT, A for the accelerometer.
     """
     d = df.copy()
-    d["fault"] = d["fault_type"] + " " + (1e3 * d["defect_width_m"]).map("{:.1f} mm".format)
-    faults = sorted(d["fault"].unique())
-    fig, axes = plt.subplots(1, len(faults), figsize=(4.0 * len(faults), 3.6), sharey=True, squeeze=False)
-    styles = {"pzt": ("o", "-"), "accelerometer": ("s", "--")}
-    for ax, fault in zip(axes[0], faults, strict=True):
-        g = d[d["fault"] == fault]
-        for (sensor, rpm, pos), h in g.groupby(["sensor", "shaft_speed_rpm", "accelerometer_position"]):
-            h = h.sort_values("disturbance_rms_m_per_s2")
-            marker, line = styles.get(sensor, ("x", ":"))
-            label = f"{SENSOR_NAMES.get(sensor, sensor)}, {rpm:g} rpm" + (f", {pos}" if sensor == "accelerometer" else "")
-            x = np.maximum(h["disturbance_rms_m_per_s2"], 1e-3)
-            ax.plot(x, h["margin_over_healthy_dB"], marker=marker, ls=line, label=label)
-        ax.axhline(0.0, color="k", lw=0.8)
-        ax.set_xscale("log")
-        ax.set_xlabel("base motion [m/s$^2$ rms] (at rest: 1e-3)")
-        ax.set_title(fault, fontsize=9)
-    axes[0, 0].set_ylabel("margin over healthy [dB]")
-    axes[0, -1].legend(fontsize=6)
-    fig.suptitle("Embedded sensor against housing accelerometer: above 0 dB the fault is seen", fontsize=9)
-    fig.tight_layout()
+    d["fault"] = d["fault_type"].str.replace("_", " ") + " " + (1e3 * d["defect_width_m"]).map("{:.1f} mm".format)
+    d["row"] = (d["fault"] + ", " + d["shaft_speed_rpm"].map("{:g} rpm".format) + ", accelerometer "
+                + d["accelerometer_position"])
+    wide = d.pivot_table(index=["row", "disturbance_level"], columns="sensor", values="margin_over_healthy_dB")
+    rms = d.groupby("disturbance_level")["disturbance_rms_m_per_s2"].median()
+    order = d.sort_values(["fault_type", "defect_width_m", "accelerometer_position", "shaft_speed_rpm"])["row"]
+    rows = list(dict.fromkeys(order))
+    levels = sorted(d["disturbance_level"].unique())
+    height = 1.3 + 0.42 * len(rows)
+    fig, ax = plt.subplots(figsize=(2.0 + 1.45 * len(levels), height))
+    ax.grid(False)
+    for i, row in enumerate(rows):
+        for j, level in enumerate(levels):
+            if (row, level) not in wide.index:
+                continue
+            p, a = wide.loc[(row, level), "pzt"], wide.loc[(row, level), "accelerometer"]
+            ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 1, 1, color=OUTCOME_COLOURS[_outcome(p, a)]))
+            ax.text(j, i, f"P {p:+.1f}\nA {a:+.1f}", ha="center", va="center", fontsize=6.5)
+    ax.set_xlim(-0.5, len(levels) - 0.5)
+    ax.set_ylim(len(rows) - 0.5, -0.5)
+    ax.set_xticks(range(len(levels)))
+    ax.set_xticklabels([f"level {v:g}\n{rms[v]:.2g} m/s$^2$" for v in levels], fontsize=7)
+    ax.set_yticks(range(len(rows)))
+    ax.set_yticklabels(rows, fontsize=7)
+    ax.set_xlabel("base motion (level; RMS over y and z)", fontsize=8)
+    handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in OUTCOME_COLOURS.values()]
+    fig.legend(handles, list(OUTCOME_COLOURS), fontsize=7, ncol=4, loc="lower center", frameon=False)
+    ax.set_title("Who sees the fault: margin over the healthy rig [dB], P embedded PZT, A accelerometer", fontsize=8)
+    fig.tight_layout(rect=(0, 0.35 / height, 1, 1))
     return fig

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..bearing import reduced_housing as rh
+from ..bearing import reduced_housing
 from ..bearing.lpm import BearingGeometry, kinematic_frequencies
 from ..io import read_harmonic, read_json, write_csv, write_json
 from ..sensor import comparison as cmp
@@ -58,8 +58,8 @@ def read_housings(config: dict, healthy_npz: str | None, faulty_npz: str | None)
     without files (the comparison then builds them itself)."""
     if healthy_npz is None and faulty_npz is None:
         return None
-    reads = rh.housing_reads(config)
-    return {False: rh.load_housing(healthy_npz, False, reads), True: rh.load_housing(faulty_npz, True, reads)}
+    reads = reduced_housing.housing_reads(config)
+    return {False: reduced_housing.load_housing(healthy_npz, False, reads), True: reduced_housing.load_housing(faulty_npz, True, reads)}
 
 
 def sensor_comparison(resistance_json: str, harmonic_csv: str | None, housing_healthy: str, housing_faulty: str,
