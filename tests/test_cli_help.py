@@ -42,7 +42,7 @@ def test_diagnose_bearing_says_which_config_and_model_it_used(monkeypatch, capsy
     answer = {"record_warnings": [], "baseline": fit, "final": fit, "selected": [], "verdict": "explained",
               "fault": {"type": "none", "params": {}, "ci95": {}}, "unexplained": [],
               "sensor_model": {"fem_factor": 0.938, "source": "the sensor FEM"},
-              "shaft_speed": {"rpm": 1000.0, "source": "bearing.shaft_speed_rpm of the config (the default)"},
+              "shaft_speed": {"rpm": 1000.0, "source": "bearing.shaft_speed_rpm of the default config"},
               "model_rate": {"reason": "recorded at 2550 Hz, held as it is"}}
     monkeypatch.setattr(stage, "diagnose_bearing", lambda *args, **kw: answer)
     assert cli.main(["diagnose-bearing", "record.csv", "--out", str(tmp_path / "out"), "--quiet"]) == 0
@@ -51,7 +51,7 @@ def test_diagnose_bearing_says_which_config_and_model_it_used(monkeypatch, capsy
     model = lines[1]
     assert model.startswith("model: 11-roller bearing (D_r 10 mm, D_p 44 mm) at 1000 rpm and 500 N")
     assert "influence line solved from the config" in model and "R = 50 MOhm" in model
-    assert "shaft speed: 1000 rpm from bearing.shaft_speed_rpm of the config (the default)" in lines[2]
+    assert "shaft speed: 1000 rpm from bearing.shaft_speed_rpm of the default config" in lines[2]
 
 
 def test_the_model_lines_follow_the_config():

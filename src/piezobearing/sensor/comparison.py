@@ -39,15 +39,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..bearing import base_motion as bm
-from ..bearing import housing_fem as fem
-from ..bearing import lpm as brg
-from ..bearing import transient as tr
+from ..bearing import base_motion, housing_fem, lpm, transient
 from ..bearing.reduced_housing import Housing, build_housing
 from ..signals import daq, detectors
-from ..signals import outputs as sout
+from ..signals import outputs as signal_outputs
 from ..signals.detectors import envelope as envelope_detector
-from . import accelerometer as acc
+from . import accelerometer
 
 SENSORS = ("pzt", "accelerometer")
 #: Stream indices of the DAQs' noise draws: default_rng([seed, NOISE_STREAM, sensor, case, replicate]).
@@ -129,7 +126,7 @@ def accelerometer_daq_settings(config: dict) -> daq.NoiseSettings:
 # --------------------------------------------------------------------------- one run of the rig
 
 
-def run_rig(config: dict, housing: Housing, faulty: bool, surroundings: bm.BaseMotionSettings,
+def run_rig(config: dict, housing: Housing, faulty: bool, surroundings: base_motion.BaseMotionSettings,
             replicate: int) -> dict:
     """One realisation of the surroundings through the LPM and the housing (``config``: :func:`rig_config`'s).
 
@@ -138,19 +135,19 @@ def run_rig(config: dict, housing: Housing, faulty: bool, surroundings: bm.BaseM
     ``disturbance_rms_m_per_s2``, and the kinematics.
     """
     b = config["bearing"]
-    motion = bm.realisation(surroundings, config["seed"], replicate) if surroundings.active else None
-    run = tr.run_lpm(b, faulty, "compiled", config["seed"], base_motion=motion)
+    motion = base_motion.realisation(surroundings, config["seed"], replicate) if surroundings.active else None
+    run = transient.run_lpm(b, faulty, "compiled", config["seed"], base_motion=motion)
     t = run["time_s"]
     a = run.get("base_acceleration_m_per_s2", np.zeros((t.size, 2)))
-    g, f = fem.project_roller_loads(housing.columns, housing.ops, run["load_N"], run["angle_rad"])
-    res = fem.response_projected(housing.ops, housing.base, g, f, a, b["time_step_s"])
+    g, f = housing_fem.project_roller_loads(housing.columns, housing.ops, run["load_N"], run["angle_rad"])
+    res = housing_fem.response_projected(housing.ops, housing.base, g, f, a, b["time_step_s"])
     return {
         "time_s": t,
         "force_N": res["force_N"],
         "acceleration_m_per_s2": res["acceleration_m_per_s2"][0],
         "base_m_per_s2": a,
-        "disturbance_rms_m_per_s2": bm.rms_m_per_s2(a),
-        "kinematics": brg.kinematic_frequencies(run["params"].geometry, run["params"].shaft_speed_Hz),
+        "disturbance_rms_m_per_s2": base_motion.rms_m_per_s2(a),
+        "kinematics": lpm.kinematic_frequencies(run["params"].geometry, run["params"].shaft_speed_Hz),
     }
 
 
@@ -163,15 +160,15 @@ def skip_samples(config: dict) -> int:
 def pzt_clean(run: dict, circuit, harmonic, config: dict, settings: ComparisonSettings) -> daq.Sampled:
     """The PZT's noiseless voltage on its DAQ clock: the sensor_voltage rule's RC model, then the DAQ's filter."""
     dt = config["bearing"]["time_step_s"]
-    table, _ = sout.sensor_voltage(run["time_s"], run["force_N"], dt, circuit, harmonic, config)
+    table, _ = signal_outputs.sensor_voltage(run["time_s"], run["force_N"], dt, circuit, harmonic, config)
     return daq.sample(table["voltage_V"].to_numpy(), dt, settings.pzt_sample_rate_Hz)
 
 
-def accelerometer_clean(run: dict, sensor: acc.AccelerometerSettings, config: dict,
+def accelerometer_clean(run: dict, sensor: accelerometer.AccelerometerSettings, config: dict,
                         settings: ComparisonSettings) -> daq.Sampled:
     """The accelerometer's noiseless voltage on its DAQ clock: its transfer function, the skip, the DAQ's filter."""
     dt = config["bearing"]["time_step_s"]
-    v = acc.transduce(run["acceleration_m_per_s2"], dt, sensor)[skip_samples(config):]
+    v = accelerometer.transduce(run["acceleration_m_per_s2"], dt, sensor)[skip_samples(config):]
     return daq.sample(v, dt, settings.accelerometer_sample_rate_Hz)
 
 
@@ -185,14 +182,14 @@ def pzt_record(clean: daq.Sampled, noise: daq.NoiseSettings, rng: np.random.Gene
     return daq.add_noise(clean.voltage_V, clean.dt_s, noise, rng)
 
 
-def accelerometer_record(clean: daq.Sampled, sensor: acc.AccelerometerSettings, noise: daq.NoiseSettings,
+def accelerometer_record(clean: daq.Sampled, sensor: accelerometer.AccelerometerSettings, noise: daq.NoiseSettings,
                          rng: np.random.Generator) -> tuple[daq.Acquired, int]:
     """The accelerometer's DAQ record: its own noise (datasheet density), its range, its DAQ's noise and ADC.
 
     Returns the record and the samples the transducer's range clipped.
     """
-    v = clean.voltage_V + acc.transducer_noise_V(clean.voltage_V.size, clean.dt_s, sensor, rng)
-    v, n_sat = acc.saturate(v, sensor)
+    v = clean.voltage_V + accelerometer.transducer_noise_V(clean.voltage_V.size, clean.dt_s, sensor, rng)
+    v, n_sat = accelerometer.saturate(v, sensor)
     return daq.add_noise(v, clean.dt_s, noise, rng), n_sat
 
 
@@ -236,8 +233,8 @@ def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_
     """
     settings = ComparisonSettings.from_config(config)
     cfg = rig_config(config, settings)
-    surroundings = bm.BaseMotionSettings.from_config(cfg["base_motion"])
-    sensor = acc.AccelerometerSettings.from_config(cfg["accelerometer"])
+    surroundings = base_motion.BaseMotionSettings.from_config(cfg["base_motion"])
+    sensor = accelerometer.AccelerometerSettings.from_config(cfg["accelerometer"])
     pzt_noise, acc_noise = pzt_noise_settings(cfg), accelerometer_daq_settings(cfg)
     fault = true_type(cfg)
     if housings is None:

@@ -90,7 +90,7 @@ def shaft_speed_given(record_path: str | Path, config: dict, rpm: float | None =
         used, source = float(rpm), "--rpm"
     elif config_sets_speed or stated is None:
         used = float(config["bearing"]["shaft_speed_rpm"])
-        source = "bearing.shaft_speed_rpm of the config" + ("" if config_sets_speed else " (the default)")
+        source = "bearing.shaft_speed_rpm of the " + ("config" if config_sets_speed else "default config")
     else:
         used, source = stated[0], f"the record's {stated[1]} variable"
     return {"rpm": used, "source": source, "record_rpm": None if stated is None else stated[0],
