@@ -16,12 +16,10 @@ import time
 from pathlib import Path
 
 import numpy as np
+from baselines import null_interpolated  # benchmarks/ is the script's folder, first on sys.path
 
 from piezobearing.bearing.kinematics import RollingBearing
 from piezobearing.signals.detectors import envelope as envelope_detector
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from baselines import null_interpolated  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from test_envelope_detector import FS, machine  # noqa: E402

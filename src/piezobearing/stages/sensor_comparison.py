@@ -13,15 +13,15 @@ import pandas as pd
 from ..bearing import reduced_housing
 from ..bearing.lpm import BearingGeometry, kinematic_frequencies
 from ..io import read_harmonic, read_json, write_csv, write_json
-from ..sensor import comparison as cmp
-from ..signals import outputs as sout
+from ..sensor import comparison
+from ..signals import outputs as signal_outputs
 
 #: The two conditions of the main workflow's comparison: the frame at rest, and the configured surroundings.
 CONDITIONS = ("without_disturbance", "with_disturbance")
 
 
 def _inputs(config: dict, resistance_json: str, harmonic_csv: str | None):
-    circuit = sout.sensor_circuit(config, read_json(resistance_json), resistance_json)
+    circuit = signal_outputs.sensor_circuit(config, read_json(resistance_json), resistance_json)
     if config["signals"]["sensor_fem_correction"] and not harmonic_csv:
         raise ValueError("signals.sensor_fem_correction is on but no sensor FEM response was given; "
                          "pass results/sensor/harmonic.csv as input 'harmonic'")
@@ -41,7 +41,7 @@ def envelope_spectra(result: dict, condition: str) -> pd.DataFrame:
     tested it (its chosen band; power over the local median, a noise bin's ratio being Exp(1)): a long table
     of condition, sensor, frequency_Hz, ratio."""
     rows = []
-    for s in cmp.SENSORS:
+    for s in comparison.SENSORS:
         spec = result["sensors"][s]["detection"]["details"]["spectrum"]
         rows.append(pd.DataFrame({"condition": condition, "sensor": s, "frequency_Hz": spec["frequency_Hz"],
                                   "ratio": spec["ratio"]}))
@@ -68,11 +68,11 @@ def sensor_comparison(resistance_json: str, harmonic_csv: str | None, housing_he
     configured base motion; sensor_comparison.json and the envelope spectra for the figure. ``housing_*``: the
     housing's models (rule sensor_comparison_housing)."""
     circuit, harmonic = _inputs(config, resistance_json, harmonic_csv)
-    settings = cmp.ComparisonSettings.from_config(config)
+    settings = comparison.ComparisonSettings.from_config(config)
     housings = read_housings(config, housing_healthy, housing_faulty)
     results, spectra = {}, []
     for condition, c in zip(CONDITIONS, (at_rest(config), config), strict=True):
-        res = cmp.compare(c, circuit, harmonic, housings, keep_records=True)
+        res = comparison.compare(c, circuit, harmonic, housings, keep_records=True)
         spectra.append(envelope_spectra(res, condition))
         results[condition] = _summary(res)
     b = config["bearing"]
@@ -105,7 +105,7 @@ def study_case(config: dict, outdir: Path, resistance: str, harmonic: str | None
     its own. Returns the case's summary with ``rows``: one per sensor (the study's summary.csv rows).
     """
     circuit, harmonic_fem = _inputs(config, resistance, harmonic)
-    res = cmp.compare(config, circuit, harmonic_fem, read_housings(config, housing_healthy, housing_faulty))
+    res = comparison.compare(config, circuit, harmonic_fem, read_housings(config, housing_healthy, housing_faulty))
     b = config["bearing"]
     common = {
         "shaft_speed_rpm": b["shaft_speed_rpm"],
@@ -118,7 +118,7 @@ def study_case(config: dict, outdir: Path, resistance: str, harmonic: str | None
         "false_alarm_probability": res["false_alarm_probability"],
     }
     rows = []
-    for s in cmp.SENSORS:
+    for s in comparison.SENSORS:
         r = res["sensors"][s]
         rows.append({"sensor": s, **common, "detection_rate": r["detection_rate"],
                      "false_alarm_rate": r["false_alarm_rate"], "margin_dB": r["margin_dB"],
