@@ -21,7 +21,6 @@ from .io.vibration import VibrationRecord, read_vibration_record
 from .sensor import outputs as sensor_outputs
 from .signals import detectors
 from .signals.detectors import Detection
-from .stages import bearing_diagnosis, diagnostics, studies
 
 #: The record kinds :func:`read_record` knows (:func:`diagnose`: calibration and bearing).
 RECORD_KINDS = ("vibration", "bearing", "calibration")
@@ -211,6 +210,10 @@ def simulate(config: dict | None = None, resistance_ohm: float | None = None) ->
     cfg = {**cfg, "signals": {**cfg["signals"], "sensor_fem_correction": False},
            "housing": {**cfg["housing"], "method": "reduced", "direct_check_s": 0.0}}
     r = cfg["calibration"]["initial_resistance_ohm"] if resistance_ohm is None else float(resistance_ohm)
+    # the study chain runs the housing's FEM and the whole signals stage (sfepy, numba, pandas: seconds to import),
+    # which read_record, calibrate and detect never need
+    from .stages import studies
+
     run = studies.workflow_chain(cfg, {"resistance_ohm": r}, None, "simulate(resistance_ohm)")
     noisy = {c: y for c, (y, _, _, _) in run["noisy"].items()}
     noiseless = {c: v for c, (_, v, _, _) in run["noisy"].items()}
@@ -339,6 +342,10 @@ def diagnose(path: str | Path, kind: str = "calibration", config: dict | None = 
     >>> d.selected, d.final_nrmse < 1.05 * d.noise_floor_nrmse < d.baseline_nrmse
     (('channel_delay',), True)
     """
+    # the diagnosis stages write figures and the bearing's reads the housing's FEM (matplotlib, sfepy: seconds to
+    # import), which read_record, calibrate and detect never need
+    from .stages import bearing_diagnosis, diagnostics
+
     cfg = _config(config)
     if kind == "calibration":
         record, _ = diagnostics.run(str(path), cfg)

@@ -7,7 +7,8 @@ of the declared keys only, in which reading any other key raises :class:`Undecla
 the fix. A rule missing here reads nothing from the config.
 
 :func:`code_hash` is the hash of every module of this package a stage's script (or a figure's notebook) imports,
-directly or through other modules (the import graph read with ``ast``, lazy imports inside functions included),
+directly or through other modules (the import graph read with ``ast``, lazy imports inside functions included;
+``from piezobearing import name`` follows the package's face to the module that defines ``name``),
 computed once per workflow start: a change to the physics reruns exactly the rules whose code it is.
 
 :func:`record_checksum` tracks a user's calibration record by content (SHA-256), so a replaced record with an older
@@ -271,7 +272,25 @@ def _module_file(name: str) -> Path | None:
     for p in (base.with_suffix(".py"), base / "__init__.py"):
         if p.is_file():
             return p
+    if len(parts) == 2 and parts[1] in _face_exports():  # `from piezobearing import detect`: its module
+        return _module_file(_face_exports()[parts[1]])
     return None
+
+
+#: The package's face (``piezobearing/__init__.py``): it imports nothing at its top; each public name is loaded on
+#: first use from the module its table ``_EXPORTS`` names.
+_FACE = PACKAGE_DIR / "__init__.py"
+
+
+@lru_cache(maxsize=None)
+def _face_exports() -> dict[str, str]:
+    """The face's table of public names and their modules (``piezobearing._EXPORTS``), read from its source: an
+    entry that imports a public name from the face runs that name's module, and its code is hashed with it."""
+    for node in ast.parse(_FACE.read_text()).body:
+        target = node.target if isinstance(node, ast.AnnAssign) else (node.targets[0] if isinstance(node, ast.Assign) else None)
+        if isinstance(target, ast.Name) and target.id == "_EXPORTS":
+            return ast.literal_eval(node.value)
+    return {}
 
 
 def _module_name(path: Path) -> str:
@@ -338,16 +357,8 @@ def _source_text(path: Path) -> str:
 def _module_imports(f: Path) -> tuple[Path, ...]:
     """The package files module file ``f`` imports directly, parsed once per process (every rule's entry
     reaches the same modules: parsing them once per entry was most of a dry run's time)."""
-    if f == _FACE:
-        return ()
     names = _imports(f.read_text(), _module_name(f), f.name == "__init__.py")
     return tuple(p for p in map(_module_file, sorted(names)) if p is not None)
-
-
-#: The package's face (``piezobearing/__init__.py``): it re-exports the public API for users, and every import of
-#: a module of the package runs it. A stage runs the modules it imports by name, so the face is hashed but its own
-#: imports are not followed; else a change to any module would rerun every rule.
-_FACE = PACKAGE_DIR / "__init__.py"
 
 
 @lru_cache(maxsize=None)
