@@ -2,7 +2,7 @@
 loads only the command line and the config; a public name is loaded on first use. Each check runs a fresh
 interpreter and reads ``sys.modules`` (what was loaded, never how long it took).
 
-The code hash (:func:`piezobearing.registry.code_hash`) follows an entry's ``from piezobearing import name``
+The code hash (:func:`piezobearing.workflow.registry.code_hash`) follows an entry's ``from piezobearing import name``
 to the module that defines the name, and the face's own lazy table is not followed: editing a module reached only
 through the face changes the hash of an entry that imports that name, and of no other.
 """
@@ -69,7 +69,7 @@ def test_the_face_names_every_subpackage_and_each_export_exists():
 
 
 _HASH = (
-    "import sys\nfrom piezobearing.registry import code_hash\nprint(code_hash(sys.argv[1]))"
+    "import sys\nfrom piezobearing.workflow.registry import code_hash\nprint(code_hash(sys.argv[1]))"
 )
 
 

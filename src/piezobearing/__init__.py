@@ -36,8 +36,8 @@ _EXPORTS = {
 
 #: The subpackages and modules reachable as attributes (``piezobearing.signals``), imported on first access.
 _SUBMODULES = frozenset({
-    "api", "bearing", "cli", "config", "diagnosis", "io", "paper", "plotting", "recording", "registry", "scorecard",
-    "sensor", "sfepy_setup", "signals", "sparse_solve", "stages", "studies", "synthesis", "threads",
+    "api", "bearing", "chain", "cli", "comparison", "config", "diagnosis", "fitting", "housing", "io", "numerics",
+    "plotting", "scorecard", "sensor", "signals", "stages", "workflow",
 })
 
 __all__ = ["__version__", *sorted(_EXPORTS)]

@@ -15,10 +15,10 @@ import numpy as np
 
 from . import config as configuration
 from .bearing.kinematics import Kinematics, RollingBearing
+from .chain import calibration as sensor_outputs
 from .diagnosis.calibration.record import check_record
 from .io import BearingRecord, Measurement, read_bearing_record, read_measurement
 from .io.vibration import VibrationRecord, read_vibration_record
-from .sensor import outputs as sensor_outputs
 from .signals import detectors
 from .signals.detectors import Detection
 
@@ -131,7 +131,7 @@ def calibrate(force_N, voltage_V, rate_Hz: float, config: dict | None = None) ->
     Examples
     --------
     >>> from piezobearing import config
-    >>> from piezobearing.sensor.outputs import synthesize_calibration
+    >>> from piezobearing.chain.calibration import synthesize_calibration
     >>> record = synthesize_calibration(config.load())          # the default synthetic press record
     >>> c = calibrate(record.force_N, record.voltage_V, record.sample_rate_Hz)
     >>> bool(0.05 < c.sensitivity_V_per_N < 0.5), bool(1e7 < c.resistance_ohm < 1e10)
@@ -333,7 +333,7 @@ def diagnose(path: str | Path, kind: str = "calibration", config: dict | None = 
     >>> import tempfile, pathlib
     >>> from piezobearing import config
     >>> from piezobearing.io import write_measurement
-    >>> from piezobearing.sensor.outputs import synthesize_calibration
+    >>> from piezobearing.chain.calibration import synthesize_calibration
     >>> cfg = config.load()
     >>> cfg["synthesis"]["hidden_effects"] = [{"name": "channel_delay", "params": {"delay_s": 0.015}}]
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "measurement.csv"

@@ -292,11 +292,11 @@ def _diagnose(args) -> int:
 
 def _hide_and_find(args) -> int:
     from .diagnosis.calibration.effects import CATALOGUE, EffectError, ForceRecord
+    from .diagnosis.calibration.presses import PressProtocol, synthesize
     from .diagnosis.calibration.subject import diagnose_record
     from .diagnosis.settings import DiagnosticsSettings
     from .sensor.calibration import detect_impulses
     from .stages.calibration import nominal_circuit
-    from .synthesis import PressProtocol, synthesize
 
     try:
         config, used = _load_config(args)
@@ -402,7 +402,7 @@ def _diagnose_bearing(args) -> int:
 def _detect(args) -> int:
     from .bearing.kinematics import BearingError
     from .io import MeasurementError
-    from .recording import RigError, detect_recording, write_detection
+    from .stages.recording import RigError, detect_recording, write_detection
 
     try:
         created = _prepare_out(args.out)

@@ -10,7 +10,7 @@ from piezobearing.config import ConfigError
 from piezobearing.config import results_folder
 from piezobearing.config import validate as validate_config
 from piezobearing.io import MeasurementError
-from piezobearing.registry import (
+from piezobearing.workflow.registry import (
     RECORD_RULES,
     code_hash,
     declared,
@@ -78,7 +78,7 @@ def sensor_harmonic():
 
 
 def stage_params(rule, entry):
-    """A rule's params, from piezobearing.registry: the config values its stage reads (``reads``, all the
+    """A rule's params, from piezobearing.workflow.registry: the config values its stage reads (``reads``, all the
     stage receives), the hash of the package code its script or notebook ``entry`` runs (``code``) and, for
     a rule reading the calibration record, the record's checksum (``record``)."""
     record = config["calibration"]["measurement"] if rule in RECORD_RULES else None
@@ -86,7 +86,7 @@ def stage_params(rule, entry):
 
 
 # The housing's reduced model (mesh, modes, operators) depends on the housing's config values alone
-# (piezobearing.registry.READS["sensor_comparison_housing"]), not on the speed, the surroundings or the seeds:
+# (piezobearing.workflow.registry.READS["sensor_comparison_housing"]), not on the speed, the surroundings or the seeds:
 # one file per healthy or faulty mesh, named by the digest of those values, which every comparison on that
 # mesh reads (the main workflow's and the study's cases). COMPARISON_HOUSINGS maps digest to values.
 COMPARISON_HOUSINGS = {}

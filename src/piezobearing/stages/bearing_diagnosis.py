@@ -16,11 +16,11 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
-from ..bearing import transient as bearing_transient
-from ..bearing.housing_mesh import build_housing_mesh
 from ..bearing.surrogate import InfluenceLine
 from ..diagnosis import engine
 from ..diagnosis.bearing.subject import SUBJECT, synthesise
+from ..housing import transient as bearing_transient
+from ..housing.mesh import build_housing_mesh
 from ..io import (
     MeasurementError,
     ResultFileError,

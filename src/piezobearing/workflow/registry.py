@@ -23,9 +23,9 @@ import json
 from functools import lru_cache
 from pathlib import Path
 
-from .paper import CASE
+from ..config.paper import CASE
 
-PACKAGE_DIR = Path(__file__).resolve().parent
+PACKAGE_DIR = Path(__file__).resolve().parents[1]
 
 #: The sensor circuit of Eq. 6 (SensorCircuit.from_config) without R.
 _CIRCUIT = [
@@ -133,7 +133,7 @@ _BEARING = [
     "bearing.substeps",
     "bearing.resample",
 ]
-#: The sensor force's period (signals.outputs.sensor_force_period_s: the bearing's geometry, speed, mean slip and
+#: The sensor force's period (chain.signals.sensor_force_period_s: the bearing's geometry, speed, mean slip and
 #: whether the rollers differ), for which the sensor circuit starts in its periodic steady state.
 _PASSAGE = [
     *_GEOMETRY,
@@ -142,7 +142,7 @@ _PASSAGE = [
     "bearing.roller_diameter_scatter_m",
 ]
 
-#: The config keys of the paper's case (piezobearing.paper.CASE), against which the scorecard compares the run's.
+#: The config keys of the paper's case (piezobearing.config.paper.CASE), against which the scorecard compares the run's.
 _CASE = list(CASE)
 
 #: Config keys each rule's stage reads, by rule.
@@ -181,7 +181,7 @@ READS: dict[str, list[str]] = {
         "signals.skip_s", "signals.sensor_fem_correction", *_CIRCUIT,
     ],
     # sensor_comparison.smk
-    "sensor_comparison_housing": [  # the housing's reduced model (piezobearing.sensor.comparison.build_housing)
+    "sensor_comparison_housing": [  # the housing's reduced model (piezobearing.comparison.rig.build_housing)
         "seed", *_HOUSING_GEOMETRY, "housing.mesh_level", "housing.n_modes", "housing.damping_ratio",
         "housing.damping_band_Hz", "housing.patch_width_m", "housing.sensor_electrical", *_PZT, *_ALUMINA_DISK,
         "sensor_comparison.mode_cutoff_ratio", "accelerometer.daq.sample_rate_Hz",
@@ -195,7 +195,7 @@ READS: dict[str, list[str]] = {
     # diagnostics_bearing.smk
     "synthesize_bearing_record": ["seed", "sensor", "signals.sensor_fem_correction", "bearing", "bearing_diagnosis"],
     "diagnose_bearing": ["seed", "sensor", "signals.sensor_fem_correction", "bearing", "bearing_diagnosis", "diagnostics"],
-    # scorecard.smk: the run's conditions against the paper's case (piezobearing.paper.CASE)
+    # scorecard.smk: the run's conditions against the paper's case (piezobearing.config.paper.CASE)
     "scorecard": _CASE,
 }
 
@@ -223,7 +223,7 @@ class DeclaredConfig(dict):
     def __missing__(self, key):
         raise UndeclaredKeyError(
             f"the stage of rule {self._rule} read config key {self._prefix}{key}, which the rule does not "
-            f"declare; add it to piezobearing.registry.READS['{self._rule}']"
+            f"declare; add it to piezobearing.workflow.registry.READS['{self._rule}']"
         )
 
 

@@ -27,13 +27,13 @@ from pathlib import Path
 
 import yaml
 
-from .bearing.kinematics import BearingError, Kinematics, RollingBearing
-from .io import write_json
-from .io.vibration import VibrationRecord, read_vibration_record
-from .plotting import save
-from .plotting.detection import detection_figure
-from .signals.detectors import Detection
-from .signals.detectors import envelope as envelope_detector
+from ..bearing.kinematics import BearingError, Kinematics, RollingBearing
+from ..io import write_json
+from ..io.vibration import VibrationRecord, read_vibration_record
+from ..plotting import save
+from ..plotting.detection import detection_figure
+from ..signals.detectors import Detection
+from ..signals.detectors import envelope as envelope_detector
 
 #: The keys of a rig file.
 RIG_KEYS = ("bearing", "shaft_speed_rpm", "sample_rate_Hz", "channel")

@@ -140,7 +140,7 @@ def realisation(settings: BaseMotionSettings, seed: int, replicate: int = 0):
 
     The draws come from ``default_rng([seed, STREAM, replicate, axis])``: a replicate is one realisation of
     the surroundings; the function gives the same numbers for the same grid. Pass it to
-    :func:`piezobearing.bearing.transient.run_lpm` (``base_motion``).
+    :func:`piezobearing.housing.transient.run_lpm` (``base_motion``).
     """
 
     def acceleration(t_s: np.ndarray) -> np.ndarray:
