@@ -22,9 +22,11 @@ extensions = [
     "myst_parser",
     "numpydoc",
     "sphinx.ext.autodoc",
-    "sphinx.ext.mathjax",
+    "piezobearing_mathml",
     "piezobearing_reference",
 ]
+
+html_math_renderer = "mathml"  # docs/_ext/piezobearing_mathml.py: MathML at build time, no CDN
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
 root_doc = "index"

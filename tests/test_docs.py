@@ -85,3 +85,27 @@ def test_cli_reference_lists_every_command(site):
         for action in sub._actions:
             for option in action.option_strings:
                 assert option in text, f"{name} {option}"
+
+
+_REMOTE = re.compile(r"<(?:script|link|img|iframe)\b[^>]*\b(?:src|href)=[\"'](?:https?:)?//", re.IGNORECASE)
+
+
+@pytest.mark.slow
+def test_site_loads_nothing_from_the_network(site):
+    """No page loads a script, style sheet or image from another host: the site works offline and saved."""
+    pages = sorted(site.rglob("*.html"))
+    assert len(pages) > 20
+    remote = [str(p.relative_to(site)) for p in pages if _REMOTE.search(p.read_text())]
+    assert not remote, f"pages loading from the network: {remote}"
+
+
+@pytest.mark.slow
+def test_equations_are_mathml(site):
+    """Every theory page's equations are MathML written at build time, with no LaTeX left for a script."""
+    for page in sorted((site / "theory").glob("*.html")):
+        if page.name == "index.html":
+            continue
+        html = page.read_text()
+        assert "<math" in html, page.name
+        text = re.sub(r"<[^>]+>", "", re.sub(r"<math.*?</math>", "", html, flags=re.DOTALL))
+        assert not re.search(r"\\(frac|varepsilon|mathrm|text)\b", text), f"raw LaTeX in {page.name}"
