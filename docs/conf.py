@@ -24,6 +24,7 @@ extensions = [
     "sphinx.ext.autodoc",
     "piezobearing_mathml",
     "piezobearing_reference",
+    "piezobearing_performance",
 ]
 
 html_math_renderer = "mathml"  # docs/_ext/piezobearing_mathml.py: MathML at build time, no CDN
