@@ -25,6 +25,7 @@ extensions = [
     "piezobearing_mathml",
     "piezobearing_reference",
     "piezobearing_performance",
+    "piezobearing_figures",
 ]
 
 html_math_renderer = "mathml"  # docs/_ext/piezobearing_mathml.py: MathML at build time, no CDN

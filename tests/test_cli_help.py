@@ -24,6 +24,7 @@ def test_the_script_and_every_command_describe_themselves_in_a_paragraph(capsys)
         text = _help(capsys, command)
         description = text.split("positional arguments:")[0]
         assert len(description) > 300, (command, description)
+    assert "'detect'" in cli.DESCRIPTION and "rig file" in cli.DESCRIPTION, "detect and its --config in the summary"
 
 
 @pytest.mark.parametrize("command", ["validate", "diagnose", "diagnose-bearing"])
@@ -62,5 +63,5 @@ def test_the_model_lines_follow_the_config():
     assert "at 1500 rpm" in cli._bearing_model(c, "infl.csv") and "influence line from infl.csv" in (
         cli._bearing_model(c, "infl.csv"))
     assert cli._bearing_model(c, None).endswith("effects switched on: outer_race_defect")
-    assert "apc850_paper disk 4.7 x 3.4 mm" in cli._calibration_model(c)
+    assert "the apc850_paper disk 4.7 x 3.4 mm" in cli._calibration_model(c)
     assert cli._calibration_model(c).endswith("effects switched on: channel_delay")

@@ -82,14 +82,18 @@ FORMATS = ".csv, .mat (MATLAB v5 or v7.3), .uff/.unv (UFF58), .tdms (NI TDMS), .
 
 #: What ``piezobearing --help`` says first.
 DESCRIPTION = (
-    "Hold the embedded PZT force sensor's models against your measurements. 'validate' checks a calibration "
-    "record as the workflow does; 'diagnose' fits the sensor's circuit model to a calibration record and "
-    "names the physical effect it misses; 'diagnose-bearing' holds the bearing, housing and sensor chain "
-    "against a running-bearing record and names the fault; 'hide-and-find' checks that the diagnosis finds an "
-    "effect hidden in a synthetic record. Every command reads the checkout's config/config.yaml with --config "
-    "merged over it, prints which config and which model it used, and stops on a bad input with one line "
-    "naming the file or key and the fix. The paper's figures and numbers come from the Snakemake workflow "
-    "(snakemake --cores 2), not from this script."
+    "Hold the embedded PZT force sensor's models against your measurements, and look for a fault in a "
+    "recording. 'validate' checks a calibration record as the workflow does; 'diagnose' fits the sensor's "
+    "circuit model to a calibration record and names the physical effect it misses; 'diagnose-bearing' holds "
+    "the bearing, housing and sensor chain against a running-bearing record and names the fault; "
+    "'hide-and-find' checks that the diagnosis finds an effect hidden in a synthetic record; 'detect' says "
+    "whether a vibration or sensor recording of any rolling bearing shows an outer-race, inner-race or "
+    "rolling-element fault. 'validate', 'diagnose', 'diagnose-bearing' and 'hide-and-find' read the "
+    "checkout's config/config.yaml with --config merged over it; 'detect' reads no model config: its --config "
+    "is a rig file (the bearing, the shaft speed, the sampling rate, the channel). The four model commands "
+    "print which config and which model they used; every command stops on a bad input with one line naming "
+    "the file or key and the fix. The paper's figures and numbers come from the Snakemake workflow (snakemake --cores 2), not from "
+    "this script."
 )
 
 
@@ -98,7 +102,7 @@ def _calibration_model(config: dict) -> str:
     s = config["sensor"]
     effects = ", ".join(config["model"]["effects"]) or "none"
     return (
-        f"model: RC circuit of Eq. 6 (R fitted) on a {s['material']} disk {s['pzt_diameter_m'] * 1e3:g} x "
+        f"model: RC circuit of Eq. 6 (R fitted) on the {s['material']} disk {s['pzt_diameter_m'] * 1e3:g} x "
         f"{s['pzt_height_m'] * 1e3:g} mm, {s['cable_length_m']:g} m cable at "
         f"{s['cable_capacitance_F_per_m'] * 1e12:g} pF/m; effects switched on: {effects}"
     )

@@ -1,0 +1,118 @@
+"""Copy the workflow's figures into the documentation, with the code and config they were made with.
+
+The documentation site shows figures a workflow run made; it never makes them itself. This script checks that
+the run is current (``snakemake -n`` has nothing to do for the figures and the scorecard), copies each figure
+of :data:`FIGURES` to ``docs/_static/figures/``, and writes ``docs/_static/figures/provenance.json``: per figure
+the rule that made it, its code hash (``piezobearing.workflow.registry.code_hash`` of the rule's notebook or
+script) and config digest (``reads_digest`` of the config values the rule declares), the PNG's SHA-256, and the
+scorecard rows the gallery shows beside it. The docs build (``docs/_ext/piezobearing_figures.py``) recomputes
+the code hash and the config digest and stops when a figure is not the current code's or config's.
+
+Usage, from the repository root, after the workflow has run on the same configuration::
+
+    python scripts/docs_figures.py --configfile config/ci.yaml
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import hashlib
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+from piezobearing import config as config_loader
+from piezobearing.workflow.registry import code_hash, reads_digest
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "docs" / "_static" / "figures"
+
+#: file name under results/figures/, the rule that writes it, its notebook or script, a title, and the
+#: scorecard sections whose rows the gallery shows beside it
+FIGURES = [
+    ("fig03.png", "fig03", "notebooks/fig03_housing_mesh.ipynb", "Fig. 3: ring, housing and sensor, the FEM mesh", ["IV"]),
+    ("fig05.png", "fig05", "notebooks/fig05_calibration_impulses.ipynb", "Fig. 5: calibration impulses and their sensitivity", ["III-B"]),
+    ("fig06.png", "fig06", "notebooks/fig06_resistance_fit.ipynb", "Fig. 6: the resistance fit", []),
+    ("fig08a.png", "fig08a", "notebooks/fig08a_lowfreq_sensitivity.ipynb", "Fig. 8a: low-frequency sensitivity", ["III-C low frequency"]),
+    ("fig07.png", "fig07", "notebooks/fig07_sensor_mode.ipynb", "Fig. 7: the sensor's first axial mode", ["III-C sensor FEM"]),
+    ("fig08b.png", "fig08b", "notebooks/fig08b_sensor_harmonic.ipynb", "Fig. 8b: the sensor's high-frequency response", ["III-C band"]),
+    ("fig09.png", "fig09", "notebooks/fig09_voltage.ipynb", "Fig. 9: sensor voltage, healthy and faulty", ["IV voltage"]),
+    ("fig10.png", "fig10", "notebooks/fig10_envelope.ipynb", "Fig. 10: envelope spectra at 10 dB SNR", ["IV detection"]),
+    ("snr_study.png", "snr_study_figure", "workflow/scripts/snr_study_figure.py", "Detection against SNR", []),
+    ("sensor_comparison.png", "sensor_comparison_figure", "notebooks/sensor_comparison.ipynb",
+     "The embedded sensor against a housing accelerometer", []),
+    ("diagnosis_bearing.png", "diagnosis_bearing_notebook", "notebooks/diagnosis_bearing.ipynb",
+     "The running bearing's diagnosis: the model ladder", []),
+]
+
+
+def sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def results_dir(cfg: dict) -> Path:
+    """Where the run's results are: ``results/`` for the run ``paper``, ``results/<run>/`` otherwise."""
+    run = cfg.get("run", "paper")
+    return ROOT / "results" if run == "paper" else ROOT / "results" / run
+
+
+def scorecard_rows(results: Path, sections: list[str]) -> list[dict]:
+    """The scorecard's rows of ``sections`` (a section matches by its start), as the gallery shows them."""
+    path = results / "scorecard.csv"
+    if not sections or not path.exists():
+        return []
+    with path.open() as f:
+        rows = [r for r in csv.DictReader(f) if any(r["section"].startswith(s) for s in sections)]
+    return [{k: r.get(k, "") for k in ("section", "quantity", "paper", "ours", "unit", "note")} for r in rows]
+
+
+def provenance(cfg: dict, configfiles: list[str], results: Path) -> dict:
+    figures = {}
+    for name, rule, entry, title, sections in FIGURES:
+        src = results / "figures" / name
+        if not src.exists():
+            raise SystemExit(f"{src} does not exist: run the workflow first (snakemake --cores 2 "
+                             f"{' '.join('--configfile ' + c for c in configfiles)})")
+        figures[name] = {"rule": rule, "entry": entry, "title": title, "source": str(src.relative_to(ROOT)),
+                         "code_hash": code_hash(str(ROOT / entry)), "config_digest": reads_digest(cfg, rule),
+                         "sha256": sha256(src), "scorecard": scorecard_rows(results, sections)}
+    return {"configfiles": configfiles, "made_by": "python scripts/docs_figures.py "
+            + " ".join(f"--configfile {c}" for c in configfiles), "figures": figures}
+
+
+def run_is_current(configfiles: list[str], targets: list[Path]) -> None:
+    """Stop unless Snakemake has nothing to do for ``targets`` (the figures come from the current code)."""
+    cmd = [sys.executable, "-m", "snakemake", "-n", "--cores", "1"]
+    for c in configfiles:
+        cmd += ["--configfile", c]
+    cmd += [str(t.relative_to(ROOT)) for t in targets]
+    run = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+    if run.returncode != 0:
+        raise SystemExit(f"snakemake -n failed:\n{run.stderr[-2000:]}")
+    if "Nothing to be done" not in run.stdout + run.stderr:
+        raise SystemExit(f"the workflow run is not current; snakemake -n would run:\n{run.stdout[-2000:]}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--configfile", action="append", default=[], help="the run's config files (as for snakemake)")
+    ap.add_argument("--no-dry-run", action="store_true", help="skip the check that the run is current")
+    a = ap.parse_args(argv)
+    cfg = config_loader.load(*a.configfile)
+    results = results_dir(cfg)
+    record = provenance(cfg, a.configfile, results)
+    if not a.no_dry_run:
+        run_is_current(a.configfile, [results / "figures" / n for n in record["figures"]])
+    OUT.mkdir(parents=True, exist_ok=True)
+    for name, fig in record["figures"].items():
+        shutil.copyfile(ROOT / fig["source"], OUT / name)
+    (OUT / "provenance.json").write_text(json.dumps(record, indent=1, ensure_ascii=False) + "\n")
+    print(f"{len(record['figures'])} figures -> {OUT}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
