@@ -43,10 +43,11 @@ numpydoc_show_class_members = False
 numpydoc_class_members_toctree = False
 
 html_theme = "pydata_sphinx_theme"
-html_title = "piezobearing"
+html_title = f"piezobearing {release}"
 html_static_path = ["_static"]
 html_css_files = ["piezobearing.css"]
 html_theme_options = {
+    "logo": {"text": f"piezobearing {release}"},  # the version on every page
     "navigation_depth": 3,
     "show_toc_level": 2,
     "navbar_align": "left",
@@ -61,6 +62,7 @@ html_sidebars = {
         "index",
         "getting_started",
         "performance",
+        "gallery",
         "changelog",
         "reference/configuration",
         "reference/cli",

@@ -31,19 +31,26 @@ ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "docs" / "_static" / "figures"
 
 #: file name under results/figures/, the rule that writes it, its notebook or script, a title, and the
-#: scorecard sections whose rows the gallery shows beside it
+#: scorecard rows the gallery shows beside it (each a part of the row's quantity)
 FIGURES = [
-    ("fig03.png", "fig03", "notebooks/fig03_housing_mesh.ipynb", "Fig. 3: ring, housing and sensor, the FEM mesh", ["IV"]),
-    ("fig05.png", "fig05", "notebooks/fig05_calibration_impulses.ipynb", "Fig. 5: calibration impulses and their sensitivity", ["III-B"]),
-    ("fig06.png", "fig06", "notebooks/fig06_resistance_fit.ipynb", "Fig. 6: the resistance fit", []),
-    ("fig08a.png", "fig08a", "notebooks/fig08a_lowfreq_sensitivity.ipynb", "Fig. 8a: low-frequency sensitivity", ["III-C low frequency"]),
-    ("fig07.png", "fig07", "notebooks/fig07_sensor_mode.ipynb", "Fig. 7: the sensor's first axial mode", ["III-C sensor FEM"]),
-    ("fig08b.png", "fig08b", "notebooks/fig08b_sensor_harmonic.ipynb", "Fig. 8b: the sensor's high-frequency response", ["III-C band"]),
-    ("fig09.png", "fig09", "notebooks/fig09_voltage.ipynb", "Fig. 9: sensor voltage, healthy and faulty", ["IV voltage"]),
-    ("fig10.png", "fig10", "notebooks/fig10_envelope.ipynb", "Fig. 10: envelope spectra at 10 dB SNR", ["IV detection"]),
-    ("snr_study.png", "snr_study_figure", "workflow/scripts/snr_study_figure.py", "Detection against SNR", []),
+    ("fig03.png", "fig03", "notebooks/fig03_housing_mesh.ipynb", "Fig. 3: ring, housing and sensor, the FEM mesh",
+     ["housing model", "reduced vs direct", "peak-to-peak change"]),
+    ("fig05.png", "fig05", "notebooks/fig05_calibration_impulses.ipynb", "Fig. 5: calibration impulses and their sensitivity",
+     ["impulse-peak sensitivity"]),
+    ("fig06.png", "fig06", "notebooks/fig06_resistance_fit.ipynb", "Fig. 6: the resistance fit", ["circuit resistance", "cable capacitance"]),
+    ("fig08a.png", "fig08a", "notebooks/fig08a_lowfreq_sensitivity.ipynb", "Fig. 8a: low-frequency sensitivity",
+     ["onset of linearity", "deviation threshold", "reference sensitivity at the onset"]),
+    ("fig07.png", "fig07", "notebooks/fig07_sensor_mode.ipynb", "Fig. 7: the sensor's first axial mode", ["first resonance"]),
+    ("fig08b.png", "fig08b", "notebooks/fig08b_sensor_harmonic.ipynb", "Fig. 8b: the sensor's high-frequency response",
+     ["band low edge", "band high edge", "mid-band sensitivity"]),
+    ("fig09.png", "fig09", "notebooks/fig09_voltage.ipynb", "Fig. 9: sensor voltage, healthy and faulty", ["sensor force"]),
+    ("fig10.png", "fig10", "notebooks/fig10_envelope.ipynb", "Fig. 10: envelope spectra at 10 dB SNR",
+     ["BPFO (11 rollers", "SNR of the added", "fault detected", "detection rate", "false-alarm rate"]),
+    ("snr_study.png", "snr_study_figure", "workflow/scripts/snr_study_figure.py", "Detection against SNR", ["lowest SNR"]),
     ("sensor_comparison.png", "sensor_comparison_figure", "notebooks/sensor_comparison.ipynb",
      "The embedded sensor against a housing accelerometer", []),
+    ("diagnosis_ladder.png", "diagnosis_notebook", "notebooks/diagnosis.ipynb",
+     "The calibration record's diagnosis: the model ladder", []),
     ("diagnosis_bearing.png", "diagnosis_bearing_notebook", "notebooks/diagnosis_bearing.ipynb",
      "The running bearing's diagnosis: the model ladder", []),
 ]
@@ -59,39 +66,39 @@ def results_dir(cfg: dict) -> Path:
     return ROOT / "results" if run == "paper" else ROOT / "results" / run
 
 
-def scorecard_rows(results: Path, sections: list[str]) -> list[dict]:
-    """The scorecard's rows of ``sections`` (a section matches by its start), as the gallery shows them."""
+def scorecard_rows(results: Path, quantities: list[str]) -> list[dict]:
+    """The scorecard's rows whose quantity holds one of ``quantities``, as the gallery shows them."""
     path = results / "scorecard.csv"
-    if not sections or not path.exists():
+    if not quantities or not path.exists():
         return []
     with path.open() as f:
-        rows = [r for r in csv.DictReader(f) if any(r["section"].startswith(s) for s in sections)]
+        rows = [r for r in csv.DictReader(f) if any(q in r["quantity"] for q in quantities)]
     return [{k: r.get(k, "") for k in ("section", "quantity", "paper", "ours", "unit", "note")} for r in rows]
 
 
 def provenance(cfg: dict, configfiles: list[str], results: Path) -> dict:
     figures = {}
-    for name, rule, entry, title, sections in FIGURES:
+    for name, rule, entry, title, quantities in FIGURES:
         src = results / "figures" / name
         if not src.exists():
             raise SystemExit(f"{src} does not exist: run the workflow first (snakemake --cores 2 "
                              f"{' '.join('--configfile ' + c for c in configfiles)})")
         figures[name] = {"rule": rule, "entry": entry, "title": title, "source": str(src.relative_to(ROOT)),
                          "code_hash": code_hash(str(ROOT / entry)), "config_digest": reads_digest(cfg, rule),
-                         "sha256": sha256(src), "scorecard": scorecard_rows(results, sections)}
+                         "sha256": sha256(src), "scorecard": scorecard_rows(results, quantities)}
     return {"configfiles": configfiles, "made_by": "python scripts/docs_figures.py "
             + " ".join(f"--configfile {c}" for c in configfiles), "figures": figures}
 
 
 def run_is_current(configfiles: list[str], targets: list[Path]) -> None:
     """Stop unless Snakemake has nothing to do for ``targets`` (the figures come from the current code)."""
-    cmd = [sys.executable, "-m", "snakemake", "-n", "--cores", "1"]
+    cmd = [str(Path(sys.executable).parent / "snakemake"), "-n", "--cores", "1"]
+    cmd += [str(t.relative_to(ROOT)) for t in targets]  # before --configfile, which takes every name after it
     for c in configfiles:
         cmd += ["--configfile", c]
-    cmd += [str(t.relative_to(ROOT)) for t in targets]
     run = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
     if run.returncode != 0:
-        raise SystemExit(f"snakemake -n failed:\n{run.stderr[-2000:]}")
+        raise SystemExit(f"snakemake -n failed:\n{(run.stdout + run.stderr)[-2000:]}")
     if "Nothing to be done" not in run.stdout + run.stderr:
         raise SystemExit(f"the workflow run is not current; snakemake -n would run:\n{run.stdout[-2000:]}")
 

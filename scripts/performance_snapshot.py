@@ -161,7 +161,7 @@ def _signals(d: dict) -> tuple[str, str, list[dict]]:
 
 
 def _detect_record(d: dict) -> tuple[str, str, list[dict]]:
-    text = f"{seconds(d['envelope_detector_cpu_s'])} CPU for one {d['record']} record"
+    text = f"{seconds(d['envelope_detector_cpu_s'])} CPU for one record of {d['record']}"
     qs = [q("CPU", d["envelope_detector_cpu_s"], "s")]
     if "command_cpu_s" in d:
         cpu = min(d["command_cpu_s"])

@@ -73,8 +73,9 @@ class FigureGallery(SphinxDirective):
     def run(self) -> list[nodes.Node]:
         self.env.note_dependency(str(PROVENANCE))
         record = json.loads(PROVENANCE.read_text())
-        lines = [f"Made by `{' '.join('snakemake --cores 2 --configfile ' + c for c in record['configfiles'])}`, "
-                 f"copied here by `{record['made_by']}`.", ""]
+        configs = ", ".join(f"`{c}`" for c in record["configfiles"]) or "`config/config.yaml`"
+        intro = [f"These come from a workflow run on {configs}, copied here by `{record['made_by']}`."]
+        lines = []
         for name, fig in record["figures"].items():
             lines += [f"## {fig['title']}", "", f"```{{figure}} /_static/figures/{name}", ":width: 100%",
                       f":alt: {fig['title']}", "",
@@ -86,10 +87,12 @@ class FigureGallery(SphinxDirective):
                           for r in fig["scorecard"]]
                 lines += ["", "From `results/scorecard.csv` of the same run (its notes say where the paper's "
                           "numbers cannot hold).", ""]
+        head = nodes.container()
+        self.state.nested_parse(StringList(intro, source=str(PROVENANCE)), self.content_offset, head)
         container = nodes.section()
         self.state.nested_parse(StringList(lines, source=str(PROVENANCE)), self.content_offset, container,
                                 match_titles=True)
-        return container.children
+        return [*head.children, *container.children]
 
 
 def setup(app):

@@ -74,7 +74,7 @@ class PerformanceRules(_SnapshotDirective):
         head = [f"`{rules['command']}`, on machine `{rules['machine']}`:", ""]
         rows = [[f"`{r['rule']}`", str(r["jobs"]), f"{r['wall_s']:.1f}", f"{r['cpu_s']:.1f}", f"{r['peak_rss_MB']:.0f}"]
                 for r in rules["rows"]]
-        return head + _table(["rule", "jobs", "wall [s]", "CPU [s]", "peak RSS [MB]"], rows)
+        return head + _table(["rule", "jobs", "wall [s]", "Snakemake's cpu_time [s]", "peak RSS [MB]"], rows)
 
 
 class PerformanceUnmeasured(_SnapshotDirective):

@@ -76,7 +76,14 @@ def _section(document, title: str, anchor: str) -> nodes.section:
 
 
 def _literal(text: str) -> nodes.literal:
-    return nodes.literal(text, text)
+    """``text`` as code that a narrow column may break after a ``.`` or ``_`` (an HTML ``<wbr>``), never inside a
+    word: a key or a value such as ``apc850_paper`` stays readable and copies as written."""
+    node = nodes.literal(text)
+    for part in re.split(r"(?<=[._])", text):
+        if node.children:
+            node += nodes.raw("", "<wbr>", format="html")
+        node += nodes.Text(part)
+    return node
 
 
 # --------------------------------------------------------------------------- configuration
