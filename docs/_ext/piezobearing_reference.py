@@ -75,15 +75,19 @@ def _section(document, title: str, anchor: str) -> nodes.section:
     return section
 
 
-def _literal(text: str) -> nodes.literal:
-    """``text`` as code that a narrow column may break after a ``.`` or ``_`` (an HTML ``<wbr>``), never inside a
-    word: a key or a value such as ``apc850_paper`` stays readable and copies as written."""
-    node = nodes.literal(text)
+def _break_points(node: nodes.Element, text: str) -> nodes.Element:
+    """``node`` holding ``text`` with a line-break opportunity (an HTML ``<wbr>``) after each ``.`` and ``_``."""
     for part in re.split(r"(?<=[._])", text):
         if node.children:
             node += nodes.raw("", "<wbr>", format="html")
         node += nodes.Text(part)
     return node
+
+
+def _literal(text: str) -> nodes.literal:
+    """``text`` as code that a narrow column may break after a ``.`` or ``_`` (an HTML ``<wbr>``), never inside a
+    word: a key or a value such as ``apc850_paper`` stays readable and copies as written."""
+    return _break_points(nodes.literal(text), text)
 
 
 # --------------------------------------------------------------------------- configuration
@@ -158,11 +162,11 @@ def _rows(spec: dict, path: str, defaults, required: bool) -> list[list]:
         rows.append(
             [
                 _literal(path),
-                _type(spec),
+                _break_points(nodes.paragraph(), _type(spec)),
                 unit,
                 _bounds(spec),
                 _literal(_default(defaults)) if defaults is not MISSING else "",
-                description + ("" if required else " Optional."),
+                _break_points(nodes.paragraph(), description + ("" if required else " Optional.")),
             ]
         )
     else:
@@ -200,7 +204,7 @@ class ConfigReference(Directive):
             section += _table(
                 ["key", "type", "unit", "bounds", "default", "meaning"],
                 rows,
-                [26, 11, 7, 11, 13, 32],
+                [24, 14, 7, 10, 13, 32],
                 ["config-reference"],
             )
             sections.append(section)
