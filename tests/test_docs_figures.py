@@ -1,0 +1,46 @@
+"""The site's figures are a workflow run's, recorded in provenance.json, and the build's check catches a stale one."""
+
+import copy
+import importlib.util
+import json
+import re
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+FIGURES = REPO / "docs" / "_static" / "figures"
+
+
+def _extension():
+    spec = importlib.util.spec_from_file_location("piezobearing_figures", REPO / "docs" / "_ext" / "piezobearing_figures.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_every_figure_on_the_site_has_its_provenance():
+    record = json.loads((FIGURES / "provenance.json").read_text())
+    on_disk = {p.name for p in FIGURES.glob("*.png")}
+    assert on_disk == set(record["figures"]), on_disk ^ set(record["figures"])
+    used = set()
+    for page in (REPO / "docs").rglob("*.md"):
+        used |= set(re.findall(r"_static/figures/([\w.]+\.png)", page.read_text()))
+    assert used and used <= on_disk, used - on_disk
+
+
+def test_the_figures_are_the_current_code_and_config():
+    assert _extension().stale_figures(json.loads((FIGURES / "provenance.json").read_text())) == []
+
+
+def test_a_figure_of_other_code_or_config_is_caught():
+    ext = _extension()
+    record = json.loads((FIGURES / "provenance.json").read_text())
+    name = next(iter(record["figures"]))
+    other_code, other_config = copy.deepcopy(record), copy.deepcopy(record)
+    other_code["figures"][name]["code_hash"] = "0" * 64
+    other_config["figures"][name]["config_digest"] = "0" * 12
+    assert [p for p in ext.stale_figures(other_code) if p.startswith(name)] == [
+        f"{name}: made by other code than the current {record['figures'][name]['entry']} and its imports"
+    ]
+    assert len(ext.stale_figures(other_config)) == 1
