@@ -54,6 +54,8 @@ html_theme_options = {
     "header_links_before_dropdown": 7,
     "footer_start": ["copyright"],
     "footer_end": [],
+    # pages whose tables need the whole width: no "on this page" column either
+    "secondary_sidebar_items": {"**": ["page-toc", "edit-this-page", "sourcelink"], "validation/sensor_comparison": [], "performance": []},
 }
 # no section navigation where a page has no section (the top-level pages) or needs the width (the tables)
 html_sidebars = {
@@ -64,6 +66,7 @@ html_sidebars = {
         "performance",
         "gallery",
         "changelog",
+        "validation/sensor_comparison",
         "reference/configuration",
         "reference/cli",
     )
