@@ -25,12 +25,6 @@ from .diagnosis_files import write_diagnosis
 CONFIG_KEYS = ("sensor", "calibration", "model", "diagnostics")
 
 
-def check_effect_names(config: dict) -> None:
-    """Raise a one-line EffectError if ``model.effects`` or ``synthesis.hidden_effects`` names an unknown
-    effect or parameter (the workflow calls this before any job runs)."""
-    SUBJECT.check_config(config)
-
-
 def run(
     measurement_csv: str, config: dict, progress: Callable[[str], None] | None = None
 ) -> tuple[dict, dict]:
