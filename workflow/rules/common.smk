@@ -9,7 +9,6 @@ import sys
 from piezobearing.config import ConfigError
 from piezobearing.config import results_folder
 from piezobearing.config import validate as validate_config
-from piezobearing.io import MeasurementError
 from piezobearing.workflow.registry import (
     RECORD_RULES,
     code_hash,
@@ -17,7 +16,6 @@ from piezobearing.workflow.registry import (
     reads_digest,
     rule_params,
 )
-from piezobearing.stages.calibration import check_record_once
 
 CONFIG_FILES = [
     "config/config.yaml",
@@ -110,6 +108,10 @@ def check_measurement():
     """Stop before any job runs when the configured measurement cannot be used (one line, no traceback)."""
     if not config["calibration"]["measurement"]:
         return
+    # the record's readers and checks (pandas, h5py, scipy: about a second at every start), only for a user's record
+    from piezobearing.io import MeasurementError
+    from piezobearing.stages.calibration import check_record_once
+
     try:  # once per record content and settings (RESULTS/.checked/), not at every start
         check_record_once(
             config["calibration"]["measurement"], config, f"{RESULTS}/.checked"
