@@ -58,6 +58,14 @@ def _sig(x: float) -> str:
     return f"{x:.3g}" if x >= 1 else f"{x:.2g}"
 
 
+def seconds_range(low: float, high: float) -> str:
+    """``1.9-11.1 s`` when both ends read in one unit, else ``450 ms-1.2 s``."""
+    a, b = seconds(low), seconds(high)
+    if a.split()[-1] == b.split()[-1] and len(a.split()) == 2 and len(b.split()) == 2:
+        return f"{a.split()[0]}-{b}"
+    return f"{a}-{b}"
+
+
 def ratio(x: float) -> str:
     return f"{x:.2g}x" if x < 10 else f"{x:.0f}x"
 
@@ -177,7 +185,7 @@ def _baseline(d: dict) -> tuple[str, str, list[dict]]:
 
 def _diagnostics(d: dict) -> tuple[str, str, list[dict]]:
     cpu = [c["cpu_seconds"] for c in d["cases"].values()]
-    return (f"{seconds(min(cpu))}-{seconds(max(cpu))} CPU over {len(cpu)} records", "–",
+    return (f"{seconds_range(min(cpu), max(cpu))} CPU over {len(cpu)} records", "–",
             [q("fastest", min(cpu), "s"), q("slowest", max(cpu), "s")])
 
 
@@ -204,7 +212,7 @@ def _sensor_design(d: dict) -> tuple[str, str, list[dict]]:
     secs = [r["seconds"] for r in rows]
     dofs = [r["n_dof"] for r in rows]
     err = max(abs(e) for r in rows for e in r["error_percent_vs_finest"].values())
-    text = (f"{seconds(min(secs))}-{seconds(max(secs))} ({min(dofs) / 1000:.1f}-{max(dofs) / 1000:.1f} k DOF), "
+    text = (f"{seconds_range(min(secs), max(secs))} ({min(dofs) / 1000:.1f}-{max(dofs) / 1000:.1f} k DOF), "
             f"errors ≤ {err:.1f} % against the finest mesh")
     return text, "–", [q("fastest", min(secs), "s"), q("slowest", max(secs), "s"), q("largest error", err, "%")]
 
