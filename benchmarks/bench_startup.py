@@ -4,7 +4,8 @@ Three commands, each in a fresh process, the two sides alternating (old, new, ol
 the same machine: ``import piezobearing``, ``piezobearing detect --help``, and ``piezobearing detect`` on a 10 s,
 12 kHz CWRU record (reading the .mat file, detecting, writing detection.json, report.md and detection.png). Per
 command and side: the median wall and CPU (user + system of the child) seconds over the runs, and their ratio
-old / new; and the heavy dependencies each side's ``import piezobearing`` loads (from ``sys.modules``).
+old / new; the heavy dependencies each side's ``import piezobearing`` loads (from ``sys.modules``); and each
+workflow script's package imports (the start-up every job of its rule pays), in CPU seconds, and their sum.
 
 The old side is ``--old REF`` (a git revision, exported to a temporary folder) run with this environment's
 Python and its ``src`` first on ``PYTHONPATH``. On a loaded machine the wall seconds grow and the CPU seconds
@@ -18,6 +19,7 @@ Writes results/benchmarks/startup.json.
 from __future__ import annotations
 
 import argparse
+import ast
 import json
 import os
 import resource
@@ -63,6 +65,30 @@ def commands(data: Path | None, out: Path) -> dict[str, list[str]]:
     return out_cmds
 
 
+def script_imports(script: Path) -> str:
+    """The package imports of a workflow script (what its job loads before it computes), as one statement list."""
+    tree = ast.parse(script.read_text())
+    return "\n".join(ast.unparse(n) for n in tree.body if isinstance(n, (ast.Import, ast.ImportFrom))
+                     and "piezobearing" in ast.unparse(n))
+
+
+def job_imports(sides: dict, old_root: Path, runs: int) -> dict:
+    """CPU seconds of each workflow script's package imports, old and new side (median of ``runs``): the start-up
+    every job of that rule pays before its stage computes."""
+    out = {}
+    for script in sorted((ROOT / "workflow" / "scripts").glob("*.py")):
+        codes = {"new": script_imports(script)}
+        old_script = old_root / "workflow" / "scripts" / script.name
+        codes["old"] = script_imports(old_script) if old_script.is_file() else ""
+        if not codes["new"] or not codes["old"]:
+            continue
+        cpu = {side: statistics.median(timed([sys.executable, "-c", codes[side]], sides[side])[1]
+                                       for _ in range(runs)) for side in ("old", "new")}
+        out[script.stem] = {"old_cpu_s": cpu["old"], "new_cpu_s": cpu["new"]}
+        print(f"  job {script.stem}: old {cpu['old']:.2f} s CPU, new {cpu['new']:.2f} s CPU", flush=True)
+    return out
+
+
 def heavy_loaded(env: dict) -> list[str]:
     code = "import piezobearing, sys, json; print(json.dumps(sorted({m.split('.')[0] for m in sys.modules})))"
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
@@ -75,6 +101,8 @@ def main() -> None:
     ap.add_argument("--data", type=Path, default=ROOT.parent / "shared" / "data" / "cwru_fan_end",
                     help="folder of CWRU fan-end records (fe05.mat, fe05.yaml); the detect row needs it")
     ap.add_argument("--runs", type=int, default=7, help="counted runs per command and side (after one warm-up)")
+    ap.add_argument("--job-runs", type=int, default=3,
+                    help="runs of each workflow script's imports per side (0: leave the per-job start-up out)")
     args = ap.parse_args()
     data = args.data if (args.data / f"{RECORD}.mat").is_file() else None
     with tempfile.TemporaryDirectory() as tmp:
@@ -97,9 +125,13 @@ def main() -> None:
             print(f"{label}: old {med['old']['wall_s']:.2f} s wall {med['old']['cpu_s']:.2f} s CPU, new "
                   f"{med['new']['wall_s']:.2f} s wall {med['new']['cpu_s']:.2f} s CPU", flush=True)
         loaded = {side: heavy_loaded(env) for side, env in sides.items()}
+        jobs = job_imports(sides, old_src.parent, args.job_runs) if args.job_runs else {}
     OUT.parent.mkdir(parents=True, exist_ok=True)
     OUT.write_text(json.dumps({"old": args.old, "record": RECORD if data else None, "commands": rows,
-                               "import_piezobearing_loads": loaded, "cpus": os.cpu_count(),
+                               "import_piezobearing_loads": loaded, "job_imports": jobs,
+                               "job_imports_cpu_s": {side: sum(j[f"{side}_cpu_s"] for j in jobs.values())
+                                                     for side in ("old", "new")},
+                               "cpus": os.cpu_count(),
                                "load_average": os.getloadavg()}, indent=1) + "\n")
     print(f"wrote {OUT.relative_to(ROOT)}")
 

@@ -89,7 +89,8 @@ def test_detector_study_figures_annotate_each_case():
 
 def test_extra_fault_types_and_their_config(paper_config):
     """The types a confusion-matrix row needs a record for, and that record's config: the first defect as that type."""
-    from piezobearing.chain.signals import extra_fault_types, fault_type_config
+    from piezobearing.chain.signals import fault_type_config
+    from piezobearing.workflow.targets import extra_fault_types
 
     assert extra_fault_types(paper_config) == ["inner_race", "rolling_element"]  # the faulty case is outer race
     c = copy.deepcopy(paper_config)

@@ -213,17 +213,6 @@ def true_fault_type(bearing: dict) -> str:
     return types[0]
 
 
-def extra_fault_types(config: dict) -> list[str]:
-    """The fault types of ``signals.detector.classification_types`` that need their own record (rule
-    fault_type_voltage): all but the faulty case's own type when it has exactly one; none without a defect
-    (the size and place of the extra types' defect come from the faulty case's first defect)."""
-    defects = config["bearing"]["defects"]
-    if not defects:
-        return []
-    own = {d["type"] for d in defects}
-    return [t for t in dict.fromkeys(config["signals"]["detector"]["classification_types"]) if own != {t}]
-
-
 def fault_type_config(config: dict, fault_type: str) -> dict:
     """The config of rule fault_type_voltage_{type}: the faulty case with one defect, the first of
     ``bearing.defects`` (its width, depth, angle) as a ``fault_type`` defect; the housing by the reduced

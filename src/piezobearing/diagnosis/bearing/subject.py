@@ -23,7 +23,7 @@ from ...numerics.threads import single_blas_thread
 from ...sensor.calibration import SensorCircuit
 from ...sensor.response import sensor_model
 from ...signals.detection import noise_std_for_snr
-from ..effect import Catalogue, EffectError, StartContext
+from ..effect import Catalogue
 from ..engine import diagnose
 from ..fit import fit_model
 from ..noise import NoiseFloor, robust_diff_std, white_level
@@ -300,19 +300,7 @@ def hidden_values(specs: list[dict], record: RigRecord | None, key: str = "beari
     model = BearingModel(tuple(CATALOGUE.resolve([s["name"] for s in specs], key)))
     if record is None:
         return model, {}
-    values = model.defaults(record)
-    for i, (spec, effect) in enumerate(zip(specs, model.effects, strict=True)):
-        allowed = {p.name: p for p in effect.params(record)}
-        for name, val in (spec.get("params") or {}).items():
-            if name not in allowed:
-                raise EffectError(
-                    f"{key}[{i}].params.{name}: unknown parameter of '{effect.name}'; it has: {', '.join(allowed)}"
-                )
-            p = allowed[name]
-            if not p.lower <= float(val) <= p.upper:
-                raise EffectError(f"{key}[{i}].params.{name}: {val} outside [{p.lower:g}, {p.upper:g}]")
-            values[name] = float(val)
-    return model, values
+    return model, model.spec_values(specs, record, key)
 
 
 def synthesise(config: dict, seed: int, hidden_effects: list[dict], influence: InfluenceLine,
@@ -588,6 +576,3 @@ def fault_statement(kind: str, params: dict, ci95: dict, remaining: list[dict], 
             f"{r['excess_dB']:.1f} dB above the floor" for r in remaining)
     return text
 
-
-def start_context(rec: RigRecord, v: np.ndarray, model_v: np.ndarray, values: dict) -> StartContext:
-    return StartContext(rec, v, model_v, values)
