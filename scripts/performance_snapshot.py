@@ -30,6 +30,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+from piezobearing import config as config_loader
+
 ROOT = Path(__file__).resolve().parents[1]
 BENCH = ROOT / "results" / "benchmarks"
 SNAPSHOT = ROOT / "docs" / "_data" / "performance.json"
@@ -90,7 +92,7 @@ class Row:
     what: str
     file: str
     command: str
-    read: Callable[[dict], tuple[str, str, list[dict]]]
+    read: Callable[[dict], tuple[str, str, list[dict]] | None]  # None: the file holds no value for this row
 
 
 def _command_row(d: dict) -> tuple[str, str, list[dict]]:
@@ -128,13 +130,21 @@ def _housing(d: dict) -> tuple[str, str, list[dict]]:
     return text, "–", [q("reduced", d["reduced_s"], "s"), q("direct", d["direct_s"], "s"), q("RMS difference", d["rms_rel_diff"], "1")]
 
 
-def _solver_level(pick: str) -> Callable[[dict], tuple[str, str, list[dict]]]:
-    def read(d: dict) -> tuple[str, str, list[dict]]:
-        levels = sorted(d["housing"], key=lambda k: float(k.split("_")[1]))
-        row = d["housing"][levels[0] if pick == "first" else levels[-1]]
+def _solver_level(pick: str) -> Callable[[dict], tuple[str, str, list[dict]] | None]:
+    """The housing factorisation at the default mesh level (``pick="default"``) or at the finest level measured
+    above it (``"finest"``; None when no level above the default was measured)."""
+
+    def read(d: dict) -> tuple[str, str, list[dict]] | None:
+        default = float(config_loader.load()["housing"]["mesh_level"])
+        levels = {float(k.split("_")[1]): k for k in d["housing"]}
+        level = default if pick == "default" else max(levels)
+        if level not in levels or (pick == "finest" and level <= default):
+            return None
+        row = d["housing"][levels[level]]
         p, s = row["pardiso"], row["superlu"]
         text = (f"{seconds(p['factor_s'])} against {seconds(s['factor_s'])} ({ratio(s['factor_s'] / p['factor_s'])}), "
-                f"{p['factor_nnz'] / 1e6:.1f} M against {s['factor_nnz'] / 1e6:.1f} M factor entries, {row['n_dofs'] / 1000:.1f} k DOF")
+                f"{p['factor_nnz'] / 1e6:.1f} M against {s['factor_nnz'] / 1e6:.1f} M factor entries, "
+                f"level {level:g}, {row['n_dofs'] / 1000:.1f} k DOF")
         return text, "–", [q("PARDISO", p["factor_s"], "s"), q("SuperLU", s["factor_s"], "s"), q("DOF", row["n_dofs"], "1")]
 
     return read
@@ -243,10 +253,11 @@ ROWS = [
         "`python benchmarks/bench_sensor_fem.py`", _sensor_reduction),
     Row("housing", "housing transient, 1 s: reduced (modes + static correction) against direct (generalized-α)",
         "housing.json", "`python benchmarks/bench_housing.py`", _housing),
-    Row("solvers_default", "sparse factorisation, housing K at the coarsest level: MKL PARDISO against SuperLU",
-        "solvers.json", "`python benchmarks/bench_solvers.py`", _solver_level("first")),
-    Row("solvers_finest", "sparse factorisation, housing K at the finest level measured", "solvers.json",
-        "`python benchmarks/bench_solvers.py`", _solver_level("last")),
+    Row("solvers_default", "sparse factorisation, housing K at the default mesh level: MKL PARDISO against SuperLU",
+        "solvers.json", "`python benchmarks/bench_solvers.py`", _solver_level("default")),
+    Row("solvers_finest", "sparse factorisation, housing K at the finest level of `housing.convergence_levels`",
+        "solvers.json", "`python benchmarks/bench_solvers.py`",
+        _solver_level("finest")),
     Row("solvers_sensor", "sensor saddle matrix, default mesh, factorisation and modes: PARDISO against SuperLU",
         "solvers.json", "`python benchmarks/bench_solvers.py`", _solver_sensor),
     Row("lpm", "bearing LPM, 1 s of bearing time: numba kernel against the numpy loop", "lpm.json",
@@ -319,8 +330,9 @@ def build(previous: dict, rules_command: str | None) -> dict:
     rows = []
     for spec in ROWS:
         path = BENCH / spec.file
-        if path.exists():
-            text, memory, quantities = spec.read(json.loads(path.read_text()))
+        value = spec.read(json.loads(path.read_text())) if path.exists() else None
+        if value is not None:
+            text, memory, quantities = value
             rows.append({"id": spec.id, "what": spec.what, "value": text, "memory": memory, "quantities": quantities,
                          "command": spec.command, "source": f"results/benchmarks/{spec.file}", "machine": here["id"]})
             machines[here["id"]] = here
