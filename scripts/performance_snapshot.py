@@ -135,6 +135,8 @@ def _solver_level(pick: str) -> Callable[[dict], tuple[str, str, list[dict]] | N
     above it (``"finest"``; None when no level above the default was measured)."""
 
     def read(d: dict) -> tuple[str, str, list[dict]] | None:
+        if "housing" not in d:  # bench_solvers.py --only snr,sensor
+            return None
         default = float(config_loader.load()["housing"]["mesh_level"])
         levels = {float(k.split("_")[1]): k for k in d["housing"]}
         level = default if pick == "default" else max(levels)
@@ -150,13 +152,17 @@ def _solver_level(pick: str) -> Callable[[dict], tuple[str, str, list[dict]] | N
     return read
 
 
-def _solver_sensor(d: dict) -> tuple[str, str, list[dict]]:
+def _solver_sensor(d: dict) -> tuple[str, str, list[dict]] | None:
+    if "sensor" not in d:
+        return None
     p, s = d["sensor"]["pardiso"], d["sensor"]["superlu"]
     tp, ts = p["factor_s"] + p["modes_s"], s["factor_s"] + s["modes_s"]
     return f"{seconds(tp)} against {seconds(ts)} ({ratio(ts / tp)})", "–", [q("PARDISO", tp, "s"), q("SuperLU", ts, "s")]
 
 
-def _snr_sweep(d: dict) -> tuple[str, str, list[dict]]:
+def _snr_sweep(d: dict) -> tuple[str, str, list[dict]] | None:
+    if "snr_study" not in d:
+        return None
     r = d["snr_study"]["fixed"]
     return (f"{seconds(r['batch_s'])} against {seconds(r['loop_s'])} ({ratio(r['loop_s'] / r['batch_s'])})", "–",
             [q("batch", r["batch_s"], "s"), q("record by record", r["loop_s"], "s")])
