@@ -115,7 +115,7 @@ def _is_reference(item) -> bool:
 def _walk_v73(f: h5py.File, path: str, item, out: MatContents) -> None:
     cls = _matlab_class(item)
     if isinstance(item, h5py.Group):
-        members = dict(item.items())
+        members = _fields_in_order(item)
         if members and all(_is_reference(m) and not _matlab_class(m) for m in members.values()):
             # a struct array: each field a dataset of references, one per element (MATLAB's element order)
             n = next(iter(members.values())).size
@@ -143,6 +143,16 @@ def _walk_v73(f: h5py.File, path: str, item, out: MatContents) -> None:
     elif item.dtype.names is not None and {"real", "imag"} <= set(item.dtype.names):
         z = np.asarray(item[()])
         out.arrays[path] = np.atleast_2d((z["real"] + 1j * z["imag"]).T)
+
+
+def _fields_in_order(group: h5py.Group) -> dict:
+    """A struct's fields in MATLAB's order (its ``MATLAB_fields`` attribute; HDF5 lists them by name)."""
+    members = dict(group.items())
+    order = group.attrs.get("MATLAB_fields")
+    if order is None:
+        return members
+    names = ["".join(c.decode() for c in np.asarray(name).ravel()) for name in order]
+    return {n: members[n] for n in names if n in members} | members
 
 
 def _name_channel_v73(f: h5py.File, at: str, members: dict, out: MatContents) -> None:
