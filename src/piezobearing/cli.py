@@ -411,6 +411,7 @@ def _detect(args) -> int:
     from .io.vibration import read_record_contents
     from .recording import (
         RigError,
+        check_names,
         detect_recording,
         detect_records,
         record_files,
@@ -440,6 +441,7 @@ def _detect(args) -> int:
     if batch:
         try:
             files = record_files(args.record)
+            check_names(files)
             bar = tqdm(total=len(files), desc="detect", unit="record", file=sys.stderr, disable=args.quiet)
             table = detect_records(files, args.out, args.config, time_field=args.time_field,
                                    time_pattern=args.time_from_name, jobs=args.jobs,

@@ -387,6 +387,15 @@ def record_files(paths: list[str | Path]) -> list[Path]:
     return out
 
 
+def check_names(files: list[Path]) -> None:
+    """Refuse two records of one name: each record's outputs go to a folder of its name."""
+    stems = [f.stem for f in files]
+    twice = sorted({s for s in stems if stems.count(s) > 1})
+    if twice:
+        raise RigError(f"{twice[0]}: two records share this name (each record's outputs go to --out/<name>/); "
+                       "rename one or run the folders one at a time")
+
+
 def rig_beside(record: Path, rig: str | Path | None) -> str | Path | None:
     """The record's own rig file (same name, ``.yaml``) where there is one, else ``rig``."""
     own = record.with_suffix(".yaml")
@@ -459,12 +468,8 @@ def detect_records(records: list[str | Path], out: str | Path, rig: str | Path |
     ``progress``: called with each finished row. ``jobs``: records detected at once (processes).
     """
     files = record_files(records)
+    check_names(files)
     out = Path(out)
-    stems = [f.stem for f in files]
-    twice = sorted({s for s in stems if stems.count(s) > 1})
-    if twice:
-        raise RigError(f"{twice[0]}: two records share this name (each record's outputs go to --out/<name>/); "
-                       "rename one or run the folders one at a time")
     base = {"rig": rig, "bearing": bearing, "rpm": rpm, "fs": fs, "channel": channel, "shaft_Hz": shaft_Hz,
             "time_field": time_field, "time_pattern": time_pattern, "out": str(out)}
     todo = [base | {"record": str(f), "order": i + 1} for i, f in enumerate(sorted(files, key=lambda f: f.name))]

@@ -1,0 +1,101 @@
+"""``piezobearing detect`` over several records or a folder: a row per record in one table, each record's report
+in its own folder, the rig file beside a record, the records' time from a field or the file name, a trend
+figure, and a record that cannot be read stopping nothing."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from datetime import datetime
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from scipy.io import loadmat, savemat
+
+from piezobearing import cli
+from piezobearing.recording import RigError, detect_records, time_from_name
+
+DATA = Path(__file__).parent / "data" / "cwru"
+TRUTH = {"fe37": "inner_race", "fe39": "none", "fe44": "outer_race"}
+
+
+@pytest.fixture()
+def folder(tmp_path) -> Path:
+    """The three CWRU records, each with its rig file beside it, and a file that is not a record."""
+    d = tmp_path / "records"
+    d.mkdir()
+    for name in TRUTH:
+        shutil.copy(DATA / f"{name}.mat", d)
+        shutil.copy(DATA / f"{name}.yaml", d)
+    (d / "fe50.mat").write_bytes(b"not a MATLAB file")
+    shutil.copy(DATA / "fe39.yaml", d / "fe50.yaml")
+    return d
+
+
+def test_a_folder_gives_a_table_a_trend_and_a_report_per_record(folder, tmp_path, capsys):
+    out = tmp_path / "out"
+    code = cli.main(["detect", str(folder), "--out", str(out), "--quiet"])
+    said = capsys.readouterr().out
+    assert code == cli.EXIT_USER  # one record could not be read: the exit status says so, the rest ran
+    table = pd.read_csv(out / "detections.csv")
+    assert list(table["file"].map(lambda f: Path(f).stem)) == ["fe37", "fe39", "fe44", "fe50"]
+    ok = table[table["status"] == "ok"]
+    assert dict(zip(ok["file"].map(lambda f: Path(f).stem), ok["call"], strict=True)) == TRUTH
+    for _, row in ok.iterrows():  # the row is the record's own detection.json
+        d = json.loads((out / Path(row["file"]).stem / "detection.json").read_text())
+        assert row["call"] == d["fault_type"] and row["shaft_speed_found_rpm"] == pytest.approx(
+            d["shaft_speed_found_rpm"], rel=1e-5)
+        for family in ("outer_race", "inner_race", "rolling_element"):
+            assert row[f"{family}_margin_dB"] == pytest.approx(d["families"][family]["margin_dB"], rel=1e-5)
+    bad = table[table["status"] == "error"].iloc[0]
+    assert "fe50.mat: not a readable MATLAB" in bad["error"] and "\n" not in bad["error"]
+    assert not (out / "fe50").exists()
+    assert (out / "trend.png").stat().st_size > 10_000
+    assert "3 of 4 records detected, 1 not read" in said and "fe50.mat: not read:" in said
+
+
+def test_options_apply_to_all_and_the_time_comes_from_the_name(folder, tmp_path):
+    for name in TRUTH:  # no rig files: the options give what they held
+        (folder / f"{name}.yaml").unlink()
+    (folder / "fe50.mat").unlink()
+    (folder / "fe50.yaml").unlink()
+    stamps = {"fe44": "20240105_0600", "fe37": "20240103_0600", "fe39": "20240101_0600"}
+    for name, stamp in stamps.items():
+        (folder / f"{name}.mat").rename(folder / f"pump_{stamp}_{name}.mat")
+    table = detect_records([folder], tmp_path / "out", bearing="SKF 6203", fs=12000.0, channel="_FE_time",
+                           time_pattern="%Y%m%d_%H%M")
+    assert list(table["time"]) == [datetime(2024, 1, 1, 6), datetime(2024, 1, 3, 6), datetime(2024, 1, 5, 6)]
+    assert list(table["call"]) == ["none", "inner_race", "outer_race"] and (table["status"] == "ok").all()
+    with pytest.raises(RigError, match="no time matching --time-from-name '%Y-%m-%d'"):
+        time_from_name("pump_20240101_0600_fe39.mat", "%Y-%m-%d")
+
+
+def test_the_time_from_a_field_and_several_jobs_give_the_same_table(tmp_path):
+    d = tmp_path / "records"
+    d.mkdir()
+    hours = {"fe44": 300.0, "fe37": 100.0, "fe39": 200.0}
+    for name, h in hours.items():
+        v = loadmat(DATA / f"{name}.mat")
+        channel = next(k for k in v if k.endswith("_FE_time"))
+        savemat(d / f"{name}.mat", {"run": {"acc": v[channel], "fs": 12000, "hours": h, "rpm": 1797.0}})
+    one = detect_records([d], tmp_path / "one", bearing="SKF 6203", fs="run.fs", channel="run.acc",
+                         time_field="run.hours")
+    two = detect_records(sorted(d.iterdir()), tmp_path / "two", bearing="SKF 6203", fs="run.fs", channel="run.acc",
+                         time_field="run.hours", jobs=2)
+    assert list(one["x"]) == [100.0, 200.0, 300.0] and list(one["call"]) == ["inner_race", "none", "outer_race"]
+    cols = [c for c in one.columns if c != "out"]
+    pd.testing.assert_frame_equal(one[cols].reset_index(drop=True), two[cols].reset_index(drop=True))
+
+
+def test_a_batch_with_nothing_to_read_or_two_records_of_one_name_stops_with_one_line(tmp_path, capsys):
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert cli.main(["detect", str(empty), "--out", str(tmp_path / "o")]) == cli.EXIT_USER
+    assert "no record files in the folder" in capsys.readouterr().err
+    for sub in ("a", "b"):
+        (tmp_path / sub).mkdir()
+        shutil.copy(DATA / "fe39.mat", tmp_path / sub)
+    code = cli.main(["detect", str(tmp_path / "a"), str(tmp_path / "b"), "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert code == cli.EXIT_USER and "fe39: two records share this name" in err and len(err.strip().splitlines()) == 1
