@@ -55,6 +55,15 @@ def test_a_folder_gives_a_table_a_trend_and_a_report_per_record(folder, tmp_path
     assert "3 of 4 records detected, 1 not read" in said and "fe50.mat: not read:" in said
 
 
+def test_a_glob_picks_the_folders_records(folder, tmp_path, capsys):
+    (folder / "labels.csv").write_text("record,fault_type\nfe37,inner_race\n")  # a table, not a record
+    assert cli.main(["detect", str(folder), "--glob", "fe3*.mat", "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    table = pd.read_csv(tmp_path / "out" / "detections.csv")
+    assert list(table["file"].map(lambda f: Path(f).name)) == ["fe37.mat", "fe39.mat"]
+    assert cli.main(["detect", str(folder), "--glob", "*.wav", "--out", str(tmp_path / "o2")]) == cli.EXIT_USER
+    assert "no record files in the folder (looked for '*.wav')" in capsys.readouterr().err
+
+
 def test_options_apply_to_all_and_the_time_comes_from_the_name(folder, tmp_path):
     for name in TRUTH:  # no rig files: the options give what they held
         (folder / f"{name}.yaml").unlink()

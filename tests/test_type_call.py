@@ -60,7 +60,8 @@ def test_a_called_type_is_the_winning_family_and_the_report_says_why_the_others_
     assert set(typed["why_not"]) == {"inner_race", "rolling_element"}
     for family, why in typed["why_not"].items():
         below = margins["outer_race"] - typed["margins_dB"][family]
-        assert why.startswith(f"{below:.1f} dB below outer_race") and below >= 1.0
+        assert why.startswith(f"{below:.1f} dB below the outer race") and below >= 1.0
+        assert why.endswith("detected but not the largest" if d["families"][family]["detected"] else "not detected")
     report = (tmp_path / "report.md").read_text()
     assert "outer race: the winning family" in report and "the winning family" in d["summary"]
     assert "  outer race: the winning family" in said and "  inner race: " in said

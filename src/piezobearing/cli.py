@@ -421,7 +421,7 @@ def _detect(args) -> int:
 
     if args.list:
         try:
-            for path in record_files(args.record):
+            for path in record_files(args.record, args.glob):
                 print(read_record_contents(path).listing())
         except (MeasurementError, RigError) as e:
             return _fail(str(e))
@@ -429,6 +429,8 @@ def _detect(args) -> int:
     if args.out is None:
         return _fail("--out is missing; give the folder for the report, e.g. --out results/detect "
                      "(or --list to see what the record holds)")
+    if args.jobs < 1:
+        return _fail(f"--jobs {args.jobs}: give the number of records to detect at once (1 or more)")
     batch = len(args.record) > 1 or Path(args.record[0]).is_dir()
     if not batch and (args.time_field or args.time_from_name):
         return _fail("--time-field and --time-from-name order several records; give several files or a folder")
@@ -440,7 +442,7 @@ def _detect(args) -> int:
                "shaft_Hz": args.shaft_hz}
     if batch:
         try:
-            files = record_files(args.record)
+            files = record_files(args.record, args.glob)
             check_names(files)
             bar = tqdm(total=len(files), desc="detect", unit="record", file=sys.stderr, disable=args.quiet)
             table = detect_records(files, args.out, args.config, time_field=args.time_field,
@@ -618,6 +620,8 @@ def _parser() -> argparse.ArgumentParser:
                    "(a number, or a date and time as text)")
     t.add_argument("--time-from-name", metavar="PATTERN", help="several records: each record's time from its file "
                    "name by a strftime pattern, e.g. %%Y%%m%%d_%%H%%M%%S")
+    t.add_argument("--glob", metavar="PATTERN", help="a folder's records: the files matching this pattern, e.g. "
+                   "'*.mat' (default: every file of a record format)")
     t.add_argument("--jobs", type=int, default=1, metavar="N", help="several records: detect N at once")
     t.add_argument("--quiet", action="store_true", help="no progress bar")
     t.set_defaults(func=_detect)

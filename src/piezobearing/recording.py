@@ -371,16 +371,18 @@ _TIME_DIRECTIVES = {"%Y": r"\d{4}", "%m": r"\d{2}", "%d": r"\d{2}", "%H": r"\d{2
                     "%j": r"\d{3}", "%y": r"\d{2}", "%f": r"\d{1,6}"}
 
 
-def record_files(paths: list[str | Path]) -> list[Path]:
+def record_files(paths: list[str | Path], pattern: str | None = None) -> list[Path]:
     """The record files named: files as given, a folder's record files (by :data:`RECORD_FORMATS` extension,
-    in name order; its rig files are not records)."""
+    or those matching the glob ``pattern``, in name order; its rig files are not records)."""
     out = []
     for p in map(Path, paths):
         if p.is_dir():
-            found = sorted(f for f in p.iterdir() if f.is_file() and f.suffix.lower() in RECORD_FORMATS)
+            found = sorted(f for f in (p.glob(pattern) if pattern else p.iterdir())
+                           if f.is_file() and f.suffix.lower() in RECORD_FORMATS)
             if not found:
-                raise RigError(f"{p}: no record files in the folder (looked for {', '.join(RECORD_FORMATS)}); give "
-                               "the folder that holds the records")
+                looked = f"'{pattern}'" if pattern else ", ".join(RECORD_FORMATS)
+                raise RigError(f"{p}: no record files in the folder (looked for {looked}); give the folder that "
+                               "holds the records" + (" or another --glob" if pattern else ""))
             out += found
         else:
             out.append(p)
@@ -458,16 +460,18 @@ def _batch_one(job: dict) -> dict:
 def detect_records(records: list[str | Path], out: str | Path, rig: str | Path | None = None,
                    bearing: str | None = None, rpm: float | str | None = None, fs: float | str | None = None,
                    channel: str | None = None, shaft_Hz: float | str | None = None, time_field: str | None = None,
-                   time_pattern: str | None = None, jobs: int = 1, progress=None) -> pd.DataFrame:
+                   time_pattern: str | None = None, jobs: int = 1, progress=None,
+                   pattern: str | None = None) -> pd.DataFrame:
     """Detect a fault in every record (files, or folders of them), each record's outputs in ``out/<name>/``,
     and write ``out/detections.csv`` (:data:`BATCH_COLUMNS`, a row per record) and ``out/trend.png`` (the
     margins over the records: their time from ``time_field`` or ``time_pattern``, else their order by name).
 
     A record's own rig file (same name, ``.yaml``) is its; ``rig`` and the options apply to all. A record that
     cannot be read gets its row with the one-line error (``status`` ``error``) and stops nothing.
-    ``progress``: called with each finished row. ``jobs``: records detected at once (processes).
+    ``progress``: called with each finished row. ``jobs``: records detected at once (processes). ``pattern``:
+    a folder's records are the files matching this glob (``*.mat``), else every file of a record format.
     """
-    files = record_files(records)
+    files = record_files(records, pattern)
     check_names(files)
     out = Path(out)
     base = {"rig": rig, "bearing": bearing, "rpm": rpm, "fs": fs, "channel": channel, "shaft_Hz": shaft_Hz,

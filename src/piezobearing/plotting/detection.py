@@ -91,7 +91,7 @@ def trend_figure(table, x_label: str):
     """
     use_style()
     ok = table[table["status"] == "ok"]
-    fig, ax = plt.subplots(figsize=(9, 4))
+    fig, ax = plt.subplots(figsize=(9, 5))
     x = ok["x"].to_numpy()
     for family, colour in FAMILY_COLOURS.items():
         ax.plot(x, ok[f"{family}_margin_dB"].to_numpy(dtype=float), "o-", color=colour, ms=3, lw=0.8,
@@ -107,7 +107,8 @@ def trend_figure(table, x_label: str):
     ax.set_xlabel(x_label)
     ax.set_ylabel("margin over the threshold [dB]")
     ax.set_title(f"{len(ok)} records; margins of every family, calls marked above")
-    ax.legend(loc="upper left", fontsize=7, ncol=3)
+    ax.set_ylim(top=top + 4.0)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.18), fontsize=7, ncol=4, frameon=False)
     if len(x) and isinstance(x[0], datetime):
         fig.autofmt_xdate()
     return fig

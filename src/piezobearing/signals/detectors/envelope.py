@@ -547,9 +547,8 @@ def type_call(tests: list[BandTest], call: str, separation_dB: float | None) -> 
     candidates = [call] + [f for f in others if best[call] - best[f] < separation_dB]
     why = {}
     for f in others:
-        reason = f"{best[call] - best[f]:.1f} dB below {call}"
-        if not detected[f]:
-            reason += ", not detected"
+        reason = f"{best[call] - best[f]:.1f} dB below the {call.replace('_', ' ')}"
+        reason += ", detected but not the largest" if detected[f] else ", not detected"
         why[f] = reason
     return {
         "call": "unknown" if gap < separation_dB else call,
