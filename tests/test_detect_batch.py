@@ -5,12 +5,14 @@ figure, and a record that cannot be read stopping nothing."""
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from datetime import datetime
 from pathlib import Path
 
 import pandas as pd
 import pytest
+from conftest import copy_repo, snakemake
 from scipy.io import loadmat, savemat
 
 from piezobearing import cli
@@ -108,3 +110,34 @@ def test_a_batch_with_nothing_to_read_or_two_records_of_one_name_stops_with_one_
     code = cli.main(["detect", str(tmp_path / "a"), str(tmp_path / "b"), "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err
     assert code == cli.EXIT_USER and "fe39: two records share this name" in err and len(err.strip().splitlines()) == 1
+
+
+def _jobs(dry_run: str) -> dict[str, int]:
+    table = dry_run.split("Job stats:")[-1]
+    return {m.group(1): int(m.group(2)) for m in re.finditer(r"^(\w+)\s+(\d+)$", table, re.M)
+            if m.group(1) not in ("total", "job")}
+
+
+@pytest.mark.slow
+def test_the_archive_rule_detects_each_record_once_outside_rule_all(tmp_path):
+    repo = copy_repo(tmp_path / "repo")
+    archive = tmp_path / "archive"
+    archive.mkdir()
+    for name in ("fe37", "fe44"):
+        shutil.copy(DATA / f"{name}.mat", archive)
+        shutil.copy(DATA / f"{name}.yaml", archive)
+    cfg = tmp_path / "archive.yaml"
+    cfg.write_text(f"detect_archive:\n  folder: {archive}\n")
+    run = snakemake("--cores", "1", "detect_archive", "--configfile", "config/ci.yaml", str(cfg), cwd=repo)
+    assert run.returncode == 0, run.stderr[-3000:]
+    table = pd.read_csv(repo / "results" / "detect_archive" / "detections.csv")
+    assert list(table["call"]) == ["inner_race", "outer_race"] and list(table["order"]) == [1, 2]
+    assert (repo / "results" / "detect_archive" / "trend.png").stat().st_size > 10_000
+    assert json.loads((repo / "results" / "detect_archive" / "fe44" / "detection.json").read_text())[
+        "fault_type"] == "outer_race"
+    shutil.copy(DATA / "fe39.mat", archive)  # a new record: its job and the table, nothing else
+    shutil.copy(DATA / "fe39.yaml", archive)
+    again = snakemake("-n", "detect_archive", "--configfile", "config/ci.yaml", str(cfg), cwd=repo)
+    assert _jobs(again.stdout) == {"detect_record": 1, "detect_archive": 1}, again.stdout[-2000:]
+    everything = snakemake("-n", "--forceall", "--configfile", "config/ci.yaml", str(cfg), cwd=repo)
+    assert everything.returncode == 0 and not {"detect_record", "detect_archive"} & set(_jobs(everything.stdout))

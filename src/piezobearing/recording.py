@@ -428,9 +428,13 @@ def record_time(rec: VibrationRecord, field: str) -> float | datetime:
     return rec.field_value(field, "the record's time, --time-field")
 
 
-def _batch_one(job: dict) -> dict:
-    """One record of a batch: its detection written into its own folder, and its table row (the one-line
-    error in the row where the record cannot be read)."""
+def detect_one(job: dict) -> dict:
+    """One record of a batch: its detection written into ``job["out"]/<name>/``, and its table row
+    (:data:`BATCH_COLUMNS`; the one-line error in the row where the record cannot be read).
+
+    ``job``: ``record`` (the file), ``order`` (its place by name), ``out``, and the options of
+    :func:`detect_records` (``rig``, ``bearing``, ``rpm``, ``fs``, ``channel``, ``shaft_Hz``, ``time_field``,
+    ``time_pattern``)."""
     path = Path(job["record"])
     row = {c: None for c in BATCH_COLUMNS} | {"order": job["order"], "file": str(path), "status": "ok", "error": ""}
     try:
@@ -480,14 +484,22 @@ def detect_records(records: list[str | Path], out: str | Path, rig: str | Path |
     rows = []
     if jobs > 1:
         with ProcessPoolExecutor(max_workers=jobs) as pool:
-            for row in pool.map(_batch_one, todo):
+            for row in pool.map(detect_one, todo):
                 rows.append(row)
                 progress and progress(row)
     else:
         for job in todo:
-            rows.append(_batch_one(job))
+            rows.append(detect_one(job))
             progress and progress(rows[-1])
-    table = pd.DataFrame(rows, columns=list(BATCH_COLUMNS))
+    return write_batch(rows, out, time_field, time_pattern)
+
+
+def write_batch(rows: list[dict], out: str | Path, time_field: str | None = None,
+                time_pattern: str | None = None) -> pd.DataFrame:
+    """The batch's table ``out/detections.csv`` and trend ``out/trend.png`` of its rows (:func:`detect_one`),
+    in the records' time where given, else their order by name."""
+    out = Path(out)
+    table = pd.DataFrame(rows, columns=list(BATCH_COLUMNS)).sort_values("order", kind="stable")
     if time_field or time_pattern:
         table["x"] = table["time"]
         x_label = "record time" + (f" (field {time_field})" if time_field else "")
@@ -497,6 +509,5 @@ def detect_records(records: list[str | Path], out: str | Path, rig: str | Path |
         x_label = "record, in order of file name"
     out.mkdir(parents=True, exist_ok=True)
     table.to_csv(out / "detections.csv", index=False, float_format="%.6g")
-    if (table["status"] == "ok").any():
-        save(trend_figure(table, x_label), out / "trend.png")
+    save(trend_figure(table, x_label), out / "trend.png")
     return table
