@@ -11,6 +11,7 @@ from pathlib import Path
 
 import h5py
 import numpy as np
+import pandas as pd
 import pytest
 from scipy.io import loadmat, savemat
 
@@ -175,6 +176,17 @@ def test_a_struct_array_of_channels_is_read_by_name_and_by_path(version, cwru, t
 
 
 @pytest.mark.parametrize("version", sorted(WRITERS))
+def test_a_name_two_channels_share_names_neither(version, cwru, tmp_path):
+    fe, de = cwru
+    path = tmp_path / "rec.mat"
+    WRITERS[version](path, {"ch": StructArray([{"name": "acc", "data": de}, {"name": "acc", "data": fe}])})
+    with pytest.raises(MeasurementError, match=r"several channels are named 'acc'; give its path \(ch\(1\).data, "
+                       r"ch\(2\).data\)"):
+        read_vibration_record(path, "acc", RATE)
+    assert np.array_equal(read_vibration_record(path, "ch(2).data", RATE).samples, fe.ravel())
+
+
+@pytest.mark.parametrize("version", sorted(WRITERS))
 def test_a_cell_array_of_channel_structs_and_of_plain_vectors(version, cwru, tmp_path):
     fe, de = cwru
     path = tmp_path / "rec.mat"
@@ -259,3 +271,14 @@ def test_detect_writes_the_field_the_speed_came_from(cwru, tmp_path):
     assert d["record"]["channel"] == "bearing.gs" and d["record"]["rate_Hz"] == RATE
     assert d["shaft_speed_given_rpm"] == pytest.approx(RPM, rel=1e-12)
     assert d["shaft_speed_source"] == "--shaft-hz: the record's field bearing.rate [Hz]"
+
+
+def test_a_csv_header_with_units_in_brackets_is_listed_and_named(cwru, tmp_path, capsys):
+    fe, de = cwru
+    path = tmp_path / "r.csv"
+    pd.DataFrame({"acc (g)": fe.ravel(), "vel (mm/s)": de.ravel()}).to_csv(path, index=False)
+    assert cli.main(["detect", str(path), "--list"]) == 0
+    assert "acc (g)                          60000 samples" in capsys.readouterr().out
+    with pytest.raises(MeasurementError, match=r"holds 2 channels \(acc \(g\), vel \(mm/s\)\); choose one"):
+        read_vibration_record(path, rate_Hz=RATE)
+    assert np.array_equal(read_vibration_record(path, "acc (g)", RATE).samples, fe.ravel())

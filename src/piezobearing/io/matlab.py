@@ -22,6 +22,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 from scipy.io import loadmat
+from scipy.io.matlab import MatlabFunction, MatlabOpaque
 
 #: Text fields that name the channel of the struct that holds them (compared in lower case).
 NAME_FIELDS = ("name", "label", "channel", "title", "id")
@@ -80,8 +81,8 @@ def mat_contents(path: str | Path) -> MatContents:
 
 
 def _walk_v5(path: str, value, out: MatContents) -> None:
-    if not isinstance(value, np.ndarray):
-        return  # an opaque MATLAB object (a function handle, a string object): no numbers to read
+    if not isinstance(value, np.ndarray) or isinstance(value, (MatlabOpaque, MatlabFunction)):
+        return  # an opaque MATLAB object (a function handle, a string or datetime object): no numbers to read
     if value.dtype.names is not None:  # a struct, or a struct array
         elements = value.ravel(order="F")
         for i, element in enumerate(elements):

@@ -67,14 +67,18 @@ class RecordContents:
     rate_Hz: float | None = None
     kind: str = ""
 
+    def _labelled(self) -> list[tuple[str, str]]:
+        """Every channel's path and label: the path, with its name where its struct gives one."""
+        by_path = {p: n for n, p in self.names.items() if p}
+        return [(c, f"{c} ('{by_path[c]}')" if c in by_path else c) for c in self.channels]
+
     def channel_list(self) -> list[str]:
         """Every channel: its path, with its name where its struct gives one."""
-        by_path = {p: n for n, p in self.names.items() if p}
-        return [f"{c} ('{by_path[c]}')" if c in by_path else c for c in self.channels]
+        return [label for _, label in self._labelled()]
 
     def held(self) -> str:
         """One line: every channel with its length, every scalar field with its value, every text field."""
-        chans = ", ".join(f"{c} [{self.channels[c.split(' (')[0]].size}]" for c in self.channel_list())
+        chans = ", ".join(f"{label} [{self.channels[c].size}]" for c, label in self._labelled())
         parts = [f"channels {chans}" if chans else "no channels"]
         if self.scalars:
             parts.append("scalar fields " + ", ".join(f"{p} = {v:g}" for p, v in self.scalars.items()))
@@ -86,7 +90,7 @@ class RecordContents:
         """What ``piezobearing detect FILE --list`` prints: a line per channel, scalar and text field."""
         lines = [f"{self.path}: {self.kind}" + (f", {self.rate_Hz:g} Hz stated by the file" if self.rate_Hz else "")]
         lines.append(f"channels ({len(self.channels)}):" if self.channels else "channels: none")
-        lines += [f"  {c:<32} {self.channels[c.split(' (')[0]].size} samples" for c in self.channel_list()]
+        lines += [f"  {label:<32} {self.channels[c].size} samples" for c, label in self._labelled()]
         if self.scalars:
             lines.append(f"scalar fields ({len(self.scalars)}):")
             lines += [f"  {p:<32} {v:g}" for p, v in self.scalars.items()]
