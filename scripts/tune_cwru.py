@@ -23,9 +23,9 @@ import numpy as np
 
 from piezobearing.io import write_json
 from piezobearing.io.vibration import read_vibration_record
-from piezobearing.recording import read_rig
 from piezobearing.signals import tuning
 from piezobearing.signals.detectors import envelope as envelope_detector
+from piezobearing.stages.recording import read_rig
 
 #: The grouped cross-validation protocols: a label column of labels.csv per protocol.
 PROTOCOLS = {"leave one fault size out": "size_mil", "leave one fault location out": "location"}

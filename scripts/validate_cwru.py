@@ -18,8 +18,8 @@ from pathlib import Path
 from piezobearing.bearing.kinematics import RollingBearing
 from piezobearing.io import write_json
 from piezobearing.io.vibration import read_vibration_record
-from piezobearing.recording import detect_recording, read_rig
 from piezobearing.signals.detectors import envelope as envelope_detector
+from piezobearing.stages.recording import detect_recording, read_rig
 
 CALLS = ("outer_race", "inner_race", "rolling_element", "unknown", "none")
 STRETCH_S = 5.0

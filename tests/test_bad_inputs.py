@@ -20,9 +20,9 @@ from conftest import CI_CONFIG, copy_repo, snakemake
 from scipy.io import savemat
 
 from piezobearing import cli, config
+from piezobearing.diagnosis.calibration.presses import PressProtocol, synthesize
 from piezobearing.io import write_measurement
 from piezobearing.stages.calibration import nominal_circuit
-from piezobearing.synthesis import PressProtocol, synthesize
 
 REPO = Path(__file__).resolve().parents[1]
 TABLE = REPO / "docs" / "reference" / "bad_inputs.md"

@@ -16,7 +16,7 @@ from conftest import copy_repo, snakemake
 from scipy.io import loadmat, savemat
 
 from piezobearing import cli
-from piezobearing.recording import RigError, detect_records, time_from_name
+from piezobearing.stages.recording import RigError, detect_records, time_from_name
 
 DATA = Path(__file__).parent / "data" / "cwru"
 TRUTH = {"fe37": "inner_race", "fe39": "none", "fe44": "outer_race"}

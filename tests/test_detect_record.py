@@ -14,7 +14,7 @@ from scipy.io import loadmat, savemat, wavfile
 from piezobearing import cli
 from piezobearing.io import MeasurementError, read_bearing_record
 from piezobearing.io.vibration import read_vibration_record
-from piezobearing.recording import RigError, detect_recording
+from piezobearing.stages.recording import RigError, detect_recording
 
 DATA = Path(__file__).parent / "data" / "cwru"
 TRUTH = {"fe37": "inner_race", "fe39": "none", "fe44": "outer_race"}

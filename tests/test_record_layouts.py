@@ -19,7 +19,7 @@ from piezobearing import cli
 from piezobearing.io import MeasurementError
 from piezobearing.io.matlab import mat_contents
 from piezobearing.io.vibration import read_record_contents, read_vibration_record
-from piezobearing.recording import Rig, detect_recording, read_rig
+from piezobearing.stages.recording import Rig, detect_recording, read_rig
 
 DATA = Path(__file__).parent / "data" / "cwru"
 RATE = 12000

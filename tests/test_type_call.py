@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 from piezobearing import cli
-from piezobearing.recording import detect_recording, write_detection
 from piezobearing.signals import tuning
 from piezobearing.signals.classification import confusion_matrix
 from piezobearing.signals.detectors import UNKNOWN, Detection, envelope, is_alarm
+from piezobearing.stages.recording import detect_recording, write_detection
 
 DATA = Path(__file__).parent / "data" / "cwru"
 

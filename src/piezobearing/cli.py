@@ -73,10 +73,14 @@ def _fail(msg: str) -> int:
 
 
 def _load_config(args) -> tuple[dict, str]:
-    """The config the command uses and a line saying where it came from."""
+    """The config the command uses and a line saying where it came from; a bad or unreadable config file is a
+    :class:`UserError` (its one line)."""
     d = default_config_dir()
     overrides = [args.config] if args.config is not None else []
-    config = load(*overrides, config_dir=d)
+    try:
+        config = load(*overrides, config_dir=d)
+    except (ConfigError, OSError) as e:
+        raise UserError(str(e)) from None
     return config, " + ".join([str(d / "config.yaml"), *map(str, overrides)])
 
 
@@ -176,10 +180,7 @@ def _validate(args) -> int:
     from .io import MeasurementError
     from .stages.calibration import load_record
 
-    try:
-        config, used = _load_config(args)
-    except ConfigError as e:
-        return _fail(str(e))
+    config, used = _load_config(args)
     if args.resample_to_uniform:
         config["calibration"]["resample_to_uniform"] = True
     try:  # the same checks as the workflow's, so that OK here means the workflow accepts the file
@@ -221,10 +222,7 @@ def _diagnose(args) -> int:
     from .io import MeasurementError
     from .stages.diagnostics import diagnose
 
-    try:
-        config, used = _load_config(args)
-    except ConfigError as e:
-        return _fail(str(e))
+    config, used = _load_config(args)
     try:
         created = _prepare_out(args.out)
     except UserError as e:
@@ -296,16 +294,13 @@ def _diagnose(args) -> int:
 
 def _hide_and_find(args) -> int:
     from .diagnosis.calibration.effects import CATALOGUE, EffectError, ForceRecord
+    from .diagnosis.calibration.presses import PressProtocol, synthesize
     from .diagnosis.calibration.subject import diagnose_record
     from .diagnosis.settings import DiagnosticsSettings
     from .sensor.calibration import detect_impulses
     from .stages.calibration import nominal_circuit
-    from .synthesis import PressProtocol, synthesize
 
-    try:
-        config, used = _load_config(args)
-    except ConfigError as e:
-        return _fail(str(e))
+    config, used = _load_config(args)
     params = {}
     for i, item in enumerate(args.param or []):
         name, eq, value = item.partition("=")
@@ -353,10 +348,7 @@ def _diagnose_bearing(args) -> int:
     from .io import MeasurementError, ResultFileError, SignalFileError
     from .stages.bearing_diagnosis import diagnose_bearing
 
-    try:
-        config, used = _load_config(args)
-    except (ConfigError, OSError) as e:
-        return _fail(str(e))
+    config, used = _load_config(args)
     config["bearing"]["measurement"] = args.record
     if args.rpm is not None and not args.rpm > 0:
         return _fail(f"--rpm {args.rpm:g}: give the shaft speed in rpm (> 0)")
@@ -409,7 +401,7 @@ def _detect(args) -> int:
     from .bearing.kinematics import BearingError
     from .io import MeasurementError
     from .io.vibration import read_record_contents
-    from .recording import (
+    from .stages.recording import (
         RigError,
         check_names,
         detect_recording,
@@ -632,6 +624,8 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)  # usage errors exit with status 2 (argparse)
     try:
         return args.func(args)
+    except UserError as e:
+        return _fail(str(e))
     except KeyboardInterrupt:
         print("piezobearing: interrupted", file=sys.stderr)
         return 130

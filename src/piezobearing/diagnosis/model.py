@@ -22,8 +22,8 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from ..fitting.params import Param
 from .effect import Effect
-from .params import Param
 from .record import Record
 
 

@@ -4,7 +4,6 @@
   WAV) read into their raw columns;
 - :mod:`piezobearing.io.records`: calibration and running-bearing records read and checked;
 - :mod:`piezobearing.io.results`: result files (JSON, NPZ, CSV tables and time series);
-- :mod:`piezobearing.io.meshes`: the housing and sensor meshes;
 - :mod:`piezobearing.io.vibration`: one channel of a vibration record for fault detection (rate, channel
   and shaft speed as DAQs write them).
 
@@ -12,13 +11,6 @@ Every name a caller uses is importable from ``piezobearing.io`` itself.
 """
 
 from .formats import RECORD_FORMATS, MeasurementError, RawTable, check_readable, read_table
-from .meshes import (
-    read_housing_mesh,
-    read_stack_mesh,
-    write_housing_mesh,
-    write_housing_vtk,
-    write_stack_mesh,
-)
 from .records import (
     BEARING_COLUMNS,
     BEARING_OPTIONAL,
@@ -102,23 +94,18 @@ __all__ = [
     "measurement_as_read",
     "read_bearing_record",
     "read_harmonic",
-    "read_housing_mesh",
     "read_json",
     "read_kinematics",
     "read_measurement",
     "read_npz",
     "read_series",
-    "read_stack_mesh",
     "read_vibration_record",
     "read_table",
     "record_rpm",
     "table_series",
     "write_bearing_record",
     "write_csv",
-    "write_housing_mesh",
-    "write_housing_vtk",
     "write_json",
     "write_measurement",
     "write_npz",
-    "write_stack_mesh",
 ]

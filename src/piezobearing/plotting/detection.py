@@ -84,7 +84,7 @@ def trend_figure(table, x_label: str):
     Parameters
     ----------
     table : DataFrame
-        The batch table (``piezobearing.recording.BATCH_COLUMNS``): ``x`` (the record's time or order),
+        The batch table (``piezobearing.stages.recording.BATCH_COLUMNS``): ``x`` (the record's time or order),
         ``{family}_margin_dB`` and ``call`` per record; rows without a call (unreadable) are left out.
     x_label : str
         What ``x`` is (its unit).

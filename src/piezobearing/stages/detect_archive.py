@@ -6,7 +6,7 @@ The archive is ``detect_archive.folder``: its files matching ``detect_archive.gl
 file beside it (same name, ``.yaml``) or ``detect_archive.rig``. Each record's job writes its report into
 ``RESULTS/detect_archive/<name>/`` and its row of the table (``row.json``); a record that cannot be read gets
 its row with the one-line error, so one bad file stops no job. The table and trend are those of
-:func:`piezobearing.recording.write_batch`.
+:func:`piezobearing.stages.recording.write_batch`.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from datetime import datetime
 from pathlib import Path
 
 from ..io import RECORD_FORMATS, read_json, write_json
-from ..recording import detect_one, rig_beside, write_batch
+from .recording import detect_one, rig_beside, write_batch
 
 
 def archive_records(archive: dict) -> dict[str, str]:

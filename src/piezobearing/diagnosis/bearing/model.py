@@ -17,8 +17,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ...bearing.surrogate import NoEquilibriumError
-from ..least_squares import InfeasibleError
-from ..params import Param
+from ...fitting.least_squares import InfeasibleError
+from ...fitting.params import Param
 from ..record import Record
 from . import chain
 from .effects import CATALOGUE, Effect
@@ -95,7 +95,7 @@ class BearingModel:
 
     def simulate(self, values: dict, record: RigRecord, input_: np.ndarray | None = None) -> np.ndarray:
         """The chain's voltage at ``values`` [V]; values without an equilibrium of the rings raise
-        :class:`~piezobearing.diagnosis.least_squares.InfeasibleError` (the fit steps back)."""
+        :class:`~piezobearing.fitting.least_squares.InfeasibleError` (the fit steps back)."""
         add = None
         for e in self.effects:
             a = e.additive(values, record)

@@ -19,10 +19,10 @@ import numpy as np
 from ...bearing.lpm import BearingGeometry
 from ...bearing.surrogate import InfluenceLine, cage_phase
 from ...io import MIN_BEARING_RATE_HZ, BearingRecord, average_blocks, read_bearing_record
+from ...numerics.threads import single_blas_thread
 from ...sensor.calibration import SensorCircuit
 from ...sensor.response import sensor_model
 from ...signals.detection import noise_std_for_snr
-from ...threads import single_blas_thread
 from ..effect import Catalogue, EffectError, StartContext
 from ..engine import diagnose
 from ..fit import fit_model

@@ -23,8 +23,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...fitting.params import Param
 from ...sensor.calibration import SensorCircuit, circuit_voltage, rc_response, resistance_param, unit_delay
-from ..params import Param
 from .effects import Effect, EffectError, ForceRecord, resolve
 from .effects.base import denoised_force, prefilter_response
 

@@ -19,8 +19,8 @@ from ..bearing.lpm import BearingGeometry, kinematic_frequencies
 from ..io import SignalFileError
 from ..sensor.calibration import SensorCircuit, design_resistance_ohm, rc_voltage
 from ..sensor.response import sensor_model
-from . import classification, daq, detection, detectors
-from .analysis import INDICATOR_DEFINITION, envelope_analysis
+from ..signals import classification, daq, detection, detectors
+from ..signals.analysis import INDICATOR_DEFINITION, envelope_analysis
 
 
 def sensor_circuit(config: dict, resistance: dict, source: str = "resistance.json") -> SensorCircuit:

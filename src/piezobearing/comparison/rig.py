@@ -2,13 +2,13 @@
 
 One run of the rig at the comparison's model step (``sensor_comparison.time_step_s``):
 
-1. the surroundings: one realisation of the base motion (:mod:`piezobearing.bearing.base_motion`);
+1. the surroundings: one realisation of the base motion (:mod:`piezobearing.housing.base_motion`);
 2. the LPM under it (the radial load, and each mass's inertial load -m a_b(t) in ground-relative
    coordinates: :func:`piezobearing.bearing.lpm.simulate_lpm`), its roller loads at the model step;
 3. the housing FEM's reduced modal model (modes to ``mode_cutoff_ratio`` times the accelerometer DAQ's
    Nyquist frequency) under the roller loads and the base's inertia -M r a_b: the sensor force and the
    absolute acceleration at the accelerometer's mounting place
-   (:func:`piezobearing.bearing.housing_fem.response_projected`).
+   (:func:`piezobearing.housing.fem.response_projected`).
 
 The housing's inertia is counted once. The LPM's pedestal (outer ring and housing as one mass on a spring,
 ``bearing.pedestal_*``) sets how the rollers' deflection responds; its inertial load under base motion goes
@@ -19,7 +19,7 @@ the sensor and the accelerometer once, through the FEM.
 Then each sensor's chain:
 
 * the PZT: the sensor force through the calibrated RC model (and the sensor FEM's correction) as the
-  sensor_voltage rule does (:func:`piezobearing.signals.outputs.sensor_voltage`), its DAQ at
+  sensor_voltage rule does (:func:`piezobearing.chain.signals.sensor_voltage`), its DAQ at
   ``pzt_sample_rate_Hz`` with the absolute noise of ``signals.noise`` in volts (density, mains pick-up, ADC);
 * the accelerometer: its transfer function (sensitivity, mounted resonance, high-pass), the first
   ``signals.skip_s`` dropped as for the PZT, its DAQ's anti-alias filter and sampling at
@@ -39,10 +39,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..bearing import base_motion, housing_fem, lpm, transient
-from ..bearing.reduced_housing import Housing, build_housing
+from ..bearing import lpm
+from ..chain import signals as signal_outputs
+from ..housing import base_motion, transient
+from ..housing import fem as housing_fem
+from ..housing.reduced import Housing, build_housing
 from ..signals import daq, detectors
-from ..signals import outputs as signal_outputs
 from ..signals.detectors import envelope as envelope_detector
 from . import accelerometer
 
@@ -212,7 +214,7 @@ def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_
     """Both sensors on the healthy and the faulty bearing over ``sensor_comparison.n_seeds`` realisations.
 
     ``config``: the workflow's (the comparison's step is applied here). ``circuit``: the PZT's measuring circuit
-    (:func:`piezobearing.signals.outputs.sensor_circuit`); ``harmonic``: the sensor FEM's response where
+    (:func:`piezobearing.chain.signals.sensor_circuit`); ``harmonic``: the sensor FEM's response where
     ``signals.sensor_fem_correction``, else None. ``housings``: the healthy and faulty :class:`Housing` when
     already built. With the base motion at rest the rig runs once per case and the seeds draw the DAQs'
     noise only; otherwise every seed is a new realisation of the surroundings through the whole rig.

@@ -35,14 +35,14 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
-from .bearing.kinematics import BearingError, Kinematics, RollingBearing
-from .io import MeasurementError, write_json
-from .io.formats import RECORD_FORMATS
-from .io.vibration import VibrationRecord, read_vibration_record
-from .plotting import save
-from .plotting.detection import detection_figure, trend_figure
-from .signals.detectors import UNKNOWN, Detection
-from .signals.detectors import envelope as envelope_detector
+from ..bearing.kinematics import BearingError, Kinematics, RollingBearing
+from ..io import MeasurementError, write_json
+from ..io.formats import RECORD_FORMATS
+from ..io.vibration import VibrationRecord, read_vibration_record
+from ..plotting import save
+from ..plotting.detection import detection_figure, trend_figure
+from ..signals.detectors import UNKNOWN, Detection
+from ..signals.detectors import envelope as envelope_detector
 
 #: The keys of a rig file.
 RIG_KEYS = ("bearing", "shaft_speed_rpm", "shaft_speed_Hz", "sample_rate_Hz", "channel")
