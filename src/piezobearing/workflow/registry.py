@@ -197,6 +197,9 @@ READS: dict[str, list[str]] = {
     "diagnose_bearing": ["seed", "sensor", "signals.sensor_fem_correction", "bearing", "bearing_diagnosis", "diagnostics"],
     # scorecard.smk: the run's conditions against the paper's case (piezobearing.config.paper.CASE)
     "scorecard": _CASE,
+    # detect_archive.smk: piezobearing detect over an archive of recordings (outside rule all)
+    "detect_record": ["detect_archive"],
+    "detect_archive": ["detect_archive"],
 }
 
 
