@@ -274,6 +274,17 @@ ROWS = [
         "`python benchmarks/bench_signals.py`", _signals),
     Row("snr_sweep", "SNR sweep of one record, fixed band: batch against record by record", "solvers.json",
         "`python benchmarks/bench_solvers.py`", _snr_sweep),
+    Row("cwru_validate", "the envelope detector's validation on the 46 CWRU fan-end records of 10-20 s (the whole script: "
+        "reading, detection, the confusion matrix)", "command_cwru_validate.json",
+        "`python benchmarks/bench_command.py cwru_validate -- python scripts/validate_cwru.py ../shared/data/cwru_fan_end "
+        "--out results/validation` (see [CWRU](validation/cwru.md))", _command_row),
+    Row("detect_folder", "`piezobearing detect` over the 46-record fan-end folder, each record's report and figure, the "
+        "table and the trend", "command_detect_folder.json",
+        "`python benchmarks/bench_command.py detect_folder -- piezobearing detect ../shared/data/cwru_fan_end "
+        "--glob '*.mat' --out results/detect/fan_end`", _command_row),
+    Row("tune_cwru", "the call settings' grid on the 46 CWRU records and the grouped cross-validation",
+        "command_tune_cwru.json", "`python benchmarks/bench_command.py tune_cwru -- python scripts/tune_cwru.py "
+        "../shared/data/cwru_fan_end --out results/validation`", _command_row),
     Row("detect_record", "envelope detector (`piezobearing detect`) on a 12 kHz record", "detect_record.json",
         "`python benchmarks/bench_detect_record.py`", _detect_record),
     Row("baseline", "baseline detector, 1 s record, CPU on one BLAS thread", "detector.json",

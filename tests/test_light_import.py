@@ -1,10 +1,12 @@
 """``import piezobearing`` loads no heavy dependency and none of its own subpackages; ``piezobearing detect --help``
-loads only the command line and the config; a public name is loaded on first use. Each check runs a fresh
+loads only the command line and the config; a public name is loaded on first use; writing results loads no
+record reader (``piezobearing.io`` is lazy too). Each check runs a fresh
 interpreter and reads ``sys.modules`` (what was loaded, never how long it took).
 
 The code hash (:func:`piezobearing.workflow.registry.code_hash`) follows an entry's ``from piezobearing import name``
 to the module that defines the name, and the face's own lazy table is not followed: editing a module reached only
-through the face changes the hash of an entry that imports that name, and of no other.
+through the face changes the hash of an entry that imports that name, and of no other (the same for the names of
+``piezobearing.io``).
 """
 
 from __future__ import annotations
@@ -92,3 +94,23 @@ def test_the_code_hash_follows_a_name_imported_from_the_face(tmp_path):
     after = _hash(via_face, src), _hash(elsewhere, src)
     assert after[0] != before[0]  # the rule that reaches kinematics through the face reruns
     assert after[1] == before[1]  # the face's other names are not followed: no other rule does
+
+
+def test_writing_results_loads_no_record_reader():
+    loaded = _loaded("from piezobearing.io import write_json, read_json")
+    assert not {m.split(".")[0] for m in loaded} & {"h5py", "pyuff", "nptdms"}
+    assert "scipy.io" not in loaded and "piezobearing.io.formats" not in loaded
+
+
+def test_the_code_hash_follows_a_name_imported_from_the_lazy_io_package(tmp_path):
+    src = tmp_path / "src"
+    shutil.copytree(SRC / "piezobearing", src / "piezobearing", ignore=shutil.ignore_patterns("__pycache__"))
+    reader = tmp_path / "reader.py"
+    reader.write_text("from piezobearing.io import read_measurement\n")
+    writer = tmp_path / "writer.py"
+    writer.write_text("from piezobearing.io import write_json\n")
+    before = _hash(reader, src), _hash(writer, src)
+    records = src / "piezobearing/io/records.py"
+    records.write_text(records.read_text() + "\n# an edit\n")
+    after = _hash(reader, src), _hash(writer, src)
+    assert after[0] != before[0] and after[1] == before[1]

@@ -246,7 +246,8 @@ def test_every_rule_reruns_on_the_keys_its_stage_reads_and_no_other_rule_does(sc
     sensor FEM rules share theirs); each rule's assertions are checked on its config's dry run."""
     d, env, children = scratch
     config = piezobearing.config.load(d / "config/ci.yaml")
-    keys = {rule: rule_keys(config, rule) for rule in sorted(READS)}
+    # the rules of the CI targets (the archive's rules, outside rule all, have a test of their own)
+    keys = {rule: rule_keys(config, rule) for rule in sorted(READS) if rule in children}
     first = {}  # each distinct key set: the first rule that reads it (names its override file)
     for rule, k in keys.items():
         first.setdefault(k, rule)

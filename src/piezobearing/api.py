@@ -248,8 +248,9 @@ def detect(samples, rate_Hz: float, bearing: RollingBearing | str, shaft_speed_r
     Returns
     -------
     Detection
-        ``fault_type`` (``none``, ``outer_race``, ``inner_race``, ``rolling_element``), the evidence per
-        family, the band, the shaft rate found and the call's false-alarm probability.
+        ``fault_type`` (``none``, ``outer_race``, ``inner_race``, ``rolling_element``, or ``unknown`` where
+        the envelope detector finds a fault whose families do not separate), the evidence per family, the
+        band, the shaft rate found and the call's false-alarm probability.
 
     Examples
     --------

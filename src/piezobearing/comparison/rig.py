@@ -224,9 +224,10 @@ def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_
     their step). Per sensor:
 
     * ``detection_rate``: share of seeds on the faulty bearing the envelope detector calls the true fault
-      type; ``false_alarm_rate``: share of seeds on the healthy bearing it calls any fault. Its threshold
-      holds its false-alarm probability for records without lines at the fault frequencies; the roller
-      passage puts lines at BPFO into both sensors' healthy records, so the healthy rig's calls are given.
+      type; ``false_alarm_rate``: share of seeds on the healthy bearing it calls any fault (of a type, or
+      ``unknown``). Its threshold holds its false-alarm probability for records without lines at the fault
+      frequencies; the roller passage puts lines at BPFO into both sensors' healthy records, so the healthy
+      rig's calls are given.
     * ``margin_dB``: median over seeds of the true family's margin on the faulty bearing;
       ``margin_over_healthy_dB``: median of that margin minus the largest margin of the same family on the
       healthy bearing under the same surroundings (seed for seed the same base motion);
@@ -281,7 +282,7 @@ def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_
         over = [r["margin_dB"] - healthy_top for r in f]
         sensors[s] = {
             "detection_rate": float(np.mean([r["called"] == fault for r in f])),
-            "false_alarm_rate": float(np.mean([r["called"] != "none" for r in h])),
+            "false_alarm_rate": float(np.mean([detectors.is_alarm(r["called"]) for r in h])),
             "margin_dB": float(np.median([r["margin_dB"] for r in f])),
             "margin_dB_per_seed": [float(r["margin_dB"]) for r in f],
             "healthy_margin_dB_per_seed": [float(r["margin_dB"]) for r in h],

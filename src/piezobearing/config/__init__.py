@@ -65,6 +65,7 @@ RESULTS_FOLDERS = frozenset(
         "bearing",
         "benchmarks",
         "calibration",
+        "detect_archive",
         "diagnostics",
         "diagnostics_bearing",
         "figures",

@@ -14,6 +14,8 @@ from ..chain.calibration import nominal_circuit  # noqa: F401 (the stages' name 
 from ..diagnosis.calibration import record
 from ..diagnosis.calibration.record import read_record
 from ..io import Measurement, check_readable, read_json, write_csv, write_json, write_measurement
+from ..io import formats as io_formats
+from ..io import records as io_records
 from ..sensor import calibration as sensor_calibration
 
 
@@ -34,7 +36,7 @@ def _checks_digest(path: str, config: dict) -> str:
     h.update(
         json.dumps({k: config[k] for k in ("calibration", "sensor")}, sort_keys=True, default=str).encode()
     )
-    for mod in (io, record, sensor_calibration):
+    for mod in (io_formats, io_records, record, sensor_calibration):
         h.update(Path(mod.__file__).read_bytes())
     h.update(Path(__file__).read_bytes())
     return h.hexdigest()

@@ -46,6 +46,7 @@ from ..sensor.analysis import SensorFemParams
 from ..sensor.calibration import SensorCircuit, design_resistance_ohm
 from ..sensor.mesh import stack_mesh
 from ..signals import daq, detection
+from ..signals.detectors import is_alarm
 from ..signals.envelope import EnvelopeSettings
 from .sensor_comparison import study_case as sensor_comparison_case
 
@@ -308,7 +309,7 @@ def detector_case(config: dict, outdir: Path, resistance: str, harmonic: str | N
         "fault_type_faulty": ind["faulty"]["fault_type"],
         "fault_type_healthy": ind["healthy"]["fault_type"],
         "correct_rate_faulty": float((faulty["fault_type"] == true).mean()),
-        "false_alarm_rate_healthy": float((seeds[seeds["case"] == "healthy"]["fault_type"] != "none").mean()),
+        "false_alarm_rate_healthy": float(seeds[seeds["case"] == "healthy"]["fault_type"].map(is_alarm).mean()),
         "clipped_fraction_max": float(seeds["clipped_fraction"].max()),
         **{f"detection_rate_{t}": float(faulty[f"{t}_detected"].mean())
            for t in ("outer_race", "inner_race", "rolling_element")},

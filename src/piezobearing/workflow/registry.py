@@ -8,7 +8,7 @@ the fix. A rule missing here reads nothing from the config.
 
 :func:`code_hash` is the hash of every module of this package a stage's script (or a figure's notebook) imports,
 directly or through other modules (the import graph read with ``ast``, lazy imports inside functions included;
-``from piezobearing import name`` follows the package's face to the module that defines ``name``),
+``from piezobearing import name`` follows a lazy package's table to the module that defines ``name``),
 computed once per workflow start: a change to the physics reruns exactly the rules whose code it is.
 
 :func:`record_checksum` tracks a user's calibration record by content (SHA-256), so a replaced record with an older
@@ -197,6 +197,9 @@ READS: dict[str, list[str]] = {
     "diagnose_bearing": ["seed", "sensor", "signals.sensor_fem_correction", "bearing", "bearing_diagnosis", "diagnostics"],
     # scorecard.smk: the run's conditions against the paper's case (piezobearing.config.paper.CASE)
     "scorecard": _CASE,
+    # detect_archive.smk: piezobearing detect over an archive of recordings (outside rule all)
+    "detect_record": ["detect_archive"],
+    "detect_archive": ["detect_archive"],
 }
 
 
@@ -272,21 +275,18 @@ def _module_file(name: str) -> Path | None:
     for p in (base.with_suffix(".py"), base / "__init__.py"):
         if p.is_file():
             return p
-    if len(parts) == 2 and parts[1] in _face_exports():  # `from piezobearing import detect`: its module
-        return _module_file(_face_exports()[parts[1]])
+    package = _module_file(".".join(parts[:-1])) if len(parts) > 1 else None
+    if package is not None and package.name == "__init__.py" and parts[-1] in _lazy_exports(package):
+        return _module_file(_lazy_exports(package)[parts[-1]])  # `from piezobearing import detect`: its module
     return None
 
 
-#: The package's face (``piezobearing/__init__.py``): it imports nothing at its top; each public name is loaded on
-#: first use from the module its table ``_EXPORTS`` names.
-_FACE = PACKAGE_DIR / "__init__.py"
-
-
 @lru_cache(maxsize=None)
-def _face_exports() -> dict[str, str]:
-    """The face's table of public names and their modules (``piezobearing._EXPORTS``), read from its source: an
-    entry that imports a public name from the face runs that name's module, and its code is hashed with it."""
-    for node in ast.parse(_FACE.read_text()).body:
+def _lazy_exports(init: Path) -> dict[str, str]:
+    """A lazy package's table of names and their modules (``_EXPORTS`` in its ``__init__.py``: the package's face,
+    ``piezobearing.io``), read from its source: an entry that imports a name from such a package runs that name's
+    module, and its code is hashed with it; the table's other modules are not followed."""
+    for node in ast.parse(init.read_text()).body:
         target = node.target if isinstance(node, ast.AnnAssign) else (node.targets[0] if isinstance(node, ast.Assign) else None)
         if isinstance(target, ast.Name) and target.id == "_EXPORTS":
             return ast.literal_eval(node.value)
