@@ -12,11 +12,13 @@ it hides effects in a synthetic record and states the user's answer, the
 
 from __future__ import annotations
 
+import time
 from dataclasses import replace
 
 import numpy as np
 
 from ...bearing.lpm import BearingGeometry
+from ...bearing.shaft_dynamics import ShaftDynamics
 from ...bearing.surrogate import InfluenceLine, cage_phase
 from ...io import MIN_BEARING_RATE_HZ, BearingRecord, average_blocks, read_bearing_record
 from ...sensor.calibration import SensorCircuit
@@ -28,11 +30,11 @@ from ..engine import diagnose
 from ..fit import fit_model
 from ..noise import NoiseFloor, robust_diff_std, white_level
 from ..record import Segments
-from ..selection import add_effect, strength
+from ..selection import Candidate, add_effect, step_entry, strength
 from ..settings import DiagnosticsSettings
 from ..subject import Problem
 from . import chain, report
-from .effects import CATALOGUE, FAULT_TYPES
+from .effects import CATALOGUE, FAULT_TYPES, RUNGS
 from .effects.shaft_speed import roller_pass_line_Hz
 from .model import BearingModel, RigRecord
 from .representations import REPRESENTATIONS, passages
@@ -64,6 +66,7 @@ def rig_from_config(config: dict, influence: InfluenceLine, time_s: np.ndarray, 
         b["shaft_speed_rpm"] / 60.0,
         t,
         None if tach_Hz is None else np.asarray(tach_Hz, dtype=float),
+        ShaftDynamics.from_config(b),
     )
 
 
@@ -202,10 +205,17 @@ class BearingSubject:
         less than 0.8 x the floor (a lift the pre-pass did not catch), the
         floor is measured again on the final model's residual and the engine
         runs once more; ``noise_floor.method`` says which.
+
+        A defect the record cannot pin down (:func:`unidentified_defects`: its width's interval holds zero, or
+        its angle's spans the circle) is taken out of the catalogue and the engine runs again without it
+        (``fault.unidentified`` names it). Where the quasi-static verdict is ``unexplained`` with a fault's
+        lines or a defect selected, the dynamic rung is tried (:func:`dynamic_rung`; ``dynamic_rung`` of the
+        dict says what it gave).
         """
         settings = DiagnosticsSettings.from_config(config.get("diagnostics"))
         rec, rate = model_rate(obs[0], config["bearing_diagnosis"]["max_model_rate_Hz"])
         obs = (rec, *obs[1:])
+        note = progress or (lambda _msg: None)
         # the fits' linear algebra is on matrices of n x (a few) values: a second BLAS thread only waits
         # (each SVD of the trust-region step 70x slower on a loaded 2-core machine, benchmarks/bench_diagnosis_bearing.py)
         with single_blas_thread():
@@ -216,8 +226,191 @@ class BearingSubject:
                 fl = noise_floor(d.final.residual_V, problem.record.dt_s, rec.clipped)
                 fl = replace(fl, method=f"{fl.method}, of the final model's residual: the record's own "
                              f"({problem.floor.voltage_noise_V:.4g} V) was lifted by the fault's lines")
-                d = diagnose(replace(problem, floor=fl), settings, progress)
-        return d, {**d.to_dict(self.answer(d)), "model_rate": rate}
+                problem = replace(problem, floor=fl)
+                d = diagnose(problem, settings, progress)
+            d, problem, dropped = without_unidentified(d, problem, settings, progress)
+            rung = {"tried": False, "accepted": False, "why": "the quasi-static verdict is explained"}
+            if d.verdict == "unexplained" and not any(e.name in RUNGS for e in problem.configured):
+                rung = rung_wanted(d, config)
+                if rung["tried"]:
+                    c0 = time.process_time()
+                    d, rung = dynamic_rung(d, problem, settings, progress, rung)
+                    d, problem, more = without_unidentified(d, problem, settings, progress)
+                    dropped += more
+                    note(f"dynamic rung: {time.process_time() - c0:.1f} s CPU "
+                         f"({'accepted' if rung['accepted'] else 'not accepted'})")
+        answer = self.answer(d)
+        answer["fault"]["unidentified"] = dropped
+        return d, {**d.to_dict(answer), "model_rate": rate, "dynamic_rung": rung}
+
+
+#: Width of a defect's 95 % interval in angle beyond which it does not place the defect [rad].
+FULL_TURN_RAD = 2 * np.pi
+
+
+def unidentified_defects(d) -> list[dict]:
+    """The selected defects the record cannot pin down: the width's 95 % interval holds zero (or is missing), or
+    the angle's spans the circle; each ``{"effect", "ci95", "reason"}``. Operating conditions keep their
+    one-sided intervals (a clearance bounded from below) and are not judged here."""
+    ci = d.final.result.ci95
+    out = []
+    for name in d.selected:
+        if name not in FAULT_TYPES:
+            continue
+        _, wkey, pkey = FAULT_TYPES[name]
+        w, a = ci.get(wkey), ci.get(pkey)
+        reason = None
+        if w is None or w[0] is None or not np.all(np.isfinite(w)) or w[0] <= 0.0:
+            reason = f"the interval of {wkey} holds zero"
+        elif name != "rolling_element_defect" and (a is None or a[0] is None or not np.all(np.isfinite(a))
+                                                   or a[1] - a[0] >= FULL_TURN_RAD):
+            reason = f"the interval of {pkey} spans the circle"
+        if reason:
+            out.append({"effect": name, "ci95": {wkey: w, pkey: a}, "reason": reason})
+    return out
+
+
+def without_unidentified(d, problem: Problem, settings, progress=None, rounds: int = 2):
+    """The diagnosis again without the defects :func:`unidentified_defects` finds (at most ``rounds`` times);
+    returns (diagnosis, problem, [the defects taken out])."""
+    dropped: list[dict] = []
+    for _ in range(rounds):
+        bad = unidentified_defects(d)
+        if not bad:
+            break
+        dropped += bad
+        names = {b["effect"] for b in bad}
+        cat = Catalogue("bearing")
+        for name, e in problem.catalogue.items():
+            if name not in names:
+                cat.register(e)
+        problem = replace(problem, catalogue=cat,
+                          configured=tuple(e for e in problem.configured if e.name not in names))
+        (progress or (lambda _m: None))(f"not identified, left out: {', '.join(sorted(names))}")
+        d = diagnose(problem, settings, progress)
+    return d, problem, dropped
+
+
+def rung_wanted(d, config: dict) -> dict:
+    """Whether the dynamic rung is tried on an ``unexplained`` quasi-static diagnosis, and why (the start of the
+    ``dynamic_rung`` entry): with ``bearing_diagnosis.dynamic_rung: auto``, where a defect is selected or the
+    residual shows a fault's lines (:func:`fault_evidence`): the shaft's ring after each dip and the deeper
+    modulation of a moving defect are what the quasi-static chain leaves there. Other structure (a healthy
+    bearing's bumps off by a housing's dynamics) is not the shaft's, and a fit of the dynamic chain costs a
+    hundred times the quasi-static one, so it is not tried there."""
+    mode = config["bearing_diagnosis"].get("dynamic_rung", "auto")
+    if mode == "off":
+        return {"tried": False, "accepted": False, "why": "bearing_diagnosis.dynamic_rung is off"}
+    faults = [n for n in d.selected if n in FAULT_TYPES]
+    evidence = fault_evidence(d)
+    if not faults and not evidence:
+        return {"tried": False, "accepted": False,
+                "why": "the quasi-static verdict is unexplained, but no defect is selected and no fault's lines are "
+                "left: the structure is not the shaft's ring on a fault"}
+    why = (f"the quasi-static model selects {', '.join(faults)} and leaves structure" if faults else
+           f"the residual shows the {evidence[0]['type'].replace('_', ' ')}'s lines and no defect is selected")
+    return {"tried": True, "accepted": False, "why": why, "evidence": evidence}
+
+
+def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None = None):
+    """The engine once more with the shaft's dynamics (``shaft_dynamics``), judged against the quasi-static diagnosis.
+
+    Configured: the quasi-static selection (its fits warm-start the rung); where no defect is selected, the
+    defect of the fault type whose lines the residual shows most (:func:`fault_evidence`), fitted quasi-statically
+    first; then ``shaft_dynamics``, whose starts move an outer-race groove by whole roller pitches with the
+    dynamics on (the pair: a groove the quasi-static chain places a pitch away is placed with the dynamics). No
+    further search (each fit of the dynamic chain costs a hundred quasi-static ones). The rung is accepted by the
+    engine's rule for one step (:func:`~piezobearing.diagnosis.selection.accepted`: its BIC drop over the
+    quasi-static final model above ``min_delta_bic`` and at least ``min_share`` of that model's misfit above
+    the floor explained); the diagnosis returned is then the rung's, else the quasi-static one. Returns
+    (diagnosis, the ``dynamic_rung`` entry: why, evidence, accepted, the BIC drop and share, the ladder:
+    baseline, quasi-static final, with the dynamics, floor NRMSE). ``rung``: :func:`rung_wanted`'s entry.
+    """
+    rung = dict(rung or rung_wanted(d, {"bearing_diagnosis": {"dynamic_rung": "auto"}}))
+    names = list(d.selected)
+    pair = [EFFECT_OF_TYPE[ev["type"]] for ev in rung.get("evidence", [])[:1]]
+    pair = [n for n in pair if n not in names and n in problem.catalogue]
+    add = [CATALOGUE[n] for n in (*names, *pair) if CATALOGUE[n] not in problem.configured]
+    rp = replace(problem, configured=(*problem.configured, *add, CATALOGUE["shaft_dynamics"]),
+                 catalogue=Catalogue("bearing"))
+    (progress or (lambda _m: None))("dynamic rung: + " + " + ".join([*pair, "shaft_dynamics"]))
+    dr = diagnose(rp, settings, progress, d.baseline)
+    drop = d.final.chi2 - dr.final.chi2
+    share = float(np.clip(drop / max(d.final.excess, drop, 1e-12), 0.0, 1.0))
+    delta_bic = float(d.final.bic - dr.final.bic)
+    ok = delta_bic > settings.min_delta_bic and share >= settings.min_share
+    rung.update(
+        accepted=bool(ok),
+        delta_bic=delta_bic,
+        strength=strength(delta_bic),
+        excess_explained=share,
+        quasi_static={"selected": list(d.selected), "verdict": d.verdict, "nrmse": d.final.nrmse,
+                      "fault": fault_answer(d)["statement"]},
+        dynamic={"selected": list(dr.selected), "configured": [e.name for e in rp.configured],
+                 "verdict": dr.verdict, "nrmse": dr.final.nrmse},
+        ladder=[
+            {"model": "baseline", "nrmse": d.baseline.nrmse},
+            {"model": "quasi-static: " + d.final.model.label, "nrmse": d.final.nrmse},
+            {"model": "dynamic: " + dr.final.model.label, "nrmse": dr.final.nrmse},
+            {"model": "noise floor", "nrmse": dr.final.floor_nrmse},
+        ],
+    )
+    rung["pair"] = pair
+    return (merged(d, dr, share, pair) if ok else d), rung
+
+
+def merged(d, dr, share: float, pair: list[str]):
+    """The rung's diagnosis ``dr`` read as steps after the quasi-static one ``d``: the quasi-static ladder, then
+    ``shaft_dynamics`` added (its fit with the quasi-static selection, its evidence over the quasi-static final
+    model), then the rung's own search; ``selected`` the quasi-static selection, ``shaft_dynamics`` and the rung's
+    additions; the configured model (and its tests) the user's."""
+    rung_fit = dr.configured
+    c = Candidate(CATALOGUE["shaft_dynamics"], rung_fit, float(d.final.bic - rung_fit.bic), share)
+    dr.steps = [*d.steps, step_entry(rung_fit, " + ".join([*pair, "shaft_dynamics"]), c), *dr.steps[1:]]
+    dr.fits = [*d.fits, rung_fit, *dr.fits[1:]]
+    dr.selected = [*d.selected, *pair, "shaft_dynamics", *dr.selected]
+    dr.configured = d.configured
+    dr.tests = {**dr.tests, "configured": d.tests["configured"]}
+    dr.ranking = d.ranking
+    return dr
+
+
+#: The catalogue effect of each fault type.
+EFFECT_OF_TYPE = {kind: name for name, (kind, _w, _a) in FAULT_TYPES.items()}
+#: A fault's lines name it (where no defect is selected) when at least two of its first three lines stand this far
+#: above the white floor in the final residual's spectrum [dB]. Set between measured values: the largest residual
+#: line a healthy record of the dynamic LPM leaves at a roller-pass harmonic against the quasi-static model is
+#: 11.5-12.4 dB (docs/validation/bearing_diagnosis.md, 25.6 kHz), the weakest line of a missed groove 26.6 dB.
+LINES_DB = 20.0
+
+
+def fault_evidence(d) -> list[dict]:
+    """The fault families the final residual still shows, strongest first: ``{"type", "lines", "envelope",
+    "strongest_dB"}``. A family counts where the envelope view finds one of its bands above the detector's
+    family-wise threshold (:class:`~.representations.EnvelopeBands`) or where at least two of its first three
+    lines stand :data:`LINES_DB` above the floor in the spectrum test's findings."""
+    env = d.judgements.get("envelope", {}).get("final")
+    env_found = env.findings if env is not None else []
+    bands = {"outer_race": ("BPFO",), "inner_race": ("BPFI",), "rolling_element": ("2xBSF", "BSF")}
+    out = []
+    for kind in ("outer_race", "inner_race", "rolling_element"):
+        lines, df = _line_spectra(d, kind)[:2]
+        first = lines[:3] if kind == "outer_race" else lines[:9]
+        hits = []
+        for u in d.unexplained:
+            if u.get("test") != "spectrum" or u.get("kind") != "narrowband":
+                continue
+            f = u["frequency_Hz"]
+            label, fl = min(first, key=lambda x: abs(x[1] - f))
+            if abs(fl - f) <= max(LINE_TOLERANCE * fl, 2 * df) and u["excess_dB"] >= LINES_DB:
+                hits.append({"line": label, "frequency_Hz": float(f), "excess_dB": float(u["excess_dB"])})
+        envs = [{"band": e["band"], "frequency_Hz": e["frequency_Hz"], "ratio": e["ratio"]} for e in env_found
+                if e["band"].split("x")[-1] in bands[kind] or e["band"] in bands[kind]]
+        if len({h["line"] for h in hits}) >= 2 or envs:
+            out.append({"type": kind, "lines": hits, "envelope": envs,
+                        "strongest_dB": max([h["excess_dB"] for h in hits], default=0.0)})
+    out.sort(key=lambda e: (-len(e["lines"]), -e["strongest_dB"]))
+    return out
 
 
 def quiet_level(residual_V: np.ndarray, clipped: np.ndarray | None = None) -> float:
@@ -284,13 +477,12 @@ SUBJECT = BearingSubject()
 
 
 def catalogue_for(tachometer: bool) -> Catalogue:
-    """The catalogue a record is searched with: with a tachometer the shaft's speed is measured, so
-    ``shaft_speed`` (a deviation from it) would only be ``cage_slip`` under another name, and is left out."""
-    if not tachometer:
-        return CATALOGUE
+    """The catalogue a record is searched with: the rungs (:data:`~.effects.RUNGS`) are added by the subject, not
+    ranked; with a tachometer the shaft's speed is measured, so ``shaft_speed`` (a deviation from it) would only be
+    ``cage_slip`` under another name, and is left out."""
     out = Catalogue("bearing")
     for name, e in CATALOGUE.items():
-        if name != "shaft_speed":
+        if name not in RUNGS and not (tachometer and name == "shaft_speed"):
             out.register(e)
     return out
 
@@ -465,11 +657,19 @@ def fault_answer(d) -> dict:
     how.pop("roller_defect_index", None)  # chosen among the starts, not fitted: no interval
     remaining = fault_lines_left(d, kind) if kind != "none" else []
     sidebands = fault_sidebands(d, kind)
+    statement = fault_statement(kind, params, ci95, remaining, sidebands)
+    source = "model" if kind != "none" else "none"
+    evidence = fault_evidence(d)
+    if kind == "none" and evidence:
+        kind, source = evidence[0]["type"], "lines"
+        statement = lines_statement(evidence[0], "shaft_dynamics" in d.final.model.names)
     return {
         "type": kind,
+        "source": source,
+        "evidence": evidence,
         "params": params,
         "ci95": ci95,
-        "statement": fault_statement(kind, params, ci95, remaining, sidebands),
+        "statement": statement,
         "lines_left": remaining,
         "sidebands": sidebands,
         "operating_conditions": cond,
@@ -565,6 +765,17 @@ def fault_sidebands(d, kind: str) -> list[dict]:
         out.append({"line": label, "frequency_Hz": float(f), "record_over_model_dB": float(20 * np.log10(r / max(m, 1e-300))),
                     "record_above_floor_dB": float(10 * np.log10(r**2 / floor))})
     return out
+
+
+def lines_statement(ev: dict, dynamics: bool) -> str:
+    """One line for a fault named from its lines alone (no defect of the model reproduces them)."""
+    kind = ev["type"].replace("_", " ")
+    parts = [f"{h['line']} ({h['frequency_Hz']:.1f} Hz) {h['excess_dB']:.1f} dB above the floor" for h in ev["lines"]]
+    parts += [f"envelope line at {e['band']} ({e['frequency_Hz']:.1f} Hz) {e['ratio']:.1f}x its floor" for e in ev["envelope"]]
+    need = ("beyond the shaft's dynamics it needs an effect outside the catalogue (a housing mode in the band, "
+            "a second defect)" if dynamics else "it needs the shaft's dynamics on its rollers (shaft_dynamics)")
+    return (f"{kind} from its lines: " + ", ".join(parts[:4]) + f"; the model selects no defect that reproduces "
+            f"them: {need}")
 
 
 def fault_statement(kind: str, params: dict, ci95: dict, remaining: list[dict], sidebands: list[dict] | None = None) -> str:
