@@ -3,7 +3,9 @@
 Each case hides catalogue values in a record of the 4-DOF LPM (:mod:`piezobearing.diagnosis.bearing.lpm_records`,
 not the quasi-static surrogate the diagnosis fits), at 30 dB, and runs the diagnosis of ``diagnose-bearing`` on
 it. The results file holds, per case: the hidden values, what the diagnosis selected, each hidden value's fitted
-value and 95 % interval, the verdict, the fault's statement and the lines it left unexplained, and the rate the
+value and 95 % interval, the verdict, the fault's statement and the lines it left unexplained, the dynamic rung
+(tried, accepted, the NRMSE ladder: baseline, quasi-static, with the shaft's dynamics, floor) with the fitted
+damping against the LPM's, the diagnosis's CPU time, and the rate the
 model was held at (a record faster than ``bearing_diagnosis.max_model_rate_Hz`` is averaged down by the
 diagnosis itself). A markdown table goes beside it.
 
@@ -18,6 +20,7 @@ import copy
 import json
 import shlex
 import sys
+import time
 from pathlib import Path
 
 from piezobearing import config as cfg
@@ -43,13 +46,21 @@ CASES = {
                                      "cage_slip_ratio": 0.015}, ["outer_race_defect", "cage_slip"]),
     "outer_race_defect+clearance": ({"outer_defect_width_m": 0.9e-3, "outer_defect_angle_rad": 0.0,
                                      "radial_clearance_m": 40e-6}, ["outer_race_defect", "clearance"]),
+    "outer_race_defect_20deg": ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.35},
+                                ["outer_race_defect"]),
+    "outer_race_defect_26deg": ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.45},
+                                ["outer_race_defect"]),
+    "outer_race_defect_26deg+cage_slip": ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.45,
+                                           "cage_slip_ratio": 0.015}, ["outer_race_defect", "cage_slip"]),
 }
 
 
 def run_case(config: dict, influence, name: str, rate_Hz: float, duration_s: float, seed: int) -> dict:
     hidden, effects = CASES[name]
     rec = lpm_record(config, influence, hidden, rate_Hz, duration_s, 30.0, seed)
+    c0 = time.process_time()
     d = SUBJECT.diagnose((rec, influence), config)[1]
+    cpu = time.process_time() - c0
     final = d["final"]
     found = {}
     for k, v in hidden.items():
@@ -68,6 +79,13 @@ def run_case(config: dict, influence, name: str, rate_Hz: float, duration_s: flo
         "values": found,
         "shaft_speed_Hz": {"found": final["params"].get("shaft_speed_Hz"), "ci95": final["ci95"].get("shaft_speed_Hz")},
         "fault_statement": d["fault"].get("statement"),
+        "fault_source": d["fault"].get("source"),
+        "unidentified": d["fault"].get("unidentified"),
+        "dynamic_rung": {k: v for k, v in d["dynamic_rung"].items() if k != "evidence"},
+        "damping": {"found": final["params"].get("bearing_damping_N_s_per_m"),
+                    "ci95": final["ci95"].get("bearing_damping_N_s_per_m"),
+                    "rig": config["bearing"]["bearing_damping_N_s_per_m"]},
+        "cpu_s": cpu,
         "fault_sidebands": d["fault"].get("sidebands"),
         "model_rate": d["model_rate"],
         "nrmse": final["nrmse"],
@@ -76,8 +94,17 @@ def run_case(config: dict, influence, name: str, rate_Hz: float, duration_s: flo
     }
 
 
+def ladder(r: dict) -> str:
+    """Baseline / quasi-static final / with the dynamics / floor NRMSE [%] (the dynamic rung's ladder where tried)."""
+    lad = (r.get("dynamic_rung") or {}).get("ladder")
+    if not lad:
+        return f"{100 * r['nrmse']:.2f} / floor {100 * r['noise_floor_nrmse']:.2f}"
+    return " / ".join(f"{100 * x['nrmse']:.2f}" for x in lad)
+
+
 def table(rows: list[dict]) -> str:
-    out = ["| case | rate [Hz] (model) | hidden | found [95 % interval] | selected | verdict |", "|---|---|---|---|---|---|"]
+    out = ["| case | rate [Hz] (model) | hidden | found [95 % interval] | selected | verdict | NRMSE % (baseline / "
+           "quasi-static / dynamic / floor) |", "|---|---|---|---|---|---|---|"]
     for r in rows:
         hid = "; ".join(f"{k} {v['hidden']:.4g}" for k, v in r["values"].items())
         fnd = "; ".join(
@@ -85,7 +112,7 @@ def table(rows: list[dict]) -> str:
             else "not fitted" for v in r["values"].values()
         )
         out.append(f"| {r['case']} | {r['sample_rate_Hz']:.0f} ({r['model_rate']['model_rate_Hz']:.0f}) | {hid} | {fnd} | {', '.join(r['selected']) or 'none'} "
-                   f"| {r['verdict']} |")
+                   f"| {r['verdict']} | {ladder(r)} |")
     return "\n".join(out)
 
 
