@@ -251,15 +251,27 @@ def shaft_mode_Hz(rig: Rig, dyn: ShaftDynamics, op: Operating | None = None) -> 
 def shaft_dynamics_force(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, offsets) -> tuple[int, np.ndarray]:
     """The sensor force of the dynamic rung averaged over the sample windows from ``first`` on: (first, force) [N].
 
-    Each sample window (its cage phase from ``edges``) is cut into S equal steps
-    (:func:`~piezobearing.bearing.shaft_dynamics.steps_per_sample` at the shaft's mode, at least the moving
-    defects' :meth:`Rig.substeps`); at each step the roller angles and every drop (an outer-race groove, a
-    moving defect, the rollers' offsets) enter the 4-DOF dynamics
-    (:func:`~piezobearing.bearing.shaft_dynamics.sensor_force`), which start at rest
-    :data:`DYNAMICS_SETTLE_S` (or ten decay times) before the record's first sample; the samples before
-    ``first`` keep the quasi-static force (the circuit's pre-roll).
+    On the grid of :func:`fine_grid` the roller angles and every drop (an outer-race groove, a moving defect, the
+    rollers' offsets) enter the 4-DOF dynamics (:func:`~piezobearing.bearing.shaft_dynamics.sensor_force`), which
+    start at rest :data:`DYNAMICS_SETTLE_S` (or ten decay times) before the record's first sample; the samples
+    before ``first`` keep the quasi-static force (the circuit's pre-roll).
     """
     dyn = dynamics_of(rig, values)
+    first, s, psi, drop = fine_grid(rig, values, edges, op, outer, offsets, dyn)
+    f = dyn_sensor_force(psi, drop, op.radial_load_N, op.radial_clearance_m, rig.geometry.roller_length_m,
+                         rig.influence, dyn, rig.dt_s / s)
+    return first, f.reshape(-1, s).mean(axis=1)
+
+
+def fine_grid(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, offsets,
+              dyn: ShaftDynamics) -> tuple[int, int, np.ndarray, np.ndarray]:
+    """The dynamic rung's grid: (first sample, steps per sample S, roller angles (n, Z) [rad], extra gaps (n, Z) [m]).
+
+    Each sample window from ``first`` on (its cage phase from ``edges``) is cut into S equal steps
+    (:func:`~piezobearing.bearing.shaft_dynamics.steps_per_sample` at the shaft's mode, at least the moving
+    defects' :meth:`Rig.substeps`); ``first`` lies :data:`DYNAMICS_SETTLE_S`, or ten decay times of the shaft's
+    mode where that is longer, before the record's first sample (within the circuit's pre-roll).
+    """
     f_mode, zeta = shaft_mode_Hz(rig, dyn, op)
     dt = rig.dt_s
     moving = values.get("inner_defect_width_m", 0.0) > 0 or values.get("roller_defect_width_m", 0.0) > 0
@@ -276,9 +288,7 @@ def shaft_dynamics_force(rig: Rig, values: dict, edges: np.ndarray, op: Operatin
         drop = drop + outer(psi)
     if offsets is not None:
         drop = drop + np.asarray(offsets)[None, :]
-    f = dyn_sensor_force(psi, drop, op.radial_load_N, op.radial_clearance_m, rig.geometry.roller_length_m,
-                         rig.influence, dyn, dt / s)
-    return first, f.reshape(-1, s).mean(axis=1)
+    return first, s, psi, drop
 
 
 def _moving_drops(rig: Rig, values: dict, phi: np.ndarray) -> np.ndarray:
