@@ -11,6 +11,7 @@ diagnosis itself). A markdown table goes beside it.
 
     python validation/bearing_diagnosis.py --out results/validation/bearing_diagnosis.json \
         [--influence results/bearing/influence_line_healthy.csv] [--rate 2550 --rate 25600] [--case NAME ...]
+        [--duration S] [--record-out DIR]
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from pathlib import Path
 
 from piezobearing import config as cfg
 from piezobearing.diagnosis.bearing.lpm_records import lpm_record
+from piezobearing.io import write_bearing_record
 from piezobearing.diagnosis.bearing.subject import SUBJECT
 from piezobearing.stages.bearing_diagnosis import influence_from_config, read_influence
 
@@ -52,12 +54,23 @@ CASES = {
                                 ["outer_race_defect"]),
     "outer_race_defect_26deg+cage_slip": ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.45,
                                            "cage_slip_ratio": 0.015}, ["outer_race_defect", "cage_slip"]),
+    "healthy_1500rpm_tachometer": ({"speed_deviation_ratio": 0.5}, []),
+    "outer_race_defect_ramp_tachometer": ({"outer_defect_width_m": 0.9e-3, "outer_defect_angle_rad": 0.0,
+                                           "speed_deviation_ratio": -0.1, "speed_ramp_Hz_per_s": 100.0 / 60.0},
+                                          ["outer_race_defect"]),
 }
+#: Cases whose record has a speed_rpm column (the tachometer): the speed the LPM ran at, 1500 rpm where the rig
+#: file says 1000; a ramp from 900 rpm at 100 rpm/s (900 to 1000 rpm over a 1 s record, 1100 over 2 s).
+TACHOMETER = ("healthy_1500rpm_tachometer", "outer_race_defect_ramp_tachometer")
 
 
-def run_case(config: dict, influence, name: str, rate_Hz: float, duration_s: float, seed: int) -> dict:
+def run_case(config: dict, influence, name: str, rate_Hz: float, duration_s: float, seed: int,
+             record_dir: Path | None = None) -> dict:
     hidden, effects = CASES[name]
-    rec = lpm_record(config, influence, hidden, rate_Hz, duration_s, 30.0, seed)
+    rec = lpm_record(config, influence, hidden, rate_Hz, duration_s, 30.0, seed, tachometer=name in TACHOMETER)
+    if record_dir is not None:
+        record_dir.mkdir(parents=True, exist_ok=True)
+        write_bearing_record(rec, record_dir / f"{name}_{rate_Hz:.0f}Hz.csv")
     c0 = time.process_time()
     d = SUBJECT.diagnose((rec, influence), config)[1]
     cpu = time.process_time() - c0
@@ -125,6 +138,7 @@ def main() -> None:
     ap.add_argument("--case", action="append", help=f"cases (default all): {', '.join(CASES)}")
     ap.add_argument("--duration", type=float, default=1.0, help="record length [s]")
     ap.add_argument("--seed", type=int, default=26)
+    ap.add_argument("--record-out", type=Path, default=None, help="folder to write each case's record to (CSV)")
     args = ap.parse_args()
     config = cfg.load(*([args.config] if args.config else []))
     influence = read_influence(args.influence) if args.influence else influence_from_config(config)
@@ -137,7 +151,7 @@ def main() -> None:
             if (name, rate) in done:
                 continue
             c = copy.deepcopy(config)
-            rows.append(run_case(c, influence, name, rate, args.duration, args.seed))
+            rows.append(run_case(c, influence, name, rate, args.duration, args.seed, args.record_out))
             out.write_text(json.dumps({"command": shlex.join(["python", *sys.argv]), "snr_dB": 30.0,
                                        "cases": rows}, indent=1))
             out.with_suffix(".md").write_text(table(rows) + "\n")

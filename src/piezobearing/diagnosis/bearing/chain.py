@@ -257,20 +257,23 @@ def shaft_dynamics_force(rig: Rig, values: dict, edges: np.ndarray, op: Operatin
     before ``first`` keep the quasi-static force (the circuit's pre-roll).
     """
     dyn = dynamics_of(rig, values)
-    first, s, psi, drop = fine_grid(rig, values, edges, op, outer, offsets, dyn)
+    first, s, psi, drop, normals = fine_grid(rig, values, edges, op, outer, offsets, dyn)
     f = dyn_sensor_force(psi, drop, op.radial_load_N, op.radial_clearance_m, rig.geometry.roller_length_m,
-                         rig.influence, dyn, rig.dt_s / s)
+                         rig.influence, dyn, rig.dt_s / s, normals)
     return first, f.reshape(-1, s).mean(axis=1)
 
 
 def fine_grid(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, offsets,
-              dyn: ShaftDynamics) -> tuple[int, int, np.ndarray, np.ndarray]:
-    """The dynamic rung's grid: (first sample, steps per sample S, roller angles (n, Z) [rad], extra gaps (n, Z) [m]).
+              dyn: ShaftDynamics) -> tuple[int, int, np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """The dynamic rung's grid: (first sample, steps per sample S, roller angles (n, Z) [rad], extra gaps (n, Z) [m],
+    the rollers' normals (sin psi, -cos psi)).
 
     Each sample window from ``first`` on (its cage phase from ``edges``) is cut into S equal steps
     (:func:`~piezobearing.bearing.shaft_dynamics.steps_per_sample` at the shaft's mode, at least the moving
     defects' :meth:`Rig.substeps`); ``first`` lies :data:`DYNAMICS_SETTLE_S`, or ten decay times of the shaft's
-    mode where that is longer, before the record's first sample (within the circuit's pre-roll).
+    mode where that is longer, before the record's first sample (within the circuit's pre-roll). An outer-race
+    groove narrower than a roller pitch holds one roller at a time: its drop is computed for the roller nearest
+    to it only (the same numbers as for every roller).
     """
     f_mode, zeta = shaft_mode_Hz(rig, dyn, op)
     dt = rig.dt_s
@@ -283,12 +286,20 @@ def fine_grid(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, o
     frac = (np.arange(s) + 0.5) / s
     phi = (e[:-1, None] + np.diff(e)[:, None] * frac[None, :]).ravel()
     psi = rig.surrogate.roller_angles(phi)
+    # the normals by the angle sum (psi_j = phi + j pitch): two products instead of two transcendentals per roller
+    pj = rig.pitch_rad * np.arange(rig.geometry.n_rollers)
+    sp, cp = np.sin(phi)[:, None], np.cos(phi)[:, None]
+    normals = (sp * np.cos(pj) + cp * np.sin(pj), -(cp * np.cos(pj) - sp * np.sin(pj)))
     drop = _moving_drops(rig, values, phi) if moving else np.zeros(psi.shape)
-    if outer is not None:
+    if isinstance(outer, OuterGroove) and outer.width_m < rig.geometry.outer_raceway_radius_m * rig.pitch_rad:
+        j = np.mod(np.rint((outer.angle_rad - phi) / rig.pitch_rad), rig.geometry.n_rollers).astype(int)
+        rows = np.arange(phi.size)
+        drop[rows, j] += outer(psi[rows, j])
+    elif outer is not None:
         drop = drop + outer(psi)
     if offsets is not None:
         drop = drop + np.asarray(offsets)[None, :]
-    return first, s, psi, drop
+    return first, s, psi, drop, normals
 
 
 def _moving_drops(rig: Rig, values: dict, phi: np.ndarray) -> np.ndarray:

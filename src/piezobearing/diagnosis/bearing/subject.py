@@ -315,32 +315,40 @@ def rung_wanted(d, config: dict) -> dict:
 def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None = None):
     """The engine once more with the shaft's dynamics (``shaft_dynamics``), judged against the quasi-static diagnosis.
 
-    Configured: the quasi-static selection (its fits warm-start the rung); where no defect is selected, the
-    defect of the fault type whose lines the residual shows most (:func:`fault_evidence`), fitted quasi-statically
-    first; then ``shaft_dynamics``, whose starts move an outer-race groove by whole roller pitches with the
-    dynamics on (the pair: a groove the quasi-static chain places a pitch away is placed with the dynamics). No
-    further search (each fit of the dynamic chain costs a hundred quasi-static ones). The rung is accepted by the
-    engine's rule for one step (:func:`~piezobearing.diagnosis.selection.accepted`: its BIC drop over the
-    quasi-static final model above ``min_delta_bic`` and at least ``min_share`` of that model's misfit above
-    the floor explained); the diagnosis returned is then the rung's, else the quasi-static one. Returns
+    Configured: the quasi-static selection's operating conditions and its first defect (their fits warm-start
+    the rung); where no defect is selected, the defect of the fault type whose lines the residual shows most
+    (:func:`fault_evidence`), fitted quasi-statically first; then ``shaft_dynamics``, whose starts place an
+    outer-race groove with the dynamics on (the pair: a groove the quasi-static chain places a pitch away).
+    Searched, by the engine's stepwise rule with the dynamics on: the quasi-static selection's later defects
+    (often stand-ins for the dynamics the quasi-static chain lacks). The rung is accepted by the engine's rule
+    for one step (:func:`~piezobearing.diagnosis.selection.accepted`: its BIC drop over the quasi-static final
+    model above ``min_delta_bic`` and at least ``min_share`` of that model's misfit above the floor explained)
+    where none of its defects is unidentified (:func:`unidentified_defects`); the diagnosis returned is then the
+    rung's, else the quasi-static one. Returns
     (diagnosis, the ``dynamic_rung`` entry: why, evidence, accepted, the BIC drop and share, the ladder:
     baseline, quasi-static final, with the dynamics, floor NRMSE). ``rung``: :func:`rung_wanted`'s entry.
     """
     rung = dict(rung or rung_wanted(d, {"bearing_diagnosis": {"dynamic_rung": "auto"}}))
-    names = list(d.selected)
-    pair = [EFFECT_OF_TYPE[ev["type"]] for ev in rung.get("evidence", [])[:1]]
-    pair = [n for n in pair if n not in names and n in problem.catalogue]
-    add = [CATALOGUE[n] for n in (*names, *pair) if CATALOGUE[n] not in problem.configured]
-    rp = replace(problem, configured=(*problem.configured, *add, CATALOGUE["shaft_dynamics"]),
-                 catalogue=Catalogue("bearing"))
+    faults = [n for n in d.selected if n in FAULT_TYPES]
+    pair = [] if faults else [EFFECT_OF_TYPE[ev["type"]] for ev in rung.get("evidence", [])[:1]]
+    pair = [n for n in pair if n in problem.catalogue]
+    first = [*[n for n in d.selected if n not in FAULT_TYPES], *faults[:1], *pair]
+    cat = Catalogue("bearing")
+    for n in faults[1:]:
+        cat.register(CATALOGUE[n])
+    add = [CATALOGUE[n] for n in first if CATALOGUE[n] not in problem.configured]
+    rp = replace(problem, configured=(*problem.configured, *add, CATALOGUE["shaft_dynamics"]), catalogue=cat,
+                 profile_evaluations=RUNG_PROFILE_EVALUATIONS)
     (progress or (lambda _m: None))("dynamic rung: + " + " + ".join([*pair, "shaft_dynamics"]))
     dr = diagnose(rp, settings, progress, d.baseline)
+    bad = unidentified_defects(dr)
     drop = d.final.chi2 - dr.final.chi2
     share = float(np.clip(drop / max(d.final.excess, drop, 1e-12), 0.0, 1.0))
     delta_bic = float(d.final.bic - dr.final.bic)
-    ok = delta_bic > settings.min_delta_bic and share >= settings.min_share
+    ok = delta_bic > settings.min_delta_bic and share >= settings.min_share and not bad
     rung.update(
         accepted=bool(ok),
+        unidentified=bad,
         delta_bic=delta_bic,
         strength=strength(delta_bic),
         excess_explained=share,
@@ -369,12 +377,17 @@ def merged(d, dr, share: float, pair: list[str]):
     dr.steps = [*d.steps, step_entry(rung_fit, " + ".join([*pair, "shaft_dynamics"]), c), *dr.steps[1:]]
     dr.fits = [*d.fits, rung_fit, *dr.fits[1:]]
     dr.selected = [*d.selected, *pair, "shaft_dynamics", *dr.selected]
+    dr.selected = list(dict.fromkeys(n for n in dr.selected if n in {e.name for e in dr.final.model.effects}))
     dr.configured = d.configured
     dr.tests = {**dr.tests, "configured": d.tests["configured"]}
     dr.ranking = d.ranking
     return dr
 
 
+#: Most evaluations of the dynamic chain the rung's interval checks and profiles may spend (the engine's 600 would
+#: cost 1.5-2 CPU minutes on a 2 s record at 2550 Hz, 0.15-0.2 s each; intervals beyond it keep the Jacobian's,
+#: flagged in ``ci_method``).
+RUNG_PROFILE_EVALUATIONS = 120
 #: The catalogue effect of each fault type.
 EFFECT_OF_TYPE = {kind: name for name, (kind, _w, _a) in FAULT_TYPES.items()}
 #: A fault's lines name it (where no defect is selected) when at least two of its first three lines stand this far

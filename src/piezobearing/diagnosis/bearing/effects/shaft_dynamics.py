@@ -99,11 +99,14 @@ class ShaftDynamicsEffect(Effect):
                 f"{values['bearing_damping_N_s_per_m']:.4g} N s/m")
 
 
+#: A placed groove within this of the current fit's angle is the rig file's start again [rad] (a tenth of the
+#: 0.57 rad roller pitch of the paper's bearing; a misplaced groove lies a pitch away).
+SAME_PLACE_RAD = 0.05
 #: Time shifts the groove's placement resolves: this many per sample [-].
 UPSAMPLE = 16
 
 
-def place_groove(ctx, own: dict, keep: int = 2) -> list[dict]:
+def place_groove(ctx, own: dict, keep: int = 1) -> list[dict]:
     """Starts of an outer-race groove for the dynamic chain, found by cross-correlation: ``keep`` dicts.
 
     The dynamic chain's voltage with a groove at each angle a_k = a_0 + k x pitch within the load zone (+-100 deg;
@@ -113,7 +116,8 @@ def place_groove(ctx, own: dict, keep: int = 2) -> list[dict]:
     at lags within half a roller pitch, resolved to 1/:data:`UPSAMPLE` of a sample (the ring's period spans
     about one sample at 2550 Hz: a fit started a few hundredths of a radian off ends in another ring's phase).
     Each a_k's best lag (a positive amplitude) gives an angle and a width (the dip grows as the width squared);
-    the ``keep`` that explain most of the residual are returned.
+    the ``keep`` that explain most of the residual are returned, less any within :data:`SAME_PLACE_RAD` of a_0 (the
+    start the rig file's values already make: each start is a whole fit of the dynamic chain).
     """
     rig = ctx.record.rig
     values = {**ctx.values, **own}
@@ -148,7 +152,7 @@ def place_groove(ctx, own: dict, keep: int = 2) -> list[dict]:
             scored.append((amp * amp * energy, {**own, "outer_defect_angle_rad": float(ak + lag_s[j] * omega),
                                                 "outer_defect_width_m": float(np.clip(w * np.sqrt(amp), 0.05e-3, 2.9e-3))}))
     scored.sort(key=lambda x: -x[0])
-    return [t for _, t in scored[:keep]]
+    return [t for _, t in scored[:keep] if abs(t["outer_defect_angle_rad"] - a0) > SAME_PLACE_RAD]
 
 
 EFFECT = ShaftDynamicsEffect()
