@@ -315,12 +315,12 @@ def rung_wanted(d, config: dict) -> dict:
 def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None = None):
     """The engine once more with the shaft's dynamics (``shaft_dynamics``), judged against the quasi-static diagnosis.
 
-    Configured: the quasi-static selection's operating conditions and its first defect (their fits warm-start
-    the rung); where no defect is selected, the defect of the fault type whose lines the residual shows most
-    (:func:`fault_evidence`), fitted quasi-statically first; then ``shaft_dynamics``, whose starts place an
-    outer-race groove with the dynamics on (the pair: a groove the quasi-static chain places a pitch away).
-    Searched, by the engine's stepwise rule with the dynamics on: the quasi-static selection's later defects
-    (often stand-ins for the dynamics the quasi-static chain lacks). The rung is accepted by the engine's rule
+    Configured: the quasi-static selection's first defect (its fit warm-starts the rung); where no defect is
+    selected, the defect of the fault type whose lines the residual shows most (:func:`fault_evidence`), fitted
+    quasi-statically first; then ``shaft_dynamics``, whose starts place an outer-race groove with the dynamics on
+    (the pair: a groove the quasi-static chain places a pitch away). Searched, by the engine's stepwise rule with
+    the dynamics on: the rest of the quasi-static selection (operating conditions and later defects, often
+    stand-ins for the dynamics the quasi-static chain lacks). The rung is accepted by the engine's rule
     for one step (:func:`~piezobearing.diagnosis.selection.accepted`: its BIC drop over the quasi-static final
     model above ``min_delta_bic`` and at least ``min_share`` of that model's misfit above the floor explained)
     where none of its defects is unidentified (:func:`unidentified_defects`); the diagnosis returned is then the
@@ -332,10 +332,11 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     faults = [n for n in d.selected if n in FAULT_TYPES]
     pair = [] if faults else [EFFECT_OF_TYPE[ev["type"]] for ev in rung.get("evidence", [])[:1]]
     pair = [n for n in pair if n in problem.catalogue]
-    first = [*[n for n in d.selected if n not in FAULT_TYPES], *faults[:1], *pair]
+    first = [*faults[:1], *pair]
     cat = Catalogue("bearing")
-    for n in faults[1:]:
-        cat.register(CATALOGUE[n])
+    for n in d.selected:
+        if n not in first:
+            cat.register(CATALOGUE[n])
     add = [CATALOGUE[n] for n in first if CATALOGUE[n] not in problem.configured]
     rp = replace(problem, configured=(*problem.configured, *add, CATALOGUE["shaft_dynamics"]), catalogue=cat,
                  profile_evaluations=RUNG_PROFILE_EVALUATIONS)
@@ -346,6 +347,15 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     share = float(np.clip(drop / max(d.final.excess, drop, 1e-12), 0.0, 1.0))
     delta_bic = float(d.final.bic - dr.final.bic)
     ok = delta_bic > settings.min_delta_bic and share >= settings.min_share and not bad
+    if ok and dr.final.nrmse < REMEASURE_BELOW * dr.final.floor_nrmse:
+        # the floor was lifted by the fault's lines the quasi-static model left: measured again on the rung's
+        # residual, and the rung run with it (as the quasi-static diagnosis does)
+        qm = problem.floor.quiet_mask
+        fl = noise_floor(dr.final.residual_V, problem.record.dt_s, None if qm is None else ~qm)
+        fl = replace(fl, method=f"{fl.method}, of the dynamic rung's final residual: the floor before "
+                     f"({problem.floor.voltage_noise_V:.4g} V) was lifted by the fault's lines")
+        (progress or (lambda _m: None))("dynamic rung: floor measured again")
+        dr = diagnose(replace(rp, floor=fl), settings, progress)
     rung.update(
         accepted=bool(ok),
         unidentified=bad,

@@ -116,8 +116,8 @@ def place_groove(ctx, own: dict, keep: int = 1) -> list[dict]:
     at lags within half a roller pitch, resolved to 1/:data:`UPSAMPLE` of a sample (the ring's period spans
     about one sample at 2550 Hz: a fit started a few hundredths of a radian off ends in another ring's phase).
     Each a_k's best lag (a positive amplitude) gives an angle and a width (the dip grows as the width squared);
-    the ``keep`` that explain most of the residual are returned, less any within :data:`SAME_PLACE_RAD` of a_0 (the
-    start the rig file's values already make: each start is a whole fit of the dynamic chain).
+    of those farther than :data:`SAME_PLACE_RAD` from a_0 (where the rig file's start already puts it: each start
+    is a whole fit of the dynamic chain), the ``keep`` that explain most of the residual are returned.
     """
     rig = ctx.record.rig
     values = {**ctx.values, **own}
@@ -152,7 +152,7 @@ def place_groove(ctx, own: dict, keep: int = 1) -> list[dict]:
             scored.append((amp * amp * energy, {**own, "outer_defect_angle_rad": float(ak + lag_s[j] * omega),
                                                 "outer_defect_width_m": float(np.clip(w * np.sqrt(amp), 0.05e-3, 2.9e-3))}))
     scored.sort(key=lambda x: -x[0])
-    return [t for _, t in scored[:keep] if abs(t["outer_defect_angle_rad"] - a0) > SAME_PLACE_RAD]
+    return [t for _, t in scored if abs(t["outer_defect_angle_rad"] - a0) > SAME_PLACE_RAD][:keep]
 
 
 EFFECT = ShaftDynamicsEffect()
