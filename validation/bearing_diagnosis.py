@@ -26,8 +26,8 @@ from pathlib import Path
 
 from piezobearing import config as cfg
 from piezobearing.diagnosis.bearing.lpm_records import lpm_record
-from piezobearing.io import write_bearing_record
 from piezobearing.diagnosis.bearing.subject import SUBJECT
+from piezobearing.io import write_bearing_record
 from piezobearing.stages.bearing_diagnosis import influence_from_config, read_influence
 
 #: name -> (hidden catalogue values, the effects that carry them)

@@ -41,8 +41,8 @@ from ...bearing.surrogate import (
     cage_phase,
     inner_race_contact,
     phase_edges,
-    rolling_element_drop,
     roller_groove_drop,
+    rolling_element_drop,
 )
 from ...sensor.response import SensorModel
 from ..record import UniformClock
