@@ -19,7 +19,8 @@ import pytest
 from piezobearing.bearing.lpm import BearingGeometry
 from piezobearing.bearing.shaft_dynamics import ShaftDynamics, contact_stiffness_N_per_m, sensor_force
 from piezobearing.diagnosis.bearing import chain, lpm_records
-from piezobearing.diagnosis.bearing.subject import SUBJECT, rig_from_config, synthesise, unidentified_defects
+from piezobearing.diagnosis.bearing.rung import unidentified_defects
+from piezobearing.diagnosis.bearing.subject import SUBJECT, rig_from_config, synthesise
 from piezobearing.stages.bearing_diagnosis import influence_from_config
 
 GROOVE_20DEG = {"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.35}
