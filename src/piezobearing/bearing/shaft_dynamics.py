@@ -29,9 +29,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from .lpm import contact_law, line_contact_stiffness, static_offset
+from .lpm import contact_law, line_contact_stiffness
 from .lpm_kernel import newmark_lpm
-from .surrogate import NoEquilibriumError
+from .surrogate import NoEquilibriumError, quasi_static_loads
 
 #: Integration steps per period of the shaft's mode on its rollers (:func:`modes_Hz`): 24 keeps the box-averaged
 #: sensor force within 0.2 % (rms) of the LPM at a 2.7 us step on the paper's rig (12: 0.7 %) with a groove
@@ -95,7 +95,7 @@ def contact_stiffness_N_per_m(radial_load_N: float, psi_rad: np.ndarray, gap_m: 
     """The rollers' contact stiffness along the load at the static equilibrium with rollers at ``psi_rad`` (Z,):
     sum_j dQ_j/d delta_j cos^2 psi_j [N/m]."""
     k = line_contact_stiffness(roller_length_m)
-    e = static_offset(np.array([0.0, -radial_load_N]), psi_rad, gap_m, np.zeros(psi_rad.size), k)
+    e = equilibrium(psi_rad, np.zeros(psi_rad.size), radial_load_N, gap_m, k)
     _, dq = contact_law(e[0] * np.sin(psi_rad) - e[1] * np.cos(psi_rad) - gap_m, k)
     return float(np.sum(dq * np.cos(psi_rad) ** 2))
 
@@ -112,6 +112,16 @@ def shaft_mode(dyn: ShaftDynamics, radial_load_N: float, radial_clearance_m: flo
     k = float(np.mean(ks))
     f = modes_Hz(k, dyn.shaft_mass_kg, dyn.pedestal_mass_kg, dyn.pedestal_stiffness_N_per_m)[0]
     return f, dyn.bearing_damping_N_s_per_m / (2.0 * np.sqrt(k * dyn.shaft_mass_kg))
+
+
+def equilibrium(psi_rad: np.ndarray, extra_gap_m: np.ndarray, radial_load_N: float, gap_m: float,
+                k_contact: float) -> np.ndarray:
+    """The shaft's static offset (y, z) [m] with rollers at ``psi_rad`` (Z,) and extra gaps (Z,): the surrogate's
+    Newton's method (:func:`.surrogate.quasi_static_loads`, from any start; no equilibrium raises
+    :class:`.surrogate.NoEquilibriumError`, a refused step of a fit)."""
+    _, e = quasi_static_loads(np.asarray(psi_rad)[None, :], np.asarray(extra_gap_m)[None, :], radial_load_N, gap_m,
+                              k_contact, 1e-12, return_offset=True)
+    return e[0]
 
 
 def steps_per_sample(mode_Hz: float, dt_s: float) -> int:
@@ -145,7 +155,7 @@ def sensor_force(psi_rad: np.ndarray, extra_gap_m: np.ndarray, radial_load_N: fl
     n = psi_rad.shape[0]
     fext = np.zeros((n, 4))
     fext[:, 1] = -radial_load_N
-    e0 = static_offset(fext[0, :2], psi_rad[0], gap, extra_gap_m[0], kc)
+    e0 = equilibrium(psi_rad[0], extra_gap_m[0], radial_load_N, gap, kc)
     up0 = fext[0, :2] / dyn.pedestal_stiffness_N_per_m
     u0 = np.r_[up0 + e0, up0]
     sn, cn = (np.sin(psi_rad), -np.cos(psi_rad)) if normals is None else normals
