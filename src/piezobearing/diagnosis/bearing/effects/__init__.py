@@ -17,9 +17,10 @@ identifier              what it models
 ======================  ==========================================================
 
 ``shaft_dynamics`` is a rung of the model, not a candidate of the quasi-static search
-(:data:`RUNGS`): a fit with it costs a hundred times one without, and alone on a healthy bearing it changes
+(:data:`RUNGS`): an evaluation with it costs 25-50 times one without (0.14-0.24 s against 3-9 ms for a 2 s record
+at 2550 Hz, benchmarks/bench_shaft_dynamics.py), and alone on a healthy bearing it changes
 the record by less than the noise. The subject adds it where the quasi-static model leaves a fault's lines or
-rings (:mod:`..subject`), or from the rig file (``bearing_diagnosis.effects``).
+rings (:mod:`..rung`), or from the rig file (``bearing_diagnosis.effects``).
 """
 
 from __future__ import annotations
