@@ -116,8 +116,10 @@ def place_groove(ctx, own: dict, keep: int = 1) -> list[dict]:
     at lags within half a roller pitch, resolved to 1/:data:`UPSAMPLE` of a sample (the ring's period spans
     about one sample at 2550 Hz: a fit started a few hundredths of a radian off ends in another ring's phase).
     Each a_k's best lag (a positive amplitude) gives an angle and a width (the dip grows as the width squared);
-    of those farther than :data:`SAME_PLACE_RAD` from a_0 (where the rig file's start already puts it: each start
-    is a whole fit of the dynamic chain), the ``keep`` that explain most of the residual are returned.
+    of the two that explain most of the residual farther than :data:`SAME_PLACE_RAD` from a_0 (where the rig
+    file's start already puts it), those whose start leaves less misfit than the groove at a_0 with the dynamics
+    are returned, at most ``keep`` (each start is a whole fit of the dynamic chain: a groove the quasi-static fit
+    placed right gets none).
     """
     rig = ctx.record.rig
     values = {**ctx.values, **own}
@@ -152,7 +154,14 @@ def place_groove(ctx, own: dict, keep: int = 1) -> list[dict]:
             scored.append((amp * amp * energy, {**own, "outer_defect_angle_rad": float(ak + lag_s[j] * omega),
                                                 "outer_defect_width_m": float(np.clip(w * np.sqrt(amp), 0.05e-3, 2.9e-3))}))
     scored.sort(key=lambda x: -x[0])
-    return [t for _, t in scored if abs(t["outer_defect_angle_rad"] - a0) > SAME_PLACE_RAD][:keep]
+    moved = [t for _, t in scored if abs(t["outer_defect_angle_rad"] - a0) > SAME_PLACE_RAD][:2]
+
+    def misfit(vals: dict) -> float:
+        r = ctx.voltage_V - chain.voltage(rig, vals)
+        return float(np.sum((r - r.mean()) ** 2))
+
+    here = misfit(values)
+    return [t for t in moved if misfit({**values, **t}) < here][:keep]
 
 
 EFFECT = ShaftDynamicsEffect()
