@@ -14,11 +14,13 @@ import numpy as np
 
 from ..effect import Catalogue
 from ..engine import diagnose
+from ..fit import fit_model
 from ..selection import Candidate, step_entry, strength
 from ..subject import Problem
 from .answer import EFFECT_OF_TYPE, fault_answer, fault_evidence
 from .effects import CATALOGUE, FAULT_TYPES
 from .floor import REMEASURE_BELOW, noise_floor
+from .model import BearingModel
 
 #: Width of a defect's 95 % interval in angle beyond which it does not place the defect [rad].
 FULL_TURN_RAD = 2 * np.pi
@@ -91,12 +93,13 @@ def rung_wanted(d, config: dict) -> dict:
 def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None = None):
     """The engine once more with the shaft's dynamics (``shaft_dynamics``), judged against the quasi-static diagnosis.
 
-    Configured: the quasi-static selection's first defect (its fit warm-starts the rung); where no defect is
-    selected, the defect of the fault type whose lines the residual shows most (:func:`fault_evidence`), fitted
-    quasi-statically first; then ``shaft_dynamics``, whose starts place an outer-race groove with the dynamics on
-    (the pair: a groove the quasi-static chain places a pitch away). Searched, by the engine's stepwise rule with
-    the dynamics on: the rest of the quasi-static selection (operating conditions and later defects, often
-    stand-ins for the dynamics the quasi-static chain lacks). The rung is accepted by the engine's rule
+    Configured: the quasi-static selection in its order (their fits start the rung where the quasi-static search
+    left them); where no defect is selected, the defect of the fault type whose lines the residual shows most
+    (:func:`fault_evidence`), fitted quasi-statically first; then ``shaft_dynamics``, whose starts place an
+    outer-race groove with the dynamics on (the pair: a groove the quasi-static chain places a pitch away). Then
+    every selected effect but the first defect is held to the selection rule with the dynamics on
+    (:func:`stand_ins`), and the rung runs again without those the record does not support (a load change or a
+    second defect the quasi-static search took as a stand-in for the ring). The rung is accepted by the engine's rule
     for one step (:func:`~piezobearing.diagnosis.selection.accepted`: its BIC drop over the quasi-static final
     model above ``min_delta_bic`` and at least ``min_share`` of that model's misfit above the floor explained)
     where none of its defects is unidentified (:func:`unidentified_defects`); the diagnosis returned is then the
@@ -108,16 +111,20 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     faults = [n for n in d.selected if n in FAULT_TYPES]
     pair = [] if faults else [EFFECT_OF_TYPE[ev["type"]] for ev in rung.get("evidence", [])[:1]]
     pair = [n for n in pair if n in problem.catalogue]
-    first = [*faults[:1], *pair]
-    cat = Catalogue("bearing")
-    for n in d.selected:
-        if n not in first:
-            cat.register(warm(CATALOGUE[n], d.final.values, d.record))
-    add = [CATALOGUE[n] for n in first if CATALOGUE[n] not in problem.configured]
-    rp = replace(problem, configured=(*problem.configured, *add, CATALOGUE["shaft_dynamics"]), catalogue=cat,
-                 profile_evaluations=RUNG_PROFILE_EVALUATIONS)
-    (progress or (lambda _m: None))("dynamic rung: + " + " + ".join([*pair, "shaft_dynamics"]))
+    names = [*d.selected, *pair]
+    add = [CATALOGUE[n] for n in names if CATALOGUE[n] not in problem.configured]
+    rp = replace(problem, configured=(*problem.configured, *add, CATALOGUE["shaft_dynamics"]),
+                 catalogue=Catalogue("bearing"), profile_evaluations=RUNG_PROFILE_EVALUATIONS)
+    note = progress or (lambda _m: None)
+    note("dynamic rung: + " + " + ".join([*pair, "shaft_dynamics"]))
     dr = diagnose(rp, settings, progress, d.baseline)
+    # the quasi-static selection's other effects, each held to the selection rule with the dynamics on
+    weak = stand_ins(dr, [n for n in names if n not in [*faults[:1], *pair]], settings)
+    if weak:
+        note(f"dynamic rung: without {', '.join(weak)} (not supported with the dynamics)")
+        rp = replace(rp, configured=tuple(e for e in rp.configured if e.name not in weak))
+        dr = diagnose(rp, settings, progress, d.baseline)
+    rung["left_out"] = weak
     bad = unidentified_defects(dr)
     drop = d.final.chi2 - dr.final.chi2
     share = float(np.clip(drop / max(d.final.excess, drop, 1e-12), 0.0, 1.0))
@@ -153,17 +160,26 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     return (merged(d, dr, share, pair) if ok else d), rung
 
 
-def warm(effect, values: dict, record):
-    """``effect`` with one more start first: its parameters' ``values`` (the quasi-static final fit's), so that the
-    rung's search refits it from where the quasi-static search left it (a clearance 8 um short of the record's
-    is a better start than the effect's own)."""
-    start = {p.name: values[p.name] for p in effect.params(record) if p.name in values}
-
-    class Warm(type(effect)):
-        def starts(self, ctx):
-            return [dict(start), *super().starts(ctx)]
-
-    return Warm()
+def stand_ins(dr, names: list[str], settings) -> list[str]:
+    """Which of ``names`` (effects of ``dr``'s final model) the record does not support with the dynamics on: the
+    final model refitted without each (from the final values), and the effect kept only where adding it back passes
+    the engine's rule (:func:`~piezobearing.diagnosis.selection.accepted`: BIC drop above ``min_delta_bic``, at
+    least ``min_share`` of the misfit explained). A quasi-static fit takes a load change or a second defect as a
+    stand-in for the ring it cannot model; an operating condition it found (a clearance) keeps its evidence."""
+    final, out = dr.final, []
+    for n in names:
+        effects = tuple(e for e in final.model.effects if e.name != n)
+        if len(effects) == len(final.model.effects):
+            continue
+        own = {p.name for e in final.model.effects if e.name == n for p in e.params(dr.record)}
+        f = fit_model(BearingModel(effects), dr.record, dr.voltage_V, dr.floor,
+                      start={k: v for k, v in final.values.items() if k not in own},
+                      max_nfev=settings.max_nfev, ftol=settings.ftol)
+        drop = f.chi2 - final.chi2
+        share = float(np.clip(drop / max(f.excess, drop, 1e-12), 0.0, 1.0))
+        if not (f.bic - final.bic > settings.min_delta_bic and share >= settings.min_share):
+            out.append(n)
+    return out
 
 
 def merged(d, dr, share: float, pair: list[str]):
