@@ -288,9 +288,12 @@ LINES_DB = 20.0
 
 def fault_evidence(d) -> list[dict]:
     """The fault families the final residual still shows, strongest first: ``{"type", "lines", "envelope",
-    "strongest_dB"}``. A family counts where the envelope view finds one of its bands above the detector's
-    family-wise threshold (:class:`~.representations.EnvelopeBands`) or where at least two of its first three
-    lines stand :data:`LINES_DB` above the floor in the spectrum test's findings."""
+    "strongest_dB"}``. A family counts where at least two of its first three lines (with their sidebands for a
+    moving defect) stand :data:`LINES_DB` above the floor in the spectrum test's findings, or, for a moving defect,
+    where the envelope view finds one of its bands above the detector's family-wise threshold
+    (:class:`~.representations.EnvelopeBands`). BPFO is the roller passage's own rate: a healthy bearing whose
+    bumps differ from the model's leaves envelope lines there (4.1x the envelope floor on a healthy LPM record at
+    1500 rpm and 25.6 kHz), so the outer race is named by its lines' strength alone."""
     env = d.judgements.get("envelope", {}).get("final")
     env_found = env.findings if env is not None else []
     bands = {"outer_race": ("BPFO",), "inner_race": ("BPFI",), "rolling_element": ("2xBSF", "BSF")}
@@ -308,7 +311,9 @@ def fault_evidence(d) -> list[dict]:
                 hits.append({"line": label, "frequency_Hz": float(f), "excess_dB": float(u["excess_dB"])})
         envs = [{"band": e["band"], "frequency_Hz": e["frequency_Hz"], "ratio": e["ratio"]} for e in env_found
                 if e["band"].split("x")[-1] in bands[kind] or e["band"] in bands[kind]]
-        if len({h["line"] for h in hits}) >= 2 or envs:
+        # the outer race's family is the roller passage's: a healthy bearing's bumps off the model put lines there
+        # too, in the envelope as well, so only its lines' strength names it
+        if len({h["line"] for h in hits}) >= 2 or (envs and kind != "outer_race"):
             out.append({"type": kind, "lines": hits, "envelope": envs,
                         "strongest_dB": max([h["excess_dB"] for h in hits], default=0.0)})
     out.sort(key=lambda e: (-len(e["lines"]), -e["strongest_dB"]))

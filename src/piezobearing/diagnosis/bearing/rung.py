@@ -97,7 +97,8 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     left them); where no defect is selected, the defect of the fault type whose lines the residual shows most
     (:func:`fault_evidence`), fitted quasi-statically first; then ``shaft_dynamics``, whose starts place an
     outer-race groove with the dynamics on (the pair: a groove the quasi-static chain places a pitch away). Then
-    every selected effect but the first defect is held to the selection rule with the dynamics on
+    every effect but the quasi-static search's first defect (the pair's defect too) is held to the selection rule
+    with the dynamics on
     (:func:`stand_ins`), and the rung runs again without those the record does not support (a load change or a
     second defect the quasi-static search took as a stand-in for the ring). The rung is accepted by the engine's rule
     for one step (:func:`~piezobearing.diagnosis.selection.accepted`: its BIC drop over the quasi-static final
@@ -119,7 +120,7 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     note("dynamic rung: + " + " + ".join([*pair, "shaft_dynamics"]))
     dr = diagnose(rp, settings, progress, d.baseline)
     # the quasi-static selection's other effects, each held to the selection rule with the dynamics on
-    weak = stand_ins(dr, [n for n in names if n not in [*faults[:1], *pair]], settings)
+    weak = stand_ins(dr, [n for n in names if n not in faults[:1]], settings)
     if weak:
         note(f"dynamic rung: without {', '.join(weak)} (not supported with the dynamics)")
         rp = replace(rp, configured=tuple(e for e in rp.configured if e.name not in weak))
@@ -188,11 +189,12 @@ def merged(d, dr, share: float, pair: list[str]):
     model), then the rung's own search; ``selected`` the quasi-static selection, ``shaft_dynamics`` and the rung's
     additions; the configured model (and its tests) the user's."""
     rung_fit = dr.configured
+    present = {e.name for e in dr.final.model.effects}
+    pair = [n for n in pair if n in present]
     c = Candidate(CATALOGUE["shaft_dynamics"], rung_fit, float(d.final.bic - rung_fit.bic), share)
     dr.steps = [*d.steps, step_entry(rung_fit, " + ".join([*pair, "shaft_dynamics"]), c), *dr.steps[1:]]
     dr.fits = [*d.fits, rung_fit, *dr.fits[1:]]
-    dr.selected = [*d.selected, *pair, "shaft_dynamics", *dr.selected]
-    dr.selected = list(dict.fromkeys(n for n in dr.selected if n in {e.name for e in dr.final.model.effects}))
+    dr.selected = list(dict.fromkeys(n for n in [*d.selected, *pair, "shaft_dynamics", *dr.selected] if n in present))
     dr.configured = d.configured
     dr.tests = {**dr.tests, "configured": d.tests["configured"]}
     dr.ranking = d.ranking
