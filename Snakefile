@@ -22,6 +22,7 @@ include: "workflow/rules/diagnostics_bearing.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/scorecard.smk"
 include: "workflow/rules/studies.smk"
+include: "workflow/rules/detect_archive.smk"
 
 
 rule all:

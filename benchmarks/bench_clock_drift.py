@@ -33,11 +33,11 @@ from piezobearing.diagnosis.calibration.effects import (
     ForceRecord,  # noqa: E402
     clock_drift,  # noqa: E402
 )
+from piezobearing.diagnosis.calibration.presses import PressProtocol, synthesize  # noqa: E402
 from piezobearing.diagnosis.calibration.subject import diagnose_record  # noqa: E402
 from piezobearing.diagnosis.settings import DiagnosticsSettings  # noqa: E402
 from piezobearing.sensor.calibration import detect_impulses  # noqa: E402
 from piezobearing.stages.calibration import nominal_circuit  # noqa: E402
-from piezobearing.synthesis import PressProtocol, synthesize  # noqa: E402
 
 HIDDEN = {
     "clock_drift": [{"name": "clock_drift", "params": {"clock_drift_ppm": 100.0}}],

@@ -33,11 +33,11 @@ from pathlib import Path
 
 import piezobearing.config
 from piezobearing.diagnosis.calibration.effects import CATALOGUE, ForceRecord
+from piezobearing.diagnosis.calibration.presses import PressProtocol, synthesize
 from piezobearing.diagnosis.calibration.subject import diagnose_record
 from piezobearing.diagnosis.settings import DiagnosticsSettings
 from piezobearing.sensor.calibration import detect_impulses
 from piezobearing.stages.calibration import nominal_circuit
-from piezobearing.synthesis import PressProtocol, synthesize
 
 #: Each effect's plausible size, its ``example`` (the one home of the hidden values; the module says why).
 SINGLE = {name: dict(e.example) for name, e in CATALOGUE.items() if e.example}

@@ -25,11 +25,11 @@ import numpy as np
 
 import piezobearing.config
 from piezobearing.diagnosis.calibration.effects import CATALOGUE, ForceRecord
+from piezobearing.diagnosis.calibration.presses import PressProtocol, synthesize
 from piezobearing.diagnosis.calibration.subject import diagnose_record
 from piezobearing.diagnosis.settings import DiagnosticsSettings
 from piezobearing.sensor.calibration import detect_impulses
 from piezobearing.stages.calibration import nominal_circuit
-from piezobearing.synthesis import PressProtocol, synthesize
 
 TARGET_S = 30.0
 DELAY = {"name": "channel_delay", "params": {"delay_s": 0.015}}
@@ -43,8 +43,8 @@ def ringing(config: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The reference sensor seen through a 35 Hz, 3%-damped fixture mode (see tests/test_diagnostics.py)."""
     from scipy.signal import cont2discrete, lfilter
 
+    from piezobearing.diagnosis.calibration.presses import press_force
     from piezobearing.sensor.calibration import circuit_voltage
-    from piezobearing.synthesis import press_force
 
     p = PressProtocol.from_config(config["synthesis"])
     rng = np.random.default_rng(config["seed"])

@@ -28,8 +28,9 @@ import numpy as np
 import scipy.sparse.linalg as spla
 
 import piezobearing.config
-from piezobearing.bearing import housing_fem, transient
-from piezobearing.bearing.housing_mesh import build_housing_mesh
+from piezobearing.housing import fem as housing_fem
+from piezobearing.housing import transient
+from piezobearing.housing.mesh import build_housing_mesh
 
 CONFIG = Path(__file__).resolve().parents[1] / "config"  # the checkout's configs (ci.yaml)
 

@@ -75,8 +75,8 @@ print(json.dumps({"seconds": time.perf_counter() - t0, "cpu_seconds": ru.ru_utim
 def make_record(rows: int, path: Path) -> float:
     """A record of ``rows`` samples from the CI synthetic record repeated; its size [MB]."""
     from piezobearing import config
+    from piezobearing.diagnosis.calibration.presses import PressProtocol, synthesize
     from piezobearing.stages.calibration import nominal_circuit
-    from piezobearing.synthesis import PressProtocol, synthesize
 
     c = config.load(CONFIG / "ci.yaml")
     m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"])

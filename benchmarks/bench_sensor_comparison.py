@@ -42,10 +42,10 @@ _CHILD = """
 import json, resource, sys, time
 import numpy as np
 from piezobearing import config as cfgmod
-from piezobearing.bearing import housing_fem as fem
-from piezobearing.bearing.reduced_housing import write_housing
+from piezobearing.housing import fem
+from piezobearing.stages.housing_model import write_housing
 from piezobearing.stages.studies import run_case
-from piezobearing.studies import case_config, check_studies
+from piezobearing.config.cases import case_config, check_studies
 
 configfile, index, mode, inputs, out = sys.argv[1], int(sys.argv[2]), sys.argv[3], json.loads(sys.argv[4]), sys.argv[5]
 config = cfgmod.load(configfile)
@@ -117,8 +117,8 @@ def _from_rules(results: Path, config: dict) -> dict:
     job (benchmark files of other configs' cases in the same folder are left out)."""
     from snakemake.utils import Paramspace
 
-    from piezobearing.registry import reads_digest
-    from piezobearing.studies import case_config, check_studies
+    from piezobearing.config.cases import case_config, check_studies
+    from piezobearing.workflow.registry import reads_digest
 
     table = check_studies(config)["sensor_comparison"]
     cases = list(Paramspace(table, filename_params="*", single_wildcard="case").instance_patterns)
@@ -156,8 +156,8 @@ def main() -> None:
     sys.path.insert(0, str(REPO / "src"))
     from piezobearing import config as cfgmod
     from piezobearing.config import results_folder
-    from piezobearing.registry import reads_digest
-    from piezobearing.studies import case_config, check_studies
+    from piezobearing.config.cases import case_config, check_studies
+    from piezobearing.workflow.registry import reads_digest
 
     config = cfgmod.load(args.configfile)
     results = REPO / results_folder(config)

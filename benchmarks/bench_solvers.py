@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 import piezobearing.config
-from piezobearing import sparse_solve
+from piezobearing.numerics import sparse_solve
 
 CONFIG = Path(__file__).resolve().parents[1] / "config"  # the checkout's configs (ci.yaml)
 
@@ -34,8 +34,9 @@ def _timed(fn):
 
 
 def bench_housing(config: dict, max_level: float) -> dict:
-    from piezobearing.bearing import housing_fem, transient
-    from piezobearing.bearing.housing_mesh import build_housing_mesh
+    from piezobearing.housing import fem as housing_fem
+    from piezobearing.housing import transient
+    from piezobearing.housing.mesh import build_housing_mesh
 
     h = config["housing"]
     out = {}

@@ -23,11 +23,11 @@ from pathlib import Path
 import numpy as np
 
 from piezobearing import config as cfg
-from piezobearing.bearing import housing_fem as fem
 from piezobearing.bearing import lpm
 from piezobearing.bearing import surrogate as sg
-from piezobearing.bearing import transient as st
-from piezobearing.bearing.housing_mesh import build_housing_mesh
+from piezobearing.housing import fem
+from piezobearing.housing import transient as st
+from piezobearing.housing.mesh import build_housing_mesh
 
 CONFIG = Path(__file__).resolve().parents[1] / "config"  # the checkout's configs (ci.yaml)
 

@@ -110,15 +110,59 @@ def _run(folder: Path, args: list[str], log: Path, extra_env: dict) -> None:
         f.write(f"\nrc={code}\n")
 
 
-def record(name: str, old: str, args: list[str], logs: tuple[Path, Path], dirs: tuple[Path, Path]) -> dict:
+def _job_dag(folder: Path, args: list[str]) -> tuple[dict[int, str], list[tuple[int, int]]]:
+    """The jobs of ``snakemake --dag --forceall`` in ``folder`` (id -> rule) and their edges (parent, child)."""
+    env = {**os.environ, "PATH": f"{BIN}:{os.environ['PATH']}", "PYTHONPATH": str(folder / "src")}
+    dot = subprocess.run([str(BIN / "snakemake"), "--dag", "--forceall", *args], cwd=folder, env=env,
+                         capture_output=True, text=True, check=True).stdout
+    jobs = {int(i): rule for i, rule in re.findall(r'^\s*(\d+)\[label = "(\w+)', dot, re.M)}
+    edges = [(int(a), int(b)) for a, b in re.findall(r"^\s*(\d+) -> (\d+)", dot, re.M)]
+    return jobs, edges
+
+
+def critical_path(folder: Path, args: list[str]) -> dict:
+    """The longest chain of jobs of a finished run in ``folder``: each job weighted by the wall seconds of its
+    rule's longest job (``results/benchmarks/rules/<rule>*.tsv``, column ``s``); the floor of the run's wall time
+    on any number of cores. Also the rules' summed wall and CPU seconds (column ``cpu_time``)."""
+    jobs, edges = _job_dag(folder, args)
+    bench = folder / "results/benchmarks/rules"
+    seconds, cpu = {}, {}
+    for f in sorted(bench.rglob("*.tsv")):
+        rows = [line.split("\t") for line in f.read_text().splitlines()[1:] if line.strip()]
+        rule = next((r for r in sorted(set(jobs.values()), key=len, reverse=True)
+                     if f.relative_to(bench).as_posix().startswith(r)), None)
+        if rule is None or not rows:
+            continue
+        seconds[rule] = max(seconds.get(rule, 0.0), float(rows[-1][0]))
+        cpu[rule] = cpu.get(rule, 0.0) + float(rows[-1][-1])
+    children: dict[int, list[int]] = {}
+    for a, b in edges:  # snakemake draws an edge from the job that makes a file to the job that reads it
+        children.setdefault(a, []).append(b)
+    memo: dict[int, tuple[float, list[str]]] = {}
+
+    def longest(j: int) -> tuple[float, list[str]]:
+        if j not in memo:
+            w = seconds.get(jobs[j], 0.0)
+            tail = max((longest(c) for c in children.get(j, ())), default=(0.0, []))
+            memo[j] = (w + tail[0], [jobs[j], *tail[1]])
+        return memo[j]
+
+    total, path = max(longest(j) for j in jobs)
+    return {"seconds": round(total, 1), "rules": [r for r in path if r != "all"],
+            "rules_wall_s": round(sum(seconds.values()), 1), "rules_cpu_s": round(sum(cpu.values()), 1)}
+
+
+def record(name: str, old: str, args: list[str], logs: tuple[Path, Path], dirs: tuple[Path, Path],
+           when: str = "at the same time") -> dict:
     t_old, t_new = (parse_time_log(p.read_text()) for p in logs)
     ratio = {k: t_new[k] / t_old[k] for k in ("wall_s", "cpu_s", "peak_rss_MB") if t_old[k]}
     load = os.getloadavg()
     return {
-        "what": f"snakemake --cores 2 {' '.join(args)} in a fresh copy, old and new at the same time",
+        "what": f"snakemake --cores 2 {' '.join(args)} in a fresh copy, old and new {when}",
         "old": {"revision": old, **t_old},
         "new": {"revision": "HEAD", **t_new},
         "new_over_old": ratio,
+        "critical_path": {"old": critical_path(dirs[0], args), "new": critical_path(dirs[1], args)},
         "load_average_1_5_15_at_end": load,
         "results": compare_results(*dirs),
     }
@@ -134,6 +178,9 @@ def main() -> None:
                     help="environment of the old run (PIEZOBEARING_SOLVER=superlu: the previous solver)")
     ap.add_argument("targets", nargs="*")
     ap.add_argument("--parse", nargs=4, metavar=("OLD_LOG", "NEW_LOG", "OLD_DIR", "NEW_DIR"))
+    ap.add_argument("--alone", action="store_true",
+                    help="run the two sides one after the other, each with the whole machine (its wall time is the "
+                    "run's own), instead of at the same time")
     a = ap.parse_args()
     args = [*a.targets, *(["--configfile", a.configfile] if a.configfile else [])]
     a.name = a.name or (Path(a.configfile).stem if a.configfile else "paper")
@@ -143,14 +190,15 @@ def main() -> None:
         tmp = Path(tempfile.mkdtemp(prefix="bench_workflow_"))
         dirs = (export_revision(a.old, tmp / "old"), export_revision("HEAD", tmp / "new"))
         logs = (tmp / "old.log", tmp / "new.log")
-        with ThreadPoolExecutor(2) as pool:
-            envs = (dict(e.split("=", 1) for e in a.old_env), {})
+        envs = (dict(e.split("=", 1) for e in a.old_env), {})
+        with ThreadPoolExecutor(1 if a.alone else 2) as pool:
             list(pool.map(lambda k: _run(dirs[k], args, logs[k], envs[k]), (0, 1)))
     out = ROOT / "results/benchmarks" / f"workflow_{a.name}.json"
     out.parent.mkdir(parents=True, exist_ok=True)
-    rec = record(a.name, a.old + "".join(f" {e}" for e in a.old_env), args, logs, dirs)
+    rec = record(a.name, a.old + "".join(f" {e}" for e in a.old_env), args, logs, dirs,
+                 "one after the other" if a.alone else "at the same time")
     out.write_text(json.dumps(rec, indent=1) + "\n")
-    print(json.dumps({k: rec[k] for k in ("old", "new", "new_over_old")}, indent=1))
+    print(json.dumps({k: rec[k] for k in ("old", "new", "new_over_old", "critical_path")}, indent=1))
     print(rec["results"]["counts"])
 
 

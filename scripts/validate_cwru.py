@@ -18,10 +18,10 @@ from pathlib import Path
 from piezobearing.bearing.kinematics import RollingBearing
 from piezobearing.io import write_json
 from piezobearing.io.vibration import read_vibration_record
-from piezobearing.recording import detect_recording, read_rig
 from piezobearing.signals.detectors import envelope as envelope_detector
+from piezobearing.stages.recording import detect_recording, read_rig
 
-CALLS = ("outer_race", "inner_race", "rolling_element", "none")
+CALLS = ("outer_race", "inner_race", "rolling_element", "unknown", "none")
 STRETCH_S = 5.0
 
 
@@ -30,11 +30,14 @@ def confusion(rows: list[dict]) -> dict:
     for r in rows:
         counts[r["truth"]][r["call"]] += 1
     right = sum(counts[t][t] for t in CALLS)
-    wrong_type = sum(counts[t][c] for t in CALLS for c in CALLS if c not in (t, "none") and t != "none")
+    wrong_type = sum(counts[t][c] for t in CALLS for c in CALLS
+                     if c not in (t, "none", "unknown") and t not in ("none", "unknown"))
+    unknown = sum(counts[t]["unknown"] for t in CALLS if t not in ("none", "unknown"))
     false_alarms = sum(counts["none"][c] for c in CALLS if c != "none")
     missed = sum(counts[t]["none"] for t in CALLS if t != "none")
     return {"rows": "truth", "columns": "call", "classes": list(CALLS), "counts": counts, "right": right,
-            "n_records": len(rows), "wrong_type": wrong_type, "missed": missed, "false_alarms": false_alarms}
+            "n_records": len(rows), "wrong_type": wrong_type, "unknown": unknown, "missed": missed,
+            "false_alarms": false_alarms}
 
 
 def main() -> None:
@@ -57,6 +60,7 @@ def main() -> None:
                      "location": lab["location"], "size_mil": int(lab["size_mil"]),
                      "nominal_rpm": float(lab["shaft_speed_rpm_nominal"]), "call": d.fault_type,
                      "margins_dB": {f: e.margin_dB for f, e in d.families.items()},
+                     "type_call": d.details.get("type_call"),
                      "band_Hz": list(d.band_Hz), "shaft_speed_found_rpm": 60.0 * d.shaft_rate_Hz,
                      "shaft_refined": d.details["shaft"]["refined"], "duration_s": result.record.duration_s})
         print(f"{lab['record']} {lab['source_name']:<18} truth {lab['fault_type']:<16} call {d.fault_type}", flush=True)
@@ -90,7 +94,8 @@ def main() -> None:
     }
     write_json(summary, out / "cwru.json")
     (out / "cwru.md").write_text(markdown(summary), encoding="utf-8")
-    print(f"right {matrix['right']}/{matrix['n_records']}, wrong type {matrix['wrong_type']}, missed "
+    print(f"right {matrix['right']}/{matrix['n_records']}, wrong type {matrix['wrong_type']}, unknown "
+          f"{matrix['unknown']}, missed "
           f"{matrix['missed']}, false alarms {matrix['false_alarms']}; healthy stretches "
           f"{summary['healthy_stretches']['false_alarms']}/{len(stretches)}; drive-end 6205 "
           f"{summary['drive_end_healthy_6205']['false_alarms']}/{len(de_rows)}; detector CPU {cpu:.1f} s")
@@ -100,9 +105,10 @@ def markdown(summary: dict) -> str:
     m = summary["confusion"]
     head = "| truth \\ call | " + " | ".join(c.replace("_", " ") for c in CALLS) + " |"
     lines = [head, "|---|" + "---:|" * len(CALLS)]
-    for t in CALLS:
+    for t in (c for c in CALLS if c != "unknown"):
         lines.append(f"| {t.replace('_', ' ')} | " + " | ".join(str(m["counts"][t][c]) for c in CALLS) + " |")
-    lines += ["", f"Right: {m['right']} of {m['n_records']}; wrong type: {m['wrong_type']}; missed: {m['missed']}; "
+    lines += ["", f"Right: {m['right']} of {m['n_records']}; wrong type: {m['wrong_type']}; unknown type: "
+              f"{m['unknown']}; missed: {m['missed']}; "
               f"false alarms: {m['false_alarms']}.", "",
               "| record | CWRU name | truth | call | outer race [dB] | inner race [dB] | rolling element [dB] |",
               "|---|---|---|---|---:|---:|---:|"]

@@ -20,8 +20,8 @@ from pathlib import Path
 import pytest
 
 from piezobearing import config
+from piezobearing.diagnosis.calibration.presses import PressProtocol, synthesize
 from piezobearing.stages.calibration import nominal_circuit
-from piezobearing.synthesis import PressProtocol, synthesize
 
 REPO = Path(__file__).resolve().parents[1]
 CI_CONFIG = REPO / "config" / "ci.yaml"

@@ -17,11 +17,12 @@ from typing import Callable
 import numpy as np
 import pytest
 from conftest import CI_CONFIG, copy_repo, snakemake
+from scipy.io import savemat
 
 from piezobearing import cli, config
+from piezobearing.diagnosis.calibration.presses import PressProtocol, synthesize
 from piezobearing.io import write_measurement
 from piezobearing.stages.calibration import nominal_circuit
-from piezobearing.synthesis import PressProtocol, synthesize
 
 REPO = Path(__file__).resolve().parents[1]
 TABLE = REPO / "docs" / "reference" / "bad_inputs.md"
@@ -119,6 +120,10 @@ def workdir() -> Path:
         (d / name).write_text(body)
     (d / "a_config_folder").mkdir()
     (d / "out_file").write_text("not a folder\n")
+    signal = np.random.default_rng(2).standard_normal((12000, 1)) + 2.5
+    savemat(d / "struct.mat", {"bearing": {"gs": signal, "sr": np.int32(12000), "rate": 29.95, "unit": "g"}})
+    (d / "two_speeds.yaml").write_text("bearing: {designation: SKF 6203}\nshaft_speed_rpm: 1797\n"
+                                       "shaft_speed_Hz: bearing.rate\n")
     return d
 
 
@@ -227,6 +232,16 @@ CASES = [
         "dead channel",
     ),
     # usage and bugs (point 11)
+    # a vibration record for fault detection (piezobearing detect)
+    Case("detect: channel not in the struct", ("detect", f"{W}/struct.mat", "--bearing", "SKF 6203", "--fs",
+                                                "bearing.sr", "--channel", "bearing.acc", "--out", f"{W}/det"),
+         "channel 'bearing.acc' not found (the file holds channels bearing.gs [12000]; scalar fields"),
+    Case("detect: rate field holds text", ("detect", f"{W}/struct.mat", "--bearing", "SKF 6203", "--fs",
+                                           "bearing.unit", "--out", f"{W}/det"), "holds the text 'g', not a number"),
+    Case("detect: both speed units in the rig file", ("detect", f"{W}/struct.mat", "--config",
+                                                      f"{W}/two_speeds.yaml", "--out", f"{W}/det"),
+         "both shaft_speed_rpm and shaft_speed_Hz given"),
+    Case("detect: no --out", ("detect", f"{W}/struct.mat"), "--out is missing"),
     Case("usage: argument missing", ("validate",), "the following arguments are required", code=2),
     Case("internal error (a bug)", (*V, REC), "internal error (ZeroDivisionError", code=3, setup=_bug),
     # the workflow refuses the same inputs before any job (dry run in the checkout)

@@ -8,13 +8,14 @@ import copy
 import numpy as np
 import pytest
 
-from piezobearing.bearing import base_motion as bm
-from piezobearing.bearing import housing_fem as fem
 from piezobearing.bearing import lpm as brg
-from piezobearing.bearing import reduced_housing
-from piezobearing.bearing import transient as st
-from piezobearing.bearing.housing_mesh import build_housing_mesh
-from piezobearing.sensor import accelerometer as acc
+from piezobearing.comparison import accelerometer as acc
+from piezobearing.housing import base_motion as bm
+from piezobearing.housing import fem
+from piezobearing.housing import reduced as reduced_housing
+from piezobearing.housing import transient as st
+from piezobearing.housing.mesh import build_housing_mesh
+from piezobearing.stages import housing_model
 
 LEVEL = 0.35  # a coarse mesh: about 5k DOFs
 RATE_HZ = 51200.0  # the comparison's model rate: two samples per sample of a 25.6 kHz DAQ
@@ -150,20 +151,20 @@ def test_housing_file_round_trip(housing, tmp_path, paper_config):
     """A housing model written by the rule sensor_comparison_housing reads back the same; a file of another
     config or mesh stops the comparison."""
     h = reduced_housing.Housing(fem.RacewayColumns.of(housing["model"]), housing["ops"], housing["base"], housing["model"].n_dofs)
-    reads = reduced_housing.housing_reads(paper_config)
-    reduced_housing.save_housing(h, False, reads, tmp_path / "h.npz")
-    back = reduced_housing.load_housing(tmp_path / "h.npz", False, reads)
+    reads = housing_model.housing_reads(paper_config)
+    housing_model.save_housing(h, False, reads, tmp_path / "h.npz")
+    back = housing_model.load_housing(tmp_path / "h.npz", False, reads)
     assert back.at("side").record() == h.at("side").record()
     for name in ("modal_y", "static_z", "sensor_modal", "omega", "zeta"):
         np.testing.assert_array_equal(getattr(back.ops, name), getattr(h.ops, name))
     np.testing.assert_array_equal(back.base.probe_modal, h.base.probe_modal)
     np.testing.assert_array_equal(back.columns.psi_rad, h.columns.psi_rad)
     with pytest.raises(ValueError, match="sensor_comparison_housing"):
-        reduced_housing.load_housing(tmp_path / "h.npz", True, reads)
+        housing_model.load_housing(tmp_path / "h.npz", True, reads)
     other = copy.deepcopy(paper_config)
     other["housing"]["mesh_level"] = 0.5
     with pytest.raises(ValueError, match="another"):
-        reduced_housing.load_housing(tmp_path / "h.npz", False, reduced_housing.housing_reads(other))
+        housing_model.load_housing(tmp_path / "h.npz", False, housing_model.housing_reads(other))
 
 
 def test_effective_mass_grows_to_the_dragged_mass(housing):

@@ -173,7 +173,7 @@ def test_load_equilibrium_over_a_record(bcfg):
 
 
 def test_defect_impacts_repeat_at_bpfo(bcfg):
-    from piezobearing.bearing.checks import impact_intervals
+    from piezobearing.housing.checks import impact_intervals
 
     p = _params(bcfg, faulty=True)
     kin = lpm.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)

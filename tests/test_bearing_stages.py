@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from piezobearing.bearing.checks import harmonic_amplitudes, off_harmonic_fraction
+from piezobearing.housing.checks import harmonic_amplitudes, off_harmonic_fraction
 from piezobearing.stages import bearing as bearing_stages
 
 

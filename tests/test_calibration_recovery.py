@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
+from piezobearing.diagnosis.calibration.presses import PressProtocol, synthesize
 from piezobearing.sensor import calibration
 from piezobearing.sensor.lowfreq import asymptote_onset_Hz, lowfreq_sensitivity
 from piezobearing.stages.calibration import nominal_circuit
-from piezobearing.synthesis import PressProtocol, synthesize
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
@@ -32,7 +32,7 @@ def test_resistance_recovered_over_decades(paper_config, truth):
 
 
 def test_impulse_sensitivity_near_paper_by_construction(paper_record, paper_config):
-    # The synthetic presses were chosen to land near 74.4 mV/N (see synthesis.py); 5% tolerance.
+    # The synthetic presses were chosen to land near 74.4 mV/N (see diagnosis/calibration/presses.py); 5% tolerance.
     c = paper_config["calibration"]
     m = paper_record
     imps = calibration.detect_impulses(
@@ -46,10 +46,10 @@ def test_impulse_sensitivity_near_paper_by_construction(paper_record, paper_conf
 
 
 def test_noise_free_sensitivity_matches_slope_estimate(paper_config):
-    # Without noise, each impulse's peak voltage is close to G tau pi F/(2 T_r), the estimate in synthesis.py.
+    # Without noise, each impulse's peak voltage is close to G tau pi F/(2 T_r), the estimate in diagnosis/calibration/presses.py.
     circuit = nominal_circuit(paper_config)
     dt, rise = 1e-4, 0.42
-    from piezobearing.synthesis import press_pulse
+    from piezobearing.diagnosis.calibration.presses import press_pulse
 
     t = np.arange(0, 2.0, dt)
     f = press_pulse(t, 0.8, 10.0, rise, 0.5)

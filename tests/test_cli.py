@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from piezobearing.cli import main
+from piezobearing.diagnosis.calibration.presses import PressProtocol, synthesize
 from piezobearing.io import write_measurement
 from piezobearing.stages.calibration import nominal_circuit
-from piezobearing.synthesis import PressProtocol, synthesize
 
 CI_OVERRIDE = "seed: 7\nsynthesis: {duration_s: 12.0, sample_rate_Hz: 500.0, n_impulses: 6}\n"
 

@@ -6,7 +6,7 @@ import pytest
 from conftest import dry_run_errors
 
 import piezobearing.config
-from piezobearing.studies import check_studies
+from piezobearing.config.cases import check_studies
 
 
 def error(config: dict) -> str:

@@ -14,7 +14,7 @@ from scipy.io import loadmat, savemat, wavfile
 from piezobearing import cli
 from piezobearing.io import MeasurementError, read_bearing_record
 from piezobearing.io.vibration import read_vibration_record
-from piezobearing.recording import RigError, detect_recording
+from piezobearing.stages.recording import RigError, detect_recording
 
 DATA = Path(__file__).parent / "data" / "cwru"
 TRUTH = {"fe37": "inner_race", "fe39": "none", "fe44": "outer_race"}
@@ -58,7 +58,7 @@ def test_options_override_the_rig_file_and_the_speed_comes_from_the_record(tmp_p
     "args, message",
     [
         (["--bearing", "SKF 6203", "--channel", "_FE_time"], "no time axis in the file and no sampling rate given; give --fs HZ"),
-        (["--bearing", "SKF 6203", "--fs", "12000"], "holds 2 channels (X739_DE_time, X739_FE_time); choose one with --channel"),
+        (["--bearing", "SKF 6203", "--fs", "12000"], "holds 2 channels (X739_DE_time, X739_FE_time) and scalar fields (X739RPM = 1797); choose one with --channel"),
         (["--fs", "12000", "--channel", "FE_time"], "no bearing given; give --bearing DESIGNATION"),
         (["--bearing", "SKF 9999", "--fs", "12000", "--channel", "FE_time"], "'SKF 9999' not in the table"),
         (["--bearing", "SKF 6203", "--fs", "12000", "--channel", "_XX_time"], "channel '_XX_time' not found"),

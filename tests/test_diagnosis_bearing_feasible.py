@@ -17,8 +17,8 @@ from piezobearing.bearing import lpm
 from piezobearing.bearing import surrogate as sg
 from piezobearing.diagnosis.bearing.lpm_records import draw_conditions, lpm_record
 from piezobearing.diagnosis.bearing.subject import SUBJECT
-from piezobearing.diagnosis.least_squares import InfeasibleError, fit
-from piezobearing.diagnosis.params import Param
+from piezobearing.fitting.least_squares import InfeasibleError, fit
+from piezobearing.fitting.params import Param
 from piezobearing.stages.bearing_diagnosis import influence_from_config
 
 

@@ -14,13 +14,13 @@ import pandas as pd
 import pytest
 import yaml
 
+from piezobearing.chain.signals import noisy, sensor_voltage
 from piezobearing.cli import main
 from piezobearing.diagnosis.bearing import report
 from piezobearing.diagnosis.bearing.lpm_records import lpm_record, lpm_sensor_force
 from piezobearing.diagnosis.bearing.subject import SUBJECT
 from piezobearing.io import write_bearing_record
 from piezobearing.sensor.calibration import SensorCircuit
-from piezobearing.signals.outputs import noisy, sensor_voltage
 from piezobearing.stages.bearing_diagnosis import influence_from_config, run
 
 #: name -> hidden catalogue values (the catalogue's examples, the groove 0.9 mm over the sensor as the paper's)

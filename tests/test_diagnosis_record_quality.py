@@ -15,9 +15,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from piezobearing.chain import calibration as outputs
 from piezobearing.diagnosis.calibration.subject import SUBJECT
 from piezobearing.io import read_measurement
-from piezobearing.sensor import outputs
 
 
 @pytest.fixture(scope="module")
@@ -183,9 +183,9 @@ def test_coarse_adc_noise_is_in_the_floor(ci_config):
     fit quantisation noise and the verdict is unexplained."""
     from piezobearing.diagnosis import noise
     from piezobearing.diagnosis.calibration.effects import ForceRecord
+    from piezobearing.diagnosis.calibration.presses import PressProtocol, synthesize
     from piezobearing.diagnosis.calibration.subject import diagnose_record
     from piezobearing.stages.calibration import nominal_circuit
-    from piezobearing.synthesis import PressProtocol, synthesize
 
     c = {**ci_config, "synthesis": {**ci_config["synthesis"], "voltage_noise_V": 0.3e-3, "force_noise_N": 0.5e-3}}
     m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"])
@@ -223,9 +223,9 @@ def test_wandering_drift_is_found_with_knots_chosen_by_the_evidence(ci_config, m
     -12 mV, Gaussian bumps of 2 s standard deviation) on the CI record: the spline drift, its knot count chosen by BIC, finds it and
     the record is explained; the cubic alone (the drift's form before) leaves it unexplained."""
     from piezobearing.diagnosis.calibration.effects import ForceRecord, baseline_drift
+    from piezobearing.diagnosis.calibration.presses import PressProtocol, synthesize
     from piezobearing.diagnosis.calibration.subject import diagnose_record
     from piezobearing.stages.calibration import nominal_circuit
-    from piezobearing.synthesis import PressProtocol, synthesize
 
     c = ci_config
     m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"])
@@ -251,9 +251,9 @@ def test_kinked_drift_is_found_with_its_kink_time(ci_config, monkeypatch):
     later. The spline with fixed knots (the drift before) leaves it ``unexplained``; the drift's kink
     refinement (a free kink time on the chosen spline, kept by BIC) finds the time and explains the record."""
     from piezobearing.diagnosis.calibration.effects import ForceRecord, baseline_drift
+    from piezobearing.diagnosis.calibration.presses import PressProtocol, synthesize
     from piezobearing.diagnosis.calibration.subject import diagnose_record
     from piezobearing.stages.calibration import nominal_circuit
-    from piezobearing.synthesis import PressProtocol, synthesize
 
     c = ci_config
     m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"])

@@ -18,6 +18,7 @@ import pytest
 from scipy.signal import cont2discrete, lfilter
 
 from piezobearing.diagnosis.calibration.effects import CATALOGUE, ForceRecord
+from piezobearing.diagnosis.calibration.presses import PressProtocol, press_force, synthesize
 from piezobearing.diagnosis.calibration.subject import diagnose_record
 from piezobearing.diagnosis.fit import fd_weighted, whiten
 from piezobearing.diagnosis.noise import estimate_noise_floor
@@ -26,7 +27,6 @@ from piezobearing.diagnosis.settings import DiagnosticsSettings
 from piezobearing.diagnosis.verdict import findings
 from piezobearing.sensor.calibration import circuit_voltage, detect_impulses
 from piezobearing.stages.calibration import nominal_circuit
-from piezobearing.synthesis import PressProtocol, press_force, synthesize
 
 #: Hidden effects: (specs, name of the main parameter, its true value). The hidden sizes are each effect's
 #: ``example`` (its module states why that size is plausible: the one home of the values the tests, the

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from piezobearing.diagnosis.calibration.effects import CATALOGUE, ForceRecord
-from piezobearing.diagnosis.units import UNITS
+from piezobearing.fitting.units import UNITS
 
 PROBE = ForceRecord(np.arange(2000) / 1000.0, np.zeros(2000))
 
@@ -34,8 +34,8 @@ def _effects():
 
 @pytest.fixture(scope="module")
 def press_record(ci_config):
+    from piezobearing.diagnosis.calibration.presses import PressProtocol, synthesize
     from piezobearing.stages.calibration import nominal_circuit
-    from piezobearing.synthesis import PressProtocol, synthesize
 
     m = synthesize(PressProtocol.from_config(ci_config["synthesis"]), nominal_circuit(ci_config), ci_config["seed"])
     return ForceRecord(m.time_s, m.force_N), nominal_circuit(ci_config)

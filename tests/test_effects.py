@@ -17,9 +17,9 @@ from piezobearing.diagnosis.calibration.effects.base import Effect, force_band_H
 from piezobearing.diagnosis.calibration.effects.channel_delay import fractional_delay
 from piezobearing.diagnosis.calibration.effects.reference_lag import lead
 from piezobearing.diagnosis.calibration.model import ForwardModel, model_from_specs
-from piezobearing.diagnosis.units import SUFFIXES
+from piezobearing.diagnosis.calibration.presses import PressProtocol, press_force, synthesize
+from piezobearing.fitting.units import SUFFIXES
 from piezobearing.sensor.calibration import SensorCircuit, circuit_voltage, rc_response
-from piezobearing.synthesis import PressProtocol, press_force, synthesize
 
 REQUIRED = {
     "channel_delay",
@@ -97,7 +97,7 @@ def test_adding_an_effect_is_one_registration(record, circuit):
         physics = "test"
 
         def params(self, record):
-            from piezobearing.diagnosis.params import Param
+            from piezobearing.fitting.params import Param
 
             return [Param("test_gain_factor_V", 1.0, 0.5, 2.0)]
 
@@ -261,8 +261,8 @@ def test_channel_delay_summary_names_the_direction():
 
 
 def test_a_parameter_needs_a_registered_unit_suffix_and_reports_in_its_unit():
-    from piezobearing.diagnosis.params import Param, ParamError
-    from piezobearing.diagnosis.units import format_value
+    from piezobearing.fitting.params import Param, ParamError
+    from piezobearing.fitting.units import format_value
 
     with pytest.raises(ParamError, match=r"parameter 'gain'.*unit suffix"):
         Param("gain", 1.0)

@@ -7,8 +7,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from piezobearing.bearing import housing_fem, lpm, transient
-from piezobearing.bearing.housing_mesh import (
+from piezobearing.bearing import lpm
+from piezobearing.housing import fem as housing_fem
+from piezobearing.housing import transient
+from piezobearing.housing.mesh import (
     GROUP_HOUSING,
     GROUP_RING,
     build_housing_mesh,

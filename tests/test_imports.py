@@ -1,5 +1,6 @@
-"""The package's structure, read with ``ast`` (no module is imported): no import cycle in ``src``,
-the diagnosis engine imports no subject (nor any physics, stage or plotting module), and the
+"""The package's structure, read with ``ast`` (no module is imported): its layers hold (the import-linter contract
+in ``pyproject.toml``), no import cycle in ``src``, the diagnosis engine imports no subject (nor any physics,
+stage or plotting module; the fit machinery below it is shared), and the
 diagnosis package keeps its modules under ~600 lines and its functions under ~80 (or says why
 with a ``# long:`` comment in the function).
 
@@ -10,9 +11,12 @@ Every ``import`` counts, also those inside functions: a lazy import only hides a
 from __future__ import annotations
 
 import ast
+import subprocess
+import sys
 from pathlib import Path
 
-SRC = Path(__file__).resolve().parents[1] / "src"
+ROOT = Path(__file__).resolve().parents[1]
+SRC = ROOT / "src"
 PACKAGE = "piezobearing"
 
 
@@ -97,6 +101,8 @@ def test_no_import_cycle_in_src():
 
 
 DIAGNOSIS = f"{PACKAGE}.diagnosis"
+#: The fit machinery under the engine (parameters, units, least squares, profiles): shared with the calibration.
+FITTING = f"{PACKAGE}.fitting"
 
 
 def _subject_packages(modules: dict[str, Path]) -> set[str]:
@@ -118,7 +124,7 @@ def test_the_engine_imports_no_subject_and_no_physics():
     engine = [m for m in g if (m == DIAGNOSIS or m.startswith(DIAGNOSIS + ".")) and not in_subject(m)]
     assert f"{DIAGNOSIS}.engine" in engine and f"{DIAGNOSIS}.report.sections" in engine
     for m in engine:
-        bad = sorted(t for t in g[m] if in_subject(t) or not t.startswith(DIAGNOSIS))
+        bad = sorted(t for t in g[m] if in_subject(t) or not t.startswith((DIAGNOSIS, FITTING)))
         assert not bad, (
             f"engine module {m} imports {bad}: the engine must not know its subjects or the physics"
         )
@@ -143,3 +149,11 @@ def test_diagnosis_modules_and_functions_stay_short():
             body = lines[fn.lineno - 1 : fn.end_lineno]
             if len(body) > 80:
                 assert any("# long:" in b for b in body), f"{path}:{fn.lineno} {fn.name}: {len(body)} lines"
+
+
+def test_the_layers_hold():
+    """``lint-imports`` checks the contract of ``pyproject.toml`` (every import, those inside functions too)."""
+    out = subprocess.run([Path(sys.executable).with_name("lint-imports"), "--no-cache"], cwd=ROOT,
+                         capture_output=True, text=True)
+    assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-2000:]
+    assert "1 kept, 0 broken" in out.stdout

@@ -20,9 +20,9 @@ import pytest
 from conftest import CI_CONFIG, REPO, copy_repo
 
 from piezobearing import config
+from piezobearing.diagnosis.calibration.presses import PressProtocol, synthesize
 from piezobearing.io import write_measurement
 from piezobearing.stages.calibration import nominal_circuit
-from piezobearing.synthesis import PressProtocol, synthesize
 
 pytestmark = pytest.mark.slow  # a wheel build, an install and a diagnosis in fresh processes
 

@@ -9,13 +9,13 @@ from scipy.optimize._numdiff import approx_derivative
 
 from piezobearing.diagnosis.calibration.effects import CATALOGUE, ForceRecord
 from piezobearing.diagnosis.calibration.effects.baseline_drift import BaselineDrift
+from piezobearing.diagnosis.calibration.presses import PressProtocol, synthesize
 from piezobearing.diagnosis.calibration.subject import calibration_problem
 from piezobearing.diagnosis.fit import likelihood_residual
-from piezobearing.diagnosis.least_squares import _fun_and_jacobian
 from piezobearing.diagnosis.settings import DiagnosticsSettings
+from piezobearing.fitting.least_squares import _fun_and_jacobian
 from piezobearing.sensor.calibration import detect_impulses
 from piezobearing.stages.calibration import nominal_circuit
-from piezobearing.synthesis import PressProtocol, synthesize
 
 START = {"mains_frequency_Hz": 50.02, "mains_h1_cos_V": 0.01, "drift_p1_V": 0.003, "drift_kink_s": 5.0,
          "drift_k1_V": 0.01}

@@ -117,8 +117,8 @@ def test_inverted_polarity_is_reported_not_fitted(good, tmp_path, paper_config):
 
 def test_release_faster_than_press_is_not_called_inverted(paper_config, tmp_path):
     # A fast release makes the negative swing the larger one; the polarity is still right.
+    from piezobearing.diagnosis.calibration.presses import PressProtocol, synthesize
     from piezobearing.stages.calibration import nominal_circuit
-    from piezobearing.synthesis import PressProtocol, synthesize
 
     syn = {**paper_config["synthesis"], "fall_time_s": [0.10, 0.15]}
     m = synthesize(PressProtocol.from_config(syn), nominal_circuit(paper_config), 3)

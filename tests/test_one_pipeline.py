@@ -14,15 +14,15 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from piezobearing.bearing.transient import CASES
+from piezobearing.chain import signals as signals_outputs
+from piezobearing.housing.transient import CASES
 from piezobearing.io import as_read, json_as_read, read_harmonic, read_json, read_series
-from piezobearing.registry import declared, declared_config
 from piezobearing.signals import detection
-from piezobearing.signals import outputs as signals_outputs
 from piezobearing.signals.envelope import EnvelopeSettings
 from piezobearing.stages import bearing as bearing_stages
 from piezobearing.stages import signals as signals_stages
 from piezobearing.stages.studies import KINDS, _fault_detection_row, workflow_chain
+from piezobearing.workflow.registry import declared, declared_config
 
 
 def _results(record: dict) -> dict:

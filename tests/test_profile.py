@@ -1,4 +1,4 @@
-"""Profile-likelihood intervals (diagnosis/profile.py): equal to the Jacobian's where the cost is quadratic,
+"""Profile-likelihood intervals (fitting/profile.py): equal to the Jacobian's where the cost is quadratic,
 and found by refitting where it is not."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from piezobearing.diagnosis.least_squares import fit
-from piezobearing.diagnosis.params import Param
-from piezobearing.diagnosis.profile import honest_intervals, profile_interval
+from piezobearing.fitting.least_squares import fit
+from piezobearing.fitting.params import Param
+from piezobearing.fitting.profile import honest_intervals, profile_interval
 
 T = np.linspace(0.0, 1.0, 40)
 

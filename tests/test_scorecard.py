@@ -6,11 +6,11 @@ import copy
 import pandas as pd
 import pytest
 
-from piezobearing import paper
-from piezobearing.registry import declared
+from piezobearing.config import paper
 from piezobearing.scorecard import NOT_THE_PAPERS_CASE, Row, assemble, changed_conditions
 from piezobearing.scorecard import bearing as bearing_rows
 from piezobearing.scorecard import signals as signals_rows
+from piezobearing.workflow.registry import declared
 
 
 def _kinematics(b: dict) -> dict:
@@ -109,7 +109,7 @@ def test_a_1500_rpm_run_states_its_conditions_and_is_not_scored_as_the_paper(tmp
 
 
 def test_every_condition_a_row_names_is_one_of_the_papers_case():
-    with pytest.raises(KeyError, match="not a key of piezobearing.paper.CASE"):
+    with pytest.raises(KeyError, match="not a key of piezobearing.config.paper.CASE"):
         Row("IV", "x", 1.0, 1.0, "-", "", ("bearing.shaft_speed",))
     assert set(paper.DETECTION) <= set(paper.CASE)
 

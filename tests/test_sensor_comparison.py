@@ -6,8 +6,8 @@ import copy
 
 import pytest
 
-from piezobearing.sensor import comparison as cmp
-from piezobearing.signals import outputs as sout
+from piezobearing.chain import signals as sout
+from piezobearing.comparison import rig as cmp
 
 
 def _rig(config: dict, level: float) -> dict:

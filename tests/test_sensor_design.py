@@ -108,7 +108,7 @@ def test_adhesive_layer_meshes_as_a_thin_layer_and_softens_the_stack():
 
 
 def test_housing_spring_adds_the_bond_layer_in_series():
-    from piezobearing.bearing.housing_fem import pzt_axial_modulus, sensor_stiffness
+    from piezobearing.housing.fem import pzt_axial_modulus, sensor_stiffness
 
     k0 = sensor_stiffness(PZT, 4.7e-3, 3.4e-3, ALUMINA, 5e-3, 1e-3)
     k1 = sensor_stiffness(PZT, 4.7e-3, 3.4e-3, ALUMINA, 5e-3, 1e-3, "open", EPOXY, 20e-6)
@@ -120,9 +120,9 @@ def test_housing_spring_adds_the_bond_layer_in_series():
 def test_sensor_spring_scales_the_whole_influence_line(ci_config):
     """The sensor is a rank-one spring: changing its stiffness multiplies the influence line by one factor,
     which is what lets the study scale the workflow's sensor force by the ratio of load shares."""
-    from piezobearing.bearing import housing_fem
-    from piezobearing.bearing.housing_mesh import build_housing_mesh
-    from piezobearing.bearing.transient import housing_geometry
+    from piezobearing.housing import fem as housing_fem
+    from piezobearing.housing.mesh import build_housing_mesh
+    from piezobearing.housing.transient import housing_geometry
     from piezobearing.sensor.materials import CAST_IRON, STEEL
 
     mesh = build_housing_mesh(housing_geometry(ci_config), False, 0.35)

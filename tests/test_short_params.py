@@ -6,7 +6,7 @@ import pickle
 
 from snakemake.persistence import PersistenceBase
 
-from piezobearing.registry import ShortParam, rule_params
+from piezobearing.workflow.registry import ShortParam, rule_params
 
 
 def _recorded(value) -> str:

@@ -89,7 +89,8 @@ def test_detector_study_figures_annotate_each_case():
 
 def test_extra_fault_types_and_their_config(paper_config):
     """The types a confusion-matrix row needs a record for, and that record's config: the first defect as that type."""
-    from piezobearing.signals.outputs import extra_fault_types, fault_type_config
+    from piezobearing.chain.signals import fault_type_config
+    from piezobearing.workflow.targets import extra_fault_types
 
     assert extra_fault_types(paper_config) == ["inner_race", "rolling_element"]  # the faulty case is outer race
     c = copy.deepcopy(paper_config)
@@ -142,7 +143,7 @@ def test_healthy_stays_healthy_at_a_daq_noise(tmp_path, inputs, paper_config, mo
     import numpy as np
     from test_signals import DT, bearing_force
 
-    from piezobearing.signals import outputs as signals_outputs
+    from piezobearing.chain import signals as signals_outputs
 
     n, shift = 2600, 14  # the stand-in's bump is centred at 0.4 of a roller passage (36 steps): 14 steps earlier
     for case, imp in (("healthy", 0.0), ("faulty", 10.0)):

@@ -1,4 +1,4 @@
-"""The sparse direct solvers (piezobearing.sparse_solve): PARDISO and SuperLU agree on FEM-like matrices."""
+"""The sparse direct solvers (piezobearing.numerics.sparse_solve): PARDISO and SuperLU agree on FEM-like matrices."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from piezobearing import sparse_solve
+from piezobearing.numerics import sparse_solve
 
 SOLVERS = ["superlu"] + (["pardiso"] if sparse_solve.pardiso_available() else [])
 

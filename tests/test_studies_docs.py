@@ -5,7 +5,7 @@ import re
 from conftest import CI_CONFIG, REPO, snakemake
 
 from piezobearing import config
-from piezobearing.studies import check_studies
+from piezobearing.config.cases import check_studies
 
 GUIDE = REPO / "docs" / "guides" / "studies.md"
 

@@ -2,11 +2,11 @@
 
 For each housing mesh level (``--levels``; default the config's ``housing.convergence_levels`` and its
 ``housing.mesh_level``) builds the healthy and faulty housing models of the sensor comparison
-(:func:`piezobearing.bearing.reduced_housing.build_housing`: modes to the cutoff, every mounting place) and
+(:func:`piezobearing.housing.reduced.build_housing`: modes to the cutoff, every mounting place) and
 records the modes below the accelerometer DAQ's Nyquist frequency (the detector's band lies below it), the
 cumulative effective mass there and at the cutoff; then runs the paper's case (the config's speed and defect)
 through both sensors at every mounting place, the frame at rest and under the configured base motion
-(:func:`piezobearing.sensor.comparison.compare`, the config's seeds and record), and records each sensor's
+(:func:`piezobearing.comparison.rig.compare`, the config's seeds and record), and records each sensor's
 margin, margin over the healthy rig and clean RMS. Everything but the mesh level is the config's.
 
     python validation/sensor_comparison_mesh.py --configfile config/ci.yaml --levels 0.35 0.5 0.7 1.0 \
@@ -29,11 +29,11 @@ from pathlib import Path
 import numpy as np
 
 from piezobearing import config as cfgmod
-from piezobearing.bearing import housing_fem as fem
-from piezobearing.bearing.reduced_housing import build_housing
+from piezobearing.chain import signals as sout
+from piezobearing.comparison import rig as cmp
+from piezobearing.housing import fem
+from piezobearing.housing.reduced import build_housing
 from piezobearing.io import read_harmonic, read_json
-from piezobearing.sensor import comparison as cmp
-from piezobearing.signals import outputs as sout
 
 
 def housing_record(housing, band_top_Hz: float) -> dict:

@@ -15,13 +15,12 @@ import numpy as np
 
 from . import config as configuration
 from .bearing.kinematics import Kinematics, RollingBearing
+from .chain import calibration as sensor_outputs
 from .diagnosis.calibration.record import check_record
 from .io import BearingRecord, Measurement, read_bearing_record, read_measurement
 from .io.vibration import VibrationRecord, read_vibration_record
-from .sensor import outputs as sensor_outputs
 from .signals import detectors
 from .signals.detectors import Detection
-from .stages import bearing_diagnosis, diagnostics, studies
 
 #: The record kinds :func:`read_record` knows (:func:`diagnose`: calibration and bearing).
 RECORD_KINDS = ("vibration", "bearing", "calibration")
@@ -132,7 +131,7 @@ def calibrate(force_N, voltage_V, rate_Hz: float, config: dict | None = None) ->
     Examples
     --------
     >>> from piezobearing import config
-    >>> from piezobearing.sensor.outputs import synthesize_calibration
+    >>> from piezobearing.chain.calibration import synthesize_calibration
     >>> record = synthesize_calibration(config.load())          # the default synthetic press record
     >>> c = calibrate(record.force_N, record.voltage_V, record.sample_rate_Hz)
     >>> bool(0.05 < c.sensitivity_V_per_N < 0.5), bool(1e7 < c.resistance_ohm < 1e10)
@@ -211,6 +210,10 @@ def simulate(config: dict | None = None, resistance_ohm: float | None = None) ->
     cfg = {**cfg, "signals": {**cfg["signals"], "sensor_fem_correction": False},
            "housing": {**cfg["housing"], "method": "reduced", "direct_check_s": 0.0}}
     r = cfg["calibration"]["initial_resistance_ohm"] if resistance_ohm is None else float(resistance_ohm)
+    # the study chain runs the housing's FEM and the whole signals stage (sfepy, numba, pandas: seconds to import),
+    # which read_record, calibrate and detect never need
+    from .stages import studies
+
     run = studies.workflow_chain(cfg, {"resistance_ohm": r}, None, "simulate(resistance_ohm)")
     noisy = {c: y for c, (y, _, _, _) in run["noisy"].items()}
     noiseless = {c: v for c, (_, v, _, _) in run["noisy"].items()}
@@ -245,8 +248,9 @@ def detect(samples, rate_Hz: float, bearing: RollingBearing | str, shaft_speed_r
     Returns
     -------
     Detection
-        ``fault_type`` (``none``, ``outer_race``, ``inner_race``, ``rolling_element``), the evidence per
-        family, the band, the shaft rate found and the call's false-alarm probability.
+        ``fault_type`` (``none``, ``outer_race``, ``inner_race``, ``rolling_element``, or ``unknown`` where
+        the envelope detector finds a fault whose families do not separate), the evidence per family, the
+        band, the shaft rate found and the call's false-alarm probability.
 
     Examples
     --------
@@ -330,7 +334,7 @@ def diagnose(path: str | Path, kind: str = "calibration", config: dict | None = 
     >>> import tempfile, pathlib
     >>> from piezobearing import config
     >>> from piezobearing.io import write_measurement
-    >>> from piezobearing.sensor.outputs import synthesize_calibration
+    >>> from piezobearing.chain.calibration import synthesize_calibration
     >>> cfg = config.load()
     >>> cfg["synthesis"]["hidden_effects"] = [{"name": "channel_delay", "params": {"delay_s": 0.015}}]
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "measurement.csv"
@@ -339,6 +343,10 @@ def diagnose(path: str | Path, kind: str = "calibration", config: dict | None = 
     >>> d.selected, d.final_nrmse < 1.05 * d.noise_floor_nrmse < d.baseline_nrmse
     (('channel_delay',), True)
     """
+    # the diagnosis stages write figures and the bearing's reads the housing's FEM (matplotlib, sfepy: seconds to
+    # import), which read_record, calibrate and detect never need
+    from .stages import bearing_diagnosis, diagnostics
+
     cfg = _config(config)
     if kind == "calibration":
         record, _ = diagnostics.run(str(path), cfg)

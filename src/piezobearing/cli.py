@@ -26,12 +26,16 @@
     the effect (or one it is declared exactly equivalent to) is ranked and
     selected first with the verdict ``explained``, else 1.
 
-``piezobearing detect RECORD --out DIR [--config RIG.yaml] [--bearing DESIGNATION] [--rpm R] [--fs HZ] [--channel NAME]``
+``piezobearing detect RECORD [RECORD ...] --out DIR [--config RIG.yaml] [--bearing DESIGNATION] [--rpm R] [--fs HZ] [--channel NAME]``
     Detect a rolling-bearing fault in a recording (accelerometer or this
-    sensor; .mat v5/v7.3, .csv, .wav, .uff, .tdms) with the envelope
-    detector: writes DIR/detection.json (the call, per family its evidence,
-    the band, the shaft speed found, the false-alarm probability),
-    DIR/report.md and DIR/detection.png; prints the call in one line.
+    sensor; .mat v5/v7.3 with structs and cells read by their paths, .csv,
+    .wav, .uff, .tdms) with the envelope detector: writes DIR/detection.json
+    (the call, per family its evidence, the band, the shaft speed found, the
+    false-alarm probability), DIR/report.md and DIR/detection.png; prints
+    the call in one line. Several records or a folder: each record's outputs
+    in DIR/<name>/, a table DIR/detections.csv and a trend DIR/trend.png
+    (exit status 1 where some record could not be read). ``--list`` prints
+    what a record holds (channels, scalar and text fields by their paths).
 
 Exit status: 0 done; 1 a user error (bad file, bad config, unknown effect,
 unusable --out), one line naming the file or key and the fix, never a
@@ -69,10 +73,14 @@ def _fail(msg: str) -> int:
 
 
 def _load_config(args) -> tuple[dict, str]:
-    """The config the command uses and a line saying where it came from."""
+    """The config the command uses and a line saying where it came from; a bad or unreadable config file is a
+    :class:`UserError` (its one line)."""
     d = default_config_dir()
     overrides = [args.config] if args.config is not None else []
-    config = load(*overrides, config_dir=d)
+    try:
+        config = load(*overrides, config_dir=d)
+    except (ConfigError, OSError) as e:
+        raise UserError(str(e)) from None
     return config, " + ".join([str(d / "config.yaml"), *map(str, overrides)])
 
 
@@ -172,10 +180,7 @@ def _validate(args) -> int:
     from .io import MeasurementError
     from .stages.calibration import load_record
 
-    try:
-        config, used = _load_config(args)
-    except ConfigError as e:
-        return _fail(str(e))
+    config, used = _load_config(args)
     if args.resample_to_uniform:
         config["calibration"]["resample_to_uniform"] = True
     try:  # the same checks as the workflow's, so that OK here means the workflow accepts the file
@@ -217,10 +222,7 @@ def _diagnose(args) -> int:
     from .io import MeasurementError
     from .stages.diagnostics import diagnose
 
-    try:
-        config, used = _load_config(args)
-    except ConfigError as e:
-        return _fail(str(e))
+    config, used = _load_config(args)
     try:
         created = _prepare_out(args.out)
     except UserError as e:
@@ -292,16 +294,13 @@ def _diagnose(args) -> int:
 
 def _hide_and_find(args) -> int:
     from .diagnosis.calibration.effects import CATALOGUE, EffectError, ForceRecord
+    from .diagnosis.calibration.presses import PressProtocol, synthesize
     from .diagnosis.calibration.subject import diagnose_record
     from .diagnosis.settings import DiagnosticsSettings
     from .sensor.calibration import detect_impulses
     from .stages.calibration import nominal_circuit
-    from .synthesis import PressProtocol, synthesize
 
-    try:
-        config, used = _load_config(args)
-    except ConfigError as e:
-        return _fail(str(e))
+    config, used = _load_config(args)
     params = {}
     for i, item in enumerate(args.param or []):
         name, eq, value = item.partition("=")
@@ -349,10 +348,7 @@ def _diagnose_bearing(args) -> int:
     from .io import MeasurementError, ResultFileError, SignalFileError
     from .stages.bearing_diagnosis import diagnose_bearing
 
-    try:
-        config, used = _load_config(args)
-    except (ConfigError, OSError) as e:
-        return _fail(str(e))
+    config, used = _load_config(args)
     config["bearing"]["measurement"] = args.record
     if args.rpm is not None and not args.rpm > 0:
         return _fail(f"--rpm {args.rpm:g}: give the shaft speed in rpm (> 0)")
@@ -411,21 +407,71 @@ def _diagnose_bearing(args) -> int:
 
 
 def _detect(args) -> int:
+    from tqdm import tqdm
+
     from .bearing.kinematics import BearingError
     from .io import MeasurementError
-    from .recording import RigError, detect_recording, write_detection
+    from .io.vibration import read_record_contents
+    from .stages.recording import (
+        RigError,
+        check_names,
+        detect_recording,
+        detect_records,
+        record_files,
+        type_lines,
+        write_detection,
+    )
 
+    if args.list:
+        try:
+            for path in record_files(args.record, args.glob):
+                print(read_record_contents(path).listing())
+        except (MeasurementError, RigError) as e:
+            return _fail(str(e))
+        return 0
+    if args.out is None:
+        return _fail("--out is missing; give the folder for the report, e.g. --out results/detect "
+                     "(or --list to see what the record holds)")
+    if args.jobs < 1:
+        return _fail(f"--jobs {args.jobs}: give the number of records to detect at once (1 or more)")
+    batch = len(args.record) > 1 or Path(args.record[0]).is_dir()
+    if not batch and (args.time_field or args.time_from_name):
+        return _fail("--time-field and --time-from-name order several records; give several files or a folder")
     try:
         created = _prepare_out(args.out)
     except UserError as e:
         return _fail(str(e))
+    options = {"bearing": args.bearing, "rpm": args.rpm, "fs": args.fs, "channel": args.channel,
+               "shaft_Hz": args.shaft_hz}
+    if batch:
+        try:
+            files = record_files(args.record, args.glob)
+            check_names(files)
+            bar = tqdm(total=len(files), desc="detect", unit="record", file=sys.stderr, disable=args.quiet)
+            table = detect_records(files, args.out, args.config, time_field=args.time_field,
+                                   time_pattern=args.time_from_name, jobs=args.jobs,
+                                   progress=lambda row: bar.update(1), **options)
+            bar.close()
+        except (MeasurementError, RigError, BearingError) as e:
+            _remove_empty(created)
+            return _fail(str(e))
+        for _, row in table.sort_values("order").iterrows():
+            said = row["call"] if row["status"] == "ok" else f"not read: {row['error']}"
+            print(f"{row['file']}: {said}")
+        failed = int((table["status"] != "ok").sum())
+        print(f"table: {Path(args.out) / 'detections.csv'}; trend: {Path(args.out) / 'trend.png'}; "
+              f"{len(table) - failed} of {len(table)} records detected" + (f", {failed} not read" if failed else ""))
+        return EXIT_USER if failed else 0
     try:
-        result = detect_recording(args.record, args.config, args.bearing, args.rpm, args.fs, args.channel)
+        result = detect_recording(args.record[0], args.config, **options)
     except (MeasurementError, RigError, BearingError) as e:
         _remove_empty(created)
         return _fail(str(e))
     paths = write_detection(result, args.out)
-    print(f"{args.record}: {result.to_dict()['summary']}")
+    d = result.to_dict()
+    print(f"{args.record[0]}: {d['summary']}")
+    for line in type_lines(d):
+        print(f"  {line}")
     print(f"report: {paths['report']}")
     return 0
 
@@ -554,15 +600,33 @@ def _parser() -> argparse.ArgumentParser:
         description="Detect an outer-race, inner-race or rolling-element fault in a vibration or sensor record with "
         "the envelope detector (pre-whitening, fast kurtogram, squared envelope spectrum, fault bands).",
     )
-    t.add_argument("record", help="the record: .mat (v5/v7.3), .csv, .wav, .uff/.unv, .tdms")
-    t.add_argument("--out", required=True, metavar="DIR",
+    t.add_argument("record", nargs="+",
+                   help="the record: .mat (v5/v7.3), .csv, .wav, .uff/.unv, .tdms; several files or a folder give a "
+                   "table (detections.csv) and a trend (trend.png), each record's report in --out/<name>/")
+    t.add_argument("--out", metavar="DIR",
                    help="output folder (detection.json, report.md, detection.png); not inside data/")
+    t.add_argument("--list", action="store_true",
+                   help="list every channel, scalar and text field the record holds, by its path, and stop")
     t.add_argument("--config", metavar="RIG.yaml",
-                   help="rig file: bearing (designation or geometry), shaft_speed_rpm, sample_rate_Hz, channel")
+                   help="rig file: bearing (designation or geometry), shaft_speed_rpm or shaft_speed_Hz, "
+                   "sample_rate_Hz, channel; beside a record, its own RECORD.yaml is used")
     t.add_argument("--bearing", metavar="DESIGNATION", help="a bearing of the designation table, e.g. 'SKF 6205'")
-    t.add_argument("--rpm", type=float, metavar="R", help="shaft speed [rpm] (default: the rig file's, else the record's RPM variable)")
-    t.add_argument("--fs", type=float, metavar="HZ", help="sampling rate [Hz] of a file without a time axis")
-    t.add_argument("--channel", metavar="NAME", help="the channel: its name or a unique suffix such as _DE_time")
+    t.add_argument("--rpm", metavar="R", help="shaft speed [rpm], or the record's field holding it in rpm "
+                   "(default: the rig file's, else the record's RPM variable)")
+    t.add_argument("--shaft-hz", metavar="F", help="shaft speed [Hz, revolutions per second], or the record's field "
+                   "holding it in Hz (bearing.rate)")
+    t.add_argument("--fs", metavar="HZ", help="sampling rate [Hz] of a file without a time axis, or the record's "
+                   "field holding it (bearing.sr)")
+    t.add_argument("--channel", metavar="NAME",
+                   help="the channel: its name or path (bearing.gs), or a unique suffix such as _DE_time")
+    t.add_argument("--time-field", metavar="FIELD", help="several records: each record's time from this field "
+                   "(a number, or a date and time as text)")
+    t.add_argument("--time-from-name", metavar="PATTERN", help="several records: each record's time from its file "
+                   "name by a strftime pattern, e.g. %%Y%%m%%d_%%H%%M%%S")
+    t.add_argument("--glob", metavar="PATTERN", help="a folder's records: the files matching this pattern, e.g. "
+                   "'*.mat' (default: every file of a record format)")
+    t.add_argument("--jobs", type=int, default=1, metavar="N", help="several records: detect N at once")
+    t.add_argument("--quiet", action="store_true", help="no progress bar")
     t.set_defaults(func=_detect)
     return p
 
@@ -571,6 +635,8 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)  # usage errors exit with status 2 (argparse)
     try:
         return args.func(args)
+    except UserError as e:
+        return _fail(str(e))
     except KeyboardInterrupt:
         print("piezobearing: interrupted", file=sys.stderr)
         return 130

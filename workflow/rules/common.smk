@@ -9,15 +9,13 @@ import sys
 from piezobearing.config import ConfigError
 from piezobearing.config import results_folder
 from piezobearing.config import validate as validate_config
-from piezobearing.io import MeasurementError
-from piezobearing.registry import (
+from piezobearing.workflow.registry import (
     RECORD_RULES,
     code_hash,
     declared,
     reads_digest,
     rule_params,
 )
-from piezobearing.stages.calibration import check_record_once
 
 CONFIG_FILES = [
     "config/config.yaml",
@@ -78,7 +76,7 @@ def sensor_harmonic():
 
 
 def stage_params(rule, entry):
-    """A rule's params, from piezobearing.registry: the config values its stage reads (``reads``, all the
+    """A rule's params, from piezobearing.workflow.registry: the config values its stage reads (``reads``, all the
     stage receives), the hash of the package code its script or notebook ``entry`` runs (``code``) and, for
     a rule reading the calibration record, the record's checksum (``record``)."""
     record = config["calibration"]["measurement"] if rule in RECORD_RULES else None
@@ -86,7 +84,7 @@ def stage_params(rule, entry):
 
 
 # The housing's reduced model (mesh, modes, operators) depends on the housing's config values alone
-# (piezobearing.registry.READS["sensor_comparison_housing"]), not on the speed, the surroundings or the seeds:
+# (piezobearing.workflow.registry.READS["sensor_comparison_housing"]), not on the speed, the surroundings or the seeds:
 # one file per healthy or faulty mesh, named by the digest of those values, which every comparison on that
 # mesh reads (the main workflow's and the study's cases). COMPARISON_HOUSINGS maps digest to values.
 COMPARISON_HOUSINGS = {}
@@ -110,6 +108,10 @@ def check_measurement():
     """Stop before any job runs when the configured measurement cannot be used (one line, no traceback)."""
     if not config["calibration"]["measurement"]:
         return
+    # the record's readers and checks (pandas, h5py, scipy: about a second at every start), only for a user's record
+    from piezobearing.io import MeasurementError
+    from piezobearing.stages.calibration import check_record_once
+
     try:  # once per record content and settings (RESULTS/.checked/), not at every start
         check_record_once(
             config["calibration"]["measurement"], config, f"{RESULTS}/.checked"

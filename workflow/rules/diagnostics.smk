@@ -5,10 +5,10 @@ import sys
 
 from piezobearing.diagnosis.calibration.effects import EffectError
 from piezobearing.diagnosis.calibration.report import FIGURES as DIAGNOSIS_FIGURES
-from piezobearing.stages.diagnostics import check_effect_names
+from piezobearing.diagnosis.calibration.subject import SUBJECT as CALIBRATION_SUBJECT
 
 try:  # an unknown effect in model.effects or synthesis.hidden_effects stops before any job
-    check_effect_names(config)
+    CALIBRATION_SUBJECT.check_config(config)
 except EffectError as e:
     print(f"piezobearing: {e}", file=sys.stderr)
     sys.exit(1)

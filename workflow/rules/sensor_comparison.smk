@@ -1,7 +1,7 @@
 # The embedded sensor against a housing accelerometer on one simulated rig (docs/guides/sensor_comparison.md):
 # the paper's case observed by both sensors, with the machine frame at rest and vibrating (base_motion), both
 # records judged by the envelope detector; the figure of both envelope spectra.
-from piezobearing.registry import short_param
+from piezobearing.workflow.registry import short_param
 
 FIGURES.append(f"{RESULTS}/figures/sensor_comparison.png")
 TARGETS.append(f"{RESULTS}/signals/sensor_comparison.json")

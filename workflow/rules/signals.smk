@@ -3,7 +3,7 @@
 # spectrum, the paper's fault indicator and the configured detector (both
 # through piezobearing.signals.detectors), detection against SNR, fault-type
 # classification.
-from piezobearing.signals.outputs import extra_fault_types
+from piezobearing.workflow.targets import extra_fault_types
 
 FIGURES.extend([f"{RESULTS}/figures/{n}.png" for n in ("fig09", "fig10", "snr_study")])
 SCORECARD_PARTS.append(f"{RESULTS}/scorecard/signals.csv")

@@ -9,8 +9,8 @@ import pandas as pd
 from snakemake.utils import Paramspace
 
 from piezobearing.config import ConfigError
-from piezobearing.registry import short_param
-from piezobearing.studies import case_config, check_studies
+from piezobearing.workflow.registry import short_param
+from piezobearing.config.cases import case_config, check_studies
 
 try:  # a bad study table or case value stops before any job, in one line
     STUDY_TABLES = check_studies(config)

@@ -3,8 +3,8 @@ from pathlib import Path
 
 sys.stderr = open(snakemake.log[0], "w")
 
-from piezobearing.registry import declared_config
 from piezobearing.stages.diagnostics import diagnose
+from piezobearing.workflow.registry import declared_config
 
 config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares
 

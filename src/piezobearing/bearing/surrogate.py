@@ -7,7 +7,7 @@ record holds, see docs/theory/bearing_housing.md), the sensor force is
 
 the roller loads Q_j times the housing's influence line g (sensor force per
 newton of outward radial roller load at the angle psi; one solve of the
-housing FEM by reciprocity, :meth:`piezobearing.bearing.housing_fem.HousingModel.influence_line`).
+housing FEM by reciprocity, :meth:`piezobearing.housing.fem.HousingModel.influence_line`).
 The roller loads come from the quasi-static equilibrium of the rings,
 
 .. math::  \sum_j Q_j(e)\, n(\psi_j) = (0, -F_r),\qquad

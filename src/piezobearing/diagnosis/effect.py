@@ -3,8 +3,8 @@
 An effect is a small, documented change to a subject's forward model (a
 channel delay, mains pickup, a defect's load drop). The engine only needs
 what this base class declares: its identifier, title and physics for the
-report, its parameters (:class:`~piezobearing.diagnosis.params.Param`, unit
-suffix from :mod:`~piezobearing.diagnosis.units`, the declared value
+report, its parameters (:class:`~piezobearing.fitting.params.Param`, unit
+suffix from :mod:`~piezobearing.fitting.units`, the declared value
 neutral), data-driven start values and a one-line summary. How an effect
 changes the simulation is the subject's business: the subject's effect base
 class (e.g. :class:`piezobearing.diagnosis.calibration.effects.base.Effect`)
@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .params import Param
+from ..fitting.params import Param
 from .record import Record
 
 

@@ -27,11 +27,11 @@ from typing import Callable
 
 import numpy as np
 
+from ..fitting.profile import honest_intervals
 from .describe import describe
 from .fit import ModelFit, fit_model, likelihood_residual
 from .identifiability import equivalences, identifiability
 from .noise import NoiseFloor
-from .profile import honest_intervals
 from .record import Record, Segments
 from .residual_tests import Z99, ResidualTests, residual_tests
 from .selection import Candidate, add_effect, cut_stand_ins, stepwise
@@ -209,7 +209,7 @@ def how_firm(sel, final: ModelFit, cut: bool, p: Problem, intervals: dict) -> di
 
 def final_intervals(final: ModelFit, record: Record, v: np.ndarray, floor: NoiseFloor, settings,
                     max_evaluations: int | None = None) -> dict:
-    """Honest 95% intervals of the final model's parameters (:func:`~piezobearing.diagnosis.profile.honest_intervals`).
+    """Honest 95% intervals of the final model's parameters (:func:`~piezobearing.fitting.profile.honest_intervals`).
 
     The Jacobian interval of each free parameter is checked along its
     quadratic profile line and profiled where it fails; the final fit's

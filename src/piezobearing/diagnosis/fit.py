@@ -35,7 +35,7 @@ from typing import Callable
 import numpy as np
 from scipy import fft as sfft
 
-from .least_squares import FitResult, InfeasibleError, fit, nrmse
+from ..fitting.least_squares import FitResult, InfeasibleError, fit, nrmse
 from .model import Model
 from .noise import NoiseFloor
 from .record import Record
@@ -146,7 +146,7 @@ def likelihood_residual(
     The model is driven by its :meth:`~piezobearing.diagnosis.model.Model.fit_input`
     and the floor is that of the input filtered by ``fit_weight`` (module docstring);
     ``scale`` (h(t), :meth:`~piezobearing.diagnosis.noise.NoiseFloor.scale`) divides
-    the residual first. The engine's profile likelihood (:mod:`~piezobearing.diagnosis.profile`)
+    the residual first. The engine's profile likelihood (:mod:`~piezobearing.fitting.profile`)
     refits with it.
     """
     v = np.asarray(voltage_V, dtype=float)
@@ -178,7 +178,7 @@ def _linear_columns(model: Model, record: Record, floor: NoiseFloor, w, inv: np.
     basis (n, k), key)``, the voltage's derivative by each named parameter (an additive term's coefficients:
     a drift's spline, the mains amplitudes; none of them in the response), ``key`` naming the basis's content
     (its transform is kept). The residual's column is then -:func:`fd_weighted` of the basis, without a model
-    evaluation; :func:`~piezobearing.diagnosis.least_squares.fit` takes it instead of a finite difference.
+    evaluation; :func:`~piezobearing.fitting.least_squares.fit` takes it instead of a finite difference.
     """
     ffts: dict = {}
 
@@ -238,7 +238,7 @@ def fit_model(
 
     ``start`` holds start values (others: defaults); each dict in ``starts``
     overrides some of them for one more start, and the best fit is kept. A start at which the model has no
-    solution (:class:`~piezobearing.diagnosis.least_squares.InfeasibleError`) is skipped; with none left the
+    solution (:class:`~piezobearing.fitting.least_squares.InfeasibleError`) is skipped; with none left the
     error goes to the caller.
     """
     v = np.asarray(voltage_V, dtype=float)

@@ -22,8 +22,8 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from .effect import Effect
-from .params import Param
+from ..fitting.params import Param
+from .effect import Effect, EffectError
 from .record import Record
 
 
@@ -64,3 +64,37 @@ class Model(Protocol):
     def release(self) -> None:
         """Drop whatever the model cached during one fit (the engine calls it when the fit is done, so
         the many models of a ranking hold no full-length arrays)."""
+
+
+class EffectList:
+    """What a subject's model inherits for the listing part of :class:`Model`: ``names`` and ``label`` from its
+    ``effects``, and :meth:`spec_values` (a dataclass's fields are its own; this class has none)."""
+
+    effects: tuple[Effect, ...]
+
+    @property
+    def names(self) -> list[str]:
+        return [e.name for e in self.effects]
+
+    @property
+    def label(self) -> str:
+        return " + ".join(["baseline", *self.names])
+
+    def spec_values(self, specs: list[dict], record: Record, key: str) -> dict[str, float]:
+        """The model's default values (``self.defaults(record)``) with those ``specs`` give: ``specs`` is
+        ``[{name, params: {parameter: value}}]``, one per effect in order; a parameter the effect does not have,
+        or a value outside its bounds, raises a one-line EffectError naming ``key``."""
+        values = self.defaults(record)
+        for i, (spec, effect) in enumerate(zip(specs, self.effects, strict=True)):
+            allowed = {p.name: p for p in effect.params(record)}
+            for name, val in (spec.get("params") or {}).items():
+                if name not in allowed:
+                    raise EffectError(
+                        f"{key}[{i}].params.{name}: unknown parameter of '{effect.name}'; "
+                        f"it has: {', '.join(allowed) or 'none'}"
+                    )
+                p = allowed[name]
+                if not p.lower <= float(val) <= p.upper:
+                    raise EffectError(f"{key}[{i}].params.{name}: {val} outside [{p.lower:g}, {p.upper:g}]")
+                values[name] = float(val)
+        return values

@@ -30,9 +30,9 @@ from typing import Callable
 
 import numpy as np
 
+from ..fitting.least_squares import InfeasibleError
 from .effect import Effect, StartContext
 from .fit import ModelFit, fit_model
-from .least_squares import InfeasibleError
 from .noise import NoiseFloor
 from .record import Record
 from .residual_tests import ResidualTests, residual_tests

@@ -14,8 +14,8 @@ A subject is a package ``piezobearing/diagnosis/<subject>/`` with
 ``effects/``
     its catalogue: one module per effect (physics in the docstring), each an
     :class:`~piezobearing.diagnosis.effect.Effect` subclass whose parameters
-    are :class:`~piezobearing.diagnosis.params.Param` with a unit suffix from
-    :data:`piezobearing.diagnosis.units.UNITS` (the declared value leaves the
+    are :class:`~piezobearing.fitting.params.Param` with a unit suffix from
+    :data:`piezobearing.fitting.units.UNITS` (the declared value leaves the
     effect neutral), registered in a :class:`~piezobearing.diagnosis.effect.Catalogue`.
     The subject's own effect base class adds the hooks its forward model calls.
 a forward model

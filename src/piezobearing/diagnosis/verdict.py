@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..fitting.least_squares import nrmse
 from .fit import ModelFit
-from .least_squares import nrmse
 from .record import Segments
 from .residual_tests import ResidualTests
 

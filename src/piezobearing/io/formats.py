@@ -14,12 +14,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-import h5py
 import numpy as np
 import pandas as pd
 import pyuff
 from nptdms import TdmsFile
-from scipy.io import loadmat, wavfile
+from scipy.io import wavfile
+
+from .matlab import mat_contents
 
 
 class MeasurementError(ValueError):
@@ -320,23 +321,10 @@ def _pick_channels(path: Path, found: dict, columns, optional, channels: dict, k
 
 
 def mat_arrays(path: Path) -> dict[str, np.ndarray]:
-    """The numeric variables of a MATLAB file (v5 by scipy.io, v7.3 by h5py), each at least 2-D, in
-    MATLAB's orientation (an n x k matrix as (n, k)); scalars are 1 x 1."""
-    if h5py.is_hdf5(path):
-        with h5py.File(path, "r") as f:
-            # MATLAB stores arrays column-major: an n x k matrix reads as (k, n)
-            arrays = {
-                n: np.asarray(v[()]).T
-                for n, v in f.items()
-                if isinstance(v, h5py.Dataset) and np.issubdtype(v.dtype, np.number)
-            }
-    else:
-        arrays = {
-            n: np.asarray(v)
-            for n, v in loadmat(path, squeeze_me=False).items()
-            if not n.startswith("__") and isinstance(v, np.ndarray) and np.issubdtype(v.dtype, np.number)
-        }
-    return {n: np.atleast_2d(a) for n, a in arrays.items()}
+    """The numeric variables and fields of a MATLAB file (v5 by scipy.io, v7.3 by h5py), each by its MATLAB
+    path (``X105RPM``, ``bearing.gs``, ``ch(2).data``; :func:`piezobearing.io.matlab.mat_contents`), at least
+    2-D, in MATLAB's orientation (an n x k matrix as (n, k)); scalars are 1 x 1."""
+    return mat_contents(path).arrays
 
 
 def _mat_channels(path: Path, channels: dict, wav_full_scale_V, key: str) -> dict:

@@ -7,7 +7,7 @@ from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
-from ..bearing.housing_mesh import GROUP_RING, HousingMesh
+from ..housing.mesh import GROUP_RING, HousingMesh
 
 #: Face colours by cell group: ring (steel), housing (cast iron).
 COLOURS = {GROUP_RING: "#8fa8d8", 2: "#d9c29a"}

@@ -3,6 +3,8 @@ and the fast kurtogram with the band used."""
 
 from __future__ import annotations
 
+from datetime import datetime
+
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.patches import Rectangle
@@ -72,4 +74,41 @@ def detection_figure(detection: dict, title: str = ""):
         kax.set_title("fast kurtogram (spectral kurtosis); red: the band used")
         fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=kax, label="spectral kurtosis [-]")
     fig.tight_layout()
+    return fig
+
+
+def trend_figure(table, x_label: str):
+    """Each family's margin over the records in their order (a trend, as a monitoring engineer reads it), the
+    call of each record marked above.
+
+    Parameters
+    ----------
+    table : DataFrame
+        The batch table (``piezobearing.stages.recording.BATCH_COLUMNS``): ``x`` (the record's time or order),
+        ``{family}_margin_dB`` and ``call`` per record; rows without a call (unreadable) are left out.
+    x_label : str
+        What ``x`` is (its unit).
+    """
+    use_style()
+    ok = table[table["status"] == "ok"]
+    fig, ax = plt.subplots(figsize=(9, 5))
+    x = ok["x"].to_numpy()
+    for family, colour in FAMILY_COLOURS.items():
+        ax.plot(x, ok[f"{family}_margin_dB"].to_numpy(dtype=float), "o-", color=colour, ms=3, lw=0.8,
+                label=family.replace("_", " "))
+    ax.axhline(0.0, color="k", lw=0.6, ls="--", label="threshold")
+    markers = {"unknown": ("X", "0.3"), **{f: ("v", c) for f, c in FAMILY_COLOURS.items()}}
+    top = np.nanmax(ok[[f"{f}_margin_dB" for f in FAMILY_COLOURS]].to_numpy(dtype=float), initial=0.0)
+    for call, (marker, colour) in markers.items():
+        sel = ok["call"] == call
+        if sel.any():
+            ax.plot(x[sel.to_numpy()], np.full(int(sel.sum()), top + 2.0), marker, color=colour, ms=6, ls="none",
+                    label=f"called {call.replace('_', ' ')}")
+    ax.set_xlabel(x_label)
+    ax.set_ylabel("margin over the threshold [dB]")
+    ax.set_title(f"{len(ok)} records; margins of every family, calls marked above")
+    ax.set_ylim(top=top + 4.0)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.18), fontsize=7, ncol=4, frameon=False)
+    if len(x) and isinstance(x[0], datetime):
+        fig.autofmt_xdate()
     return fig

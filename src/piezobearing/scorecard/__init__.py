@@ -2,7 +2,7 @@
 
 Each stage writes a fragment (``RESULTS/scorecard/<stage>.csv``) with :func:`write_part`; the ``scorecard`` rule
 gathers them with :func:`assemble`. A row names the conditions of the paper's case it depends on
-(:data:`piezobearing.paper.CASE`); it is compared with the paper only where the run's config holds them all, and
+(:data:`piezobearing.config.paper.CASE`); it is compared with the paper only where the run's config holds them all, and
 marked "not the paper's case" otherwise.
 """
 
@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..paper import CASE, case_value, differs
+from ..config.paper import CASE, case_value, differs
 
 #: Columns of a stage's fragment.
 PART_COLUMNS = ["section", "quantity", "paper", "ours", "unit", "rel_error", "note", "conditions"]
@@ -29,7 +29,7 @@ class Row:
     """One paper number and ours.
 
     ``paper`` may be None for a quantity the paper does not state; ``note`` says where they differ and why (with
-    the arithmetic); ``conditions`` are the keys of :data:`piezobearing.paper.CASE` the comparison needs.
+    the arithmetic); ``conditions`` are the keys of :data:`piezobearing.config.paper.CASE` the comparison needs.
     """
 
     section: str
@@ -43,7 +43,7 @@ class Row:
     def __post_init__(self):
         unknown = [k for k in self.conditions if k not in CASE]
         if unknown:
-            raise KeyError(f"scorecard row {self.quantity!r}: {unknown[0]} is not a key of piezobearing.paper.CASE")
+            raise KeyError(f"scorecard row {self.quantity!r}: {unknown[0]} is not a key of piezobearing.config.paper.CASE")
 
     @property
     def rel_error(self) -> float:
@@ -76,7 +76,7 @@ def write_part(rows: list[Row], path: str | Path) -> None:
 
 
 def changed_conditions(config: dict) -> list[str]:
-    """The keys of :data:`piezobearing.paper.CASE` where ``config`` leaves the paper's case, in table order."""
+    """The keys of :data:`piezobearing.config.paper.CASE` where ``config`` leaves the paper's case, in table order."""
     return [k for k in CASE if differs(config, k)]
 
 
@@ -94,7 +94,7 @@ def compare(df: pd.DataFrame, config: dict) -> pd.DataFrame:
 
 def assemble(parts: list[str | Path], csv_out: str | Path, md_out: str | Path, config: dict) -> pd.DataFrame:
     """Concatenate the fragments into ``scorecard.csv`` and a Markdown table, compared with the paper where
-    ``config`` (the run's, with the keys of :data:`piezobearing.paper.CASE`) holds the rows' conditions."""
+    ``config`` (the run's, with the keys of :data:`piezobearing.config.paper.CASE`) holds the rows' conditions."""
     df = compare(pd.concat([pd.read_csv(p) for p in parts], ignore_index=True)[PART_COLUMNS], config)
     df.to_csv(csv_out, index=False)
     Path(md_out).write_text(to_markdown(df, config, str(md_out)))

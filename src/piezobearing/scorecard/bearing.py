@@ -1,9 +1,9 @@
-"""Scorecard rows of the bearing and its housing (Sec. III-A, IV): the paper's numbers (:mod:`piezobearing.paper`)
+"""Scorecard rows of the bearing and its housing (Sec. III-A, IV): the paper's numbers (:mod:`piezobearing.config.paper`)
 beside the LPM's, the housing model's and the verification studies'."""
 
 from __future__ import annotations
 
-from ..paper import KINEMATICS, RUNNING, TABLE
+from ..config.paper import KINEMATICS, RUNNING, TABLE
 from . import Row
 
 

@@ -1,11 +1,11 @@
-"""Scorecard rows of the calibration chain (Sec. II, III-B/C): the paper's numbers (:mod:`piezobearing.paper`)
+"""Scorecard rows of the calibration chain (Sec. II, III-B/C): the paper's numbers (:mod:`piezobearing.config.paper`)
 beside ours, with the arithmetic where the paper's own constants cannot hold together."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..paper import CIRCUIT, TABLE
+from ..config.paper import CIRCUIT, TABLE
 from ..sensor import calibration as sensor_calibration
 from . import Row
 

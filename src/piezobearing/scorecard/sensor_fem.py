@@ -1,4 +1,4 @@
-"""Scorecard rows of the sensor FEM (Sec. III-C): the paper's numbers (:mod:`piezobearing.paper`) beside the
+"""Scorecard rows of the sensor FEM (Sec. III-C): the paper's numbers (:mod:`piezobearing.config.paper`) beside the
 modal survey's, the harmonic response's and the mesh convergence's, with the reasons where they differ."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..paper import CIRCUIT, PZT, TABLE
+from ..config.paper import CIRCUIT, PZT, TABLE
 from . import Row
 
 

@@ -1,9 +1,9 @@
-"""Scorecard rows of the fault detection (Sec. IV): the paper's numbers (:mod:`piezobearing.paper`) beside the
+"""Scorecard rows of the fault detection (Sec. IV): the paper's numbers (:mod:`piezobearing.config.paper`) beside the
 indicator's and the SNR study's."""
 
 from __future__ import annotations
 
-from ..paper import DETECTION, KINEMATICS, TABLE
+from ..config.paper import DETECTION, KINEMATICS, TABLE
 from . import Row
 
 

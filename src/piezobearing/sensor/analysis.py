@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
-from .. import paper
+from ..config import paper
 from . import fem
 from .calibration import SensorCircuit, frequency_response
 from .materials import (

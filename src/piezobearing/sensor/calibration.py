@@ -21,8 +21,8 @@ import numpy as np
 from scipy.signal import find_peaks, lfilter
 from scipy.stats import t as student_t
 
-from ..diagnosis.least_squares import FitResult, fit
-from ..diagnosis.params import Param
+from ..fitting.least_squares import FitResult, fit
+from ..fitting.params import Param
 from .materials import epsilon_0, pzt_from_config
 
 
@@ -342,7 +342,7 @@ def fit_resistance(
     sample: filled across a gap of the recorded clock, or within the model's
     memory of one) are not in the residual, so the fit, its ``n_data`` and
     its intervals count measured samples only. Returns a
-    :class:`piezobearing.diagnosis.least_squares.FitResult`.
+    :class:`piezobearing.fitting.least_squares.FitResult`.
     """
     v = np.asarray(voltage_V, dtype=float)
     keep = slice(None) if left_out is None else ~np.asarray(left_out, dtype=bool)

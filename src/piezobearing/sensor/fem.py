@@ -76,7 +76,7 @@ from scipy.linalg import eigh
 from scipy.optimize import brentq, minimize_scalar
 from scipy.spatial import cKDTree
 
-from piezobearing import sfepy_setup  # noqa: F401  (before sfepy: without its JAX terms where JAX is absent)
+from piezobearing.numerics import sfepy_setup  # noqa: F401  (before sfepy: without its JAX terms where JAX is absent)
 
 # isort: split
 from sfepy.base.base import output
@@ -84,7 +84,7 @@ from sfepy.discrete import Equation, Equations, FieldVariable, Integral, Materia
 from sfepy.discrete.fem import FEDomain, Field, Mesh
 from sfepy.terms import Term
 
-from piezobearing import sparse_solve
+from piezobearing.numerics import sparse_solve
 from piezobearing.sensor.materials import IsotropicMaterial, StressChargeForm
 from piezobearing.sensor.mesh import GROUP_ADHESIVE, GROUP_BOTTOM_DISK, GROUP_PZT, GROUP_TOP_DISK, StackMesh
 
@@ -451,7 +451,7 @@ class ReducedSystem:
 def reduce(asm: Assembled, bc: BoundaryConditions, solver: str | None = None) -> ReducedSystem:
     """Apply the conditions of ``bc`` and split the potential into interior and electrodes.
 
-    ``solver`` factorises the saddle matrix (:func:`piezobearing.sparse_solve.factorize`):
+    ``solver`` factorises the saddle matrix (:func:`piezobearing.numerics.sparse_solve.factorize`):
     None (PARDISO where installed), ``pardiso`` or ``superlu`` (the previous method).
     """
     if len(bc.symmetry) != 2 or set(bc.symmetry) - {"S", "A"}:

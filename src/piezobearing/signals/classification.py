@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import daq, detection, detectors
-from .detectors.result import CALLS, Detection
+from .detectors.result import CALLS, UNKNOWN, Detection
 
 
 @dataclass(frozen=True)
@@ -55,8 +55,13 @@ def configured_detector(sig: dict, kinematics: dict, healthy: tuple[np.ndarray, 
     return Detector(method, settings, reference)
 
 
-def confusion_matrix(true_types: list[str], classified: list[str], classes: tuple[str, ...] = CALLS) -> dict:
-    """Counts with rows the true type and columns the classified type, and the per-class rates."""
+def confusion_matrix(true_types: list[str], classified: list[str], classes: tuple[str, ...] | None = None) -> dict:
+    """Counts with rows the true type and columns the classified type, and the per-class rates.
+
+    ``classes``: default, every fault type and ``none``, with ``unknown`` (a fault whose type was not called:
+    an alarm, right for no true type) where some record is called so."""
+    if classes is None:
+        classes = tuple(c for c in CALLS if c != UNKNOWN or UNKNOWN in classified)
     idx = {c: i for i, c in enumerate(classes)}
     m = np.zeros((len(classes), len(classes)), dtype=int)
     for t, c in zip(true_types, classified, strict=True):

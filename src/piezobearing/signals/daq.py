@@ -179,15 +179,21 @@ def absolute_noise_std_V(settings: NoiseSettings, fs_Hz: float) -> float:
     return float(settings.noise_density_V_per_sqrtHz * np.sqrt(0.5 * fs_Hz))
 
 
-def interference_V(t_s: np.ndarray, settings: NoiseSettings, rng: np.random.Generator) -> np.ndarray:
-    """Mains and drive lines: sum_h a_h sin(2 pi h f t + phi_h), phases uniform from ``rng`` [V]."""
+def tone_sum(t_s: np.ndarray, lines, rng: np.random.Generator) -> np.ndarray:
+    """Harmonic series of lines: sum over ``lines`` of sum_h a_h sin(2 pi h f0 t + phi_h), with ``lines`` pairs
+    (f0 [Hz], amplitudes a_1, a_2, ... of its harmonics), the phases uniform from ``rng`` drawn in that order."""
     t = np.asarray(t_s, dtype=float)
     out = np.zeros_like(t)
-    for f0, amps in ((settings.mains_frequency_Hz, settings.mains_amplitudes_V),
-                     (settings.drive_frequency_Hz, settings.drive_amplitudes_V)):
+    for f0, amps in lines:
         for h, a in enumerate(amps, start=1):
-            out += a * np.sin(2 * np.pi * h * f0 * t + rng.uniform(0, 2 * np.pi))
+            out += a * np.sin(2 * np.pi * h * f0 * t + rng.uniform(0.0, 2 * np.pi))
     return out
+
+
+def interference_V(t_s: np.ndarray, settings: NoiseSettings, rng: np.random.Generator) -> np.ndarray:
+    """Mains and drive lines: sum_h a_h sin(2 pi h f t + phi_h), phases uniform from ``rng`` [V]."""
+    return tone_sum(t_s, ((settings.mains_frequency_Hz, settings.mains_amplitudes_V),
+                          (settings.drive_frequency_Hz, settings.drive_amplitudes_V)), rng)
 
 
 def quantise(x: np.ndarray, bits: int, range_V: float) -> tuple[np.ndarray, int]:

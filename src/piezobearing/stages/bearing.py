@@ -2,7 +2,7 @@
 
 bearing_lpm -> housing_mesh_{case} -> housing_transient_{case} -> sensor_force_{case}.csv,
 plus the mesh convergence study and the sampling-phase study. Each stage reads its inputs, calls one function
-(:mod:`piezobearing.bearing.outputs` for the chain, :mod:`piezobearing.bearing.checks`) and writes what it
+(:mod:`piezobearing.chain.bearing` for the chain, :mod:`piezobearing.housing.checks`) and writes what it
 returns; the file formats are in :mod:`piezobearing.io`.
 """
 
@@ -10,28 +10,20 @@ from __future__ import annotations
 
 import pandas as pd
 
-from ..bearing import outputs
-from ..bearing.checks import mesh_convergence as _mesh_convergence
-from ..bearing.checks import sampling_phase as _sampling_phase
-from ..bearing.transient import CASES
-from ..io import (
-    FORCE_CSV_FORMAT,
-    read_housing_mesh,
-    read_npz,
-    write_csv,
-    write_housing_mesh,
-    write_housing_vtk,
-    write_json,
-    write_npz,
-)
+from ..chain import bearing as outputs
+from ..housing.checks import mesh_convergence as _mesh_convergence
+from ..housing.checks import sampling_phase as _sampling_phase
+from ..housing.transient import CASES
+from ..io import FORCE_CSV_FORMAT, read_npz, write_csv, write_json, write_npz
 from . import log_progress
+from .meshes import read_housing_mesh, write_housing_mesh, write_housing_vtk
 
 
 def bearing_lpm(
     out_kinematics: str, out_npz: dict, out_csv: dict, out_json: str, config: dict, method: str = "compiled"
 ) -> None:
     """Stage bearing_lpm: kinematics.json, per case the contact loads (NPZ: fine grid and FEM step; CSV at the
-    FEM step) and lpm.json (:func:`piezobearing.bearing.outputs.bearing_lpm`). ``method``: for the benchmark."""
+    FEM step) and lpm.json (:func:`piezobearing.chain.bearing.bearing_lpm`). ``method``: for the benchmark."""
     log_progress()
     r = outputs.bearing_lpm(config, method)
     write_json(r["kinematics"], out_kinematics)
@@ -75,7 +67,7 @@ def housing_transient(
 def mesh_convergence(
     contact_npz: str, out_json: str, out_csv: str, config: dict, quasi_static_npz: str | None = None
 ) -> None:
-    """Stage housing_convergence: the sensor force amplitude on the convergence levels (bearing.checks).
+    """Stage housing_convergence: the sensor force amplitude on the convergence levels (housing.checks).
 
     ``quasi_static_npz``: housing_transient_healthy's quasi-static force on the mesh of ``housing.mesh_level``,
     that level's row (its mesh is not factorised a second time).
@@ -97,7 +89,7 @@ def mesh_convergence(
 
 
 def sampling_phase(contact_npz: str, influence_csv: str, out_json: str, config: dict) -> None:
-    """Stage bearing_sampling: what the step 1/(36 BPFO) does to the faulty sensor force (bearing.checks)."""
+    """Stage bearing_sampling: what the step 1/(36 BPFO) does to the faulty sensor force (housing.checks)."""
     inf = pd.read_csv(influence_csv)
     out = _sampling_phase(
         read_npz(contact_npz),

@@ -16,21 +16,20 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
-from ..bearing import transient as bearing_transient
-from ..bearing.housing_mesh import build_housing_mesh
 from ..bearing.surrogate import InfluenceLine
 from ..diagnosis import engine
 from ..diagnosis.bearing.subject import SUBJECT, synthesise
+from ..housing import transient as bearing_transient
+from ..housing.mesh import build_housing_mesh
 from ..io import (
     MeasurementError,
     ResultFileError,
     read_harmonic,
     record_rpm,
     write_bearing_record,
-    write_json,
 )
-from ..plotting import save, use_style
 from ..plotting.bearing_diagnosis import all_figures
+from .diagnosis_files import write_diagnosis
 
 #: Config sections a bearing diagnosis depends on (copied into diagnosis.json).
 CONFIG_KEYS = ("sensor", "bearing", "housing", "bearing_diagnosis", "diagnostics")
@@ -138,15 +137,6 @@ def run(
     return out, arrays
 
 
-def write_figures(arrays: dict, diag: dict, fig_dir: str | Path) -> dict[str, str]:
-    use_style()
-    paths = {}
-    for name, fig in all_figures(arrays, diag).items():
-        paths[name] = str(Path(fig_dir) / f"{name}.png")
-        save(fig, paths[name])
-    return paths
-
-
 def diagnose_bearing(
     record_path: str,
     out_dir: str | Path,
@@ -164,9 +154,5 @@ def diagnose_bearing(
     out_dir.mkdir(parents=True, exist_ok=True)
     influence = read_influence(influence_csv) if influence_csv else (lambda: influence_from_config(config))
     diag, arrays = run(record_path, influence, config, progress, harmonic_of(harmonic_csv), rpm, config_sets_speed)
-    write_json(diag, out_dir / "diagnosis.json")
-    np.savez_compressed(out_dir / "diagnosis.npz", **arrays)
-    figs = write_figures(arrays, diag, out_dir / "figures")
-    rel = {k: str(Path(v).relative_to(out_dir)) for k, v in figs.items()}
-    (out_dir / "report.md").write_text(SUBJECT.report(diag, rel) + "\n")
+    write_diagnosis(out_dir, diag, arrays, all_figures, SUBJECT.report)
     return diag

@@ -1,5 +1,5 @@
 """Stage functions of the calibration chain (Sec. II, III-B/C; Fig. 5, 6, 8a): each reads its files, calls one
-function of :mod:`piezobearing.sensor.outputs` (which the calibration_circuit study calls too) and writes what
+function of :mod:`piezobearing.chain.calibration` (which the calibration_circuit study calls too) and writes what
 it returns."""
 
 from __future__ import annotations
@@ -9,12 +9,14 @@ import json
 from pathlib import Path
 
 from .. import io
+from ..chain import calibration as outputs
+from ..chain.calibration import nominal_circuit  # noqa: F401 (the stages' name for it: tests, diagnostics)
 from ..diagnosis.calibration import record
 from ..diagnosis.calibration.record import read_record
 from ..io import Measurement, check_readable, read_json, write_csv, write_json, write_measurement
+from ..io import formats as io_formats
+from ..io import records as io_records
 from ..sensor import calibration as sensor_calibration
-from ..sensor import outputs
-from ..sensor.outputs import nominal_circuit  # noqa: F401 (the stages' name for it: tests, diagnostics)
 
 
 def synthesize_calibration(config: dict, out_csv: str) -> None:
@@ -34,7 +36,7 @@ def _checks_digest(path: str, config: dict) -> str:
     h.update(
         json.dumps({k: config[k] for k in ("calibration", "sensor")}, sort_keys=True, default=str).encode()
     )
-    for mod in (io, record, sensor_calibration):
+    for mod in (io_formats, io_records, record, sensor_calibration):
         h.update(Path(mod.__file__).read_bytes())
     h.update(Path(__file__).read_bytes())
     return h.hexdigest()

@@ -16,22 +16,13 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Callable
 
-import numpy as np
-
 from ..diagnosis import engine
 from ..diagnosis.calibration.subject import SUBJECT
-from ..io import write_json
-from ..plotting import save, use_style
 from ..plotting.diagnostics import all_figures
+from .diagnosis_files import write_diagnosis
 
 #: Config sections a diagnosis depends on (copied into diagnosis.json).
 CONFIG_KEYS = ("sensor", "calibration", "model", "diagnostics")
-
-
-def check_effect_names(config: dict) -> None:
-    """Raise a one-line EffectError if ``model.effects`` or ``synthesis.hidden_effects`` names an unknown
-    effect or parameter (the workflow calls this before any job runs)."""
-    SUBJECT.check_config(config)
 
 
 def run(
@@ -50,17 +41,6 @@ def run(
     return out, engine.arrays(d)
 
 
-def write_figures(arrays: dict, diag: dict, fig_dir: str | Path) -> dict[str, str]:
-    """Draw every figure of the report into ``fig_dir``; returns name -> path."""
-    use_style()
-    fig_dir = Path(fig_dir)
-    paths = {}
-    for name, fig in all_figures(arrays, diag).items():
-        paths[name] = str(fig_dir / f"{name}.png")
-        save(fig, paths[name])
-    return paths
-
-
 def diagnose(
     measurement_csv: str, out_dir: str | Path, config: dict, progress: Callable[[str], None] | None = None
 ) -> dict:
@@ -68,9 +48,5 @@ def diagnose(
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     diag, arrays = run(measurement_csv, config, progress)
-    write_json(diag, out_dir / "diagnosis.json")
-    np.savez_compressed(out_dir / "diagnosis.npz", **arrays)
-    figs = write_figures(arrays, diag, out_dir / "figures")
-    rel = {k: str(Path(v).relative_to(out_dir)) for k, v in figs.items()}
-    (out_dir / "report.md").write_text(SUBJECT.report(diag, rel) + "\n")
+    write_diagnosis(out_dir, diag, arrays, all_figures, SUBJECT.report)
     return diag

@@ -1,6 +1,6 @@
 """Stage of the rule sensor_comparison and the study kind of the same name: the embedded sensor against the
-housing accelerometer (:mod:`piezobearing.sensor.comparison`) on the housing models of the rule
-sensor_comparison_housing (:mod:`piezobearing.bearing.reduced_housing`), the results written.
+housing accelerometer (:mod:`piezobearing.comparison.rig`) on the housing models of the rule
+sensor_comparison_housing (:mod:`piezobearing.housing.reduced`), the results written.
 """
 
 from __future__ import annotations
@@ -10,11 +10,11 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..bearing import reduced_housing
 from ..bearing.lpm import BearingGeometry, kinematic_frequencies
+from ..chain import signals as signal_outputs
+from ..comparison import rig as comparison
 from ..io import read_harmonic, read_json, write_csv, write_json
-from ..sensor import comparison
-from ..signals import outputs as signal_outputs
+from . import housing_model
 
 #: The two conditions of the main workflow's comparison: the frame at rest, and the configured surroundings.
 CONDITIONS = ("without_disturbance", "with_disturbance")
@@ -58,8 +58,8 @@ def read_housings(config: dict, healthy_npz: str | None, faulty_npz: str | None)
     without files (the comparison then builds them itself)."""
     if healthy_npz is None and faulty_npz is None:
         return None
-    reads = reduced_housing.housing_reads(config)
-    return {False: reduced_housing.load_housing(healthy_npz, False, reads), True: reduced_housing.load_housing(faulty_npz, True, reads)}
+    reads = housing_model.housing_reads(config)
+    return {False: housing_model.load_housing(healthy_npz, False, reads), True: housing_model.load_housing(faulty_npz, True, reads)}
 
 
 def sensor_comparison(resistance_json: str, harmonic_csv: str | None, housing_healthy: str, housing_faulty: str,

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import io
-from ..io import read_npz, read_stack_mesh, write_csv, write_json, write_npz, write_stack_mesh
+from ..io import read_npz, write_csv, write_json, write_npz
 from ..sensor.analysis import (
     SensorFemError,
     SensorFemParams,
@@ -32,6 +32,7 @@ from ..sensor.analysis import (
 from ..sensor.calibration import SensorCircuit, design_resistance_ohm
 from ..sensor.mesh import StackMesh, stack_mesh
 from . import log_progress
+from .meshes import read_stack_mesh, write_stack_mesh
 
 
 def read_json(path: str | Path, keys=()) -> dict:

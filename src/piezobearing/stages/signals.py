@@ -6,7 +6,7 @@ envelope spectrum), indicator (fault_indicator.json: the paper's indicator and
 the configured detector, :mod:`piezobearing.signals.detectors`), classification,
 snr_study (detection against SNR over noise seeds) and defect_events (Fig. 9
 markers). Each reads its files, calls one function (the chain's are in
-:mod:`piezobearing.signals.outputs`, which the parameter studies call too) and
+:mod:`piezobearing.chain.signals`, which the parameter studies call too) and
 writes what it returns.
 """
 
@@ -18,7 +18,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..bearing.outputs import fault_type_force
+from ..chain import signals as outputs
+from ..chain.bearing import fault_type_force
+from ..chain.signals import true_fault_type  # noqa: F401 (the stage's name for it)
 from ..io import (
     SERIES_UNIFORM_RTOL,
     SignalFileError,
@@ -31,10 +33,9 @@ from ..io import (
     write_json,
 )
 from ..sensor.calibration import SensorCircuit
-from ..signals import detection, outputs
+from ..signals import detection
 from ..signals.analysis import band_rules, snr_grid, snr_study_record, snr_summary
 from ..signals.envelope import EnvelopeSettings
-from ..signals.outputs import true_fault_type  # noqa: F401 (the stage's name for it)
 
 #: Largest relative deviation of a time step from the mean step of a record.
 UNIFORM_RTOL = SERIES_UNIFORM_RTOL
@@ -54,7 +55,7 @@ def sensor_voltage(
     force_csv: str, resistance_json: str, harmonic_csv: str | None, out_csv: str, out_json: str, config: dict
 ) -> None:
     """Sensor force through the calibrated sensor model → voltage_{case}.{csv,json}
-    (:func:`piezobearing.signals.outputs.sensor_voltage`; the FEM's response where ``harmonic_csv``)."""
+    (:func:`piezobearing.chain.signals.sensor_voltage`; the FEM's response where ``harmonic_csv``)."""
     t, force, dt = read_series(force_csv, "force_N")
     circuit, _ = sensor_circuit(config, resistance_json)
     harmonic = read_harmonic(harmonic_csv) if harmonic_csv else None
@@ -69,7 +70,7 @@ def sensor_voltage(
 
 def noisy(voltage_csv: str, case: str, out_csv: str, out_json: str, config: dict) -> None:
     """The DAQ: sampling at signals.sample_rate_Hz and noise → noisy_{case}.{csv,json}
-    (:func:`piezobearing.signals.outputs.noisy`)."""
+    (:func:`piezobearing.chain.signals.noisy`)."""
     table, record = outputs.noisy(*read_series(voltage_csv, "voltage_V"), case, config)
     write_csv(table, out_csv)
     write_json(record, out_json)
@@ -82,7 +83,7 @@ def envelope(
     noisy_csv: str, voltage_csv: str, kinematics_json: str, out_csv: str, out_json: str, config: dict
 ) -> None:
     """Band (kurtogram or fixed), envelope spectrum → envelope_{case}.{csv,json}
-    (:func:`piezobearing.signals.outputs.envelope`)."""
+    (:func:`piezobearing.chain.signals.envelope`)."""
     df = pd.read_csv(noisy_csv)
     _, y, dt = table_series(df, "voltage_V", noisy_csv)
     _, v, _ = table_series(df, "noiseless_V", noisy_csv)  # the sampled noiseless record, on the DAQ clock
@@ -94,7 +95,7 @@ def envelope(
 def indicator(envelope_jsons: dict, kinematics_json: str, noisy_csvs: dict, noisy_jsons: dict, out_json: str,
               config: dict) -> None:
     """The paper's indicator and the configured detector on each case's noisy record → fault_indicator.json
-    (:func:`piezobearing.signals.outputs.fault_indicator`).
+    (:func:`piezobearing.chain.signals.fault_indicator`).
 
     ``envelope_jsons``, ``noisy_csvs`` and ``noisy_jsons`` map each case to its envelope record, its noisy
     table (voltage_V, noiseless_V) and its noisy record.
@@ -171,7 +172,7 @@ def defect_events(healthy_csv: str, faulty_csv: str, kinematics_json: str, out_c
 def classification(voltages: dict, kinematics_json: str, out_json: str, out_csv: str, out_roc_csv: str,
                    config: dict, type_voltages: list[str] | None = None) -> None:
     """Fault type over noise seeds and ROC across SNR → classification.json, classification.csv, roc.csv
-    (:func:`piezobearing.signals.outputs.fault_classification`; ``voltages``: healthy and faulty voltage CSVs;
+    (:func:`piezobearing.chain.signals.fault_classification`; ``voltages``: healthy and faulty voltage CSVs;
     ``type_voltages``: rule fault_type_voltage's CSVs, ``voltage_{type}.csv``)."""
     series = {case: read_series(path, "voltage_V")[1:] for case, path in voltages.items()}
     types = {Path(p).stem.removeprefix("voltage_"): read_series(p, "voltage_V")[1:] for p in type_voltages or []}
@@ -186,8 +187,8 @@ def fault_type_voltage(fault_type: str, resistance_json: str, harmonic_csv: str 
     """The sensor force and voltage of one more fault type for the classification →
     fault_types/{sensor_force,voltage}_{type}.csv, voltage_{type}.json.
 
-    The faulty case's first defect as a ``fault_type`` defect (:func:`~piezobearing.signals.outputs.fault_type_config`)
-    through the bearing chain's functions (:func:`piezobearing.bearing.outputs.fault_type_force`: LPM, housing
+    The faulty case's first defect as a ``fault_type`` defect (:func:`~piezobearing.chain.signals.fault_type_config`)
+    through the bearing chain's functions (:func:`piezobearing.chain.bearing.fault_type_force`: LPM, housing
     mesh, reduced housing solve) and the sensor_voltage rule's function.
     """
     cfg = outputs.fault_type_config(config, fault_type)

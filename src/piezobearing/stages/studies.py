@@ -2,7 +2,7 @@
 
 Each study kind runs, per case, only the rules its varied keys affect, in process and in memory, and reduces
 them to one summary row (the case's summary.json, its only file). A kind runs the workflow's own code path:
-the functions the rules' stages call (:mod:`piezobearing.bearing.outputs`, :mod:`piezobearing.signals.outputs`;
+the functions the rules' stages call (:mod:`piezobearing.chain.bearing`, :mod:`piezobearing.chain.signals`;
 :func:`workflow_chain` from the bearing to the fault indicator), each output handed on as the next rule reads
 it back from its file, so a case's results equal the workflow's for the same config to the bit and a change
 to a rule changes every study.
@@ -17,11 +17,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..bearing import outputs as bearing_outputs
-from ..bearing import transient as bearing_transient
 from ..bearing.lpm import BearingGeometry
-from ..bearing.transient import CASES
+from ..chain import bearing as bearing_outputs
+from ..chain import calibration as sensor_outputs
+from ..chain import signals as signals_outputs
+from ..config.cases import case_config
 from ..diagnosis.calibration.record import check_record
+from ..housing import transient as bearing_transient
+from ..housing.transient import CASES
 from ..io import (
     FORCE_CSV_FORMAT,
     as_read,
@@ -39,20 +42,18 @@ from ..plotting import save, use_style
 from ..plotting.studies import SUMMARY_FIGURES
 from ..sensor import design as sensor_design
 from ..sensor import fem as sensor_fem
-from ..sensor import outputs as sensor_outputs
 from ..sensor.analysis import SensorFemParams
 from ..sensor.calibration import SensorCircuit, design_resistance_ohm
 from ..sensor.mesh import stack_mesh
 from ..signals import daq, detection
-from ..signals import outputs as signals_outputs
+from ..signals.detectors import is_alarm
 from ..signals.envelope import EnvelopeSettings
-from ..studies import case_config
 from .sensor_comparison import study_case as sensor_comparison_case
 
 
 def calibration_circuit_case(config: dict, outdir: Path) -> dict:
     """Synthesis, sensitivity, resistance fit and low-frequency limit for one case: the calibration rules'
-    functions (:mod:`piezobearing.sensor.outputs`) in memory, the synthetic record as extract_sensitivity and
+    functions (:mod:`piezobearing.chain.calibration`) in memory, the synthetic record as extract_sensitivity and
     fit_resistance read it back from measurement.csv (with the reader's checks)."""
     m = measurement_as_read(sensor_outputs.synthesize_calibration(config), "measurement.csv")
     imps = check_record(m, config, m.source)
@@ -75,8 +76,8 @@ def workflow_chain(config: dict, resistance: dict, harmonic=None, resistance_sou
     """The workflow's rules from the bearing to the fault indicator for one config, in memory.
 
     bearing_lpm, housing_mesh and housing_transient, sensor_voltage, noisy, envelope (healthy and faulty) and
-    fault_indicator: each rule's own function (:mod:`piezobearing.bearing.outputs`,
-    :mod:`piezobearing.signals.outputs`), called as its stage calls it, each output handed to the next rule as
+    fault_indicator: each rule's own function (:mod:`piezobearing.chain.bearing`,
+    :mod:`piezobearing.chain.signals`), called as its stage calls it, each output handed to the next rule as
     that rule reads it back from the file (:func:`piezobearing.io.as_read`, :func:`piezobearing.io.json_as_read`:
     the CSVs' digits), so the results are the workflow's to the bit and no file is written. ``resistance``: the
     fit_resistance record; ``harmonic``: the sensor FEM's (frequency, |V/F|) where
@@ -177,7 +178,7 @@ def _fault_detection_row(cfg: dict, run: dict) -> dict:
 
 
 def sensor_design_housing(out_json: str, config: dict) -> None:
-    """Rule sensor_design_housing: :func:`piezobearing.bearing.outputs.sensor_port`, written."""
+    """Rule sensor_design_housing: :func:`piezobearing.chain.bearing.sensor_port`, written."""
     write_json(bearing_outputs.sensor_port(config), out_json)
 
 
@@ -197,9 +198,9 @@ def sensor_design_case(
        where null; cable plus DAQ capacitance): :func:`piezobearing.sensor.design.design_figures`.
     2. The load share: the sensor force per newton of radial roller load with a roller over the sensor.
        The sensor is a rank-one spring on the housing, so its stiffness scales the whole influence line by
-       one factor (:func:`piezobearing.bearing.housing_fem.spring_share_factor`, from the ``housing``
+       one factor (:func:`piezobearing.housing.fem.spring_share_factor`, from the ``housing``
        file of :func:`sensor_design_housing`); a design with another contact disk gets its own housing model
-       (:func:`piezobearing.bearing.outputs.design_load_share`).
+       (:func:`piezobearing.chain.bearing.design_load_share`).
     3. The workflow's sensor force records (``force_healthy``/``force_faulty``, made with the configured
        design) scaled by the ratio of this design's load share to the configured one: exact for the
        quasi-static force (the dynamic part is below 1e-4 of it, docs/theory/bearing_housing.md), approximate for another contact disk.
@@ -308,7 +309,7 @@ def detector_case(config: dict, outdir: Path, resistance: str, harmonic: str | N
         "fault_type_faulty": ind["faulty"]["fault_type"],
         "fault_type_healthy": ind["healthy"]["fault_type"],
         "correct_rate_faulty": float((faulty["fault_type"] == true).mean()),
-        "false_alarm_rate_healthy": float((seeds[seeds["case"] == "healthy"]["fault_type"] != "none").mean()),
+        "false_alarm_rate_healthy": float(seeds[seeds["case"] == "healthy"]["fault_type"].map(is_alarm).mean()),
         "clipped_fraction_max": float(seeds["clipped_fraction"].max()),
         **{f"detection_rate_{t}": float(faulty[f"{t}_detected"].mean())
            for t in ("outer_race", "inner_race", "rolling_element")},

@@ -17,8 +17,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ...bearing.surrogate import NoEquilibriumError
-from ..least_squares import InfeasibleError
-from ..params import Param
+from ...fitting.least_squares import InfeasibleError
+from ...fitting.params import Param
+from ..model import EffectList
 from ..record import Record
 from . import chain
 from .effects import CATALOGUE, Effect
@@ -33,7 +34,7 @@ class RigRecord(Record):
 
 
 @dataclass(frozen=True)
-class BearingModel:
+class BearingModel(EffectList):
     """Baseline (healthy, nominal) + nuisance parameters + effects.
 
     Parameters
@@ -47,14 +48,6 @@ class BearingModel:
     @classmethod
     def build(cls, names=(), key: str = "bearing.effects") -> "BearingModel":
         return cls(tuple(CATALOGUE.resolve(list(names), key)))
-
-    @property
-    def names(self) -> list[str]:
-        return [e.name for e in self.effects]
-
-    @property
-    def label(self) -> str:
-        return " + ".join(["baseline", *self.names])
 
     def with_effect(self, effect: Effect) -> "BearingModel":
         return BearingModel((*self.effects, effect))
@@ -95,7 +88,7 @@ class BearingModel:
 
     def simulate(self, values: dict, record: RigRecord, input_: np.ndarray | None = None) -> np.ndarray:
         """The chain's voltage at ``values`` [V]; values without an equilibrium of the rings raise
-        :class:`~piezobearing.diagnosis.least_squares.InfeasibleError` (the fit steps back)."""
+        :class:`~piezobearing.fitting.least_squares.InfeasibleError` (the fit steps back)."""
         add = None
         for e in self.effects:
             a = e.additive(values, record)

@@ -23,11 +23,11 @@ from ...bearing.lpm import BearingGeometry
 from ...bearing.shaft_dynamics import ShaftDynamics
 from ...bearing.surrogate import InfluenceLine, cage_phase
 from ...io import MIN_BEARING_RATE_HZ, BearingRecord, average_blocks, read_bearing_record
+from ...numerics.threads import single_blas_thread
 from ...sensor.calibration import SensorCircuit
 from ...sensor.response import sensor_model
 from ...signals.detection import noise_std_for_snr
-from ...threads import single_blas_thread
-from ..effect import Catalogue, EffectError, StartContext
+from ..effect import Catalogue
 from ..engine import diagnose
 from ..record import Segments
 from ..settings import DiagnosticsSettings
@@ -248,19 +248,7 @@ def hidden_values(specs: list[dict], record: RigRecord | None, key: str = "beari
     model = BearingModel(tuple(CATALOGUE.resolve([s["name"] for s in specs], key)))
     if record is None:
         return model, {}
-    values = model.defaults(record)
-    for i, (spec, effect) in enumerate(zip(specs, model.effects, strict=True)):
-        allowed = {p.name: p for p in effect.params(record)}
-        for name, val in (spec.get("params") or {}).items():
-            if name not in allowed:
-                raise EffectError(
-                    f"{key}[{i}].params.{name}: unknown parameter of '{effect.name}'; it has: {', '.join(allowed)}"
-                )
-            p = allowed[name]
-            if not p.lower <= float(val) <= p.upper:
-                raise EffectError(f"{key}[{i}].params.{name}: {val} outside [{p.lower:g}, {p.upper:g}]")
-            values[name] = float(val)
-    return model, values
+    return model, model.spec_values(specs, record, key)
 
 
 def synthesise(config: dict, seed: int, hidden_effects: list[dict], influence: InfluenceLine,
@@ -290,7 +278,3 @@ def synthesise(config: dict, seed: int, hidden_effects: list[dict], influence: I
     if tach is not None:
         speed = 60.0 * tach * (1 + values.get("speed_deviation_ratio", 0.0))
     return BearingRecord(t, v, speed, "synthetic", (), np.zeros(t.size, dtype=bool))
-
-
-def start_context(rec: RigRecord, v: np.ndarray, model_v: np.ndarray, values: dict) -> StartContext:
-    return StartContext(rec, v, model_v, values)

@@ -23,8 +23,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...fitting.params import Param
 from ...sensor.calibration import SensorCircuit, circuit_voltage, rc_response, resistance_param, unit_delay
-from ..params import Param
+from ..model import EffectList
 from .effects import Effect, EffectError, ForceRecord, resolve
 from .effects.base import denoised_force, prefilter_response
 
@@ -36,7 +37,7 @@ CACHE_ENTRIES = 16
 
 
 @dataclass(frozen=True)
-class ForwardModel:
+class ForwardModel(EffectList):
     """The RC baseline with a tuple of effects (a :class:`piezobearing.diagnosis.model.Model`).
 
     Parameters
@@ -60,14 +61,6 @@ class ForwardModel:
     ) -> "ForwardModel":
         """A model from effect identifiers; an unknown name raises a one-line EffectError naming ``key``."""
         return cls(circuit, tuple(resolve(names, key)))
-
-    @property
-    def names(self) -> list[str]:
-        return [e.name for e in self.effects]
-
-    @property
-    def label(self) -> str:
-        return " + ".join(["baseline", *self.names])
 
     def with_effect(self, effect: Effect) -> "ForwardModel":
         return ForwardModel(self.circuit, (*self.effects, effect))
@@ -250,17 +243,4 @@ def model_from_specs(
     unknown effect or parameter raises a one-line EffectError naming the key.
     """
     model = ForwardModel.build(circuit, [s["name"] for s in specs], key=key)
-    values = model.defaults(record)
-    for i, (spec, effect) in enumerate(zip(specs, model.effects, strict=True)):
-        allowed = {p.name: p for p in effect.params(record)}
-        for name, val in (spec.get("params") or {}).items():
-            if name not in allowed:
-                raise EffectError(
-                    f"{key}[{i}].params.{name}: unknown parameter of '{effect.name}'; "
-                    f"it has: {', '.join(allowed) or 'none'}"
-                )
-            p = allowed[name]
-            if not p.lower <= float(val) <= p.upper:
-                raise EffectError(f"{key}[{i}].params.{name}: {val} outside [{p.lower:g}, {p.upper:g}]")
-            values[name] = float(val)
-    return model, values
+    return model, model.spec_values(specs, record, key)

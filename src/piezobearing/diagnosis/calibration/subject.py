@@ -8,7 +8,7 @@
   nonlinearity, mains, drift, extra capacitance);
 - representations: the engine's whitened time residual, and the error per
   impulse (:class:`PerImpulse`);
-- synthesiser: :mod:`piezobearing.synthesis` with the effects hidden by
+- synthesiser: :mod:`piezobearing.diagnosis.calibration.presses` with the effects hidden by
   :func:`.synthesis.hidden_voltage`;
 - answer: the most likely missing effect (``winner``), when the search kept it first.
 """
@@ -21,9 +21,8 @@ from typing import Callable
 import numpy as np
 
 from ...io import Measurement
+from ...numerics.threads import single_blas_thread
 from ...sensor.calibration import Impulse, SensorCircuit, detect_impulses
-from ...synthesis import PressProtocol, synthesize
-from ...threads import single_blas_thread
 from ..engine import Diagnosis, diagnose
 from ..fit import ModelFit
 from ..noise import estimate_noise_floor
@@ -33,6 +32,7 @@ from ..verdict import segment_stats
 from . import report
 from .effects import CATALOGUE, resolve
 from .model import ForwardModel, model_from_specs
+from .presses import PressProtocol, synthesize
 from .record import ForceRecord, gap_memory_s, impulse_segments, read_record
 
 

@@ -1,6 +1,6 @@
 """The calibration subject's synthesiser: catalogue effects hidden in a synthetic calibration record.
 
-The press protocol (:mod:`piezobearing.synthesis`) makes the true force and
+The press protocol (:mod:`piezobearing.diagnosis.calibration.presses`) makes the true force and
 its recorded, noisy copy; :func:`hidden_voltage` turns the true force into
 the voltage with the diagnosis's own forward model (the RC baseline plus the
 hidden effects, ``synthesis.hidden_effects``), so that a test can check that

@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 
-from ..units import unit_of
+from ...fitting.units import unit_of
 from ..verdict import peak_where
 
 #: Significant digits a value and its interval start with; more where fewer would print two ends alike.

@@ -34,15 +34,17 @@ from .result import (
     CALLS,
     FAULT_TYPES,
     KINEMATIC_KEYS,
+    UNKNOWN,
     Detection,
     FamilyEvidence,
     LineEvidence,
+    is_alarm,
     kinematics_dict,
     margin_dB,
 )
 
-__all__ = ["CALLS", "FAULT_TYPES", "KINEMATIC_KEYS", "METHODS", "Detection", "FamilyEvidence", "LineEvidence",
-           "detect", "detect_many", "kinematics_dict", "margin_dB", "settings_from_config"]
+__all__ = ["CALLS", "FAULT_TYPES", "KINEMATIC_KEYS", "METHODS", "UNKNOWN", "Detection", "FamilyEvidence",
+           "LineEvidence", "detect", "detect_many", "is_alarm", "kinematics_dict", "margin_dB", "settings_from_config"]
 
 #: The detectors by name.
 _MODULES = {"paper": paper, "envelope": envelope, "baseline": baseline}

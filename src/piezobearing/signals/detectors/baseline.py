@@ -129,7 +129,7 @@ import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 from scipy.special import ndtr
 
-from ...threads import one_blas_thread
+from ...numerics.threads import one_blas_thread
 from .. import daq
 from ..fault_bands import slipped_frequencies
 from ..harmonics import Harmonics, below_nyquist, harmonic_fits, n_fitted, refine_period

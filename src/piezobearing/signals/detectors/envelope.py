@@ -80,8 +80,7 @@ class Settings:
         harmonics refine the rate, the refined rate's own spread replaces it.
     frequency_tolerance : float
         Relative uncertainty of the fault frequencies at a known shaft rate, both directions [-]: the
-        contact angle of a ball bearing under axial load, the geometry's tolerances (on the shared CWRU
-        records the inner-race lines lie up to 0.5 % below the kinematic BPFI at the refined rate).
+        contact angle of a ball bearing under axial load, the geometry's tolerances.
     false_alarm_probability : float
         Probability that a record without a fault is called any fault [-].
     families : tuple of str
@@ -109,13 +108,22 @@ class Settings:
         A family is detected only where at least this many of its lines also pass their own threshold: a
         fault shows as a family of lines, and one strong line (another machine element's, another
         bearing's) alone is not its signature. The condition can only lower the false-alarm probability.
+    min_type_separation_dB : float or None
+        A fault's type is called only where the winning family's margin stands at least this far above
+        every other family's [dB]; nearer, the call is ``unknown`` with its candidates (:func:`type_call`).
+        None turns the rule and its record in ``details`` off (the workflow's simulated records).
+
+    The defaults of ``frequency_tolerance``, ``mains_Hz``, ``cage_lines``, ``min_lines_above`` and
+    ``min_type_separation_dB`` are chosen on the 46 records of the CWRU fan-end set, by the procedure whose
+    worth grouped cross-validation measures (:mod:`piezobearing.signals.tuning`, ``scripts/tune_cwru.py``,
+    docs/validation/cwru.md); the others were not chosen on real records.
     """
 
     n_harmonics: int = 3
     n_sidebands: int = 1
     slip_max: float = 0.02
     speed_tolerance: float = 0.02
-    frequency_tolerance: float = 0.01
+    frequency_tolerance: float = 0.005
     false_alarm_probability: float = 1e-3
     families: tuple[str, ...] = FAULT_TYPES
     floor_halfwidth_Hz: float = 5.0
@@ -126,7 +134,8 @@ class Settings:
     refine_speed: bool = True
     mains_Hz: tuple[float, ...] = (50.0, 60.0)
     cage_lines: bool = True
-    min_lines_above: int = 2
+    min_lines_above: int = 1
+    min_type_separation_dB: float | None = 1.0
 
     def __post_init__(self):
         if not 0 < self.false_alarm_probability < 1:
@@ -138,7 +147,8 @@ class Settings:
     @classmethod
     def from_config(cls, signals: dict) -> "Settings":
         """From the validated config's ``signals`` section (the workflow's simulated records: its
-        ``band_rule: fixed`` band, its harmonics, sidebands, slip range and false-alarm probability).
+        ``band_rule: fixed`` band, its harmonics, sidebands, slip range and false-alarm probability; two lines
+        above their own threshold, and the family of largest margin called without the type rule).
 
         No pre-whitening there: a simulated defect strikes exactly periodically, so its impulses are
         lines of the spectrum, which pre-whitening would flatten with the rest (a real defect's impulses
@@ -147,7 +157,8 @@ class Settings:
         band = tuple(signals["band_Hz"]) if signals.get("band_rule") == "fixed" else None
         return cls(n_harmonics=d["n_harmonics"], n_sidebands=d["n_sidebands"], slip_max=d["slip_max"],
                    speed_tolerance=0.0, frequency_tolerance=0.0, false_alarm_probability=signals["false_alarm_probability"],
-                   band_Hz=band, refine_speed=False, prewhiten=False, mains_Hz=(), cage_lines=False)
+                   band_Hz=band, refine_speed=False, prewhiten=False, mains_Hz=(), cage_lines=False,
+                   min_lines_above=2, min_type_separation_dB=None)
 
 
 # --------------------------------------------------------------------------- null distribution
@@ -310,6 +321,28 @@ def electrical_rate(x: np.ndarray, dt_s: float, candidates_Hz: tuple[float, ...]
 
 
 @dataclass(frozen=True)
+class LineRatio:
+    """One line's measurement in one band: the largest ratio over the floor in its window, where, and how
+    many bins the window held (the shaft and supply harmonics' bins left out)."""
+
+    label: str
+    frequency_Hz: float
+    ratio: float
+    n_bins: int
+
+
+@dataclass(frozen=True)
+class BandRatios:
+    """What one band's squared envelope spectrum shows at every family's lines, before any threshold."""
+
+    band_Hz: tuple[float, float]
+    spectrum: EnvelopeSpectrum
+    ratio: np.ndarray
+    floor_shape: float
+    lines: dict[str, tuple[LineRatio, ...]]
+
+
+@dataclass(frozen=True)
 class BandTest:
     """The families tested in one band's squared envelope spectrum."""
 
@@ -320,9 +353,9 @@ class BandTest:
     p_values: dict[str, float]
 
 
-def test_band(spectrum: EnvelopeSpectrum, lines: dict[str, list[FaultLine]], excluded_rates: list[ShaftRate],
-              alpha: float, settings: Settings) -> BandTest:
-    """Every family's lines searched in one squared envelope spectrum (steps 4-6 of the module docstring)."""
+def band_ratios(spectrum: EnvelopeSpectrum, lines: dict[str, list[FaultLine]], excluded_rates: list[ShaftRate],
+                settings: Settings) -> BandRatios:
+    """Every family's lines read in one squared envelope spectrum (steps 4-5 of the module docstring)."""
     f = spectrum.frequency_Hz
     df = spectrum.resolution_Hz
     half = max(8, int(round(settings.floor_halfwidth_Hz / df)))
@@ -331,9 +364,9 @@ def test_band(spectrum: EnvelopeSpectrum, lines: dict[str, list[FaultLine]], exc
     for rate in excluded_rates:
         excluded |= harmonic_mask(f, rate, settings.shaft_guard_bins)
     floor_shape = math.log(2.0) ** 2 * (2 * half + 1) / _HANN_INFLATION
-    families, p_values = {}, {}
+    found = {}
     for family, family_lines in lines.items():
-        evidence, sizes, total = [], [], 0.0
+        measured = []
         for line in family_lines:
             if line.high_Hz >= f[-1]:
                 continue
@@ -342,23 +375,40 @@ def test_band(spectrum: EnvelopeSpectrum, lines: dict[str, list[FaultLine]], exc
             if bins.size == 0:
                 continue  # the line lies on a shaft harmonic: no evidence either way
             i = int(bins[np.argmax(ratio[bins])])
-            r = float(ratio[i])
-            t = line_threshold(alpha, int(bins.size))
-            evidence.append(LineEvidence(line_label(line), float(f[i]), 10.0 * math.log10(r) if r > 0 else -math.inf,
+            measured.append(LineRatio(line_label(line), float(f[i]), float(ratio[i]), int(bins.size)))
+        found[family] = tuple(measured)
+    return BandRatios(tuple(float(b) for b in spectrum.band_Hz), spectrum, ratio, floor_shape, found)
+
+
+def judge_band(band: BandRatios, alpha: float, settings: Settings) -> BandTest:
+    """Every family of one band against its null distribution at ``alpha`` (step 6 of the module docstring)."""
+    families, p_values = {}, {}
+    for family, measured in band.lines.items():
+        evidence, sizes, total = [], [], 0.0
+        for m in measured:
+            r = m.ratio
+            t = line_threshold(alpha, m.n_bins)
+            evidence.append(LineEvidence(m.label, m.frequency_Hz, 10.0 * math.log10(r) if r > 0 else -math.inf,
                                          10.0 * math.log10(t), bool(r > t)))
-            sizes.append(int(bins.size))
+            sizes.append(m.n_bins)
             total += r
         if not sizes:
             families[family] = FamilyEvidence(family, 0.0, math.inf, -math.inf, False, ())
             p_values[family] = 1.0
             continue
-        null = null_distribution(tuple(sizes), round(floor_shape, 3))
+        null = null_distribution(tuple(sizes), round(band.floor_shape, 3))
         threshold = null.threshold(alpha)
         detected = total > threshold and sum(e.above for e in evidence) >= settings.min_lines_above
         families[family] = FamilyEvidence(family, total, threshold, margin_dB(total, threshold), bool(detected),
                                           tuple(evidence))
         p_values[family] = null.p_value(total)
-    return BandTest(tuple(float(b) for b in spectrum.band_Hz), spectrum, ratio, families, p_values)
+    return BandTest(band.band_Hz, band.spectrum, band.ratio, families, p_values)
+
+
+def test_band(spectrum: EnvelopeSpectrum, lines: dict[str, list[FaultLine]], excluded_rates: list[ShaftRate],
+              alpha: float, settings: Settings) -> BandTest:
+    """Every family's lines searched in one squared envelope spectrum (steps 4-6 of the module docstring)."""
+    return judge_band(band_ratios(spectrum, lines, excluded_rates, settings), alpha, settings)
 
 
 def candidate_bands(w: np.ndarray, dt_s: float, top_line_Hz: float, settings: Settings
@@ -380,8 +430,142 @@ def candidate_bands(w: np.ndarray, dt_s: float, top_line_Hz: float, settings: Se
     return bands, kurtogram
 
 
+@dataclass(frozen=True)
+class Reading:
+    """What a record shows at a bearing's lines before any decision (:func:`measure`): the shaft and supply
+    rates found, the bands with every line's ratio, the kurtogram. :func:`decide` turns it into a
+    :class:`Detection` at any false-alarm probability and call rule, without reading the record again."""
+
+    shaft: ShaftRate
+    mains: ShaftRate | None
+    bands: tuple[BandRatios, ...]
+    kurtogram: Kurtogram | None
+    lines: dict[str, list[FaultLine]]
+    top_Hz: float
+
+
+def measure(samples: np.ndarray, rate_Hz: float, kinematics: dict, settings: Settings) -> Reading:
+    """Steps 1-5 of the module docstring: the rate, the bands, every family's line ratios (``settings``'
+    decision fields, ``false_alarm_probability``, ``min_lines_above`` and ``min_type_separation_dB``, are
+    not read)."""
+    x = np.asarray(samples, dtype=float)
+    dt = 1.0 / float(rate_Hz)
+    nominal = float(kinematics["shaft_Hz"])
+    if settings.refine_speed:
+        shaft = refine_shaft_rate(x, dt, nominal, settings.speed_tolerance)
+    else:
+        shaft = ShaftRate(nominal, nominal, False, (), settings.speed_tolerance)
+    kin = scaled_kinematics(kinematics, shaft.shaft_Hz)
+    tolerance = shaft.tolerance + settings.frequency_tolerance
+    lines = {fam: family_lines(kin, fam, settings, tolerance) for fam in settings.families}
+    top = max(ln.high_Hz for fam in lines.values() for ln in fam)
+    w = prewhiten(x) if settings.prewhiten else x - x.mean()
+    bands, kurtogram = candidate_bands(w, dt, top, settings)
+    mains = electrical_rate(x, dt, settings.mains_Hz) if settings.mains_Hz else None
+    excluded_rates = [shaft] + ([mains] if mains is not None else [])
+    measured = tuple(band_ratios(envelope_spectrum(w, dt, band, window="hann", squared=True), lines, excluded_rates,
+                                 settings) for band in bands)
+    return Reading(shaft, mains, measured, kurtogram, lines, top)
+
+
+def decide(m: Reading, settings: Settings) -> Detection:
+    """Step 6 of the module docstring and the call: each family judged in each band at the false-alarm
+    probability split over families and bands; the call is the detected family of largest margin
+    (:func:`type_call`), or ``unknown`` where another family's margin lies within ``min_type_separation_dB``
+    of it, or ``none``."""
+    alpha, tests, call, chosen = _judge(m, settings)
+    families = tests[chosen].families
+    if call == "none":
+        # the families' evidence from the band where each came closest
+        families = {fam: max((t.families[fam] for t in tests), key=lambda e: e.margin_dB) for fam in settings.families}
+    typed = type_call(tests, call, settings.min_type_separation_dB)
+    spectrum = tests[chosen].spectrum
+    keep = spectrum.frequency_Hz <= 1.1 * m.top_Hz
+    kurtogram = m.kurtogram
+    details = {
+        "shaft": m.shaft.to_dict(),
+        "mains": None if m.mains is None else m.mains.to_dict(),
+        "bands": [{"band_Hz": list(t.band_Hz), "margins_dB": {f: e.margin_dB for f, e in t.families.items()},
+                   "p_values": t.p_values} for t in tests],
+        "chosen_band": chosen,
+        "alpha_per_test": alpha,
+        "prewhitened": settings.prewhiten,
+        "kurtogram": None if kurtogram is None else {
+            "level": kurtogram.level.tolist(), "low_Hz": kurtogram.low_Hz.tolist(),
+            "high_Hz": kurtogram.high_Hz.tolist(), "kurtosis": kurtogram.kurtosis.tolist()},
+        "spectrum": {"frequency_Hz": spectrum.frequency_Hz[keep].tolist(),
+                     "ratio": tests[chosen].ratio[keep].tolist()},
+        "lines": {fam: [{"label": line_label(ln), "low_Hz": ln.low_Hz, "high_Hz": ln.high_Hz} for ln in fam_lines]
+                  for fam, fam_lines in m.lines.items()},
+    }
+    if typed is not None:
+        details["type_call"] = typed
+        call = typed["call"]
+    return Detection.from_families("envelope", families, call, tests[chosen].band_Hz, m.shaft.shaft_Hz,
+                                   settings.false_alarm_probability, details)
+
+
+def _judge(m: Reading, settings: Settings) -> tuple[float, list[BandTest], str, int]:
+    """Every band judged: the level per test, the band tests, the detected family of largest margin (or none)
+    and its band."""
+    alpha = settings.false_alarm_probability / (len(settings.families) * len(m.bands))
+    tests = [judge_band(b, alpha, settings) for b in m.bands]
+    call, chosen = _call(tests)
+    return alpha, tests, call, chosen
+
+
+def call_of(m: Reading, settings: Settings) -> tuple[str, dict[str, float], dict | None]:
+    """The call :func:`decide` makes, without its report: the call, each family's best margin over the bands
+    [dB] and the :func:`type_call` record (None where no fault is detected or the type rule is off)."""
+    _, tests, call, _ = _judge(m, settings)
+    margins = {fam: max(t.families[fam].margin_dB for t in tests) for fam in settings.families}
+    typed = type_call(tests, call, settings.min_type_separation_dB)
+    return (call if typed is None else typed["call"]), margins, typed
+
+
+def without_spectra(m: Reading) -> Reading:
+    """The reading with its bands' spectra and the kurtogram dropped: what :func:`call_of` needs, a few
+    kilobytes instead of megabytes (for a settings search over many records)."""
+    bands = tuple(BandRatios(b.band_Hz, None, None, b.floor_shape, b.lines) for b in m.bands)
+    return Reading(m.shaft, m.mains, bands, None, m.lines, m.top_Hz)
+
+
+def type_call(tests: list[BandTest], call: str, separation_dB: float | None) -> dict | None:
+    """The fault type's call where a fault is detected: the winning family (largest margin of any band), each
+    other family's best margin and its distance below the winner, and ``unknown`` where the runner-up lies
+    within ``separation_dB`` of it (its candidates: the winner and every family within that distance).
+
+    None where no family is detected (the call is ``none``) or ``separation_dB`` is None (the rule is off: the
+    workflow's simulated records, whose calls stay the detected family of largest margin)."""
+    if call == "none" or separation_dB is None:
+        return None
+    best = {fam: max(t.families[fam].margin_dB for t in tests) for fam in tests[0].families}
+    detected = {fam: any(t.families[fam].detected for t in tests) for fam in best}
+    others = sorted((f for f in best if f != call), key=lambda f: -best[f])
+    runner = others[0] if others else None
+    gap = math.inf if runner is None else best[call] - best[runner]
+    candidates = [call] + [f for f in others if best[call] - best[f] < separation_dB]
+    why = {}
+    for f in others:
+        reason = f"{best[call] - best[f]:.1f} dB below the {call.replace('_', ' ')}"
+        reason += ", detected but not the largest" if detected[f] else ", not detected"
+        why[f] = reason
+    return {
+        "call": "unknown" if gap < separation_dB else call,
+        "winner": call,
+        "runner_up": runner,
+        "separation_dB": gap,
+        "required_separation_dB": separation_dB,
+        "candidates": candidates if gap < separation_dB else [call],
+        "margins_dB": best,
+        "detected": detected,
+        "why_not": why,
+    }
+
+
 def detect(samples: np.ndarray, rate_Hz: float, kinematics: dict, settings: Settings, reference=None) -> Detection:
-    """Detect and classify a bearing fault in one record (``reference`` is not used).
+    """Detect and classify a bearing fault in one record (``reference`` is not used): :func:`decide` of
+    :func:`measure`.
 
     Parameters
     ----------
@@ -398,52 +582,12 @@ def detect(samples: np.ndarray, rate_Hz: float, kinematics: dict, settings: Sett
     -------
     Detection
         ``details``: ``shaft`` (the rate found), ``bands`` (per band tested its families' margins),
-        ``chosen_band`` (index), and, for a report, ``kurtogram`` and ``spectrum`` (the chosen band's
-        squared envelope spectrum up to the highest line) as lists.
+        ``chosen_band`` (index), ``type_call`` (where a fault is detected and the type rule is on: the
+        winner, its runner-up and their separation, the candidates of an ``unknown`` call, per family why it
+        lost), and, for a report, ``kurtogram`` and ``spectrum`` (the chosen band's squared envelope spectrum
+        up to the highest line) as lists.
     """
-    x = np.asarray(samples, dtype=float)
-    dt = 1.0 / float(rate_Hz)
-    nominal = float(kinematics["shaft_Hz"])
-    if settings.refine_speed:
-        shaft = refine_shaft_rate(x, dt, nominal, settings.speed_tolerance)
-    else:
-        shaft = ShaftRate(nominal, nominal, False, (), settings.speed_tolerance)
-    kin = scaled_kinematics(kinematics, shaft.shaft_Hz)
-    tolerance = shaft.tolerance + settings.frequency_tolerance
-    lines = {fam: family_lines(kin, fam, settings, tolerance) for fam in settings.families}
-    top = max(ln.high_Hz for fam in lines.values() for ln in fam)
-    w = prewhiten(x) if settings.prewhiten else x - x.mean()
-    bands, kurtogram = candidate_bands(w, dt, top, settings)
-    alpha = settings.false_alarm_probability / (len(settings.families) * len(bands))
-    mains = electrical_rate(x, dt, settings.mains_Hz) if settings.mains_Hz else None
-    excluded_rates = [shaft] + ([mains] if mains is not None else [])
-    tests = [test_band(envelope_spectrum(w, dt, band, window="hann", squared=True), lines, excluded_rates, alpha,
-                       settings) for band in bands]
-    call, chosen = _call(tests)
-    families = tests[chosen].families
-    if call == "none":
-        # the families' evidence from the band where each came closest
-        families = {fam: max((t.families[fam] for t in tests), key=lambda e: e.margin_dB) for fam in settings.families}
-    spectrum = tests[chosen].spectrum
-    keep = spectrum.frequency_Hz <= 1.1 * top
-    details = {
-        "shaft": shaft.to_dict(),
-        "mains": None if mains is None else mains.to_dict(),
-        "bands": [{"band_Hz": list(t.band_Hz), "margins_dB": {f: e.margin_dB for f, e in t.families.items()},
-                   "p_values": t.p_values} for t in tests],
-        "chosen_band": chosen,
-        "alpha_per_test": alpha,
-        "prewhitened": settings.prewhiten,
-        "kurtogram": None if kurtogram is None else {
-            "level": kurtogram.level.tolist(), "low_Hz": kurtogram.low_Hz.tolist(),
-            "high_Hz": kurtogram.high_Hz.tolist(), "kurtosis": kurtogram.kurtosis.tolist()},
-        "spectrum": {"frequency_Hz": spectrum.frequency_Hz[keep].tolist(),
-                     "ratio": tests[chosen].ratio[keep].tolist()},
-        "lines": {fam: [{"label": line_label(ln), "low_Hz": ln.low_Hz, "high_Hz": ln.high_Hz} for ln in fam_lines]
-                  for fam, fam_lines in lines.items()},
-    }
-    return Detection.from_families("envelope", families, call, tests[chosen].band_Hz, shaft.shaft_Hz,
-                                   settings.false_alarm_probability, details)
+    return decide(measure(samples, rate_Hz, kinematics, settings), settings)
 
 
 def _call(tests: list[BandTest]) -> tuple[str, int]:

@@ -2,7 +2,8 @@
 
 A detector tests fault *families* (outer race, inner race, rolling element),
 each by one statistic against a threshold set at a false-alarm probability,
-and calls the record one of :data:`FAULT_TYPES` or ``"none"``. What each
+and calls the record one of :data:`FAULT_TYPES`, ``"unknown"`` (a fault whose type the evidence does not
+settle: an alarm all the same) or ``"none"``. What each
 detector's statistic is, and how it sets its threshold, is the detector's own
 (:mod:`.paper`, :mod:`.envelope`, :mod:`.baseline`); the shape of the answer is
 the same for all, so that a simulated record in the workflow and a user's
@@ -15,12 +16,19 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-#: The fault families a detector calls; a call is one of these or ``"none"``.
+#: The fault families a detector calls; a call is one of these, ``"unknown"`` or ``"none"``.
 FAULT_TYPES = ("outer_race", "inner_race", "rolling_element")
+#: The call of a fault whose type the families' margins do not separate: an alarm, of no type.
+UNKNOWN = "unknown"
 #: The calls a detector can make.
-CALLS = FAULT_TYPES + ("none",)
+CALLS = FAULT_TYPES + (UNKNOWN, "none")
 #: The kinematic frequencies a detector reads [Hz] (``kinematics.json``'s keys).
 KINEMATIC_KEYS = ("shaft_Hz", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz")
+
+
+def is_alarm(call: str) -> bool:
+    """Whether a call is an alarm: any fault, of a type or ``unknown`` (every call but ``none``)."""
+    return call != "none"
 
 
 def margin_dB(statistic: float, threshold: float) -> float:
@@ -102,7 +110,7 @@ class Detection:
     method : str
         ``"paper"``, ``"envelope"`` or ``"baseline"``.
     fault_type : str
-        ``"none"`` or a :data:`FAULT_TYPES` entry.
+        A :data:`FAULT_TYPES` entry, ``"unknown"`` (a fault, its type not settled) or ``"none"``.
     families : dict
         Family name -> :class:`FamilyEvidence`, for every family tested.
     band_Hz : tuple of float or None
@@ -112,7 +120,7 @@ class Detection:
     false_alarm_probability : float
         Probability that a record without a fault is called any fault, at the thresholds used [-].
     margin_dB : float
-        The called family's margin, or the largest margin when the call is ``"none"`` [dB].
+        The called family's margin, or the largest margin when the call is ``"none"`` or ``"unknown"`` [dB].
     details : dict
         The detector's own numbers (JSON-ready), documented in its module.
     """
@@ -134,8 +142,9 @@ class Detection:
     def from_families(cls, method: str, families: dict[str, FamilyEvidence], fault_type: str,
                       band_Hz: tuple[float, float] | None, shaft_rate_Hz: float, false_alarm_probability: float,
                       details: dict) -> "Detection":
-        """A detection whose ``margin_dB`` is the called family's (the largest of all when ``"none"``)."""
-        if fault_type != "none":
+        """A detection whose ``margin_dB`` is the called family's (the largest of all when ``"none"`` or
+        ``"unknown"``)."""
+        if fault_type in families:
             margin = families[fault_type].margin_dB
         else:
             margin = max((f.margin_dB for f in families.values()), default=-math.inf)

@@ -21,7 +21,7 @@ Parameter: ``cage_slip_ratio`` in [-0.02, 0.2] (0: rolling without slip).
 
 from __future__ import annotations
 
-from ...params import Param
+from ....fitting.params import Param
 from .base import Effect
 
 

@@ -31,7 +31,7 @@ Parameter: ``radial_clearance_m`` in [-20, 200] um, neutral at the config's
 
 from __future__ import annotations
 
-from ...params import Param
+from ....fitting.params import Param
 from .base import Effect
 
 

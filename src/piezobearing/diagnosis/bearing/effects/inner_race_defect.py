@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...params import Param
+from ....fitting.params import Param
 from .base import Effect, cage_phase_of, fold_peak, scan
 from .outer_race_defect import TRIAL_WIDTH_M, _width_start
 

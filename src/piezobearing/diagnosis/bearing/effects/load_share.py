@@ -20,7 +20,7 @@ Parameter: ``load_share_ratio`` in [0.05, 5] (1: the housing model's force).
 
 from __future__ import annotations
 
-from ...params import Param
+from ....fitting.params import Param
 from .base import Effect
 
 

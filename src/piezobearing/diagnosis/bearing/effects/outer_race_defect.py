@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...params import Param
+from ....fitting.params import Param
 from .base import Effect, cage_phase_of, fold_peak, scan
 
 TRIAL_WIDTH_M = 0.5e-3

@@ -21,7 +21,7 @@ Parameter: ``radial_load_N`` in [10 N, 50 kN], neutral at the config's
 
 from __future__ import annotations
 
-from ...params import Param
+from ....fitting.params import Param
 from .base import Effect
 
 

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...params import Param
+from ....fitting.params import Param
 from .. import chain
 from ..representations import fitted_kinematics
 from .base import Effect

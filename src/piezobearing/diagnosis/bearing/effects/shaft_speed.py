@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...params import Param
+from ....fitting.params import Param
 from .base import Effect
 
 

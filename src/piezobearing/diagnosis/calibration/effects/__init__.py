@@ -4,7 +4,7 @@ Each effect is one module defining ``EFFECT``, an instance of a subclass of
 :class:`~piezobearing.diagnosis.calibration.effects.base.Effect`, registered below under a stable
 identifier. Adding an effect is adding one module and one entry in
 ``_MODULES`` (or calling :func:`register` at run time). Parameter names carry
-a unit suffix from :data:`piezobearing.diagnosis.units.UNITS` and are unique
+a unit suffix from :data:`piezobearing.fitting.units.UNITS` and are unique
 across the catalogue.
 
 =====================  ==========================================================
@@ -25,8 +25,8 @@ identifier             what it models
 
 from __future__ import annotations
 
+from ....fitting.params import Param
 from ...effect import Catalogue
-from ...params import Param
 from .base import Effect, EffectError, ForceRecord, StartContext
 
 #: The calibration subject's catalogue (an engine :class:`~piezobearing.diagnosis.effect.Catalogue`).

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...params import Param
+from ....fitting.params import Param
 from .base import Effect, ForceRecord, StartContext, fd_filter, force_band_Hz
 from .reference_lag import ORDER
 
@@ -63,7 +63,7 @@ class FixtureMode(Effect):
     )
 
     def params(self, record: ForceRecord) -> list[Param]:
-        # names end in a unit suffix of diagnosis/units.py; the declared value (first number) is neutral
+        # names end in a unit suffix of fitting/units.py; the declared value (first number) is neutral
         return [
             Param("fixture_tau_s", 0.0, 0.0, 0.05, scale=1e-3, description="1/(2 pi f_n) of the fixture mode [s]"),
             Param("fixture_damping_ratio", 0.05, 1e-3, 1.0, log=True, description="damping ratio of the mode [-]"),

@@ -25,8 +25,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ....fitting.params import Param
 from ....sensor.calibration import rc_response, rc_voltage, unit_delay
-from ...params import Param
 from .base import Effect, ForceRecord, StartContext
 
 

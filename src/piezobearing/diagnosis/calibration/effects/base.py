@@ -22,9 +22,9 @@ import numpy as np
 from scipy import fft as sfft
 from scipy.signal import welch
 
+from ....fitting.params import Param
 from ... import effect as engine
 from ...effect import EffectError, StartContext
-from ...params import Param
 from ..record import ForceRecord
 
 __all__ = ["Effect", "EffectError", "Param", "ForceRecord", "StartContext", "denoised_force", "fd_filter"]

@@ -57,7 +57,7 @@ import math
 import numpy as np
 from numpy.polynomial import legendre
 
-from ...params import Param
+from ....fitting.params import Param
 from .base import Effect, ForceRecord, StartContext
 
 DEGREE = 3

@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import correlate
 
-from ...params import Param
+from ....fitting.params import Param
 from .base import Effect, ForceRecord, StartContext, fd_filter
 
 MAX_DELAY_S = 0.1

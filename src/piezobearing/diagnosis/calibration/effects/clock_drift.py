@@ -38,7 +38,7 @@ import math
 
 import numpy as np
 
-from ...params import Param
+from ....fitting.params import Param
 from .base import Effect, ForceRecord
 
 #: Half-length [samples] and Kaiser beta of the interpolation kernel.

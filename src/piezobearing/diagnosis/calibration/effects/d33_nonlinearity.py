@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...params import Param
+from ....fitting.params import Param
 from .base import Effect, ForceRecord, denoised_force
 
 

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from ...params import Param
+from ....fitting.params import Param
 from .base import Effect, ForceRecord
 
 

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...params import Param
+from ....fitting.params import Param
 from .base import Effect, ForceRecord, StartContext
 
 HARMONICS = (1, 3, 5)

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...params import Param
+from ....fitting.params import Param
 from .base import Effect, ForceRecord, StartContext, fd_filter, force_band_Hz
 from .channel_delay import best_lag_s
 

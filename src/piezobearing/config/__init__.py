@@ -21,7 +21,7 @@ import jsonschema
 import yaml
 
 #: The default config (config.yaml) and its schema (schema.yaml), the package's own data.
-CONFIG_DIR = Path(__file__).parent / "defaults"
+CONFIG_DIR = Path(__file__).parents[1] / "defaults"
 SCHEMA_PATH = CONFIG_DIR / "schema.yaml"
 DEFAULT_CONFIG = CONFIG_DIR / "config.yaml"
 
@@ -65,6 +65,7 @@ RESULTS_FOLDERS = frozenset(
         "bearing",
         "benchmarks",
         "calibration",
+        "detect_archive",
         "diagnostics",
         "diagnostics_bearing",
         "figures",

@@ -1,9 +1,9 @@
 """The one parameter class of every diagnosis model, effect and fit.
 
 A :class:`Param` is a named, bounded quantity with its unit in its name (a
-suffix from :mod:`piezobearing.diagnosis.units`). A forward model or an
+suffix from :mod:`piezobearing.fitting.units`). A forward model or an
 effect declares its parameters with the value that leaves the model neutral
-(or its nominal start); the fit (:mod:`piezobearing.diagnosis.least_squares`)
+(or its nominal start); the fit (:mod:`piezobearing.fitting.least_squares`)
 receives copies with start values (:meth:`Param.with_value`).
 """
 
@@ -27,7 +27,7 @@ class Param:
     Parameters
     ----------
     name : str
-        Identifier with a unit suffix from :data:`~piezobearing.diagnosis.units.UNITS`,
+        Identifier with a unit suffix from :data:`~piezobearing.fitting.units.UNITS`,
         e.g. ``resistance_ohm``; unique within a subject's model and catalogue.
     value : float
         Start (or fixed) value; in a declaration, the value that switches an
@@ -59,7 +59,7 @@ class Param:
         if not self.name.endswith(SUFFIXES):
             raise ParamError(
                 f"parameter '{self.name}': its name must end with a unit suffix ({', '.join(SUFFIXES)}); "
-                "add the unit to piezobearing.diagnosis.units.UNITS if it is new"
+                "add the unit to piezobearing.fitting.units.UNITS if it is new"
             )
         if self.log and not self.lower > 0:
             raise ParamError(f"parameter '{self.name}': a log-scale parameter needs lower > 0")

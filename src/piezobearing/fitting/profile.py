@@ -1,6 +1,6 @@
 """Profile-likelihood intervals, computed where the Jacobian's are not honest.
 
-The fit's 95% intervals (:func:`~piezobearing.diagnosis.least_squares.fit`)
+The fit's 95% intervals (:func:`~piezobearing.fitting.least_squares.fit`)
 come from the Gauss-Newton covariance: they take the cost as quadratic in the
 fit's internal coordinates. For a parameter near a bound, a strongly
 nonlinear one (a corner frequency, a lag) or a pair that trades off along a
@@ -23,7 +23,7 @@ evaluations, no refit). Where chi2 there rises by D within ``tolerance``
 (25%), the Jacobian interval is kept ("jacobian (checked)"); elsewhere, or
 where the interval reaches a bound, :func:`profile_interval` finds the ends
 by refitting (a few refits per end). Both functions work on any residual
-function and parameter list of :func:`~piezobearing.diagnosis.least_squares.fit`:
+function and parameter list of :func:`~piezobearing.fitting.least_squares.fit`:
 the engine uses them on the final model of a diagnosis (every subject).
 """
 
@@ -201,7 +201,7 @@ def profile_interval(
     """The profile-likelihood interval of ``name`` (see the module docstring).
 
     ``residual_fn`` and ``params`` are those ``result`` was fitted with
-    (:func:`~piezobearing.diagnosis.least_squares.fit`); ``result`` must hold
+    (:func:`~piezobearing.fitting.least_squares.fit`); ``result`` must hold
     the Jacobian intervals at 95% (``result.ci95``), which set the first
     trial ends. An end that reaches the parameter's bound before chi2 has
     risen by D is reported as the bound (``at_bound``).

@@ -23,5 +23,5 @@ def skip_jax_terms() -> None:
     sys.modules[JAX_TERMS] = types.ModuleType(JAX_TERMS, "sfepy's JAX terms, left out: JAX is not installed (piezobearing)")
 
 
-# at import: before sfepy's own import in the modules that import this one (bearing.housing_fem, sensor.fem)
+# at import: before sfepy's own import in the modules that import this one (housing.fem, sensor.fem)
 skip_jax_terms()

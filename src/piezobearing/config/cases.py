@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .config import ConfigError, validate
+from . import ConfigError, validate
 
 SEP = "__"
 

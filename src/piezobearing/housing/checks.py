@@ -14,9 +14,10 @@ import numpy as np
 import pandas as pd
 from scipy.signal import find_peaks
 
-from . import housing_fem, lpm
-from .housing_mesh import build_housing_mesh
-from .kinematics import Kinematics
+from ..bearing import lpm
+from ..bearing.kinematics import Kinematics
+from . import fem as housing_fem
+from .mesh import build_housing_mesh
 from .transient import housing_geometry, make_model
 
 log = logging.getLogger("piezobearing.bearing.lpm")

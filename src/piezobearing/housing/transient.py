@@ -12,9 +12,10 @@ import time
 
 import numpy as np
 
+from ..bearing import lpm
 from ..sensor.materials import CAST_IRON, STEEL, adhesive_from_config, alumina_from_config, pzt_from_config
-from . import housing_fem, lpm
-from .housing_mesh import HousingGeometry, HousingMesh
+from . import fem as housing_fem
+from .mesh import HousingGeometry, HousingMesh
 
 log = logging.getLogger("piezobearing.bearing.lpm")
 
@@ -41,7 +42,7 @@ def run_lpm(bearing: dict, faulty: bool, method: str = "compiled", seed: int = 0
     diameters, slip jitter). With ``bearing.tachometer_pulses_per_rev`` > 0 the dict has the tachometer's
     pulse times over the record. ``base_motion``: None (the ground at rest) or a function of the LPM's fine
     time grid [s] giving the ground's acceleration (n, 2) [m/s^2] (y, z;
-    :func:`piezobearing.bearing.base_motion.realisation`); the dict then holds it on the fine grid
+    :func:`piezobearing.housing.base_motion.realisation`); the dict then holds it on the fine grid
     (``fine_base_acceleration_m_per_s2``) and at the FEM step (``base_acceleration_m_per_s2``, treated as the
     roller loads are, ``bearing.resample``), and the displacements are relative to the ground.
     """

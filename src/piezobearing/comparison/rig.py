@@ -2,13 +2,13 @@
 
 One run of the rig at the comparison's model step (``sensor_comparison.time_step_s``):
 
-1. the surroundings: one realisation of the base motion (:mod:`piezobearing.bearing.base_motion`);
+1. the surroundings: one realisation of the base motion (:mod:`piezobearing.housing.base_motion`);
 2. the LPM under it (the radial load, and each mass's inertial load -m a_b(t) in ground-relative
    coordinates: :func:`piezobearing.bearing.lpm.simulate_lpm`), its roller loads at the model step;
 3. the housing FEM's reduced modal model (modes to ``mode_cutoff_ratio`` times the accelerometer DAQ's
    Nyquist frequency) under the roller loads and the base's inertia -M r a_b: the sensor force and the
    absolute acceleration at the accelerometer's mounting place
-   (:func:`piezobearing.bearing.housing_fem.response_projected`).
+   (:func:`piezobearing.housing.fem.response_projected`).
 
 The housing's inertia is counted once. The LPM's pedestal (outer ring and housing as one mass on a spring,
 ``bearing.pedestal_*``) sets how the rollers' deflection responds; its inertial load under base motion goes
@@ -19,7 +19,7 @@ the sensor and the accelerometer once, through the FEM.
 Then each sensor's chain:
 
 * the PZT: the sensor force through the calibrated RC model (and the sensor FEM's correction) as the
-  sensor_voltage rule does (:func:`piezobearing.signals.outputs.sensor_voltage`), its DAQ at
+  sensor_voltage rule does (:func:`piezobearing.chain.signals.sensor_voltage`), its DAQ at
   ``pzt_sample_rate_Hz`` with the absolute noise of ``signals.noise`` in volts (density, mains pick-up, ADC);
 * the accelerometer: its transfer function (sensitivity, mounted resonance, high-pass), the first
   ``signals.skip_s`` dropped as for the PZT, its DAQ's anti-alias filter and sampling at
@@ -39,10 +39,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..bearing import base_motion, housing_fem, lpm, transient
-from ..bearing.reduced_housing import Housing, build_housing
+from ..bearing import lpm
+from ..chain import signals as signal_outputs
+from ..housing import base_motion, transient
+from ..housing import fem as housing_fem
+from ..housing.reduced import Housing, build_housing
 from ..signals import daq, detectors
-from ..signals import outputs as signal_outputs
 from ..signals.detectors import envelope as envelope_detector
 from . import accelerometer
 
@@ -212,7 +214,7 @@ def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_
     """Both sensors on the healthy and the faulty bearing over ``sensor_comparison.n_seeds`` realisations.
 
     ``config``: the workflow's (the comparison's step is applied here). ``circuit``: the PZT's measuring circuit
-    (:func:`piezobearing.signals.outputs.sensor_circuit`); ``harmonic``: the sensor FEM's response where
+    (:func:`piezobearing.chain.signals.sensor_circuit`); ``harmonic``: the sensor FEM's response where
     ``signals.sensor_fem_correction``, else None. ``housings``: the healthy and faulty :class:`Housing` when
     already built. With the base motion at rest the rig runs once per case and the seeds draw the DAQs'
     noise only; otherwise every seed is a new realisation of the surroundings through the whole rig.
@@ -222,9 +224,10 @@ def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_
     their step). Per sensor:
 
     * ``detection_rate``: share of seeds on the faulty bearing the envelope detector calls the true fault
-      type; ``false_alarm_rate``: share of seeds on the healthy bearing it calls any fault. Its threshold
-      holds its false-alarm probability for records without lines at the fault frequencies; the roller
-      passage puts lines at BPFO into both sensors' healthy records, so the healthy rig's calls are given.
+      type; ``false_alarm_rate``: share of seeds on the healthy bearing it calls any fault (of a type, or
+      ``unknown``). Its threshold holds its false-alarm probability for records without lines at the fault
+      frequencies; the roller passage puts lines at BPFO into both sensors' healthy records, so the healthy
+      rig's calls are given.
     * ``margin_dB``: median over seeds of the true family's margin on the faulty bearing;
       ``margin_over_healthy_dB``: median of that margin minus the largest margin of the same family on the
       healthy bearing under the same surroundings (seed for seed the same base motion);
@@ -279,7 +282,7 @@ def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_
         over = [r["margin_dB"] - healthy_top for r in f]
         sensors[s] = {
             "detection_rate": float(np.mean([r["called"] == fault for r in f])),
-            "false_alarm_rate": float(np.mean([r["called"] != "none" for r in h])),
+            "false_alarm_rate": float(np.mean([detectors.is_alarm(r["called"]) for r in h])),
             "margin_dB": float(np.median([r["margin_dB"] for r in f])),
             "margin_dB_per_seed": [float(r["margin_dB"]) for r in f],
             "healthy_margin_dB_per_seed": [float(r["margin_dB"]) for r in h],

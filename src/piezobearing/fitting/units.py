@@ -3,7 +3,7 @@
 Every parameter of a forward model or an effect carries its SI unit in its
 name (``resistance_ohm``, ``delay_s``, ``beta_per_N``). :data:`UNITS` lists
 the allowed suffixes with the unit a report shows them in;
-:class:`~piezobearing.diagnosis.params.Param` refuses a name without one, and
+:class:`~piezobearing.fitting.params.Param` refuses a name without one, and
 the report formats values from it. A subject that needs a new unit (say
 ``_rad`` for a phase) adds one line here.
 """

@@ -10,13 +10,13 @@ from pathlib import Path
 import meshio
 import numpy as np
 
-from ..bearing.housing_mesh import HousingGeometry, HousingMesh
+from ..housing.mesh import HousingGeometry, HousingMesh
+from ..io.results import ResultFileError, write_npz
 from ..sensor.mesh import StackMesh
-from .results import ResultFileError, write_npz
 
 
 def write_housing_mesh(m, path: str | Path) -> None:
-    """A :class:`~piezobearing.bearing.housing_mesh.HousingMesh` and its node sets as NPZ (with its geometry)."""
+    """A :class:`~piezobearing.housing.mesh.HousingMesh` and its node sets as NPZ (with its geometry)."""
     write_npz(
         path,
         coors=m.coors,

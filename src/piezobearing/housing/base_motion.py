@@ -22,6 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..signals.daq import tone_sum
+
 #: Stream index of the base-motion draws in ``numpy.random.default_rng([seed, STREAM, replicate])``.
 STREAM = 29
 
@@ -126,13 +128,8 @@ def broadband(n: int, dt_s: float, settings: BaseMotionSettings, rng: np.random.
 
 def tones(t_s: np.ndarray, settings: BaseMotionSettings, rng: np.random.Generator) -> np.ndarray:
     """One axis's tonal lines at level 1: sum_h a_h sin(2 pi h f t + phi_h), phases uniform from ``rng`` [m/s^2]."""
-    t = np.asarray(t_s, dtype=float)
-    out = np.zeros_like(t)
-    for f0, amps in ((settings.mains_frequency_Hz, settings.mains_amplitudes_m_per_s2),
-                     (settings.gear_mesh_frequency_Hz, settings.gear_mesh_amplitudes_m_per_s2)):
-        for h, a in enumerate(amps, start=1):
-            out += a * np.sin(2 * np.pi * h * f0 * t + rng.uniform(0.0, 2 * np.pi))
-    return out
+    return tone_sum(t_s, ((settings.mains_frequency_Hz, settings.mains_amplitudes_m_per_s2),
+                          (settings.gear_mesh_frequency_Hz, settings.gear_mesh_amplitudes_m_per_s2)), rng)
 
 
 def realisation(settings: BaseMotionSettings, seed: int, replicate: int = 0):
@@ -140,7 +137,7 @@ def realisation(settings: BaseMotionSettings, seed: int, replicate: int = 0):
 
     The draws come from ``default_rng([seed, STREAM, replicate, axis])``: a replicate is one realisation of
     the surroundings; the function gives the same numbers for the same grid. Pass it to
-    :func:`piezobearing.bearing.transient.run_lpm` (``base_motion``).
+    :func:`piezobearing.housing.transient.run_lpm` (``base_motion``).
     """
 
     def acceleration(t_s: np.ndarray) -> np.ndarray:

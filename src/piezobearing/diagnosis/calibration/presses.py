@@ -24,9 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .diagnosis.calibration.synthesis import hidden_voltage
-from .io import Measurement
-from .sensor.calibration import SensorCircuit, circuit_voltage
+from ...io import Measurement
+from ...sensor.calibration import SensorCircuit, circuit_voltage
+from .synthesis import hidden_voltage
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """Bounded nonlinear least squares with parameter objects and a fit report.
 
-In the spirit of lmfit: each free parameter (:class:`~piezobearing.diagnosis.params.Param`)
+In the spirit of lmfit: each free parameter (:class:`~piezobearing.fitting.params.Param`)
 has a value, bounds, a unit and a scale (``log`` for quantities that span
 decades, such as a resistance). The fit runs in the internal coordinates
 (log10 for ``log`` parameters), and the covariance from the Jacobian is
@@ -48,7 +48,7 @@ class FitResult:
     message: str = ""
     #: sum ln h^2 of a non-stationary noise model (:meth:`NoiseFloor.scale`): -2 ln L = chi2 + log_det + const.
     log_det: float = 0.0
-    #: The Gauss-Newton intervals when ``ci95`` was replaced by honest ones (:mod:`~piezobearing.diagnosis.profile`).
+    #: The Gauss-Newton intervals when ``ci95`` was replaced by honest ones (:mod:`~piezobearing.fitting.profile`).
     ci95_jacobian: dict[str, list[float]] | None = None
 
     @property

@@ -1,6 +1,6 @@
 r"""Transient FEM of outer ring, housing and sensor under the moving roller loads.
 
-Linear elastodynamics on the half model of :mod:`piezobearing.bearing.housing_mesh`
+Linear elastodynamics on the half model of :mod:`piezobearing.housing.mesh`
 (x = 0 a mirror plane, U_x = 0; the foot's underside held):
 
 .. math::
@@ -51,7 +51,7 @@ import scipy.sparse.linalg as spla
 from numba import njit
 from scipy.linalg import expm
 
-from .. import sfepy_setup  # noqa: F401  (before sfepy: without its JAX terms where JAX is absent)
+from ..numerics import sfepy_setup  # noqa: F401  (before sfepy: without its JAX terms where JAX is absent)
 
 # isort: split
 from sfepy.base.base import Struct, output
@@ -63,9 +63,9 @@ from sfepy.solvers.nls import Newton
 from sfepy.solvers.ts_solvers import GeneralizedAlphaTS
 from sfepy.terms import Term
 
-from .. import sparse_solve
+from ..numerics import sparse_solve
 from ..sensor.materials import IsotropicMaterial, PiezoMaterial
-from .housing_mesh import GROUP_HOUSING, GROUP_RING, HousingMesh, nested_dissection_order
+from .mesh import GROUP_HOUSING, GROUP_RING, HousingMesh, nested_dissection_order
 
 # ---------------------------------------------------------------------------
 # The sensor as a spring
@@ -326,7 +326,7 @@ class HousingModel:
     patch_width_m : float
     solver : str or None
         Sparse direct solver of K and of the direct method's effective matrix
-        (:func:`piezobearing.sparse_solve.factorize`): None (PARDISO where
+        (:func:`piezobearing.numerics.sparse_solve.factorize`): None (PARDISO where
         installed), ``pardiso`` or ``superlu`` (the previous method).
     """
 
@@ -439,7 +439,7 @@ def splu_symmetric(a: sp.spmatrix, ordering: str = "NATURAL"):
     """SuperLU of a symmetric positive definite matrix, without pivoting.
 
     The model's DOFs are numbered in nested-dissection order already
-    (:func:`piezobearing.bearing.housing_mesh.nested_dissection_order`), so the
+    (:func:`piezobearing.housing.mesh.nested_dissection_order`), so the
     natural column order is the fill-reducing one.
     """
     return spla.splu(

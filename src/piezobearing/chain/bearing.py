@@ -14,11 +14,19 @@ from dataclasses import asdict
 
 import pandas as pd
 
-from . import lpm
-from .checks import lpm_checks
-from .housing_fem import spring_share_factor
-from .housing_mesh import HousingMesh, build_housing_mesh, mesh_quality
-from .transient import CASES, housing_geometry, is_faulty, make_model, run_lpm, transient, transient_summary
+from ..bearing import lpm
+from ..housing.checks import lpm_checks
+from ..housing.fem import spring_share_factor
+from ..housing.mesh import HousingMesh, build_housing_mesh, mesh_quality
+from ..housing.transient import (
+    CASES,
+    housing_geometry,
+    is_faulty,
+    make_model,
+    run_lpm,
+    transient,
+    transient_summary,
+)
 
 log = logging.getLogger("piezobearing.bearing.lpm")
 

@@ -3,25 +3,23 @@
 The mesh, the model, its modes to the cutoff (``sensor_comparison.mode_cutoff_ratio`` times the
 accelerometer DAQ's Nyquist frequency) and the modal operators of the roller loads, the base motion and the
 accelerometer's mounting places depend on the housing's config values alone (its geometry and defect, the mesh
-level, the sensor's spring, the damping, the cutoff: ``piezobearing.registry.READS["sensor_comparison_housing"]``),
+level, the sensor's spring, the damping, the cutoff: ``piezobearing.workflow.registry.READS["sensor_comparison_housing"]``),
 not on the speed, the surroundings or the seeds. The workflow computes them once per healthy or faulty mesh
-(rule ``sensor_comparison_housing``, :func:`write_housing`) and every comparison on that mesh, the main rule's
-and the study's cases, reads them (:func:`load_housing`): the same arrays, to the bit, as building them in the
+(rule ``sensor_comparison_housing``, :func:`piezobearing.stages.housing_model.write_housing`) and every
+comparison on that mesh, the main rule's and the study's cases, reads them
+(:func:`piezobearing.stages.housing_model.load_housing`): the same arrays, to the bit, as building them in the
 case.
 """
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
-import scipy.sparse as sp
 
-from ..registry import declared
-from . import housing_fem, transient
-from .housing_mesh import build_housing_mesh
+from . import fem as housing_fem
+from . import transient
+from .mesh import build_housing_mesh
 
 
 @dataclass(frozen=True)
@@ -31,8 +29,8 @@ class Housing:
 
     It depends on the housing's mesh (geometry, defect, level), the sensor's spring, the damping and the
     modes' cutoff, not on the speed, the surroundings or the seeds: :func:`build_housing` computes it once per
-    mesh (the workflow's rule ``sensor_comparison_housing``, :func:`save_housing`), every case on that mesh
-    reads it (:func:`load_housing`).
+    mesh (the workflow's rule ``sensor_comparison_housing``, :func:`piezobearing.stages.housing_model.save_housing`), every case on that mesh
+    reads it (:func:`piezobearing.stages.housing_model.load_housing`).
 
     Attributes
     ----------
@@ -84,10 +82,6 @@ class Housing:
 
 #: Modes asked for first: the housing of the paper's geometry has 15-20 below 32 kHz (2.5 x 12.8 kHz).
 FIRST_MODE_COUNT = 20
-#: The rule that builds a housing model (its config keys: piezobearing.registry.READS).
-HOUSING_RULE = "sensor_comparison_housing"
-
-
 def modes_to(model: housing_fem.HousingModel, top_Hz: float, start: int, seed: int) -> housing_fem.Modes:
     """The housing's modes up to past ``top_Hz``: max(``start``, 20) modes, 1.5 times as many until the highest
     passes it (each try one shift-invert Lanczos solve on the factors of K)."""
@@ -117,62 +111,3 @@ def build_housing(config: dict, faulty: bool) -> Housing:
     probes = tuple(housing_fem.mounting_probe(mesh, p) for p in housing_fem.MOUNTING_POSITIONS)
     base = housing_fem.base_motion_operators(model, modes, probes)
     return Housing(housing_fem.RacewayColumns.of(model), ops, base, model.n_dofs)
-
-
-def housing_reads(config: dict) -> dict:
-    """The config values a housing model depends on (the rule ``sensor_comparison_housing``'s), JSON-ready."""
-    return declared(config, HOUSING_RULE)
-
-
-def save_housing(housing: Housing, faulty: bool, reads: dict, path: str | Path) -> None:
-    """Write a housing model to ``path`` (.npz), with the config values it was built from."""
-    o, b, c = housing.ops, housing.base, housing.columns
-    rows = b.probe_rows.tocsr()
-    np.savez(
-        path,
-        reads_json=np.array(json.dumps(reads, sort_keys=True)),
-        faulty=np.array(bool(faulty)),
-        n_dofs=np.array(housing.n_dofs),
-        columns_psi_rad=c.psi_rad, columns_radius_m=np.array(c.radius_m),
-        columns_patch_width_m=np.array(c.patch_width_m),
-        **{f"ops_{k}": getattr(o, k) for k in housing_fem.ReducedOperators.__dataclass_fields__},
-        base_rigid=b.rigid, base_participation=b.participation, base_rigid_mass_kg=b.rigid_mass_kg,
-        base_static_sensor=b.static_sensor, base_probe_modal=b.probe_modal, base_probe_base=b.probe_base,
-        probe_rows_data=rows.data, probe_rows_indices=rows.indices, probe_rows_indptr=rows.indptr,
-        probe_rows_shape=np.array(rows.shape),
-        probe_position=np.array([p.position for p in b.probes]),
-        probe_node=np.array([p.node for p in b.probes]),
-        probe_coordinates_m=np.array([p.coordinates_m for p in b.probes]),
-        probe_normal=np.array([p.normal for p in b.probes]),
-    )
-
-
-def load_housing(path: str | Path, faulty: bool, reads: dict) -> Housing:
-    """The housing model in ``path`` (:func:`save_housing`); stops if it was built for another case or config."""
-    with np.load(path, allow_pickle=False) as d:
-        if bool(d["faulty"]) != bool(faulty) or json.loads(str(d["reads_json"])) != json.loads(json.dumps(reads)):
-            raise ValueError(
-                f"{path}: this housing model was built for another {'faulty' if faulty else 'healthy'} mesh or "
-                f"config; rebuild it (snakemake rule {HOUSING_RULE})"
-            )
-        ops = housing_fem.ReducedOperators(**{k: d[f"ops_{k}"] for k in housing_fem.ReducedOperators.__dataclass_fields__})
-        probes = tuple(
-            housing_fem.Probe(str(pos), int(node), tuple(float(v) for v in xyz), tuple(float(v) for v in n))
-            for pos, node, xyz, n in zip(d["probe_position"], d["probe_node"], d["probe_coordinates_m"],
-                                         d["probe_normal"], strict=True)
-        )
-        rows = sp.csr_matrix((d["probe_rows_data"], d["probe_rows_indices"], d["probe_rows_indptr"]),
-                             shape=tuple(d["probe_rows_shape"]))
-        base = housing_fem.BaseMotionOperators(
-            rigid=d["base_rigid"], participation=d["base_participation"], rigid_mass_kg=d["base_rigid_mass_kg"],
-            static_sensor=d["base_static_sensor"], probes=probes, probe_rows=rows, probe_modal=d["base_probe_modal"],
-            probe_base=d["base_probe_base"],
-        )
-        columns = housing_fem.RacewayColumns(d["columns_psi_rad"], float(d["columns_radius_m"]),
-                                     float(d["columns_patch_width_m"]))
-        return Housing(columns, ops, base, int(d["n_dofs"]))
-
-
-def write_housing(config: dict, faulty: bool, out_npz: str | Path) -> None:
-    """Rule sensor_comparison_housing: the housing model of one mesh (healthy or faulty), built and written."""
-    save_housing(build_housing(config, faulty), faulty, housing_reads(config), out_npz)

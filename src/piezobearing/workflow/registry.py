@@ -7,7 +7,8 @@ of the declared keys only, in which reading any other key raises :class:`Undecla
 the fix. A rule missing here reads nothing from the config.
 
 :func:`code_hash` is the hash of every module of this package a stage's script (or a figure's notebook) imports,
-directly or through other modules (the import graph read with ``ast``, lazy imports inside functions included),
+directly or through other modules (the import graph read with ``ast``, lazy imports inside functions included;
+``from piezobearing import name`` follows a lazy package's table to the module that defines ``name``),
 computed once per workflow start: a change to the physics reruns exactly the rules whose code it is.
 
 :func:`record_checksum` tracks a user's calibration record by content (SHA-256), so a replaced record with an older
@@ -22,9 +23,9 @@ import json
 from functools import lru_cache
 from pathlib import Path
 
-from .paper import CASE
+from ..config.paper import CASE
 
-PACKAGE_DIR = Path(__file__).resolve().parent
+PACKAGE_DIR = Path(__file__).resolve().parents[1]
 
 #: The sensor circuit of Eq. 6 (SensorCircuit.from_config) without R.
 _CIRCUIT = [
@@ -132,7 +133,7 @@ _BEARING = [
     "bearing.substeps",
     "bearing.resample",
 ]
-#: The sensor force's period (signals.outputs.sensor_force_period_s: the bearing's geometry, speed, mean slip and
+#: The sensor force's period (chain.signals.sensor_force_period_s: the bearing's geometry, speed, mean slip and
 #: whether the rollers differ), for which the sensor circuit starts in its periodic steady state.
 _PASSAGE = [
     *_GEOMETRY,
@@ -141,7 +142,7 @@ _PASSAGE = [
     "bearing.roller_diameter_scatter_m",
 ]
 
-#: The config keys of the paper's case (piezobearing.paper.CASE), against which the scorecard compares the run's.
+#: The config keys of the paper's case (piezobearing.config.paper.CASE), against which the scorecard compares the run's.
 _CASE = list(CASE)
 
 #: Config keys each rule's stage reads, by rule.
@@ -180,7 +181,7 @@ READS: dict[str, list[str]] = {
         "signals.skip_s", "signals.sensor_fem_correction", *_CIRCUIT,
     ],
     # sensor_comparison.smk
-    "sensor_comparison_housing": [  # the housing's reduced model (piezobearing.sensor.comparison.build_housing)
+    "sensor_comparison_housing": [  # the housing's reduced model (piezobearing.comparison.rig.build_housing)
         "seed", *_HOUSING_GEOMETRY, "housing.mesh_level", "housing.n_modes", "housing.damping_ratio",
         "housing.damping_band_Hz", "housing.patch_width_m", "housing.sensor_electrical", *_PZT, *_ALUMINA_DISK,
         "sensor_comparison.mode_cutoff_ratio", "accelerometer.daq.sample_rate_Hz",
@@ -194,8 +195,11 @@ READS: dict[str, list[str]] = {
     # diagnostics_bearing.smk
     "synthesize_bearing_record": ["seed", "sensor", "signals.sensor_fem_correction", "bearing", "bearing_diagnosis"],
     "diagnose_bearing": ["seed", "sensor", "signals.sensor_fem_correction", "bearing", "bearing_diagnosis", "diagnostics"],
-    # scorecard.smk: the run's conditions against the paper's case (piezobearing.paper.CASE)
+    # scorecard.smk: the run's conditions against the paper's case (piezobearing.config.paper.CASE)
     "scorecard": _CASE,
+    # detect_archive.smk: piezobearing detect over an archive of recordings (outside rule all)
+    "detect_record": ["detect_archive"],
+    "detect_archive": ["detect_archive"],
 }
 
 
@@ -222,7 +226,7 @@ class DeclaredConfig(dict):
     def __missing__(self, key):
         raise UndeclaredKeyError(
             f"the stage of rule {self._rule} read config key {self._prefix}{key}, which the rule does not "
-            f"declare; add it to piezobearing.registry.READS['{self._rule}']"
+            f"declare; add it to piezobearing.workflow.registry.READS['{self._rule}']"
         )
 
 
@@ -271,7 +275,22 @@ def _module_file(name: str) -> Path | None:
     for p in (base.with_suffix(".py"), base / "__init__.py"):
         if p.is_file():
             return p
+    package = _module_file(".".join(parts[:-1])) if len(parts) > 1 else None
+    if package is not None and package.name == "__init__.py" and parts[-1] in _lazy_exports(package):
+        return _module_file(_lazy_exports(package)[parts[-1]])  # `from piezobearing import detect`: its module
     return None
+
+
+@lru_cache(maxsize=None)
+def _lazy_exports(init: Path) -> dict[str, str]:
+    """A lazy package's table of names and their modules (``_EXPORTS`` in its ``__init__.py``: the package's face,
+    ``piezobearing.io``), read from its source: an entry that imports a name from such a package runs that name's
+    module, and its code is hashed with it; the table's other modules are not followed."""
+    for node in ast.parse(init.read_text()).body:
+        target = node.target if isinstance(node, ast.AnnAssign) else (node.targets[0] if isinstance(node, ast.Assign) else None)
+        if isinstance(target, ast.Name) and target.id == "_EXPORTS":
+            return ast.literal_eval(node.value)
+    return {}
 
 
 def _module_name(path: Path) -> str:
@@ -338,16 +357,8 @@ def _source_text(path: Path) -> str:
 def _module_imports(f: Path) -> tuple[Path, ...]:
     """The package files module file ``f`` imports directly, parsed once per process (every rule's entry
     reaches the same modules: parsing them once per entry was most of a dry run's time)."""
-    if f == _FACE:
-        return ()
     names = _imports(f.read_text(), _module_name(f), f.name == "__init__.py")
     return tuple(p for p in map(_module_file, sorted(names)) if p is not None)
-
-
-#: The package's face (``piezobearing/__init__.py``): it re-exports the public API for users, and every import of
-#: a module of the package runs it. A stage runs the modules it imports by name, so the face is hashed but its own
-#: imports are not followed; else a change to any module would rerun every rule.
-_FACE = PACKAGE_DIR / "__init__.py"
 
 
 @lru_cache(maxsize=None)

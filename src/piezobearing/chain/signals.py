@@ -19,8 +19,8 @@ from ..bearing.lpm import BearingGeometry, kinematic_frequencies
 from ..io import SignalFileError
 from ..sensor.calibration import SensorCircuit, design_resistance_ohm, rc_voltage
 from ..sensor.response import sensor_model
-from . import classification, daq, detection, detectors
-from .analysis import INDICATOR_DEFINITION, envelope_analysis
+from ..signals import classification, daq, detection, detectors
+from ..signals.analysis import INDICATOR_DEFINITION, envelope_analysis
 
 
 def sensor_circuit(config: dict, resistance: dict, source: str = "resistance.json") -> SensorCircuit:
@@ -211,17 +211,6 @@ def true_fault_type(bearing: dict) -> str:
         raise ValueError(f"bearing.defects: {len(types)} fault types ({', '.join(types) or 'none'}); the "
                          "classification needs exactly one true type in the faulty case")
     return types[0]
-
-
-def extra_fault_types(config: dict) -> list[str]:
-    """The fault types of ``signals.detector.classification_types`` that need their own record (rule
-    fault_type_voltage): all but the faulty case's own type when it has exactly one; none without a defect
-    (the size and place of the extra types' defect come from the faulty case's first defect)."""
-    defects = config["bearing"]["defects"]
-    if not defects:
-        return []
-    own = {d["type"] for d in defects}
-    return [t for t in dict.fromkeys(config["signals"]["detector"]["classification_types"]) if own != {t}]
 
 
 def fault_type_config(config: dict, fault_type: str) -> dict:

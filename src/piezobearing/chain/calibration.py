@@ -13,12 +13,12 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from ..diagnosis.calibration.presses import PressProtocol, synthesize
 from ..diagnosis.calibration.record import left_out_samples
-from ..diagnosis.least_squares import nrmse
+from ..fitting.least_squares import nrmse
 from ..io import Measurement
-from ..synthesis import PressProtocol, synthesize
-from . import calibration
-from .lowfreq import asymptote_onset_Hz, lowfreq_sensitivity
+from ..sensor import calibration
+from ..sensor.lowfreq import asymptote_onset_Hz, lowfreq_sensitivity
 
 
 def nominal_circuit(config: dict, resistance_ohm: float | None = None) -> calibration.SensorCircuit:

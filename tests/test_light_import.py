@@ -1,0 +1,116 @@
+"""``import piezobearing`` loads no heavy dependency and none of its own subpackages; ``piezobearing detect --help``
+loads only the command line and the config; a public name is loaded on first use; writing results loads no
+record reader (``piezobearing.io`` is lazy too). Each check runs a fresh
+interpreter and reads ``sys.modules`` (what was loaded, never how long it took).
+
+The code hash (:func:`piezobearing.workflow.registry.code_hash`) follows an entry's ``from piezobearing import name``
+to the module that defines the name, and the face's own lazy table is not followed: editing a module reached only
+through the face changes the hash of an entry that imports that name, and of no other (the same for the names of
+``piezobearing.io``).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import piezobearing
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+
+#: Dependencies that cost tenths of a second to seconds each; a bare import of the package loads none of them.
+HEAVY = ("numpy", "scipy", "pandas", "matplotlib", "sfepy", "numba", "h5py", "pyuff", "nptdms", "meshio",
+         "jsonschema", "snakemake", "tqdm")
+
+
+def _loaded(code: str, pythonpath: Path = SRC) -> set[str]:
+    """The top-level module names loaded by ``code`` in a fresh interpreter, plus this package's modules."""
+    script = code + "\nimport json, sys\nprint(json.dumps(sorted(sys.modules)))"
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True,
+                         env={"PYTHONPATH": str(pythonpath), "PATH": "/usr/bin:/bin"})
+    return set(json.loads(out.stdout.strip().splitlines()[-1]))
+
+
+def test_import_piezobearing_loads_no_heavy_dependency_and_no_subpackage():
+    loaded = _loaded("import piezobearing")
+    assert not {m.split(".")[0] for m in loaded} & set(HEAVY)
+    assert sorted(m for m in loaded if m.startswith("piezobearing")) == ["piezobearing"]
+
+
+def test_detect_help_loads_the_command_line_and_the_config_only():
+    code = "from piezobearing.cli import main\ntry:\n    main(['detect', '--help'])\nexcept SystemExit:\n    pass"
+    loaded = _loaded(code)
+    heavy = {m.split(".")[0] for m in loaded} & set(HEAVY)
+    assert heavy == {"jsonschema"}, heavy  # the config's schema validator; nothing of the physics
+    assert sorted(m for m in loaded if m.startswith("piezobearing")) == [
+        "piezobearing", "piezobearing.cli", "piezobearing.config",
+    ]
+
+
+def test_a_public_name_is_loaded_on_first_use_and_stays():
+    loaded = _loaded("import piezobearing\npiezobearing.Kinematics")
+    assert "piezobearing.bearing.kinematics" in loaded and "piezobearing.api" not in loaded
+    assert piezobearing.detect is piezobearing.api.detect
+    assert "detect" in dir(piezobearing) and "signals" in dir(piezobearing)
+    with pytest.raises(AttributeError, match="no attribute 'nothing'"):
+        piezobearing.nothing  # noqa: B018
+
+
+def test_the_face_names_every_subpackage_and_each_export_exists():
+    package = SRC / "piezobearing"
+    children = {p.stem for p in package.glob("*.py") if p.stem != "__init__"}
+    children |= {p.parent.name for p in package.glob("*/__init__.py")}
+    assert piezobearing._SUBMODULES == children
+    for name, module in piezobearing._EXPORTS.items():
+        assert getattr(__import__(module, fromlist=[name]), name) is getattr(piezobearing, name)
+
+
+_HASH = (
+    "import sys\nfrom piezobearing.workflow.registry import code_hash\nprint(code_hash(sys.argv[1]))"
+)
+
+
+def _hash(entry: Path, src: Path) -> str:
+    out = subprocess.run([sys.executable, "-c", _HASH, str(entry)], capture_output=True, text=True, check=True,
+                         env={"PYTHONPATH": str(src), "PATH": "/usr/bin:/bin"})
+    return out.stdout.strip()
+
+
+def test_the_code_hash_follows_a_name_imported_from_the_face(tmp_path):
+    src = tmp_path / "src"
+    shutil.copytree(SRC / "piezobearing", src / "piezobearing", ignore=shutil.ignore_patterns("__pycache__"))
+    via_face = tmp_path / "via_face.py"
+    via_face.write_text("from piezobearing import Kinematics\n")
+    elsewhere = tmp_path / "elsewhere.py"
+    elsewhere.write_text("from piezobearing.sensor import materials\n")
+    before = _hash(via_face, src), _hash(elsewhere, src)
+    kinematics = src / "piezobearing/bearing/kinematics.py"
+    kinematics.write_text(kinematics.read_text() + "\n# an edit\n")
+    after = _hash(via_face, src), _hash(elsewhere, src)
+    assert after[0] != before[0]  # the rule that reaches kinematics through the face reruns
+    assert after[1] == before[1]  # the face's other names are not followed: no other rule does
+
+
+def test_writing_results_loads_no_record_reader():
+    loaded = _loaded("from piezobearing.io import write_json, read_json")
+    assert not {m.split(".")[0] for m in loaded} & {"h5py", "pyuff", "nptdms"}
+    assert "scipy.io" not in loaded and "piezobearing.io.formats" not in loaded
+
+
+def test_the_code_hash_follows_a_name_imported_from_the_lazy_io_package(tmp_path):
+    src = tmp_path / "src"
+    shutil.copytree(SRC / "piezobearing", src / "piezobearing", ignore=shutil.ignore_patterns("__pycache__"))
+    reader = tmp_path / "reader.py"
+    reader.write_text("from piezobearing.io import read_measurement\n")
+    writer = tmp_path / "writer.py"
+    writer.write_text("from piezobearing.io import write_json\n")
+    before = _hash(reader, src), _hash(writer, src)
+    records = src / "piezobearing/io/records.py"
+    records.write_text(records.read_text() + "\n# an edit\n")
+    after = _hash(reader, src), _hash(writer, src)
+    assert after[0] != before[0] and after[1] == before[1]
