@@ -26,7 +26,7 @@ start ``bearing.bearing_damping_N_s_per_m``). The pedestal's ``bearing.pedestal_
 lies far above any DAQ band a record of this sensor is held at. The shaft's mass is fitted only where the shaft's
 mode (at the rig file's mass) lies below the record's Nyquist frequency; above it (the paper's 2550 Hz: Nyquist
 1275 Hz against 2.6 kHz) the record sees the mode only through its aliases and the box average, and the mass is
-held at the rig file's value (``ci_method``: "held, not free").
+held at the rig file's value (in the final fit's values without an interval).
 
 Where a user finds the values: the shaft's mass is the shaft's and inner ring's (and anything they carry)
 weighed or from the drawing, the share this bearing carries (half for a shaft between two equal bearings at
