@@ -11,7 +11,7 @@ The old side is ``--old REF`` (a git revision, exported to a temporary folder) r
 Python and its ``src`` first on ``PYTHONPATH``. On a loaded machine the wall seconds grow and the CPU seconds
 much less: quote the CPU and the ratio.
 
-    python benchmarks/bench_startup.py --old ef136dc [--data ../shared/data/cwru_fan_end] [--runs 7]
+    python benchmarks/bench_startup.py --old REV [--data ../shared/data/cwru_fan_end] [--runs 7]
 
 Writes results/benchmarks/startup.json.
 """

@@ -3,12 +3,15 @@
 Each case hides catalogue values in a record of the 4-DOF LPM (:mod:`piezobearing.diagnosis.bearing.lpm_records`,
 not the quasi-static surrogate the diagnosis fits), at 30 dB, and runs the diagnosis of ``diagnose-bearing`` on
 it. The results file holds, per case: the hidden values, what the diagnosis selected, each hidden value's fitted
-value and 95 % interval, the verdict, the fault's statement and the lines it left unexplained, and the rate the
+value and 95 % interval, the verdict, the fault's statement and the lines it left unexplained, the dynamic rung
+(tried, accepted, the NRMSE ladder: baseline, quasi-static, with the shaft's dynamics, floor) with the fitted
+damping against the LPM's, the diagnosis's CPU time, and the rate the
 model was held at (a record faster than ``bearing_diagnosis.max_model_rate_Hz`` is averaged down by the
 diagnosis itself). A markdown table goes beside it.
 
     python validation/bearing_diagnosis.py --out results/validation/bearing_diagnosis.json \
         [--influence results/bearing/influence_line_healthy.csv] [--rate 2550 --rate 25600] [--case NAME ...]
+        [--duration S] [--record-out DIR]
 """
 
 from __future__ import annotations
@@ -18,11 +21,13 @@ import copy
 import json
 import shlex
 import sys
+import time
 from pathlib import Path
 
 from piezobearing import config as cfg
 from piezobearing.diagnosis.bearing.lpm_records import lpm_record
 from piezobearing.diagnosis.bearing.subject import SUBJECT
+from piezobearing.io import write_bearing_record
 from piezobearing.stages.bearing_diagnosis import influence_from_config, read_influence
 
 #: name -> (hidden catalogue values, the effects that carry them)
@@ -43,13 +48,32 @@ CASES = {
                                      "cage_slip_ratio": 0.015}, ["outer_race_defect", "cage_slip"]),
     "outer_race_defect+clearance": ({"outer_defect_width_m": 0.9e-3, "outer_defect_angle_rad": 0.0,
                                      "radial_clearance_m": 40e-6}, ["outer_race_defect", "clearance"]),
+    "outer_race_defect_20deg": ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.35},
+                                ["outer_race_defect"]),
+    "outer_race_defect_26deg": ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.45},
+                                ["outer_race_defect"]),
+    "outer_race_defect_26deg+cage_slip": ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.45,
+                                           "cage_slip_ratio": 0.015}, ["outer_race_defect", "cage_slip"]),
+    "healthy_1500rpm_tachometer": ({"speed_deviation_ratio": 0.5}, []),
+    "outer_race_defect_ramp_tachometer": ({"outer_defect_width_m": 0.9e-3, "outer_defect_angle_rad": 0.0,
+                                           "speed_deviation_ratio": -0.1, "speed_ramp_Hz_per_s": 100.0 / 60.0},
+                                          ["outer_race_defect"]),
 }
+#: Cases whose record has a speed_rpm column (the tachometer): the speed the LPM ran at, 1500 rpm where the rig
+#: file says 1000; a ramp from 900 rpm at 100 rpm/s (900 to 1000 rpm over a 1 s record, 1100 over 2 s).
+TACHOMETER = ("healthy_1500rpm_tachometer", "outer_race_defect_ramp_tachometer")
 
 
-def run_case(config: dict, influence, name: str, rate_Hz: float, duration_s: float, seed: int) -> dict:
+def run_case(config: dict, influence, name: str, rate_Hz: float, duration_s: float, seed: int,
+             record_dir: Path | None = None) -> dict:
     hidden, effects = CASES[name]
-    rec = lpm_record(config, influence, hidden, rate_Hz, duration_s, 30.0, seed)
+    rec = lpm_record(config, influence, hidden, rate_Hz, duration_s, 30.0, seed, tachometer=name in TACHOMETER)
+    if record_dir is not None:
+        record_dir.mkdir(parents=True, exist_ok=True)
+        write_bearing_record(rec, record_dir / f"{name}_{rate_Hz:.0f}Hz.csv")
+    c0 = time.process_time()
     d = SUBJECT.diagnose((rec, influence), config)[1]
+    cpu = time.process_time() - c0
     final = d["final"]
     found = {}
     for k, v in hidden.items():
@@ -68,6 +92,13 @@ def run_case(config: dict, influence, name: str, rate_Hz: float, duration_s: flo
         "values": found,
         "shaft_speed_Hz": {"found": final["params"].get("shaft_speed_Hz"), "ci95": final["ci95"].get("shaft_speed_Hz")},
         "fault_statement": d["fault"].get("statement"),
+        "fault_source": d["fault"].get("source"),
+        "unidentified": d["fault"].get("unidentified"),
+        "dynamic_rung": {k: v for k, v in d["dynamic_rung"].items() if k != "evidence"},
+        "damping": {"found": final["params"].get("bearing_damping_N_s_per_m"),
+                    "ci95": final["ci95"].get("bearing_damping_N_s_per_m"),
+                    "rig": config["bearing"]["bearing_damping_N_s_per_m"]},
+        "cpu_s": cpu,
         "fault_sidebands": d["fault"].get("sidebands"),
         "model_rate": d["model_rate"],
         "nrmse": final["nrmse"],
@@ -76,8 +107,17 @@ def run_case(config: dict, influence, name: str, rate_Hz: float, duration_s: flo
     }
 
 
+def ladder(r: dict) -> str:
+    """Baseline / quasi-static final / with the dynamics / floor NRMSE [%] (the dynamic rung's ladder where tried)."""
+    lad = (r.get("dynamic_rung") or {}).get("ladder")
+    if not lad:
+        return f"{100 * r['nrmse']:.2f} / floor {100 * r['noise_floor_nrmse']:.2f}"
+    return " / ".join(f"{100 * x['nrmse']:.2f}" for x in lad)
+
+
 def table(rows: list[dict]) -> str:
-    out = ["| case | rate [Hz] (model) | hidden | found [95 % interval] | selected | verdict |", "|---|---|---|---|---|---|"]
+    out = ["| case | rate [Hz] (model) | hidden | found [95 % interval] | selected | verdict | NRMSE % (baseline / "
+           "quasi-static / dynamic / floor) |", "|---|---|---|---|---|---|---|"]
     for r in rows:
         hid = "; ".join(f"{k} {v['hidden']:.4g}" for k, v in r["values"].items())
         fnd = "; ".join(
@@ -85,7 +125,7 @@ def table(rows: list[dict]) -> str:
             else "not fitted" for v in r["values"].values()
         )
         out.append(f"| {r['case']} | {r['sample_rate_Hz']:.0f} ({r['model_rate']['model_rate_Hz']:.0f}) | {hid} | {fnd} | {', '.join(r['selected']) or 'none'} "
-                   f"| {r['verdict']} |")
+                   f"| {r['verdict']} | {ladder(r)} |")
     return "\n".join(out)
 
 
@@ -98,6 +138,7 @@ def main() -> None:
     ap.add_argument("--case", action="append", help=f"cases (default all): {', '.join(CASES)}")
     ap.add_argument("--duration", type=float, default=1.0, help="record length [s]")
     ap.add_argument("--seed", type=int, default=26)
+    ap.add_argument("--record-out", type=Path, default=None, help="folder to write each case's record to (CSV)")
     args = ap.parse_args()
     config = cfg.load(*([args.config] if args.config else []))
     influence = read_influence(args.influence) if args.influence else influence_from_config(config)
@@ -110,7 +151,7 @@ def main() -> None:
             if (name, rate) in done:
                 continue
             c = copy.deepcopy(config)
-            rows.append(run_case(c, influence, name, rate, args.duration, args.seed))
+            rows.append(run_case(c, influence, name, rate, args.duration, args.seed, args.record_out))
             out.write_text(json.dumps({"command": shlex.join(["python", *sys.argv]), "snr_dB": 30.0,
                                        "cases": rows}, indent=1))
             out.with_suffix(".md").write_text(table(rows) + "\n")

@@ -360,7 +360,11 @@ def _diagnose_bearing(args) -> int:
     rig = read_yaml(args.config) if args.config is not None else {}
     rig_speed = "shaft_speed_rpm" in ((rig or {}).get("bearing") or {})
 
+    cost: list[str] = []
+
     def progress(msg: str) -> None:
+        if msg.startswith("dynamic rung:") and "CPU" in msg:
+            cost.append(msg)
         if not args.quiet:
             print(f"  fit: {msg}", file=sys.stderr, flush=True)
 
@@ -386,7 +390,14 @@ def _diagnose_bearing(args) -> int:
         f"selected: {', '.join(d['selected']) or 'nothing'}; final NRMSE {100 * final['nrmse']:.2f}% "
         f"(floor {100 * final['noise_floor_nrmse']:.2f}%)"
     )
-    print(f"fault: {f['type']}" + "".join(f"; {k} = {v:.6g} [{f['ci95'][k][0]:.6g}, {f['ci95'][k][1]:.6g}]" for k, v in f["params"].items() if f["ci95"].get(k)))
+    rung = d.get("dynamic_rung") or {}
+    if rung.get("tried"):
+        print(f"{cost[-1] if cost else 'dynamic rung'}: " + " -> ".join(
+            f"{row['model']} {100 * row['nrmse']:.2f}%" for row in rung["ladder"]))
+    print(f"fault: {f['type']}" + (" (named from its lines)" if f.get("source") == "lines" else "")
+          + "".join(f"; {k} = {v:.6g} [{f['ci95'][k][0]:.6g}, {f['ci95'][k][1]:.6g}]" for k, v in f["params"].items() if f["ci95"].get(k)))
+    if f.get("source") == "lines":
+        print(f"  {f['statement']}")
     if f.get("lines_left"):
         print(f"found, with lines left: {f['statement']}")
     print(f"verdict: {d['verdict']}")

@@ -156,7 +156,7 @@ def diagnose(
         for r in p.representations
     }
     note("intervals of the final model")
-    intervals = final_intervals(final, record, v, floor, settings)
+    intervals = final_intervals(final, record, v, floor, settings, p.profile_evaluations)
     found = findings(tests["final"], record.input_name, p.segments)
     for js in judgements.values():
         found += js["final"].findings
@@ -207,12 +207,14 @@ def how_firm(sel, final: ModelFit, cut: bool, p: Problem, intervals: dict) -> di
     return idf
 
 
-def final_intervals(final: ModelFit, record: Record, v: np.ndarray, floor: NoiseFloor, settings) -> dict:
+def final_intervals(final: ModelFit, record: Record, v: np.ndarray, floor: NoiseFloor, settings,
+                    max_evaluations: int | None = None) -> dict:
     """Honest 95% intervals of the final model's parameters (:func:`~piezobearing.fitting.profile.honest_intervals`).
 
     The Jacobian interval of each free parameter is checked along its
     quadratic profile line and profiled where it fails; the final fit's
-    ``ci95`` then holds the honest interval and ``ci95_jacobian`` the Jacobian's.
+    ``ci95`` then holds the honest interval and ``ci95_jacobian`` the Jacobian's. ``max_evaluations``: the
+    budget of model evaluations (None: :data:`PROFILE_EVALUATIONS`).
     """
     res = final.result
     out = honest_intervals(
@@ -222,7 +224,7 @@ def final_intervals(final: ModelFit, record: Record, v: np.ndarray, floor: Noise
         max_profiles=PROFILES,
         max_nfev=settings.max_nfev,
         ftol=settings.ftol,
-        max_evaluations=PROFILE_EVALUATIONS,
+        max_evaluations=PROFILE_EVALUATIONS if max_evaluations is None else max_evaluations,
     )
     final.model.release()
     res.ci95_jacobian = dict(res.ci95)

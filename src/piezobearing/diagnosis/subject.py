@@ -124,6 +124,10 @@ class Problem:
     zoom_segments : int
         How many consecutive segments the figures show at the full rate (where the baseline misses
         most; :func:`piezobearing.diagnosis.engine.zoom_window`): one impulse, a dozen roller passages.
+    profile_evaluations : int or None
+        Most forward-model evaluations the final model's interval checks and profiles may spend (None: the
+        engine's :data:`~piezobearing.diagnosis.engine.PROFILE_EVALUATIONS`); a subject lowers it for a model
+        whose evaluation is costly (intervals beyond it keep the Jacobian's, flagged).
     """
 
     record: Record
@@ -137,6 +141,7 @@ class Problem:
     segments: Segments
     representations: Sequence[Representation] = ()
     zoom_segments: int = 1
+    profile_evaluations: int | None = None
 
 
 @runtime_checkable

@@ -47,8 +47,11 @@ UNITS: tuple[Unit, ...] = (
     Unit("_per_N", "1/N", 1.0, "1/N"),
     Unit("_ratio", "1", 1.0, "x"),
     Unit("_ppm", "1e-6", 1.0, "ppm"),
-    # the running bearing (diagnosis/bearing): loads, widths and clearances, angles, a roller's index
+    # the running bearing (diagnosis/bearing): damping, loads, masses, widths and clearances, angles, a roller's
+    # index
+    Unit("_N_s_per_m", "N s/m", 1.0, "N s/m"),
     Unit("_N", "N", 1.0, "N"),
+    Unit("_kg", "kg", 1.0, "kg"),
     Unit("_m", "m", 1e-3, "mm"),
     Unit("_rad", "rad", 1.0, "rad"),
     Unit("_index", "1", 1.0, ""),

@@ -26,11 +26,13 @@ Moving defects are solved on a fine grid (sub-samples) and averaged.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ...bearing.lpm import BearingGeometry, kinematic_frequencies
+from ...bearing.shaft_dynamics import ShaftDynamics, shaft_mode, steps_per_sample
+from ...bearing.shaft_dynamics import sensor_force as dyn_sensor_force
 from ...bearing.surrogate import (
     InfluenceLine,
     Operating,
@@ -40,6 +42,7 @@ from ...bearing.surrogate import (
     inner_race_contact,
     phase_edges,
     roller_groove_drop,
+    rolling_element_drop,
 )
 from ...sensor.response import SensorModel
 from ..record import UniformClock
@@ -75,6 +78,9 @@ class Rig(UniformClock):
         The record's uniform clock [s].
     tach_Hz : ndarray or None
         Shaft speed from the tachometer at each sample [Hz].
+    dynamics : ShaftDynamics or None
+        The rig's shaft and pedestal (``bearing.shaft_mass_kg`` ...): the values the ``shaft_dynamics`` effect
+        starts from and holds (None: the LPM's keys are not known, the effect cannot be added).
     """
 
     geometry: BearingGeometry
@@ -86,6 +92,7 @@ class Rig(UniformClock):
     shaft_speed_Hz: float
     time_s: np.ndarray
     tach_Hz: np.ndarray | None = None
+    dynamics: ShaftDynamics | None = None
     surrogate: Surrogate = field(default=None, repr=False)
     cache: dict = field(default_factory=dict, repr=False, compare=False)
 
@@ -155,9 +162,12 @@ def sensor_force(rig: Rig, values: dict) -> tuple[np.ndarray, np.ndarray]:
     w_r = values.get("roller_defect_width_m", 0.0)
     edges = phase_edges(phi)
     f = rig.surrogate.box_average(edges, op, outer, key, offsets)
-    if w_i <= 0 and w_r <= 0:
-        return f, t_ext
-    return f + moving_defect_change(rig, values, edges, op, outer, key, offsets), t_ext
+    if w_i > 0 or w_r > 0:
+        f = f + moving_defect_change(rig, values, edges, op, outer, key, offsets)
+    if values.get("shaft_mass_kg", 0.0) > 0:  # the dynamic rung: the 4-DOF dynamics after the pre-roll
+        first, fd = shaft_dynamics_force(rig, values, edges, op, outer, offsets)
+        f = np.concatenate([f[:first], fd])
+    return f, t_ext
 
 
 def moving_defect_change(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, key, offsets) -> np.ndarray:
@@ -215,6 +225,99 @@ def moving_defect_change(rig: Rig, values: dict, edges: np.ndarray, op: Operatin
     diff = rig.surrogate.fine_change(phi_f[sub], op, drop, outer, key, offsets)
     change[samples] = diff.reshape(-1, s).mean(axis=1)
     return change
+
+
+#: The shaft's dynamics are simulated from at least this long before the record's first sample, from static
+#: equilibrium (their start transient decays as exp(-zeta omega t): 20 ms is 14 time constants at the rig's 5 %
+#: damping; ten time constants where the damping is lighter, :func:`shaft_dynamics_force`) [s].
+DYNAMICS_SETTLE_S = 0.02
+
+
+def dynamics_of(rig: Rig, values: dict) -> ShaftDynamics:
+    """The rig's shaft and pedestal with the values' ``shaft_mass_kg`` and ``bearing_damping_N_s_per_m``."""
+    d = rig.dynamics
+    return replace(d, shaft_mass_kg=float(values["shaft_mass_kg"]),
+                   bearing_damping_N_s_per_m=float(values.get("bearing_damping_N_s_per_m", d.bearing_damping_N_s_per_m)))
+
+
+def shaft_mode_Hz(rig: Rig, dyn: ShaftDynamics, op: Operating | None = None) -> tuple[float, float]:
+    """The shaft's mode on its rollers along the load [Hz] and its damping ratio [-] at the operating point (the
+    rig's nominal one by default): :func:`piezobearing.bearing.shaft_dynamics.shaft_mode`."""
+    op = op or Operating(rig.radial_load_N, rig.radial_clearance_m)
+    return shaft_mode(dyn, float(op.radial_load_N), float(op.radial_clearance_m), rig.geometry.roller_length_m,
+                      rig.geometry.n_rollers)
+
+
+def shaft_dynamics_force(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, offsets) -> tuple[int, np.ndarray]:
+    """The sensor force of the dynamic rung averaged over the sample windows from ``first`` on: (first, force) [N].
+
+    On the grid of :func:`fine_grid` the roller angles and every drop (an outer-race groove, a moving defect, the
+    rollers' offsets) enter the 4-DOF dynamics (:func:`~piezobearing.bearing.shaft_dynamics.sensor_force`), which
+    start at rest :data:`DYNAMICS_SETTLE_S` (or ten decay times) before the record's first sample; the samples
+    before ``first`` keep the quasi-static force (the circuit's pre-roll).
+    """
+    dyn = dynamics_of(rig, values)
+    first, s, psi, drop, normals = fine_grid(rig, values, edges, op, outer, offsets, dyn)
+    f = dyn_sensor_force(psi, drop, op.radial_load_N, op.radial_clearance_m, rig.geometry.roller_length_m,
+                         rig.influence, dyn, rig.dt_s / s, normals)
+    return first, f.reshape(-1, s).mean(axis=1)
+
+
+def fine_grid(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, offsets,
+              dyn: ShaftDynamics) -> tuple[int, int, np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """The dynamic rung's grid: (first sample, steps per sample S, roller angles (n, Z) [rad], extra gaps (n, Z) [m],
+    the rollers' normals (sin psi, -cos psi)).
+
+    Each sample window from ``first`` on (its cage phase from ``edges``) is cut into S equal steps
+    (:func:`~piezobearing.bearing.shaft_dynamics.steps_per_sample` at the shaft's mode, at least the moving
+    defects' :meth:`Rig.substeps`); ``first`` lies :data:`DYNAMICS_SETTLE_S`, or ten decay times of the shaft's
+    mode where that is longer, before the record's first sample (within the circuit's pre-roll). An outer-race
+    groove narrower than a roller pitch holds one roller at a time: its drop is computed for the roller nearest
+    to it only (the same numbers as for every roller).
+    """
+    f_mode, zeta = shaft_mode_Hz(rig, dyn, op)
+    dt = rig.dt_s
+    moving = values.get("inner_defect_width_m", 0.0) > 0 or values.get("roller_defect_width_m", 0.0) > 0
+    s = max(steps_per_sample(f_mode, dt), rig.substeps() if moving else 1)
+    settle = max(DYNAMICS_SETTLE_S, 10.0 / max(zeta * 2 * np.pi * f_mode, 1e-12))
+    n_ext = edges.size - 1
+    first = max(0, n_ext - rig.n - int(np.ceil(settle / dt)))
+    e = edges[first:]
+    frac = (np.arange(s) + 0.5) / s
+    phi = (e[:-1, None] + np.diff(e)[:, None] * frac[None, :]).ravel()
+    psi = rig.surrogate.roller_angles(phi)
+    # the normals by the angle sum (psi_j = phi + j pitch): two products instead of two transcendentals per roller
+    pj = rig.pitch_rad * np.arange(rig.geometry.n_rollers)
+    sp, cp = np.sin(phi)[:, None], np.cos(phi)[:, None]
+    normals = (sp * np.cos(pj) + cp * np.sin(pj), -(cp * np.cos(pj) - sp * np.sin(pj)))
+    drop = _moving_drops(rig, values, phi) if moving else np.zeros(psi.shape)
+    if isinstance(outer, OuterGroove) and outer.width_m < rig.geometry.outer_raceway_radius_m * rig.pitch_rad:
+        j = np.mod(np.rint((outer.angle_rad - phi) / rig.pitch_rad), rig.geometry.n_rollers).astype(int)
+        rows = np.arange(phi.size)
+        drop[rows, j] += outer(psi[rows, j])
+    elif outer is not None:
+        drop = drop + outer(psi)
+    if offsets is not None:
+        drop = drop + np.asarray(offsets)[None, :]
+    return first, s, psi, drop, normals
+
+
+def _moving_drops(rig: Rig, values: dict, phi: np.ndarray) -> np.ndarray:
+    """The drops (n, Z) [m] of an inner-race and a rolling-element groove at cage phases ``phi`` (n,)."""
+    g = rig.geometry
+    slip = values.get("cage_slip_ratio", 0.0)
+    cage_per_shaft = rig.ftf_ratio() * (1 - slip)
+    spin_per_cage = g.outer_raceway_radius_m / (0.5 * g.roller_diameter_m)
+    drop = np.zeros((phi.size, g.n_rollers))
+    if values.get("inner_defect_width_m", 0.0) > 0:
+        theta = values["inner_defect_angle_rad"] + (phi - values["start_phase_rad"]) / cage_per_shaft
+        j, d = inner_race_contact(phi, theta, values["inner_defect_width_m"], g)
+        drop[np.arange(phi.size), j] += d
+    if values.get("roller_defect_width_m", 0.0) > 0:
+        spin = values["roller_defect_spin_rad"] + spin_per_cage * (phi - values["start_phase_rad"])
+        drop += rolling_element_drop(g.n_rollers, int(values.get("roller_defect_index", 0)), spin,
+                                     values["roller_defect_width_m"], g)
+    return drop
 
 
 def _passes(angle_at_edges: np.ndarray, half_rad: float, period_rad: float) -> np.ndarray:

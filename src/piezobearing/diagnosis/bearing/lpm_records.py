@@ -40,7 +40,8 @@ SETTLE_S = 0.02
 def lpm_parameters(config: dict, hidden: dict, start_phase_rad: float, seed: int = 0) -> LPMParameters:
     """The LPM of the config's healthy bearing with the ``hidden`` conditions and defects (catalogue names).
 
-    ``speed_deviation_ratio`` runs the shaft at (1 + it) times ``bearing.shaft_speed_rpm``; ``roller_k_offset_m``
+    ``speed_deviation_ratio`` runs the shaft at (1 + it) times ``bearing.shaft_speed_rpm`` at t = 0, and
+    ``speed_ramp_Hz_per_s`` (not a catalogue parameter: a record's condition) changes it at that rate; ``roller_k_offset_m``
     makes roller k smaller by it (a gap larger by it, as the surrogate's offsets); the defects are grooves
     1 mm deep. A rolling-element groove at ``roller_defect_spin_rad`` faces the outer race at spin 0.
     """
@@ -64,6 +65,7 @@ def lpm_parameters(config: dict, hidden: dict, start_phase_rad: float, seed: int
         geometry=geo,
         radial_load_N=hidden.get("radial_load_N", p.radial_load_N),
         shaft_speed_Hz=p.shaft_speed_Hz * (1.0 + hidden.get("speed_deviation_ratio", 0.0)),
+        speed_ramp_Hz_per_s=hidden.get("speed_ramp_Hz_per_s", 0.0),
         cage_slip=hidden.get("cage_slip_ratio", 0.0),
         start_angle_rad=start_phase_rad,
         defects=tuple(defects),
@@ -120,7 +122,7 @@ def lpm_record(
     harmonic : (ndarray, ndarray), optional
         The sensor FEM's response (else the paper sensor's, :func:`~piezobearing.sensor.response.sensor_model`).
     tachometer : bool
-        Write the shaft speed as ``speed_rpm``.
+        Write the shaft speed as ``speed_rpm`` (with a ``speed_ramp_Hz_per_s``, the speed at each sample).
     """
     dt = 1.0 / sample_rate_Hz
     t = dt * np.arange(int(round(duration_s * sample_rate_Hz)))
@@ -137,7 +139,9 @@ def lpm_record(
     rng = np.random.default_rng(seed)
     v = v + noise_std_for_snr(v, snr_dB) * rng.standard_normal(v.size)
     f0 = config["bearing"]["shaft_speed_rpm"] / 60.0
-    speed = np.full(t.size, 60.0 * f0 * (1.0 + hidden.get("speed_deviation_ratio", 0.0))) if tachometer else None
+    speed = None
+    if tachometer:
+        speed = 60.0 * (f0 * (1.0 + hidden.get("speed_deviation_ratio", 0.0)) + hidden.get("speed_ramp_Hz_per_s", 0.0) * t)
     return BearingRecord(t, v, speed, "lpm", (), np.zeros(t.size, dtype=bool))
 
 

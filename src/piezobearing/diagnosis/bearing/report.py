@@ -46,11 +46,17 @@ def fault(d: dict) -> list[str]:
     out = ["## The fault", ""]
     if f["type"] == "none":
         out.append("**No fault**: no defect effect was selected (the healthy bearing explains the record).")
+    elif f.get("source") == "lines":
+        out.append(f"**Fault: {f['type'].replace('_', ' ')}**, named from its lines: no defect of the model "
+                   "reproduces them, so there is no size or position to give.")
+        out += ["", *found_and_left(f)]
     else:
         out.append(f"**Fault: {f['type'].replace('_', ' ')}.**")
         out.append("")
         out += s.param_table(f["params"], f["ci95"])
         out += ["", *found_and_left(f)]
+    for u in f.get("unidentified") or []:
+        out += ["", f"- `{u['effect']}` was left out of the search: {u['reason']} (the record cannot pin it down)."]
     out += ["", "Operating conditions (fitted where the search selected the effect, else the nominal value):", ""]
     out += ["| condition | shown in | value | 95% interval | fitted |", "|---|---|---|---|---|"]
     for k, v in f["operating_conditions"].items():
@@ -80,6 +86,29 @@ def found_and_left(f: dict) -> list[str]:
         out.append(f"| {r['line']} | {r['frequency_Hz']:.2f} | {r['record_over_model_dB']:+.1f} | "
                    f"{r['excess_dB']:.1f} |")
     return out + [""]
+
+
+def dynamic_rung(d: dict) -> list[str]:
+    """The dynamic rung (``dynamic_rung``): whether the shaft's dynamics were tried, why, and what they bought."""
+    r = d.get("dynamic_rung")
+    if not r:
+        return []
+    out = ["## The shaft's dynamics (the dynamic rung)", ""]
+    if not r["tried"]:
+        return out + [f"Not tried: {r['why']}.", ""]
+    verdict = "accepted" if r["accepted"] else "not accepted"
+    out += [
+        f"Tried because {r['why']}: the quasi-static selection{' and ' + ', '.join(r['pair']) if r.get('pair') else ''} "
+        f"refitted with `shaft_dynamics`; {verdict} by the selection rule (BIC drop {r['delta_bic']:.4g}, "
+        f"{r['strength']}; {100 * r['excess_explained']:.0f} % of the quasi-static model's misfit above the floor "
+        "explained). The diagnosis above is the "
+        + ("dynamic model's." if r["accepted"] else "quasi-static model's."),
+        "",
+        "| model | NRMSE |",
+        "|---|---|",
+    ]
+    out += [f"| {row['model']} | {s.pct(row['nrmse'])} |" for row in r["ladder"]]
+    return out + ["", f"Quasi-static answer: {r['quasi_static']['fault']}.", ""]
 
 
 def sensor_model(d: dict) -> list[str]:
@@ -226,6 +255,7 @@ def render(d: dict, figures: dict[str, str] | None = None) -> str:
             ),
             s.verdict_paragraph(d, "voltage"),
             fault(d),
+            dynamic_rung(d),
             measurement(d),
             sensor_model(d),
             s.compare(

@@ -7,16 +7,20 @@ nuisance parameters and their starts (:mod:`.model`), the catalogue
 (:mod:`.effects`), the noise floor measured from the record, the roller
 passages as segments, and the representations (:mod:`.representations`);
 it hides effects in a synthetic record and states the user's answer, the
-``fault`` entry of ``diagnosis.json``.
+``fault`` entry of ``diagnosis.json`` (:mod:`.answer`). The noise floor and its
+pre-pass are in :mod:`.floor`; the dynamic rung and the defects a record cannot
+pin down in :mod:`.rung`.
 """
 
 from __future__ import annotations
 
+import time
 from dataclasses import replace
 
 import numpy as np
 
 from ...bearing.lpm import BearingGeometry
+from ...bearing.shaft_dynamics import ShaftDynamics
 from ...bearing.surrogate import InfluenceLine, cage_phase
 from ...io import MIN_BEARING_RATE_HZ, BearingRecord, average_blocks, read_bearing_record
 from ...numerics.threads import single_blas_thread
@@ -25,24 +29,22 @@ from ...sensor.response import sensor_model
 from ...signals.detection import noise_std_for_snr
 from ..effect import Catalogue
 from ..engine import diagnose
-from ..fit import fit_model
-from ..noise import NoiseFloor, robust_diff_std, white_level
 from ..record import Segments
-from ..selection import add_effect, strength
 from ..settings import DiagnosticsSettings
 from ..subject import Problem
 from . import chain, report
-from .effects import CATALOGUE, FAULT_TYPES
+from .answer import fault_answer
+from .effects import CATALOGUE, RUNGS
 from .effects.shaft_speed import roller_pass_line_Hz
+from .floor import REMEASURE_BELOW, floor_prepass, noise_floor
 from .model import BearingModel, RigRecord
 from .representations import REPRESENTATIONS, passages
+from .rung import dynamic_rung, rung_wanted, without_unidentified
 
 #: Phases of the baseline's start scan over one roller pitch.
 PHASE_SCAN = 24
 #: Roller passages the overlay figure shows at the full rate (where the baseline misses most).
 ZOOM_PASSAGES = 12
-#: Final NRMSE below this share of the record's floor: the floor is measured again on the final residual.
-REMEASURE_BELOW = 0.8
 
 
 def rig_from_config(config: dict, influence: InfluenceLine, time_s: np.ndarray, tach_Hz=None,
@@ -64,6 +66,7 @@ def rig_from_config(config: dict, influence: InfluenceLine, time_s: np.ndarray, 
         b["shaft_speed_rpm"] / 60.0,
         t,
         None if tach_Hz is None else np.asarray(tach_Hz, dtype=float),
+        ShaftDynamics.from_config(b),
     )
 
 
@@ -104,22 +107,6 @@ def model_rate(rec: BearingRecord, max_rate_Hz: float) -> tuple[BearingRecord, d
     out = average_blocks(rec, n)
     return out, {"record_rate_Hz": float(fs), "model_rate_Hz": float(out.sample_rate_Hz), "block_samples": n,
                  "max_model_rate_Hz": float(max_rate_Hz), "reason": reason}
-
-
-def noise_floor(v: np.ndarray, dt_s: float, clipped: np.ndarray | None = None) -> NoiseFloor:
-    """The voltage's white level over the whole record (one long segment: the bearing's lines are narrow).
-
-    The periodogram of the longest power-of-two stretch, 5-45% of f_s,
-    line-free trimmed mean (:func:`piezobearing.diagnosis.noise.white_level`):
-    the roller-pass harmonics are lines a few bins wide, left out.
-    """
-    mask = np.ones(v.size, dtype=bool) if clipped is None else ~clipped
-    seg = int(2 ** np.floor(np.log2(max(mask.sum(), 64))))
-    var, _ = white_level(v, mask, dt_s, segment=seg)
-    return NoiseFloor(
-        float(np.sqrt(var)), 0.0, float(mask.sum() * dt_s), 1,
-        "whole record: line-free trimmed mean of the periodogram, 5-45% of fs", mask,
-    )
 
 
 def baseline_starts(rec: RigRecord, v: np.ndarray) -> tuple[dict, list[dict]]:
@@ -202,10 +189,17 @@ class BearingSubject:
         less than 0.8 x the floor (a lift the pre-pass did not catch), the
         floor is measured again on the final model's residual and the engine
         runs once more; ``noise_floor.method`` says which.
+
+        A defect the record cannot pin down (:func:`unidentified_defects`: its width's interval holds zero, or
+        its angle's spans the circle) is taken out of the catalogue and the engine runs again without it
+        (``fault.unidentified`` names it). Where the quasi-static verdict is ``unexplained`` with a fault's
+        lines or a defect selected, the dynamic rung is tried (:func:`dynamic_rung`; ``dynamic_rung`` of the
+        dict says what it gave).
         """
         settings = DiagnosticsSettings.from_config(config.get("diagnostics"))
         rec, rate = model_rate(obs[0], config["bearing_diagnosis"]["max_model_rate_Hz"])
         obs = (rec, *obs[1:])
+        note = progress or (lambda _msg: None)
         # the fits' linear algebra is on matrices of n x (a few) values: a second BLAS thread only waits
         # (each SVD of the trust-region step 70x slower on a loaded 2-core machine, benchmarks/bench_diagnosis_bearing.py)
         with single_blas_thread():
@@ -216,67 +210,22 @@ class BearingSubject:
                 fl = noise_floor(d.final.residual_V, problem.record.dt_s, rec.clipped)
                 fl = replace(fl, method=f"{fl.method}, of the final model's residual: the record's own "
                              f"({problem.floor.voltage_noise_V:.4g} V) was lifted by the fault's lines")
-                d = diagnose(replace(problem, floor=fl), settings, progress)
-        return d, {**d.to_dict(self.answer(d)), "model_rate": rate}
-
-
-def quiet_level(residual_V: np.ndarray, clipped: np.ndarray | None = None) -> float:
-    """The white noise level [V] of a residual that is noise plus sparse events, from its quiet samples.
-
-    :func:`~piezobearing.diagnosis.noise.robust_diff_std`: the median absolute deviation of the first
-    differences, x 1.4826 / sqrt(2) (the differences take out the slow misfit, the median the sparse
-    events). A fault's dips and bursts fill every bin of the spectrum but few samples: at 2550 Hz and
-    30 dB this gives 0.28 x the record's spectral floor for the inner-race and the rolling-element
-    records of the tests, 0.95 for the healthy one and 0.90-5.3 for every other catalogue effect
-    (measured).
-    """
-    r = np.asarray(residual_V, dtype=float)
-    return robust_diff_std(r if clipped is None else r[~clipped])
-
-
-def floor_prepass(p: Problem, settings, clipped: np.ndarray | None, progress=None, fits: dict | None = None) -> Problem:
-    """The noise floor measured once more, before the engine, where a fault's lines have lifted it.
-
-    The baseline is fitted with the record's floor. Where its residual's
-    quiet level (:func:`quiet_level`) is below :data:`REMEASURE_BELOW` x that
-    floor (the floor is lifted by lines that fill the spectrum but few
-    samples), each fault of the catalogue (:data:`~.effects.FAULT_TYPES`) is
-    fitted alone on top, as the engine's first ranking does
-    (:func:`~piezobearing.diagnosis.selection.add_effect`); where the best
-    leaves less than :data:`REMEASURE_BELOW` x the record's floor, the floor
-    is measured on that residual the same way as on the record
-    (:func:`noise_floor`) and ``p`` is returned with it; otherwise ``p``
-    unchanged. A white floor's level does not move the fits, only the
-    evidence: the engine's run with this floor is the second run of the old
-    two-pass method, found with four fits instead of a whole run. Where ``p`` is returned unchanged, the
-    baseline's fit is put in ``fits["baseline"]`` (the engine's own first fit, the same numbers: not fitted twice).
-    """
-    v, rec = np.asarray(p.voltage_V, dtype=float), p.record
-    note = progress or (lambda _msg: None)
-    note("floor pre-pass: baseline")
-    base = fit_model(p.baseline, rec, v, p.floor, start=p.baseline_start, starts=p.baseline_starts,
-                     max_nfev=settings.max_nfev, ftol=settings.ftol)
-    base.model.release()
-    if fits is not None:
-        fits["baseline"] = base  # taken back below if the floor changes
-    if quiet_level(base.residual_V, clipped) >= REMEASURE_BELOW * p.floor.voltage_noise_V:
-        return p
-    best = base
-    for name in FAULT_TYPES:
-        if name in p.catalogue:
-            note(f"floor pre-pass: baseline + {name}")
-            f = add_effect(base, p.catalogue[name], rec, v, p.floor, settings)
-            f.model.release()
-            if f.nrmse < best.nrmse:
-                best = f
-    if best.nrmse >= REMEASURE_BELOW * best.floor_nrmse:
-        return p
-    if fits is not None:
-        fits.pop("baseline")
-    fl = noise_floor(best.residual_V, rec.dt_s, clipped)
-    fl = replace(fl, method=f"{fl.method}, of the residual of {best.model.label} fitted before the search "
-                 f"(pre-pass): the record's own ({p.floor.voltage_noise_V:.4g} V) was lifted by the fault's lines")
-    return replace(p, floor=fl)
+                problem = replace(problem, floor=fl)
+                d = diagnose(problem, settings, progress)
+            d, problem, dropped = without_unidentified(d, problem, settings, progress)
+            rung = {"tried": False, "accepted": False, "why": "the quasi-static verdict is explained"}
+            if d.verdict == "unexplained" and not any(e.name in RUNGS for e in problem.configured):
+                rung = rung_wanted(d, config)
+                if rung["tried"]:
+                    c0 = time.process_time()
+                    d, rung = dynamic_rung(d, problem, settings, progress, rung)
+                    d, problem, more = without_unidentified(d, problem, settings, progress)
+                    dropped += more
+                    note(f"dynamic rung: {time.process_time() - c0:.1f} s CPU "
+                         f"({'accepted' if rung['accepted'] else 'not accepted'})")
+        answer = self.answer(d)
+        answer["fault"]["unidentified"] = dropped
+        return d, {**d.to_dict(answer), "model_rate": rate, "dynamic_rung": rung}
 
 
 #: The running-bearing subject.
@@ -284,13 +233,12 @@ SUBJECT = BearingSubject()
 
 
 def catalogue_for(tachometer: bool) -> Catalogue:
-    """The catalogue a record is searched with: with a tachometer the shaft's speed is measured, so
-    ``shaft_speed`` (a deviation from it) would only be ``cage_slip`` under another name, and is left out."""
-    if not tachometer:
-        return CATALOGUE
+    """The catalogue a record is searched with: the rungs (:data:`~.effects.RUNGS`) are added by the subject, not
+    ranked; with a tachometer the shaft's speed is measured, so ``shaft_speed`` (a deviation from it) would only be
+    ``cage_slip`` under another name, and is left out."""
     out = Catalogue("bearing")
     for name, e in CATALOGUE.items():
-        if name != "shaft_speed":
+        if name not in RUNGS and not (tachometer and name == "shaft_speed"):
             out.register(e)
     return out
 
@@ -330,249 +278,3 @@ def synthesise(config: dict, seed: int, hidden_effects: list[dict], influence: I
     if tach is not None:
         speed = 60.0 * tach * (1 + values.get("speed_deviation_ratio", 0.0))
     return BearingRecord(t, v, speed, "synthetic", (), np.zeros(t.size, dtype=bool))
-
-
-#: Which operating conditions the answer reports, and what each cannot be told apart from.
-CONDITIONS = {
-    "cage_slip_ratio": "cage_slip",
-    "radial_load_N": "radial_load",
-    "radial_clearance_m": "clearance",
-    "load_share_ratio": "load_share",
-    "shaft_speed_Hz": None,
-    "speed_deviation_ratio": "shaft_speed",
-}
-
-
-def non_separable(tach: bool) -> list[dict]:
-    """The sets of quantities one record cannot tell apart (stated, not hidden), each with the catalogue
-    effects that stand for them (``effects``: whose first-ranking evidence :func:`separability` reads)."""
-    out = [
-        {
-            "set": ["load_share_ratio", "sensor.d33_C_per_N", "capacitance C", "circuit and DAQ gain"],
-            "why": "all scale the voltage by one factor for a single record",
-            "exact": True,
-            "effects": ["load_share"],
-        },
-        {
-            "set": ["radial_load_N", "radial_clearance_m", "load_share_ratio"],
-            "why": "partly: heavier load, smaller clearance and a larger share all raise the bumps; only the load "
-            "zone's shape tells them apart (see the fit's correlations)",
-            "exact": False,
-            "effects": ["radial_load", "clearance", "load_share"],
-        },
-        {
-            "set": ["outer_race 2 x BSF", "BPFO"],
-            "why": "2 x BSF can sit within a bin or two of BPFO in a short record (for this bearing "
-            "2 x BSF / BPFO = 0.98)",
-            "exact": False,
-            "effects": ["outer_race_defect", "rolling_element_defect"],
-        },
-    ]
-    if not tach:
-        out.insert(
-            1,
-            {
-                "set": ["cage_slip_ratio", "shaft_speed_Hz"],
-                "why": "without a tachometer only the roller-pass rate Z x FTF (1 - slip) is seen, unless an "
-                "inner-race defect shows the shaft rate",
-                "exact": False,
-                "effects": ["cage_slip", "shaft_speed"],
-            },
-        )
-    return out
-
-
-def separability(sets: list[dict], ranking: list, correlation: dict) -> list[dict]:
-    """What this record says about each non-separable set (:func:`non_separable`).
-
-    ``evidence``: the BIC drop of each of the set's effects fitted alone in
-    the first ranking; ``margin_bic`` and ``margin_strength``: the best of
-    them over the next (the engine's plain words,
-    :func:`~piezobearing.diagnosis.selection.strength`): "decisive" means
-    this record did tell them apart, "weak" that it could not;
-    ``correlation``: the final fit's correlation of every pair of the set's
-    parameters that it fitted (near +-1: only a combination is determined).
-    An exact set (the gain's) has no evidence to give: no record separates it.
-    """
-    first = {c.effect.name: float(c.delta_bic) for c in ranking}
-    out = []
-    for ns in sets:
-        row = dict(ns)
-        ev = {e: first[e] for e in ns["effects"] if e in first}
-        row["evidence"] = ev
-        top = sorted(ev.values(), reverse=True)
-        margin = top[0] - top[1] if len(top) > 1 else None
-        row["margin_bic"], row["margin_strength"] = margin, strength(margin)
-        names = [k for k in ns["set"] if k in correlation]
-        row["correlation"] = [
-            {"params": [a, b], "correlation": correlation[a][b]} for i, a in enumerate(names) for b in names[i + 1:]
-        ]
-        out.append(row)
-    return out
-
-
-def fault_answer(d) -> dict:
-    """``fault``: type, size and position with 95% intervals, the operating conditions found, look-alikes.
-
-    ``ci_method`` says how each interval was found (the engine's honest intervals of the final model,
-    :func:`~piezobearing.diagnosis.engine.final_intervals`: "jacobian (checked)", "profile", or a
-    Jacobian one flagged not honest: not profiled / profile over budget; "not fitted (nominal)").
-    """
-    values, ci = d.final.values, d.final.result.ci95
-    kind, params, ci95 = "none", {}, {}
-    for name in d.selected:
-        if name in FAULT_TYPES:
-            kind, wkey, pkey = FAULT_TYPES[name]
-            params = {wkey: values[wkey], pkey: values[pkey]}
-            ci95 = {wkey: ci.get(wkey), pkey: ci.get(pkey)}
-            if name == "rolling_element_defect":
-                params["roller_defect_index"] = values["roller_defect_index"]
-            break
-    cond, cond_ci, fitted = {}, {}, []
-    rig = d.record.rig
-    nominal = {
-        "cage_slip_ratio": 0.0,
-        "radial_load_N": rig.radial_load_N,
-        "radial_clearance_m": rig.radial_clearance_m,
-        "load_share_ratio": 1.0,
-        "speed_deviation_ratio": 0.0,
-    }
-    for key in ("cage_slip_ratio", "radial_load_N", "radial_clearance_m", "load_share_ratio", "shaft_speed_Hz", "speed_deviation_ratio"):
-        if key in values:
-            cond[key] = values[key]
-            cond_ci[key] = ci.get(key)
-            fitted.append(key)
-        elif key in nominal:
-            cond[key] = nominal[key]
-            cond_ci[key] = None
-    intervals = d.identifiability.get("intervals", {})
-    how = {
-        k: intervals[k]["method"] if k in intervals else "held, not free" if k in values else "nominal, not fitted"
-        for k in [*params, *cond]
-    }
-    how.pop("roller_defect_index", None)  # chosen among the starts, not fitted: no interval
-    remaining = fault_lines_left(d, kind) if kind != "none" else []
-    sidebands = fault_sidebands(d, kind)
-    return {
-        "type": kind,
-        "params": params,
-        "ci95": ci95,
-        "statement": fault_statement(kind, params, ci95, remaining, sidebands),
-        "lines_left": remaining,
-        "sidebands": sidebands,
-        "operating_conditions": cond,
-        "operating_conditions_ci95": cond_ci,
-        "fitted_conditions": fitted,
-        "ci_method": how,
-        "non_separable": separability(non_separable(rig.tach_Hz is not None), d.ranking, d.final.result.correlation),
-    }
-
-
-#: A residual line belongs to a fault's own line within this share of its frequency, or two bins [-].
-LINE_TOLERANCE = 0.005
-
-
-def family_lines(kind: str, kin: dict, harmonics: int = 3) -> list[tuple[str, float]]:
-    """(label, frequency [Hz]) of the lines a fault of ``kind`` puts into the sensor's spectrum: the harmonics
-    of its passing rate and, for a moving defect, their sidebands at the rate that carries it through the load
-    zone (f_r for the inner race, FTF for a roller)."""
-    if kind == "outer_race":
-        return [(f"{k}xBPFO", k * kin["bpfo_Hz"]) for k in range(1, harmonics + 1)]
-    if kind == "inner_race":
-        base, side, sname, bname = kin["bpfi_Hz"], kin["shaft_Hz"], "fr", "BPFI"
-    else:
-        base, side, sname, bname = 2 * kin["bsf_Hz"], kin["ftf_Hz"], "FTF", "2xBSF"
-    out = []
-    for k in range(1, harmonics + 1):
-        lab = bname if k == 1 else f"{k}x{bname}"
-        out += [(lab, k * base), (f"{lab}-{sname}", k * base - side), (f"{lab}+{sname}", k * base + side)]
-    return out
-
-
-def _line_spectra(d, kind: str) -> tuple[list[tuple[str, float]], float, np.ndarray, np.ndarray, float]:
-    """The fault's own lines (:func:`family_lines` at the final fit's speeds), the bin width [Hz], the record's
-    and the final model's Hann-windowed amplitude spectra, and the white floor's power in one such bin [V^2]."""
-    values, rig = d.final.values, d.record.rig
-    shaft = float(values.get("shaft_speed_Hz", rig.shaft_speed_Hz) if rig.tach_Hz is None else np.mean(rig.tach_Hz))
-    shaft *= 1.0 + values.get("speed_deviation_ratio", 0.0)
-    lines = family_lines(kind, rig.frequencies(shaft, values.get("cage_slip_ratio", 0.0)))
-    v = np.asarray(d.voltage_V, dtype=float)
-    n = v.size
-    w = np.hanning(n)
-    rec_a = np.abs(np.fft.rfft((v - v.mean()) * w))
-    mod = np.asarray(d.final.model_V, dtype=float)
-    mod_a = np.abs(np.fft.rfft((mod - mod.mean()) * w))
-    floor = d.problem.floor.voltage_noise_V ** 2 * float(np.sum(w**2))
-    return lines, 1.0 / (n * d.record.dt_s), rec_a, mod_a, floor
-
-
-def _peak(a: np.ndarray, f_Hz: float, df_Hz: float) -> float:
-    """The largest of a spectrum's three bins around ``f_Hz``."""
-    k = int(round(f_Hz / df_Hz))
-    return float(a[max(k - 1, 0):k + 2].max())
-
-
-def fault_lines_left(d, kind: str) -> list[dict]:
-    """The residual lines the final model leaves at the found fault's own lines (:func:`family_lines`).
-
-    For each narrowband finding of the verdict within :data:`LINE_TOLERANCE` of one of them: its label and
-    frequency, its level above the noise floor, and the record's line against the model's, 20 log10 of
-    their Hann-windowed amplitude spectra's ratio at the peak (positive: the record's is the stronger) [dB].
-    """
-    lines, df, rec_a, mod_a, _ = _line_spectra(d, kind)
-    out = []
-    for u in d.unexplained:
-        if u.get("test") != "spectrum" or u.get("kind") != "narrowband":
-            continue
-        f = u["frequency_Hz"]
-        label, fl = min(lines, key=lambda x: abs(x[1] - f))
-        if abs(fl - f) > max(LINE_TOLERANCE * fl, 2 * df):
-            continue
-        diff = 20 * np.log10(_peak(rec_a, f, df) / max(_peak(mod_a, f, df), 1e-300))
-        out.append({"line": label, "frequency_Hz": float(f), "excess_dB": float(u["excess_dB"]),
-                    "record_over_model_dB": float(diff)})
-    return out
-
-
-def fault_sidebands(d, kind: str) -> list[dict]:
-    """A moving defect's first line and its sidebands, record against model: BPFI and BPFI -/+ f_r for the
-    inner race, 2 x BSF and 2 x BSF -/+ FTF for a roller (the modulation through the load zone, where the
-    quasi-static model and a dynamic bearing differ most); empty for the outer race.
-
-    Each: label, frequency [Hz], the record's line over the model's (20 log10 of their Hann-windowed amplitude
-    spectra's ratio at the peak, positive: the record's is the stronger) [dB], and the record's line above the
-    white floor (10 log10 of its power over the floor's in one bin) [dB]: a line near 0 dB above the floor is
-    noise in the record, and its difference from the model's says nothing.
-    """
-    if kind not in ("inner_race", "rolling_element"):
-        return []
-    lines, df, rec_a, mod_a, floor = _line_spectra(d, kind)
-    out = []
-    for label, f in lines[:3]:
-        r, m = _peak(rec_a, f, df), _peak(mod_a, f, df)
-        out.append({"line": label, "frequency_Hz": float(f), "record_over_model_dB": float(20 * np.log10(r / max(m, 1e-300))),
-                    "record_above_floor_dB": float(10 * np.log10(r**2 / floor))})
-    return out
-
-
-def fault_statement(kind: str, params: dict, ci95: dict, remaining: list[dict], sidebands: list[dict] | None = None) -> str:
-    """One line: the fault found with its size and interval, how a moving defect's sidebands differ from the
-    model's (:func:`fault_sidebands`), and what of its own lines the model leaves above the floor."""
-    if kind == "none":
-        return "no fault"
-    wkey = next(k for k in params if k.endswith("width_m"))
-    lo, hi = ci95.get(wkey) or (float("nan"), float("nan"))
-    text = f"{kind.replace('_', ' ')} {params[wkey] * 1e3:.3g} mm [{lo * 1e3:.3g}, {hi * 1e3:.3g}] (95 %)"
-    if sidebands:
-        carrier, *sides = sidebands
-        name = carrier["line"] + " ± " + sides[0]["line"].split("-")[-1]
-        text += f"; its sidebands at {name} differ from the model's by " + " and ".join(
-            f"{r['record_over_model_dB']:+.1f} dB ({r['line']}, {r['frequency_Hz']:.1f} Hz, "
-            f"{r['record_above_floor_dB']:.1f} dB above the floor)" for r in sides)
-        text += f", the line at {carrier['line']} by {carrier['record_over_model_dB']:+.1f} dB"
-    if remaining:
-        text += ("; left above the floor: " if sidebands else "; its lines differ from the model's: ") + ", ".join(
-            f"{r['line']} ({r['frequency_Hz']:.1f} Hz) {r['record_over_model_dB']:+.1f} dB, "
-            f"{r['excess_dB']:.1f} dB above the floor" for r in remaining)
-    return text
-

@@ -1,0 +1,208 @@
+"""The running bearing's dynamic rung and the defects a record cannot pin down.
+
+Where the quasi-static diagnosis ends ``unexplained`` with a defect selected or a fault's lines left
+(:func:`rung_wanted`), :func:`dynamic_rung` runs the engine once more with ``shaft_dynamics`` and keeps it where it
+passes the selection rule; :func:`without_unidentified` runs the engine again without a selected defect whose width
+interval holds zero or whose angle interval spans the circle (:func:`unidentified_defects`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from ..effect import Catalogue
+from ..engine import diagnose
+from ..fit import fit_model
+from ..selection import Candidate, step_entry, strength
+from ..subject import Problem
+from .answer import EFFECT_OF_TYPE, fault_answer, fault_evidence
+from .effects import CATALOGUE, FAULT_TYPES
+from .floor import REMEASURE_BELOW, noise_floor
+from .model import BearingModel
+
+#: Width of a defect's 95 % interval in angle beyond which it does not place the defect [rad].
+FULL_TURN_RAD = 2 * np.pi
+
+
+def unidentified_defects(d) -> list[dict]:
+    """The selected defects the record cannot pin down: the width's 95 % interval holds zero (or is missing), or
+    the angle's spans the circle; each ``{"effect", "ci95", "reason"}``. Operating conditions keep their
+    one-sided intervals (a clearance bounded from below) and are not judged here."""
+    ci = d.final.result.ci95
+    out = []
+    for name in d.selected:
+        if name not in FAULT_TYPES:
+            continue
+        _, wkey, pkey = FAULT_TYPES[name]
+        w, a = ci.get(wkey), ci.get(pkey)
+        reason = None
+        if w is None or w[0] is None or not np.all(np.isfinite(w)) or w[0] <= 0.0:
+            reason = f"the interval of {wkey} holds zero"
+        elif name != "rolling_element_defect" and (a is None or a[0] is None or not np.all(np.isfinite(a))
+                                                   or a[1] - a[0] >= FULL_TURN_RAD):
+            reason = f"the interval of {pkey} spans the circle"
+        if reason:
+            out.append({"effect": name, "ci95": {wkey: w, pkey: a}, "reason": reason})
+    return out
+
+
+def without_unidentified(d, problem: Problem, settings, progress=None, rounds: int = 2):
+    """The diagnosis again without the defects :func:`unidentified_defects` finds (at most ``rounds`` times);
+    returns (diagnosis, problem, [the defects taken out])."""
+    dropped: list[dict] = []
+    for _ in range(rounds):
+        bad = unidentified_defects(d)
+        if not bad:
+            break
+        dropped += bad
+        names = {b["effect"] for b in bad}
+        cat = Catalogue("bearing")
+        for name, e in problem.catalogue.items():
+            if name not in names:
+                cat.register(e)
+        problem = replace(problem, catalogue=cat,
+                          configured=tuple(e for e in problem.configured if e.name not in names))
+        (progress or (lambda _m: None))(f"not identified, left out: {', '.join(sorted(names))}")
+        d = diagnose(problem, settings, progress)
+    return d, problem, dropped
+
+
+def rung_wanted(d, config: dict) -> dict:
+    """Whether the dynamic rung is tried on an ``unexplained`` quasi-static diagnosis, and why (the start of the
+    ``dynamic_rung`` entry): with ``bearing_diagnosis.dynamic_rung: auto``, where a defect is selected or the
+    residual shows a fault's lines (:func:`fault_evidence`): the shaft's ring after each dip and the deeper
+    modulation of a moving defect are what the quasi-static chain leaves there. Other structure (a healthy
+    bearing's bumps off by a housing's dynamics) is not the shaft's, and an evaluation of the dynamic chain costs
+    25-50 times the quasi-static one (benchmarks/bench_shaft_dynamics.py), so it is not tried there."""
+    mode = config["bearing_diagnosis"].get("dynamic_rung", "auto")
+    if mode == "off":
+        return {"tried": False, "accepted": False, "why": "bearing_diagnosis.dynamic_rung is off"}
+    faults = [n for n in d.selected if n in FAULT_TYPES]
+    evidence = fault_evidence(d)
+    if not faults and not evidence:
+        return {"tried": False, "accepted": False,
+                "why": "the quasi-static verdict is unexplained, but no defect is selected and no fault's lines are "
+                "left: the structure is not the shaft's ring on a fault"}
+    why = (f"the quasi-static model selects {', '.join(faults)} and leaves structure" if faults else
+           f"the residual shows the {evidence[0]['type'].replace('_', ' ')}'s lines and no defect is selected")
+    return {"tried": True, "accepted": False, "why": why, "evidence": evidence}
+
+
+def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None = None):
+    """The engine once more with the shaft's dynamics (``shaft_dynamics``), judged against the quasi-static diagnosis.
+
+    Configured: the quasi-static selection in its order (their fits start the rung where the quasi-static search
+    left them); where no defect is selected, the defect of the fault type whose lines the residual shows most
+    (:func:`fault_evidence`), fitted quasi-statically first; then ``shaft_dynamics``, whose starts place an
+    outer-race groove with the dynamics on (the pair: a groove the quasi-static chain places a pitch away). Then
+    every effect but the quasi-static search's first defect (the pair's defect too) is held to the selection rule
+    with the dynamics on
+    (:func:`stand_ins`), and the rung runs again without those the record does not support (a load change or a
+    second defect the quasi-static search took as a stand-in for the ring). The rung is accepted by the engine's rule
+    for one step (:func:`~piezobearing.diagnosis.selection.accepted`: its BIC drop over the quasi-static final
+    model above ``min_delta_bic`` and at least ``min_share`` of that model's misfit above the floor explained)
+    where none of its defects is unidentified (:func:`unidentified_defects`); the diagnosis returned is then the
+    rung's, else the quasi-static one. Returns
+    (diagnosis, the ``dynamic_rung`` entry: why, evidence, accepted, the BIC drop and share, the ladder:
+    baseline, quasi-static final, with the dynamics, floor NRMSE). ``rung``: :func:`rung_wanted`'s entry.
+    """
+    rung = dict(rung or rung_wanted(d, {"bearing_diagnosis": {"dynamic_rung": "auto"}}))
+    faults = [n for n in d.selected if n in FAULT_TYPES]
+    pair = [] if faults else [EFFECT_OF_TYPE[ev["type"]] for ev in rung.get("evidence", [])[:1]]
+    pair = [n for n in pair if n in problem.catalogue]
+    names = [*d.selected, *pair]
+    add = [CATALOGUE[n] for n in names if CATALOGUE[n] not in problem.configured]
+    rp = replace(problem, configured=(*problem.configured, *add, CATALOGUE["shaft_dynamics"]),
+                 catalogue=Catalogue("bearing"), profile_evaluations=RUNG_PROFILE_EVALUATIONS)
+    note = progress or (lambda _m: None)
+    note("dynamic rung: + " + " + ".join([*pair, "shaft_dynamics"]))
+    dr = diagnose(rp, settings, progress, d.baseline)
+    # the quasi-static selection's other effects, each held to the selection rule with the dynamics on
+    weak = stand_ins(dr, [n for n in names if n not in faults[:1]], settings)
+    if weak:
+        note(f"dynamic rung: without {', '.join(weak)} (not supported with the dynamics)")
+        rp = replace(rp, configured=tuple(e for e in rp.configured if e.name not in weak))
+        dr = diagnose(rp, settings, progress, d.baseline)
+    rung["left_out"] = weak
+    bad = unidentified_defects(dr)
+    drop = d.final.chi2 - dr.final.chi2
+    share = float(np.clip(drop / max(d.final.excess, drop, 1e-12), 0.0, 1.0))
+    delta_bic = float(d.final.bic - dr.final.bic)
+    ok = delta_bic > settings.min_delta_bic and share >= settings.min_share and not bad
+    if ok and dr.final.nrmse < REMEASURE_BELOW * dr.final.floor_nrmse:
+        # the floor was lifted by the fault's lines the quasi-static model left: measured again on the rung's
+        # residual, and the rung run with it (as the quasi-static diagnosis does)
+        qm = problem.floor.quiet_mask
+        fl = noise_floor(dr.final.residual_V, problem.record.dt_s, None if qm is None else ~qm)
+        fl = replace(fl, method=f"{fl.method}, of the dynamic rung's final residual: the floor before "
+                     f"({problem.floor.voltage_noise_V:.4g} V) was lifted by the fault's lines")
+        (progress or (lambda _m: None))("dynamic rung: floor measured again")
+        dr = diagnose(replace(rp, floor=fl), settings, progress)
+    rung.update(
+        accepted=bool(ok),
+        unidentified=bad,
+        delta_bic=delta_bic,
+        strength=strength(delta_bic),
+        excess_explained=share,
+        quasi_static={"selected": list(d.selected), "verdict": d.verdict, "nrmse": d.final.nrmse,
+                      "fault": fault_answer(d)["statement"]},
+        dynamic={"selected": list(dr.selected), "configured": [e.name for e in rp.configured],
+                 "verdict": dr.verdict, "nrmse": dr.final.nrmse},
+        ladder=[
+            {"model": "baseline", "nrmse": d.baseline.nrmse},
+            {"model": "quasi-static: " + d.final.model.label, "nrmse": d.final.nrmse},
+            {"model": "dynamic: " + dr.final.model.label, "nrmse": dr.final.nrmse},
+            {"model": "noise floor", "nrmse": dr.final.floor_nrmse},
+        ],
+    )
+    rung["pair"] = pair
+    return (merged(d, dr, share, pair) if ok else d), rung
+
+
+def stand_ins(dr, names: list[str], settings) -> list[str]:
+    """Which of ``names`` (effects of ``dr``'s final model) the record does not support with the dynamics on: the
+    final model refitted without each (from the final values), and the effect kept only where adding it back passes
+    the engine's rule (:func:`~piezobearing.diagnosis.selection.accepted`: BIC drop above ``min_delta_bic``, at
+    least ``min_share`` of the misfit explained). A quasi-static fit takes a load change or a second defect as a
+    stand-in for the ring it cannot model; an operating condition it found (a clearance) keeps its evidence."""
+    final, out = dr.final, []
+    for n in names:
+        effects = tuple(e for e in final.model.effects if e.name != n)
+        if len(effects) == len(final.model.effects):
+            continue
+        own = {p.name for e in final.model.effects if e.name == n for p in e.params(dr.record)}
+        f = fit_model(BearingModel(effects), dr.record, dr.voltage_V, dr.floor,
+                      start={k: v for k, v in final.values.items() if k not in own},
+                      max_nfev=settings.max_nfev, ftol=settings.ftol)
+        drop = f.chi2 - final.chi2
+        share = float(np.clip(drop / max(f.excess, drop, 1e-12), 0.0, 1.0))
+        if not (f.bic - final.bic > settings.min_delta_bic and share >= settings.min_share):
+            out.append(n)
+    return out
+
+
+def merged(d, dr, share: float, pair: list[str]):
+    """The rung's diagnosis ``dr`` read as steps after the quasi-static one ``d``: the quasi-static ladder, then
+    ``shaft_dynamics`` added (its fit with the quasi-static selection, its evidence over the quasi-static final
+    model), then the rung's own search; ``selected`` the quasi-static selection, ``shaft_dynamics`` and the rung's
+    additions; the configured model (and its tests) the user's."""
+    rung_fit = dr.configured
+    present = {e.name for e in dr.final.model.effects}
+    pair = [n for n in pair if n in present]
+    c = Candidate(CATALOGUE["shaft_dynamics"], rung_fit, float(d.final.bic - rung_fit.bic), share)
+    dr.steps = [*d.steps, step_entry(rung_fit, " + ".join([*pair, "shaft_dynamics"]), c), *dr.steps[1:]]
+    dr.fits = [*d.fits, rung_fit, *dr.fits[1:]]
+    dr.selected = list(dict.fromkeys(n for n in [*d.selected, *pair, "shaft_dynamics", *dr.selected] if n in present))
+    dr.configured = d.configured
+    dr.tests = {**dr.tests, "configured": d.tests["configured"]}
+    dr.ranking = d.ranking
+    dr.problem = replace(dr.problem, catalogue=d.problem.catalogue)
+    return dr
+
+
+#: Most evaluations of the dynamic chain the rung's interval checks and profiles may spend (the engine's 600 would
+#: cost 1.5-2 CPU minutes on a 2 s record at 2550 Hz, 0.15-0.2 s each; intervals beyond it keep the Jacobian's,
+#: flagged in ``ci_method``).
+RUNG_PROFILE_EVALUATIONS = 120
