@@ -57,13 +57,13 @@ def kind(command: str) -> str:
     if re.match(r"(python3\.11 -m venv|pip install)", command):
         return "install"
     first = command.split()[0]
-    if first == "piezobearing" or first == "cat" or command.startswith("python -m json.tool"):
+    if first in ("piezobearing", "cat", "printf") or command.startswith("python -m json.tool"):
         return "run"
     if first == "snakemake":
         return "snakemake"
     if " && " in command and all(kind(part) in ("snakemake", "script") for part in command.split(" && ")):
         return "snakemake"
-    if command.startswith("python scripts/"):
+    if command.startswith(("python scripts/", "python validation/")):
         return "script"
     return "unknown"
 

@@ -23,6 +23,8 @@ QUOTED = [
 NOT_FROM_SNAPSHOT = {
     "docs/validation/cwru.md": "the CWRU run's detector CPU is printed by scripts/validate_cwru.py, in no benchmark file",
     "docs/guides/detect.md": "quotes a folder run timed by hand; the snapshot's row detect_folder is the generated one",
+    "docs/guides/running_bearing.md": "quotes the dynamic rung's CPU from a run by hand, in no benchmark file",
+    "docs/validation/bearing_diagnosis.md": "quotes validation runs timed by hand, in no benchmark file",
 }
 
 
