@@ -81,17 +81,25 @@ def _hash(entry: Path, src: Path) -> str:
     return out.stdout.strip()
 
 
-def test_the_code_hash_follows_a_name_imported_from_the_face(tmp_path):
+def _hashes_around_an_edit(tmp_path: Path, entries: list[str], module: str) -> tuple[list[str], list[str]]:
+    """The code hash of each entry (a one-line script of ``entries``) in a copy of the package, before and after an
+    edit of ``module`` (a path in the package)."""
     src = tmp_path / "src"
     shutil.copytree(SRC / "piezobearing", src / "piezobearing", ignore=shutil.ignore_patterns("__pycache__"))
-    via_face = tmp_path / "via_face.py"
-    via_face.write_text("from piezobearing import Kinematics\n")
-    elsewhere = tmp_path / "elsewhere.py"
-    elsewhere.write_text("from piezobearing.sensor import materials\n")
-    before = _hash(via_face, src), _hash(elsewhere, src)
-    kinematics = src / "piezobearing/bearing/kinematics.py"
-    kinematics.write_text(kinematics.read_text() + "\n# an edit\n")
-    after = _hash(via_face, src), _hash(elsewhere, src)
+    scripts = []
+    for k, line in enumerate(entries):
+        scripts.append(tmp_path / f"entry{k}.py")
+        scripts[-1].write_text(line + "\n")
+    before = [_hash(e, src) for e in scripts]
+    edited = src / "piezobearing" / module
+    edited.write_text(edited.read_text() + "\n# an edit\n")
+    return before, [_hash(e, src) for e in scripts]
+
+
+def test_the_code_hash_follows_a_name_imported_from_the_face(tmp_path):
+    before, after = _hashes_around_an_edit(
+        tmp_path, ["from piezobearing import Kinematics", "from piezobearing.sensor import materials"],
+        "bearing/kinematics.py")
     assert after[0] != before[0]  # the rule that reaches kinematics through the face reruns
     assert after[1] == before[1]  # the face's other names are not followed: no other rule does
 
@@ -103,14 +111,7 @@ def test_writing_results_loads_no_record_reader():
 
 
 def test_the_code_hash_follows_a_name_imported_from_the_lazy_io_package(tmp_path):
-    src = tmp_path / "src"
-    shutil.copytree(SRC / "piezobearing", src / "piezobearing", ignore=shutil.ignore_patterns("__pycache__"))
-    reader = tmp_path / "reader.py"
-    reader.write_text("from piezobearing.io import read_measurement\n")
-    writer = tmp_path / "writer.py"
-    writer.write_text("from piezobearing.io import write_json\n")
-    before = _hash(reader, src), _hash(writer, src)
-    records = src / "piezobearing/io/records.py"
-    records.write_text(records.read_text() + "\n# an edit\n")
-    after = _hash(reader, src), _hash(writer, src)
+    before, after = _hashes_around_an_edit(
+        tmp_path, ["from piezobearing.io import read_measurement", "from piezobearing.io import write_json"],
+        "io/records.py")
     assert after[0] != before[0] and after[1] == before[1]
