@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...fitting.least_squares import InfeasibleError
+from ..effect import StartContext
 from ..fit import fit_model
 from ..selection import add_effect, strength
 from .effects import CATALOGUE, FAULT_TYPES
@@ -393,36 +394,41 @@ def best_healthy(d):
 #: within x/÷ 2 of the file's: where the shaft rests on one or two rollers (a light load in a wide clearance) the
 #: dynamic chain's misfit has local minima a fit from the rig file's values does not leave.
 HEALTHY_GRID = ((0.0, 15e-6, 30e-6, 45e-6, 60e-6, 90e-6), (0.5, 0.7, 1.0, 1.4, 2.0))
-#: How many of the grid's best points the dynamic healthy model is fitted from.
-HEALTHY_STARTS = 2
+#: How many of the best points (the grid's and the quasi-static fit's own) the dynamic healthy model is fitted from:
+#: each fit runs the dynamic chain some 20 times per step (every free parameter's difference, the rollers' offsets
+#: among them).
+HEALTHY_STARTS = 1
 
 
 def _dynamic_healthy(d, qs):
-    """The quasi-static healthy fit ``qs`` with the shaft's dynamics, the load, the clearance and the load share
-    (those it lacks added), fitted from the :data:`HEALTHY_STARTS` best points of :data:`HEALTHY_GRID` (each point's
-    misfit with the load share at its least-squares value, the speed and slip at ``qs``'s) and from ``qs`` itself."""
+    """The quasi-static healthy fit ``qs`` with the shaft's dynamics, the load, the clearance, the load share and the
+    rollers' scatter (those it lacks added), fitted from the :data:`HEALTHY_STARTS` best of the points of
+    :data:`HEALTHY_GRID` and ``qs``'s own (each point's misfit of the dynamic chain with the load share at its
+    least-squares value, the speed, slip and offsets at ``qs``'s)."""
     present = {e.name for e in qs.model.effects}
     model = qs.model
-    for name in ("radial_load", "clearance", "load_share", "shaft_dynamics"):
+    for name in ("radial_load", "clearance", "load_share", "roller_scatter", "shaft_dynamics"):
         if name not in present:
             model = model.with_effect(CATALOGUE[name])
     rec, v = d.record, np.asarray(d.voltage_V, dtype=float)
-    base = {**model.defaults(rec), **qs.values}
+    # the shaft's mass and damping at the rig file's values (its starts), not at the effect's neutral mass 0
+    own = CATALOGUE["shaft_dynamics"].starts(StartContext(rec, v, qs.model_V, qs.values))[0]
+    base = {**model.defaults(rec), **qs.values, **own}
     vc = v - v.mean()
     scores = []
-    for c in HEALTHY_GRID[0]:
-        for r in HEALTHY_GRID[1]:
-            vals = {**base, "radial_clearance_m": c, "radial_load_N": r * rec.rig.radial_load_N, "load_share_ratio": 1.0}
-            try:
-                m = model.simulate(vals, rec)
-            except InfeasibleError:
-                continue
-            mc = m - m.mean()
-            share = float(vc @ mc / max(mc @ mc, 1e-300))
-            scores.append((float(np.sum((vc - share * mc) ** 2)), {"radial_clearance_m": c, "radial_load_N": vals[
-                "radial_load_N"], "load_share_ratio": float(np.clip(share, 0.05, 5.0))}))
+    here = (base["radial_clearance_m"], base["radial_load_N"] / rec.rig.radial_load_N)
+    for c, r in [here, *((c, r) for c in HEALTHY_GRID[0] for r in HEALTHY_GRID[1])]:
+        vals = {**base, "radial_clearance_m": c, "radial_load_N": r * rec.rig.radial_load_N, "load_share_ratio": 1.0}
+        try:
+            m = model.simulate(vals, rec)
+        except InfeasibleError:
+            continue
+        mc = m - m.mean()
+        share = float(vc @ mc / max(mc @ mc, 1e-300))
+        scores.append((float(np.sum((vc - share * mc) ** 2)), {"radial_clearance_m": c, "radial_load_N": vals[
+            "radial_load_N"], "load_share_ratio": float(np.clip(share, 0.05, 5.0))}))
     scores.sort(key=lambda x: x[0])
-    starts = [{}] + [pt for _, pt in scores[:HEALTHY_STARTS]]
+    starts = [pt for _, pt in scores[:HEALTHY_STARTS]] or [{}]
     f = fit_model(model, rec, v, d.floor, start=base, starts=starts, max_nfev=d.settings.max_nfev,
                   ftol=d.settings.ftol)
     f.model.release()
