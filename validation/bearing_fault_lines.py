@@ -6,7 +6,8 @@ bearing whose operating point the search did not reach leaves lines there too. T
 far from the rig file's operating point and diagnoses each with the quasi-static search (``dynamic_rung: off``: the
 rule is applied to the quasi-static final residual), and writes for each the carriers of every fault family
 (:func:`~piezobearing.diagnosis.bearing.answer.carrier_levels`: the residual's line above the white floor and over
-the final model's own line). The missed grooves (20-26 deg from the sensor, with and without 1.5 % slip, 2550 Hz and
+the fitted model's own line), of the final model and of the best healthy model the rule judges
+(:func:`~piezobearing.diagnosis.bearing.answer.best_healthy`, where it was fitted), and the answer. The missed grooves (20-26 deg from the sensor, with and without 1.5 % slip, 2550 Hz and
 25.6 kHz) are diagnosed the same way, so the rule's margin on both sides reads from one file.
 
 Healthy draws (:func:`healthy_draw`): the paper's rig file (500 N, 20 um, 1000 rpm); the record at a load of
@@ -14,7 +15,9 @@ Healthy draws (:func:`healthy_draw`): the paper's rig file (500 N, 20 um, 1000 r
 deviation of 0-2 um; in odd draws a ``speed_rpm`` column and a speed of 600-1500 rpm, in even ones no column and a
 speed within the fit's tolerance (+-2 %); 1 s at 2550 Hz (draws 0, 1 mod 4) or 25.6 kHz, 30 dB, LPM.
 
-    python validation/bearing_fault_lines.py --draws 24 --out results/validation/bearing_fault_lines.json
+    python validation/bearing_fault_lines.py --draws 12 [--no-grooves] --out results/validation/bearing_fault_lines.json
+
+(draws already in the output file are kept; ``--no-grooves`` leaves the grooves for a later run.)
 """
 
 from __future__ import annotations
@@ -72,7 +75,10 @@ def row(config: dict, influence, hidden: dict, rate: float, tach: bool, seed: in
     return {"hidden": hidden, "sample_rate_Hz": rate, "tachometer": tach, "selected": dj["selected"],
             "verdict": dj["verdict"], "fault_type": dj["fault"]["type"], "fault_source": dj["fault"]["source"],
             "evidence": [e["type"] for e in fault_evidence(d)],
-            "carriers": {k: carrier_levels(d, k) for k in FAMILIES}}
+            "healthy_model": dj["fault"]["healthy_model"],
+            "carriers": {k: carrier_levels(d, k) for k in FAMILIES},
+            "healthy_carriers": ({k: carrier_levels(d, k, d._best_healthy) for k in FAMILIES}
+                                 if getattr(d, "_best_healthy", None) is not None else None)}
 
 
 def main() -> None:
@@ -94,7 +100,7 @@ def main() -> None:
         res["healthy"].append({"draw": i, **row(config, influence, hidden, rate, tach, i)})
         out.write_text(json.dumps(res, indent=1))
         r = res["healthy"][-1]
-        print(f"healthy {i} {rate:.0f} Hz: {r['selected']} {r['fault_type']}/{r['fault_source']} "
+        print(f"healthy {i} {rate:.0f} Hz: {r['selected']} {r['fault_type']}/{r['fault_source']} {r['healthy_model']} "
               f"BPFO {[round(c['excess_dB'], 1) for c in r['carriers']['outer_race']]} dB, over model "
               f"{[round(c['over_model_dB'], 1) for c in r['carriers']['outer_race']]}", flush=True)
     done = {(g["case"], g["sample_rate_Hz"]) for g in res["grooves"]}
