@@ -88,6 +88,8 @@ def main() -> None:
     ap.add_argument("--influence", default=None, help="influence_line_healthy.csv (default: solved from the config)")
     ap.add_argument("--seed", type=int, default=35)
     ap.add_argument("--no-grooves", action="store_true")
+    ap.add_argument("--groove-rate", type=float, action="append", help="the grooves' sample rates [Hz] (default 2550 "
+                    "and 25600)")
     args = ap.parse_args()
     config = cfg.load()
     influence = read_influence(args.influence) if args.influence else influence_from_config(config)
@@ -104,7 +106,7 @@ def main() -> None:
               f"BPFO {[round(c['excess_dB'], 1) for c in r['carriers']['outer_race']]} dB, over model "
               f"{[round(c['over_model_dB'], 1) for c in r['carriers']['outer_race']]}", flush=True)
     done = {(g["case"], g["sample_rate_Hz"]) for g in res["grooves"]}
-    for rate in ([] if args.no_grooves else [2550.0, 25600.0]):
+    for rate in ([] if args.no_grooves else args.groove_rate or [2550.0, 25600.0]):
         for name, hidden in GROOVES.items():
             if (name, rate) in done:
                 continue

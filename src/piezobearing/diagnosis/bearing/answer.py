@@ -288,33 +288,34 @@ def fault_statement(kind: str, params: dict, ci95: dict, remaining: list[dict], 
 
 #: The catalogue effect of each fault type.
 EFFECT_OF_TYPE = {kind: name for name, (kind, _w, _a) in FAULT_TYPES.items()}
-#: How many carriers of a family, and how many bins around each (:func:`_peak`), the lines rule reads.
-CARRIERS, PEAK_BINS = 3, 3
+#: How many bins around each carrier the lines rule reads (:func:`_peak`), and the top of the band it reads them in
+#: (a share of the sampling rate: the white floor's band, :func:`~.floor.noise_floor`, ends at 45 %).
+PEAK_BINS, CARRIER_BAND = 3, 0.45
 
 
-def lines_threshold_dB(alpha: float) -> float:
+def lines_threshold_dB(alpha: float, carriers: int) -> float:
     """The level above the white floor at which the lines rule (:func:`fault_evidence`: at least two of a family's
-    three carriers above it, three families) names a fault in white noise with probability at most ``alpha`` [dB].
+    ``carriers`` harmonics above it, three families) names a fault in white noise with probability at most ``alpha``
+    [dB].
 
     One Hann-windowed bin of white noise has |X|^2 / floor ~ Exp(1); the largest of :data:`PEAK_BINS` bins exceeds
-    x with probability at most 3 e^-x (union bound), two of three carriers with at most 3 (3 e^-x)^2, one of three
-    families with at most 81 e^-2x: x = ln(81 / alpha) / 2."""
-    fam = len(FAULT_TYPES)
-    pairs = CARRIERS * (CARRIERS - 1) // 2
-    return float(10 * np.log10(0.5 * np.log(fam * pairs * PEAK_BINS**2 / alpha)))
+    x with probability at most 3 e^-x (union bound), two of K carriers with at most C(K, 2) (3 e^-x)^2; each of the
+    three families gets alpha / 3: x = ln(27 C(K, 2) / alpha) / 2."""
+    pairs = max(carriers * (carriers - 1) // 2, 1)
+    return float(10 * np.log10(0.5 * np.log(len(FAULT_TYPES) * pairs * PEAK_BINS**2 / alpha)))
 
 
 def _families(d, fit) -> list[dict]:
     """The fault families whose lines the residual of ``fit`` holds (the rule of :func:`fault_evidence`)."""
     # the envelope view of the residual of ``fit``, judged with the detector's family-wise threshold
     env = EnvelopeBands().judge(fit, d.problem, d.settings).findings
-    threshold = lines_threshold_dB(d.settings.test_alpha)
     bands = {"outer_race": ("BPFO",), "inner_race": ("BPFI",), "rolling_element": ("2xBSF", "BSF")}
-    bpfo = [f for _label, f in _line_spectra(d, "outer_race", fit)[0]]
+    bpfo = [c["frequency_Hz"] for c in carrier_levels(d, "outer_race", fit)]
     df = 1.0 / (d.record.n * d.record.dt_s)
     out = []
     for kind in FAMILIES:
         levels = carrier_levels(d, kind, fit)
+        threshold = lines_threshold_dB(d.settings.test_alpha, len(levels))
         hits = [c for c in levels if c["excess_dB"] >= threshold]
         envs = [{"band": e["band"], "frequency_Hz": e["frequency_Hz"], "ratio": e["ratio"]} for e in env
                 if (e["band"].split("x")[-1] in bands[kind] or e["band"] in bands[kind])
@@ -327,17 +328,26 @@ def _families(d, fit) -> list[dict]:
 
 
 def carrier_levels(d, kind: str, fit=None) -> list[dict]:
-    """The first three carriers of a fault family (k x BPFO, k x BPFI, k x 2 x BSF at the fit's speeds) in the
-    residual of ``fit`` (default: the final model's): each ``{"line", "frequency_Hz", "excess_dB",
-    "over_model_dB"}``, the residual's line above the white floor (the largest of :data:`PEAK_BINS` bins' power of
-    the Hann-windowed spectrum over the floor's in one bin) and over the fitted model's own line at that frequency
-    (the line a model without this fault already puts there: at k x BPFO, the roller passage's) [dB]."""
+    """The carriers of a fault family (k x BPFO, k x BPFI, k x 2 x BSF at the fit's speeds, every harmonic below
+    :data:`CARRIER_BAND` x the sampling rate) in the residual of ``fit`` (default: the final model's): each
+    ``{"line", "frequency_Hz", "excess_dB", "over_model_dB"}``, the residual's line above the white floor (the largest
+    of :data:`PEAK_BINS` bins' power of the Hann-windowed spectrum over the floor's in one bin) and over the fitted
+    model's own line at that frequency (the line a model without this fault already puts there: at k x BPFO, the
+    roller passage's) [dB]. A groove's dip is short: where a healthy model takes up its first harmonics (a load, a
+    clearance), its higher ones stay."""
     fit = d.final if fit is None else fit
-    lines, df, _, mod_a, floor = _line_spectra(d, kind, fit)
+    _, df, _, mod_a, floor = _line_spectra(d, kind, fit)
+    values, rig = fit.values, d.record.rig
+    shaft = float(values.get("shaft_speed_Hz", rig.shaft_speed_Hz) if rig.tach_Hz is None else np.mean(rig.tach_Hz))
+    shaft *= 1.0 + values.get("speed_deviation_ratio", 0.0)
+    kin = rig.frequencies(shaft, max(values.get("cage_slip_ratio", 0.0), 0.0))
+    base = {"outer_race": kin["bpfo_Hz"], "inner_race": kin["bpfi_Hz"], "rolling_element": 2 * kin["bsf_Hz"]}[kind]
+    name = {"outer_race": "BPFO", "inner_race": "BPFI", "rolling_element": "2xBSF"}[kind]
+    top = CARRIER_BAND / d.record.dt_s
+    carriers = [(name if k == 1 else f"{k}x{name}", k * base) for k in range(1, int(top // base) + 1)]
     res = np.asarray(fit.residual_V, dtype=float)
     w = np.hanning(res.size)
     res_a = np.abs(np.fft.rfft((res - res.mean()) * w))
-    carriers = lines[:CARRIERS] if kind == "outer_race" else lines[0:3 * CARRIERS:3]
     out = []
     for label, f in carriers:
         r = _peak(res_a, f, df)
@@ -442,7 +452,8 @@ def healthy_model_entry(d) -> dict | None:
     if f is None:
         return None
     return {"model": f.model.label, "nrmse": f.nrmse, "noise_floor_nrmse": f.floor_nrmse,
-            "threshold_dB": lines_threshold_dB(d.settings.test_alpha)}
+            "threshold_dB": {k: lines_threshold_dB(d.settings.test_alpha, len(carrier_levels(d, k, f)))
+                             for k in FAMILIES}}
 
 
 def fault_evidence(d) -> list[dict]:
@@ -452,7 +463,7 @@ def fault_evidence(d) -> list[dict]:
     Judged on the residual of :func:`best_healthy` (the record minus the best model of a healthy bearing the catalogue
     and the shaft's dynamics hold), never on the final model's alone: BPFO is the roller passage's own rate, and what
     a search leaves of a far-off load, clearance or speed stands at its harmonics as a groove's lines do. A family
-    counts where at least two of its first three carriers (k x BPFO, k x BPFI, k x 2 x BSF; :func:`carrier_levels`)
+    counts where at least two of its carriers (k x BPFO, k x BPFI, k x 2 x BSF below 0.45 f_s; :func:`carrier_levels`)
     stand above :func:`lines_threshold_dB` at the engine's test significance (``diagnostics.significance`` / 4: the
     level white noise reaches there with at most that probability), or, for a moving defect, where the envelope view
     of that residual finds one of its bands above the detector's family-wise threshold
