@@ -105,10 +105,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=120, help="records per kind, length and rate")
     ap.add_argument("--out", default=str(null_calibration.TABLE.relative_to(ROOT)))
+    ap.add_argument("--levels", default="results/validation/null_levels.npz",
+                    help="where the records' critical levels go (per length), for another table without a rerun")
     args = ap.parse_args()
     settings = replace(envelope.Settings(), calibrated_null=False)
     cpu = time.process_time()
-    rows, cells, total = [], {}, 0
+    rows, cells, total, critical = [], {}, 0, {}
     for length in LENGTHS_S:
         levels = []
         for ki, kind in enumerate(KINDS):
@@ -122,6 +124,7 @@ def main() -> None:
                       flush=True)
         rows += null_calibration.calibrate(np.concatenate(levels), PROBABILITIES, length)
         total += sum(a.size for a in levels)
+        critical[f"{length:g} s"] = np.concatenate(levels)
     spectrum = {k: v for k, v in asdict(settings).items()
                 if k not in ("false_alarm_probability", "min_type_separation_dB", "calibrated_null")}
     table = {
@@ -141,6 +144,8 @@ def main() -> None:
     }
     out = Path(args.out)
     out.write_text(json.dumps(table, indent=2) + "\n", encoding="utf-8")
+    Path(args.levels).parent.mkdir(parents=True, exist_ok=True)
+    np.savez(args.levels, **critical)
     for r in rows:
         print(f"{r['length_s']:g} s, p = {r['false_alarm_probability']:g}: level per test {r['alpha_per_test']:.4g} "
               f"(effective tests {r['effective_tests']:.3g}, {r['alarms_allowed']} of {r['records']} records)")

@@ -604,7 +604,8 @@ def alpha_per_test(settings: Settings, n_bands: int, seconds: float) -> float:
     probability and a record of ``seconds`` (:func:`.null_calibration.alpha_per_test`), or, with ``calibrated_null`` off, the probability
     split over the families and bands (Bonferroni)."""
     if settings.calibrated_null:
-        return null_calibration.alpha_per_test(settings.false_alarm_probability, seconds)
+        return null_calibration.alpha_per_test(settings.false_alarm_probability, seconds,
+                                               len(settings.families) * n_bands)
     return settings.false_alarm_probability / (len(settings.families) * n_bands)
 
 

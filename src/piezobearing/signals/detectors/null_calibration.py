@@ -11,12 +11,13 @@ bins). Measured, the rate lay 12-25 times below the stated probability at 0.01-0
 How conservative depends on the record's length: a longer record has more bins per line window and a
 wider median floor (of fixed width in Hz), and its computed null is nearer the truth. The calibration table
 (``null_calibration.json``, written by ``python scripts/calibrate_null.py``) holds, per record length and stated
-probability ``p``, the level per test at which at most a lower confidence bound of ``p`` of its records
-without a fault raise an alarm: an order statistic of their critical levels. Its records, what null they
+probability ``p``, the level per test at which a share ``p`` of its records without a fault (the binomial
+count's median, :data:`CONFIDENCE`) raise an alarm: an order statistic of their critical levels. Its records, what null they
 stand for, and the settings it was made with are in the table itself. Between its probabilities the level is
-interpolated in log-log; below the smallest, the level keeps the smallest's ratio to the probability (its
-effective number of independent tests), and above the largest, the largest's; between lengths it is
-interpolated in log-log, and outside them the nearest length's.
+interpolated in log-log; below the smallest, the smaller of the smallest's ratio to the probability (its
+effective number of independent tests) and the power law fitted to the length's rows; above the largest, the
+largest's ratio; between lengths it is interpolated in log-log; below the shortest, the shortest's level, and
+beyond the longest the smaller of the longest's and the Bonferroni split (:func:`alpha_per_test`).
 """
 
 from __future__ import annotations
@@ -31,9 +32,10 @@ from scipy.stats import binom
 
 #: The committed table.
 TABLE = Path(__file__).with_name("null_calibration.json")
-#: One-sided confidence of the table's count bound: the probability that a level lets through more than the
-#: stated share of the null the records stand for [-].
-CONFIDENCE = 0.95
+#: The count of alarms a level lets through on the table's records: the binomial quantile of the stated
+#: probability at this confidence; 0.5, its median, calibrates the rate itself (a larger confidence sets the
+#: level lower, for a rate below the stated one with that confidence) [-].
+CONFIDENCE = 0.5
 
 
 @lru_cache(maxsize=1)
@@ -42,29 +44,37 @@ def table() -> dict:
     return json.loads(TABLE.read_text(encoding="utf-8"))
 
 
-def alpha_per_test(pfa: float, seconds: float, calibration: dict | None = None) -> float:
+def alpha_per_test(pfa: float, seconds: float, n_tests: int, calibration: dict | None = None) -> float:
     """The level per test for a stated false-alarm probability ``pfa`` and a record of ``seconds`` [-]
-    (module docstring): each calibrated length's level for ``pfa``, interpolated in log-log over the length;
-    a record shorter than the shortest length or longer than the longest takes that length's level."""
+    (module docstring): each calibrated length's level for ``pfa``, interpolated in log-log over the length.
+    A record shorter than the shortest length takes that length's level (a shorter record's null is more
+    conservative still); one longer than the longest the smaller of that length's level and the Bonferroni
+    split ``pfa / n_tests`` (the calibration has not measured it)."""
     rows = (calibration or table())["rows"]
     lengths = sorted({r["length_s"] for r in rows})
     levels = np.log([_level(pfa, [r for r in rows if r["length_s"] == t]) for t in lengths])
-    lt = math.log(min(max(seconds, lengths[0]), lengths[-1]))
-    return float(math.exp(np.interp(lt, np.log(lengths), levels)))
+    level = float(math.exp(np.interp(math.log(max(seconds, lengths[0])), np.log(lengths), levels)))
+    return min(level, pfa / n_tests) if seconds > lengths[-1] else level
 
 
 def _level(pfa: float, rows: list[dict]) -> float:
-    """One length's level for ``pfa``: log-log interpolation between its rows; below the smallest probability
-    the smallest's ratio of level to probability, above the largest the largest's."""
+    """One length's level for ``pfa``: log-log interpolation between its rows; above the largest probability the
+    largest's ratio of level to probability; below the smallest, the smaller of the smallest's ratio (a constant
+    effective number of tests) and the least-squares power law through the rows (where the share of records
+    with a small critical level falls slower than the level, that ratio would overstate the level)."""
     rows = sorted(rows, key=lambda r: r["false_alarm_probability"])
     p = np.log([r["false_alarm_probability"] for r in rows])
     a = np.log([r["alpha_per_test"] for r in rows])
     lp = math.log(pfa)
-    if lp <= p[0]:
-        return float(math.exp(a[0] + lp - p[0]))
     if lp >= p[-1]:
         return float(math.exp(a[-1] + lp - p[-1]))
-    return float(math.exp(np.interp(lp, p, a)))
+    if lp > p[0]:
+        return float(math.exp(np.interp(lp, p, a)))
+    ratio = a[0] + lp - p[0]
+    if p.size < 2:
+        return float(math.exp(ratio))
+    slope, intercept = np.polyfit(p, a, 1)
+    return float(math.exp(min(ratio, intercept + slope * lp)))
 
 
 def calibrate(critical: np.ndarray, probabilities: tuple[float, ...], seconds: float,
