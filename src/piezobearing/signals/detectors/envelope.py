@@ -23,8 +23,12 @@ The chain (Randall & Antoni, MSSP 25 (2011) 485-520; Smith & Randall, MSSP 64-65
    window. Under noise alone R_l is the largest of M_l Exp(1) bins over a median floor of effective Gamma
    shape M_f = ln(2)^2 n_floor / 1.94 (the median's variance; Hann-correlated bins); the distribution of the
    sum is computed (densities convolved, the floor by quadrature), and the family is detected when its sum
-   passes the (1 - alpha) quantile, alpha = pfa / (n_families n_bands) (Bonferroni over families and
-   bands: the probability that a record without a fault is called any fault is at most ``pfa``). Of several
+   passes the (1 - alpha) quantile. The level alpha per test is the calibration table's for ``pfa`` and the
+   record's length (:mod:`.null_calibration`: made on simulated records without a fault, so that such a
+   record is called any fault with probability ``pfa``); with ``calibrated_null`` off it is
+   pfa / (n_families n_bands) (Bonferroni over families and bands: an upper bound, which the tests'
+   correlation and each test's conservative null leave far above the measured rate on records of a few
+   seconds). Of several
    families detected, the call is the one with the largest margin (the statistic over its threshold,
    in dB), taken in its better band.
 
