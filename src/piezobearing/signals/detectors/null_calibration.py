@@ -50,11 +50,19 @@ def alpha_per_test(pfa: float, seconds: float, n_tests: int, calibration: dict |
     A record shorter than the shortest length takes that length's level (a shorter record's null is more
     conservative still); one longer than the longest the smaller of that length's level and the Bonferroni
     split ``pfa / n_tests`` (the calibration has not measured it)."""
-    rows = (calibration or table())["rows"]
+    if calibration is None:
+        return _committed_level(float(pfa), float(seconds), int(n_tests))
+    rows = calibration["rows"]
     lengths = sorted({r["length_s"] for r in rows})
     levels = np.log([_level(pfa, [r for r in rows if r["length_s"] == t]) for t in lengths])
     level = float(math.exp(np.interp(math.log(max(seconds, lengths[0])), np.log(lengths), levels)))
     return min(level, pfa / n_tests) if seconds > lengths[-1] else level
+
+
+@lru_cache(maxsize=256)
+def _committed_level(pfa: float, seconds: float, n_tests: int) -> float:
+    """:func:`alpha_per_test` of the committed table (a record's level is asked for at every decision)."""
+    return alpha_per_test(pfa, seconds, n_tests, table())
 
 
 def _level(pfa: float, rows: list[dict]) -> float:
