@@ -223,6 +223,25 @@ def _clock_drift(d: dict) -> tuple[str, str, list[dict]]:
     return text, "–", [q("current", p["current_cpu_s"], "s"), q("previous", p["previous_cpu_s"], "s")]
 
 
+def _dynamic_rung(d: dict) -> tuple[str, str, list[dict]] | None:
+    """The whole running-bearing diagnosis of 2 s LPM records with ``dynamic_rung`` off, then auto, per case."""
+    if "search" not in d:  # bench_shaft_dynamics.py --accuracy only
+        return None
+    runs = d["search"]
+    cases = sorted({k.rsplit(", dynamic_rung ", 1)[0] for k in runs}, key=lambda k: (k.rsplit(" @ ", 1)[1], k))
+    parts, qs = [], []
+    for case in cases:
+        off, auto = runs.get(f"{case}, dynamic_rung off"), runs.get(f"{case}, dynamic_rung auto")
+        if off is None or auto is None:
+            continue
+        name, rate = case.rsplit(" @ ", 1)
+        label = name if rate == "2550 Hz" else f"{name} at {float(rate.split()[0]) / 1000:g} kHz"
+        rung = "accepted" if auto["rung_accepted"] else ("not accepted" if auto["rung_tried"] else "not tried")
+        parts.append(f"{label}: {seconds(off['cpu_s'])} / {seconds(auto['cpu_s'])} ({rung})")
+        qs += [q(f"{label}, off", off["cpu_s"], "s"), q(f"{label}, auto", auto["cpu_s"], "s")]
+    return "CPU, off / auto: " + "; ".join(parts), "–", qs
+
+
 def _sensor_design(d: dict) -> tuple[str, str, list[dict]]:
     rows = [r for design in d["designs"].values() for r in design if r["multiplier"] == 1.0]
     secs = [r["seconds"] for r in rows]
@@ -294,7 +313,11 @@ ROWS = [
     Row("diagnosis_bearing", "running-bearing diagnosis, 2 s record, whole catalogue: healthy / 0.6 mm outer race / "
         "0.8 mm inner race", "diagnosis_bearing.json", "`python benchmarks/bench_diagnosis_bearing.py`",
         _diagnosis_bearing),
-    Row("clock_drift", "`clock_drift` effect's windowed-sinc reading against one 32-tap kernel a sample",
+    Row("dynamic_rung", "running-bearing diagnosis, 2 s LPM records at 2550 Hz (one at 25.6 kHz), whole search with "
+        "`bearing_diagnosis.dynamic_rung` `off` / `auto` (the default)", "shaft_dynamics.json",
+        "`python benchmarks/bench_shaft_dynamics.py --search`", _dynamic_rung),
+    Row("clock_drift", "`clock_drift` effect's windowed-sinc reading of a 25001-sample record: a series for I0 and "
+        "one sine a sample, against numpy's `i0` and `sinc` for every tap",
         "clock_drift.json", "`python benchmarks/bench_clock_drift.py`", _clock_drift),
     Row("sensor_design", "sensor-design study mesh, one design at multiplier 1.0", "sensor_design.json",
         "`python benchmarks/bench_sensor_design.py`", _sensor_design),
