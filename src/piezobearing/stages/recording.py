@@ -37,6 +37,7 @@ import yaml
 
 from ..bearing.kinematics import BearingError, Kinematics, RollingBearing
 from ..io import MeasurementError, write_json
+from ..io.archive import rig_beside
 from ..io.formats import RECORD_FORMATS
 from ..io.vibration import VibrationRecord, read_vibration_record
 from ..plotting import save
@@ -396,12 +397,6 @@ def check_names(files: list[Path]) -> None:
     if twice:
         raise RigError(f"{twice[0]}: two records share this name (each record's outputs go to --out/<name>/); "
                        "rename one or run the folders one at a time")
-
-
-def rig_beside(record: Path, rig: str | Path | None) -> str | Path | None:
-    """The record's own rig file (same name, ``.yaml``) where there is one, else ``rig``."""
-    own = record.with_suffix(".yaml")
-    return own if own.is_file() else rig
 
 
 def time_from_name(name: str, pattern: str) -> datetime:
