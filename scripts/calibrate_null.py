@@ -45,10 +45,10 @@ PROBABILITIES = (0.01, 0.02, 0.05, 0.1, 0.2)
 SEED = 101
 
 
-def machine(rng: np.random.Generator, shaft_Hz: float, seconds: float, rate_Hz: float) -> np.ndarray:
+def machine(rng: np.random.Generator, shaft_Hz: float, seconds: float, sample_rate_Hz: float) -> np.ndarray:
     """A healthy machine: white noise modulated at the shaft rate, its first 8 harmonics far above the noise,
     and a 31 x shaft mesh tone with +-1, +-2 shaft-rate sidebands."""
-    t = np.arange(int(rate_Hz * seconds)) / rate_Hz
+    t = np.arange(int(sample_rate_Hz * seconds)) / sample_rate_Hz
     phase = 2 * np.pi * shaft_Hz * t
     x = (1.0 + 0.5 * np.cos(phase + rng.uniform(0, 2 * np.pi))) * rng.standard_normal(t.size)
     for k in range(1, 9):
@@ -57,37 +57,37 @@ def machine(rng: np.random.Generator, shaft_Hz: float, seconds: float, rate_Hz: 
     return x
 
 
-def resonant_noise(rng: np.random.Generator, seconds: float, rate_Hz: float) -> np.ndarray:
+def resonant_noise(rng: np.random.Generator, seconds: float, sample_rate_Hz: float) -> np.ndarray:
     """White noise through a two-pole resonance (centre 1-4 kHz, Q 5-30) over a white floor a tenth of its rms."""
-    n = int(rate_Hz * seconds)
+    n = int(sample_rate_Hz * seconds)
     f0, q = rng.uniform(1000.0, 4000.0), rng.uniform(5.0, 30.0)
-    r = np.exp(-np.pi * f0 / (q * rate_Hz))
-    y = lfilter([1.0], [1.0, -2.0 * r * np.cos(2 * np.pi * f0 / rate_Hz), r * r], rng.standard_normal(n))
+    r = np.exp(-np.pi * f0 / (q * sample_rate_Hz))
+    y = lfilter([1.0], [1.0, -2.0 * r * np.cos(2 * np.pi * f0 / sample_rate_Hz), r * r], rng.standard_normal(n))
     return y / y.std() + 0.1 * rng.standard_normal(n)
 
 
-def pink_noise(rng: np.random.Generator, seconds: float, rate_Hz: float) -> np.ndarray:
+def pink_noise(rng: np.random.Generator, seconds: float, sample_rate_Hz: float) -> np.ndarray:
     """Noise of power density 1/f (from 1 Hz), shaped in the frequency domain."""
-    n = int(rate_Hz * seconds)
+    n = int(sample_rate_Hz * seconds)
     spectrum = np.fft.rfft(rng.standard_normal(n))
-    f = np.fft.rfftfreq(n, 1.0 / rate_Hz)
+    f = np.fft.rfftfreq(n, 1.0 / sample_rate_Hz)
     return np.fft.irfft(spectrum / np.sqrt(np.maximum(f, 1.0)), n)
 
 
-def record(kind: str, rng: np.random.Generator, shaft_Hz: float, seconds: float, rate_Hz: float) -> np.ndarray:
+def record(kind: str, rng: np.random.Generator, shaft_Hz: float, seconds: float, sample_rate_Hz: float) -> np.ndarray:
     """A record without a bearing fault of ``kind`` (module docstring; ``pink noise``: :func:`pink_noise`)."""
     if kind == "white noise":
-        return rng.standard_normal(int(seconds * rate_Hz))
+        return rng.standard_normal(int(seconds * sample_rate_Hz))
     if kind == "resonant noise":
-        return resonant_noise(rng, seconds, rate_Hz)
+        return resonant_noise(rng, seconds, sample_rate_Hz)
     if kind == "pink noise":
-        return pink_noise(rng, seconds, rate_Hz)
+        return pink_noise(rng, seconds, sample_rate_Hz)
     if kind == "healthy machine":
-        return machine(rng, shaft_Hz, seconds, rate_Hz)
+        return machine(rng, shaft_Hz, seconds, sample_rate_Hz)
     raise ValueError(f"kind '{kind}' unknown")
 
 
-def critical_levels(kind: str, seconds: float, rate_Hz: float, n: int, seed: tuple[int, ...],
+def critical_levels(kind: str, seconds: float, sample_rate_Hz: float, n: int, seed: tuple[int, ...],
                     settings: envelope.Settings, bearing: RollingBearing = BEARING) -> np.ndarray:
     """The critical level per test (:func:`~piezobearing.signals.detectors.envelope.critical_alpha`) of ``n``
     records of one kind, length and rate; record j from the seed ``(*seed, j)``."""
@@ -95,9 +95,9 @@ def critical_levels(kind: str, seconds: float, rate_Hz: float, n: int, seed: tup
     for j in range(n):
         rng = np.random.default_rng([*seed, j])
         shaft = rng.uniform(20.0, 30.0)
-        x = record(kind, rng, shaft, seconds, rate_Hz)
+        x = record(kind, rng, shaft, seconds, sample_rate_Hz)
         kin = bearing.kinematics(shaft * rng.uniform(0.99, 1.01)).to_dict()
-        out[j] = envelope.critical_alpha(envelope.measure(x, rate_Hz, kin, settings), settings)
+        out[j] = envelope.critical_alpha(envelope.measure(x, sample_rate_Hz, kin, settings), settings)
     return out
 
 

@@ -70,9 +70,9 @@ def cwru_readings(folder: Path, settings: envelope.Settings) -> list[envelope.Re
         rec = read_vibration_record(folder / f"{CWRU_HEALTHY}.mat", suffix, rig.sample_rate_Hz)
         kin = bearing.kinematics(rec.speed_rpm / 60.0).to_dict()
         for seconds in STRETCHES_S:
-            n = int(seconds * rec.rate_Hz)
+            n = int(seconds * rec.sample_rate_Hz)
             for i in range(rec.samples.size // n):
-                out.append(envelope.measure(rec.samples[i * n:(i + 1) * n], rec.rate_Hz, kin, settings))
+                out.append(envelope.measure(rec.samples[i * n:(i + 1) * n], rec.sample_rate_Hz, kin, settings))
     return out
 
 

@@ -46,6 +46,7 @@ import yaml
 
 from ..bearing.kinematics import BearingError, Kinematics, RollingBearing
 from ..io import MeasurementError, write_json
+from ..io.archive import rig_beside
 from ..io.formats import RECORD_FORMATS
 from ..io.vibration import VibrationRecord, pick_channel, read_vibration_record
 from ..plotting import save
@@ -222,7 +223,7 @@ class RecordingDetection:
             "shaft_speed_given_rpm": self.speed_rpm,
             "shaft_speed_source": self.speed_source,
             "families": d["families"],
-            "record": {"file": self.record.source, "channel": self.record.channel, "rate_Hz": self.record.rate_Hz,
+            "record": {"file": self.record.source, "channel": self.record.channel, "rate_Hz": self.record.sample_rate_Hz,
                        "duration_s": self.record.duration_s, "channels_in_file": list(self.record.channels)},
             "bearing": {"designation": self.bearing.designation, "n_rolling_elements": self.bearing.n_rolling_elements,
                         "rolling_element_diameter_m": self.bearing.rolling_element_diameter_m,
@@ -342,7 +343,7 @@ def detect_recording(record: str | Path, rig: str | Path | Rig | None = None, be
     if tracked is not None:
         angle, tracking = tracked
         try:
-            detection, track = order.detect_tracked(rec.samples, 1.0 / rec.rate_Hz, angle,
+            detection, track = order.detect_tracked(rec.samples, 1.0 / rec.sample_rate_Hz, angle,
                                                     bearing.kinematics(1.0).to_dict(), settings)
         except ValueError as e:
             raise RigError(f"{record}: {tracking['kind']} {tracking['channel']}: {e}") from None
@@ -352,7 +353,7 @@ def detect_recording(record: str | Path, rig: str | Path | Rig | None = None, be
     speed, speed_source = shaft_speed(rec, rig, rpm, shaft_Hz)
     kinematics = bearing.kinematics(speed / 60.0)
     try:
-        detection = envelope_detector.detect(rec.samples, rec.rate_Hz, kinematics.to_dict(), settings)
+        detection = envelope_detector.detect(rec.samples, rec.sample_rate_Hz, kinematics.to_dict(), settings)
     except ValueError as e:
         raise RigError(f"{record}: {e}") from None
     return RecordingDetection(detection, rec, bearing, speed, speed_source, kinematics)
@@ -394,7 +395,7 @@ def tracking_angle(rec: VibrationRecord, tachometer: str | None, pulses: int | N
     bad = np.flatnonzero(~np.isfinite(v))
     if bad.size:
         raise RigError(f"{where}, sample {int(bad[0]) + 1}: not a finite number; fix the channel or cut the record")
-    dt = 1.0 / rec.rate_Hz
+    dt = 1.0 / rec.sample_rate_Hz
     if kind == "speed channel":
         low = np.flatnonzero(v <= 0)
         if low.size:
@@ -541,12 +542,6 @@ def check_names(files: list[Path]) -> None:
     if twice:
         raise RigError(f"{twice[0]}: two records share this name (each record's outputs go to --out/<name>/); "
                        "rename one or run the folders one at a time")
-
-
-def rig_beside(record: Path, rig: str | Path | None) -> str | Path | None:
-    """The record's own rig file (same name, ``.yaml``) where there is one, else ``rig``."""
-    own = record.with_suffix(".yaml")
-    return own if own.is_file() else rig
 
 
 def time_from_name(name: str, pattern: str) -> datetime:
