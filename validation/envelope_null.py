@@ -1,7 +1,8 @@
 """The envelope detector's false-alarm rate as measured, against the probability it states, with the calibrated
 null and with the Bonferroni split, on records the calibration was not made on.
 
-``python validation/envelope_null.py [--n 250] [--out results/validation] [--cwru ../shared/data/cwru_fan_end]``
+``python validation/envelope_null.py [--n 250] [--out results/validation] [--cwru ../shared/data/cwru_fan_end]
+[--lengths 3 8] [--rates 12000 25600]``
 
 draws records without a fault of three kinds: white noise; pink noise (power 1/f: a colour the calibration's
 records do not have); a healthy machine (noise modulated at the shaft rate, its first 8 harmonics far above the
@@ -95,14 +96,16 @@ def main() -> None:
     parser.add_argument("--out", default="results/validation")
     parser.add_argument("--cwru", default="../shared/data/cwru_fan_end",
                         help="folder of the CWRU fan-end set (its healthy record fe39); left out where absent")
+    parser.add_argument("--lengths", type=float, nargs="+", default=list(LENGTHS_S), help="record lengths [s]")
+    parser.add_argument("--rates", type=float, nargs="+", default=list(RATES_HZ), help="sampling rates [Hz]")
     args = parser.parse_args()
     settings = envelope.Settings()
     cpu = time.process_time()
     rows, cells = [], {}
     for ki, kind in enumerate(KINDS):
         counts = {(null, p): 0 for null in NULLS for p in PROBABILITIES}
-        for length in LENGTHS_S:
-            for rate in RATES_HZ:
+        for length in args.lengths:
+            for rate in args.rates:
                 cell = {(null, p): 0 for null in NULLS for p in PROBABILITIES}
                 for j in range(args.n):
                     rng = np.random.default_rng([23, ki, int(length), int(rate), j])
@@ -116,10 +119,10 @@ def main() -> None:
                 name = f"{kind}, {length:g} s, {rate:g} Hz"
                 cells[name] = {f"{null} {p:g}": cell[(null, p)] for null, p in cell}
                 print(f"{name}: {cells[name]}", flush=True)
-        rows += rows_of(kind, counts, args.n * len(LENGTHS_S) * len(RATES_HZ))
+        rows += rows_of(kind, counts, args.n * len(args.lengths) * len(args.rates))
     all_counts = {key: sum(r["alarms"] for r in rows if (r["null"], r["false_alarm_probability"]) == key)
                   for key in ((null, p) for null in NULLS for p in PROBABILITIES)}
-    rows += rows_of("all simulated", all_counts, args.n * len(LENGTHS_S) * len(RATES_HZ) * len(KINDS))
+    rows += rows_of("all simulated", all_counts, args.n * len(args.lengths) * len(args.rates) * len(KINDS))
     folder = Path(args.cwru)
     if (folder / f"{CWRU_HEALTHY}.mat").exists():
         readings = cwru_readings(folder, settings)
@@ -129,7 +132,7 @@ def main() -> None:
                 counts[key] += alarm
         rows += rows_of(f"CWRU {CWRU_HEALTHY} stretches", counts, len(readings))
     summary = {"settings": "envelope.Settings() defaults, the false-alarm probability and the null varied",
-               "n_per_cell": args.n, "lengths_s": list(LENGTHS_S), "rates_Hz": list(RATES_HZ), "kinds": list(KINDS),
+               "n_per_cell": args.n, "lengths_s": args.lengths, "rates_Hz": args.rates, "kinds": list(KINDS),
                "rows": rows, "cells": cells, "cpu_s": time.process_time() - cpu}
     out = Path(args.out)
     write_json(summary, out / "envelope_null.json")
