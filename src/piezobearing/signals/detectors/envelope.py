@@ -481,7 +481,9 @@ class Reading:
     kurtogram: Kurtogram | None
     lines: dict[str, list[FaultLine]]
     top_Hz: float
-    seconds: float = 0.0
+    #: The record's length [s] (the calibrated null's level depends on it); unknown: infinite, whose level is
+    #: the longest calibrated length's, at most Bonferroni's.
+    seconds: float = math.inf
 
 
 def measure(samples: np.ndarray, sample_rate_Hz: float, kinematics: dict, settings: Settings) -> Reading:
