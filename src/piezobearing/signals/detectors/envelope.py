@@ -293,7 +293,7 @@ def _line_ratio_density(m: int, floor_shape: float, span: float, n_grid: int) ->
     g = np.zeros(n_grid)
     ends = np.minimum(np.searchsorted(x, v_max / y, side="right"), n_grid)
     with np.errstate(divide="ignore"):  # ln(1 - e^0) = -inf at v = 0: the density's exact 0 there
-        for yj, wj, k in zip(y, w, ends):
+        for yj, wj, k in zip(y, w, ends, strict=True):
             v = x[:k] * yj
             z = np.exp(-v) if m == 1 else np.exp(math.log(m) - v + (m - 1) * np.log(-np.expm1(-v)))
             g[:k] += (wj * yj) * z
