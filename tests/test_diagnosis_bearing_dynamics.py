@@ -18,7 +18,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from piezobearing.bearing.lpm import BearingGeometry
+from piezobearing.bearing.geometry import BearingGeometry
 from piezobearing.bearing.shaft_dynamics import ShaftDynamics, contact_stiffness_N_per_m, sensor_force
 from piezobearing.diagnosis.bearing import chain, lpm_records
 from piezobearing.diagnosis.bearing.answer import FAULT_TYPES, _peak, lines_threshold_dB

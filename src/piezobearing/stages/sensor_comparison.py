@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..bearing.lpm import BearingGeometry, kinematic_frequencies
+from ..bearing.geometry import BearingGeometry, kinematic_frequencies
 from ..chain import signals as signal_outputs
 from ..comparison import rig as comparison
 from ..io import read_harmonic, read_json, write_csv, write_json
