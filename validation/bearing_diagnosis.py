@@ -11,7 +11,10 @@ diagnosis itself). A markdown table goes beside it.
 
     python validation/bearing_diagnosis.py --out results/validation/bearing_diagnosis.json \
         [--influence results/bearing/influence_line_healthy.csv] [--rate 2550 --rate 25600] [--case NAME ...]
-        [--duration S] [--record-out DIR]
+        [--duration S] [--record-out DIR] [--steps-per-period N]
+
+``--steps-per-period``: the dynamic rung's integration steps per period of the shaft's mode (default
+:data:`piezobearing.bearing.shaft_dynamics.STEPS_PER_PERIOD`), to see what its time step does to a fitted width.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ import time
 from pathlib import Path
 
 from piezobearing import config as cfg
+from piezobearing.bearing import shaft_dynamics
 from piezobearing.diagnosis.bearing.lpm_records import lpm_record
 from piezobearing.diagnosis.bearing.subject import SUBJECT
 from piezobearing.io import write_bearing_record
@@ -139,7 +143,11 @@ def main() -> None:
     ap.add_argument("--duration", type=float, default=1.0, help="record length [s]")
     ap.add_argument("--seed", type=int, default=26)
     ap.add_argument("--record-out", type=Path, default=None, help="folder to write each case's record to (CSV)")
+    ap.add_argument("--steps-per-period", type=int, default=None,
+                    help="the dynamic rung's steps per period of the shaft's mode (default: its setting)")
     args = ap.parse_args()
+    if args.steps_per_period:
+        shaft_dynamics.STEPS_PER_PERIOD = args.steps_per_period
     config = cfg.load(*([args.config] if args.config else []))
     influence = read_influence(args.influence) if args.influence else influence_from_config(config)
     out = Path(args.out)
