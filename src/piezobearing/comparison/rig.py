@@ -39,7 +39,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..bearing import lpm
+from ..bearing import lpm, surface
 from ..chain import signals as signal_outputs
 from ..housing import base_motion, transient
 from ..housing import fem as housing_fem
@@ -104,9 +104,12 @@ class ComparisonSettings:
 
 
 def rig_config(config: dict, settings: ComparisonSettings) -> dict:
-    """The config with the bearing on the comparison's model step and the envelope detector's band rule."""
+    """The config with the bearing on the comparison's model step, the healthy bearing's floor
+    (``sensor_comparison.bearing_floor`` over ``bearing``: roughness, waviness, unbalance) and the envelope
+    detector's band rule."""
     cfg = copy.deepcopy(config)
     cfg["bearing"].update(time_step_s=settings.time_step_s, substeps=settings.substeps)
+    cfg["bearing"].update(copy.deepcopy(config["sensor_comparison"]["bearing_floor"]))
     cfg["signals"]["band_rule"] = settings.band_rule
     return cfg
 
@@ -138,7 +141,7 @@ def run_rig(config: dict, housing: Housing, faulty: bool, surroundings: base_mot
     """
     b = config["bearing"]
     motion = base_motion.realisation(surroundings, config["seed"], replicate) if surroundings.active else None
-    run = transient.run_lpm(b, faulty, "compiled", config["seed"], base_motion=motion)
+    run = transient.run_lpm(b, faulty, "compiled", config["seed"], base_motion=motion, realisation=replicate)
     t = run["time_s"]
     a = run.get("base_acceleration_m_per_s2", np.zeros((t.size, 2)))
     g, f = housing_fem.project_roller_loads(housing.columns, housing.ops, run["load_N"], run["angle_rad"])
@@ -210,14 +213,17 @@ def true_type(config: dict) -> str:
 
 
 def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_records: bool = False,
-            log=sys.stderr) -> dict:
-    """Both sensors on the healthy and the faulty bearing over ``sensor_comparison.n_seeds`` realisations.
+            log=sys.stderr, n_seeds: tuple[int, int] | None = None) -> dict:
+    """Both sensors on the healthy and the faulty bearing over ``sensor_comparison.n_seeds`` realisations each
+    (``n_seeds``: healthy and faulty realisations instead, as the calibrated test draws them).
 
     ``config``: the workflow's (the comparison's step is applied here). ``circuit``: the PZT's measuring circuit
     (:func:`piezobearing.chain.signals.sensor_circuit`); ``harmonic``: the sensor FEM's response where
     ``signals.sensor_fem_correction``, else None. ``housings``: the healthy and faulty :class:`Housing` when
-    already built. With the base motion at rest the rig runs once per case and the seeds draw the DAQs'
-    noise only; otherwise every seed is a new realisation of the surroundings through the whole rig.
+    already built. Every seed is a new realisation of the rig where anything in it is random: the bearing's
+    floor (``sensor_comparison.bearing_floor``: its surfaces and unbalance phase, drawn per case and seed) and
+    the surroundings (the k-th healthy and faulty seeds share the k-th base motion); with both off (the frame
+    at rest, an ideal bearing) the rig runs once per case and the seeds draw the DAQs' noise only.
 
     Returns the per-sensor summary (``sensors``), the disturbance's RMS, the housing's records, and with
     ``keep_records`` the first replicate's DAQ records (``records``: per sensor and case the samples and
@@ -240,6 +246,8 @@ def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_
     sensor = accelerometer.AccelerometerSettings.from_config(cfg["accelerometer"])
     pzt_noise, acc_noise = pzt_noise_settings(cfg), accelerometer_daq_settings(cfg)
     fault = true_type(cfg)
+    redraw = surroundings.active or surface.SurfaceSettings.from_config(cfg["bearing"]).active
+    n_healthy, n_faulty = n_seeds if n_seeds is not None else (settings.n_seeds, settings.n_seeds)
     if housings is None:
         housings = {faulty: build_housing(cfg, faulty) for faulty in (False, True)}
     housings = {faulty: h.at(settings.position) for faulty, h in housings.items()}
@@ -248,8 +256,8 @@ def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_
     for faulty in (False, True):
         case = "faulty" if faulty else "healthy"
         run = clean = None
-        for rep in range(settings.n_seeds):
-            if run is None or surroundings.active:
+        for rep in range(n_faulty if faulty else n_healthy):
+            if run is None or redraw:
                 run = run_rig(cfg, housings[faulty], faulty, surroundings, rep)
                 clean = {"pzt": pzt_clean(run, circuit, harmonic, cfg, settings),
                          "accelerometer": accelerometer_clean(run, sensor, cfg, settings)}
@@ -297,7 +305,9 @@ def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_
         }
     out = {
         "fault_type": fault,
-        "n_seeds": settings.n_seeds,
+        "n_seeds": n_faulty,
+        "n_healthy_seeds": n_healthy,
+        "n_faulty_seeds": n_faulty,
         "disturbance_rms_m_per_s2": float(np.mean(rms)),
         "false_alarm_probability": cfg["signals"]["false_alarm_probability"],
         "accelerometer_position": settings.position,

@@ -195,6 +195,8 @@ READS: dict[str, list[str]] = {
         "seed", *_BEARING, *_HOUSING_GEOMETRY, "housing", *_PZT, *_ALUMINA_DISK, *_CIRCUIT, "signals",
         "base_motion", "accelerometer", "sensor_comparison",
     ],
+    # studies.smk: the sensor comparison's calibrated figures (from its cases' files alone)
+    "sensor_comparison_calibrated_figures": [],
     # diagnostics.smk
     "diagnose": ["seed", "sensor", "synthesis", "calibration", "model", "diagnostics"],
     # diagnostics_bearing.smk
