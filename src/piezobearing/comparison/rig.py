@@ -209,6 +209,66 @@ def true_type(config: dict) -> str:
     return config["bearing"]["defects"][0]["type"] if config["bearing"]["defects"] else "none"
 
 
+@dataclass(frozen=True)
+class Rig:
+    """What every realisation of one comparison case shares (:func:`prepare`)."""
+
+    config: dict
+    settings: ComparisonSettings
+    surroundings: base_motion.BaseMotionSettings
+    sensor: accelerometer.AccelerometerSettings
+    pzt_noise: daq.NoiseSettings
+    accelerometer_noise: daq.NoiseSettings
+    fault: str
+    redraw: bool
+    housings: dict
+    circuit: object
+    harmonic: object
+
+
+def prepare(config: dict, circuit, harmonic, housings: dict | None = None) -> Rig:
+    """One case's rig: the comparison's config (:func:`rig_config`), its settings, the housings at the
+    accelerometer's place (built when not given), and whether each seed is a new rig run (``redraw``: the
+    bearing's floor or the surroundings random)."""
+    settings = ComparisonSettings.from_config(config)
+    cfg = rig_config(config, settings)
+    surroundings = base_motion.BaseMotionSettings.from_config(cfg["base_motion"])
+    if housings is None:
+        housings = {faulty: build_housing(cfg, faulty) for faulty in (False, True)}
+    return Rig(cfg, settings, surroundings, accelerometer.AccelerometerSettings.from_config(cfg["accelerometer"]),
+               pzt_noise_settings(cfg), accelerometer_daq_settings(cfg), true_type(cfg),
+               surroundings.active or surface.SurfaceSettings.from_config(cfg["bearing"]).active,
+               {faulty: h.at(settings.position) for faulty, h in housings.items()}, circuit, harmonic)
+
+
+def realise(rig: Rig, faulty: bool, replicate: int) -> tuple[dict, dict]:
+    """One realisation of the rig (:func:`run_rig`) and both sensors' noiseless DAQ voltages."""
+    run = run_rig(rig.config, rig.housings[faulty], faulty, rig.surroundings, replicate)
+    clean = {"pzt": pzt_clean(run, rig.circuit, rig.harmonic, rig.config, rig.settings),
+             "accelerometer": accelerometer_clean(run, rig.sensor, rig.config, rig.settings)}
+    return run, clean
+
+
+def observe(rig: Rig, run: dict, clean: dict, faulty: bool, replicate: int) -> tuple[dict, dict]:
+    """Both sensors' DAQ records of one realisation (their noise drawn for ``replicate``) through the detector.
+
+    Returns per sensor ``called`` (the detector's call), ``margin_dB`` (the true family's margin; the call's
+    where there is no fault), ``clipped`` and ``detection``; and the DAQ records.
+    """
+    cfg, fault = rig.config, rig.fault
+    out = {"pzt": pzt_record(clean["pzt"], rig.pzt_noise, noise_rng(cfg["seed"], "pzt", faulty, replicate))}
+    out["accelerometer"], n_sat = accelerometer_record(
+        clean["accelerometer"], rig.sensor, rig.accelerometer_noise,
+        noise_rng(cfg["seed"], "accelerometer", faulty, replicate))
+    seen = {}
+    for s in SENSORS:
+        d = judge(out[s].voltage_V, clean[s].dt_s, run["kinematics"], cfg)
+        family = d.families.get(fault) if fault != "none" else None
+        seen[s] = {"called": d.fault_type, "margin_dB": family.margin_dB if family is not None else d.margin_dB,
+                   "clipped": out[s].n_clipped + (n_sat if s == "accelerometer" else 0), "detection": d}
+    return seen, out
+
+
 # --------------------------------------------------------------------------- a case over seeds
 
 
@@ -240,42 +300,24 @@ def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_
       ``detection_rate_over_healthy``: share of seeds where it is positive: the healthy rig as the
       reference, a false-alarm probability of at most 1 / (n_seeds + 1) for both sensors alike.
     """
-    settings = ComparisonSettings.from_config(config)
-    cfg = rig_config(config, settings)
-    surroundings = base_motion.BaseMotionSettings.from_config(cfg["base_motion"])
-    sensor = accelerometer.AccelerometerSettings.from_config(cfg["accelerometer"])
-    pzt_noise, acc_noise = pzt_noise_settings(cfg), accelerometer_daq_settings(cfg)
-    fault = true_type(cfg)
-    redraw = surroundings.active or surface.SurfaceSettings.from_config(cfg["bearing"]).active
+    rig = prepare(config, circuit, harmonic, housings)
+    cfg, settings, fault = rig.config, rig.settings, rig.fault
     n_healthy, n_faulty = n_seeds if n_seeds is not None else (settings.n_seeds, settings.n_seeds)
-    if housings is None:
-        housings = {faulty: build_housing(cfg, faulty) for faulty in (False, True)}
-    housings = {faulty: h.at(settings.position) for faulty, h in housings.items()}
+    housings = rig.housings
     rows = {s: {"faulty": [], "healthy": []} for s in SENSORS}
     records, levels, rms = {}, {s: {} for s in SENSORS}, []
     for faulty in (False, True):
         case = "faulty" if faulty else "healthy"
         run = clean = None
         for rep in range(n_faulty if faulty else n_healthy):
-            if run is None or redraw:
-                run = run_rig(cfg, housings[faulty], faulty, surroundings, rep)
-                clean = {"pzt": pzt_clean(run, circuit, harmonic, cfg, settings),
-                         "accelerometer": accelerometer_clean(run, sensor, cfg, settings)}
+            if run is None or rig.redraw:
+                run, clean = realise(rig, faulty, rep)
                 rms.append(run["disturbance_rms_m_per_s2"])
                 print(f"sensor_comparison: {case} replicate {rep}: base motion "
                       f"{run['disturbance_rms_m_per_s2']:.3g} m/s^2 rms", file=log)
-            out = {"pzt": pzt_record(clean["pzt"], pzt_noise, noise_rng(cfg["seed"], "pzt", faulty, rep))}
-            out["accelerometer"], n_sat = accelerometer_record(
-                clean["accelerometer"], sensor, acc_noise, noise_rng(cfg["seed"], "accelerometer", faulty, rep))
+            seen, out = observe(rig, run, clean, faulty, rep)
             for s in SENSORS:
-                d = judge(out[s].voltage_V, clean[s].dt_s, run["kinematics"], cfg)
-                family = d.families.get(fault) if fault != "none" else None
-                rows[s][case].append({
-                    "called": d.fault_type,
-                    "margin_dB": family.margin_dB if family is not None else d.margin_dB,
-                    "clipped": out[s].n_clipped + (n_sat if s == "accelerometer" else 0),
-                    "detection": d if rep == 0 else None,
-                })
+                rows[s][case].append({**seen[s], "detection": seen[s]["detection"] if rep == 0 else None})
                 if rep == 0:
                     v = clean[s].voltage_V
                     levels[s][case] = {"clean_rms_V": float(np.sqrt(np.mean(v * v))),
