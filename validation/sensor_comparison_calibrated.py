@@ -80,13 +80,18 @@ def run(args) -> None:
     out, cpu = Path(args.out), Path(args.out + ".cpu.jsonl")
     out.parent.mkdir(parents=True, exist_ok=True)
     done = done_seeds(out)
-    rigs, plans = {}, {}
+    rigs, plans, built = {}, {}, {}
     for label, overrides in map(parse_case, args.case):
         cfg = case_config(base, overrides, source=f"case {label}")
         circuit = signal_outputs.sensor_circuit(cfg, resistance, args.resistance)
         harmonic = read_harmonic(args.harmonic) if cfg["signals"]["sensor_fem_correction"] else None
         t = time.process_time()
-        rigs[label] = comparison.prepare(cfg, circuit, harmonic, housings_for(cfg, args.housing_dir))
+        digest = reads_digest(cfg, "sensor_comparison_housing")  # one housing model per mesh, shared by the cases
+        if digest not in built:
+            built[digest] = housings_for(cfg, args.housing_dir) or {
+                faulty: comparison.build_housing(comparison.rig_config(cfg, comparison.ComparisonSettings.from_config(
+                    cfg)), faulty) for faulty in (False, True)}
+        rigs[label] = comparison.prepare(cfg, circuit, harmonic, built[digest])
         c = cfg["sensor_comparison"]
         plans[label] = [s for s in schedule(c["n_healthy_seeds"], c["n_faulty_seeds"]) if (label, *s) not in done]
         print(f"{label}: {len(plans[label])} seeds to run; rig prepared in {time.process_time() - t:.1f} s CPU",
