@@ -84,7 +84,8 @@ def sensor_comparison(resistance_json: str, harmonic_csv: str | None, housing_he
             "per condition and sensor: detection_rate = share of seeds on the faulty bearing the envelope "
             "detector calls the true fault type; false_alarm_rate = share of seeds on the healthy bearing it "
             "calls any fault; margin_dB = median over seeds of the true family's 10 log10(statistic / threshold); "
-            "detection: the first seed's Detection. Each seed is a new realisation of the base motion (through "
+            "detection: the first seed's Detection. Each seed is a new realisation of the bearing's floor "
+            "(sensor_comparison.bearing_floor: roughness, waviness, unbalance phase), of the base motion (through "
             "the LPM and the housing) and of both DAQs' noise."
         ),
         "kinematics": kin.to_dict(),
