@@ -114,8 +114,8 @@ def main() -> None:
     if args.duration_s is not None:  # as many presses per second as the default record
         syn["n_impulses"] = max(2, int(round(syn["n_impulses"] * args.duration_s / syn["duration_s"])))
         syn["duration_s"] = args.duration_s
-    if args.rate_Hz is not None:
-        syn["sample_rate_Hz"] = args.rate_Hz
+    if args.sample_rate_Hz is not None:
+        syn["sample_rate_Hz"] = args.sample_rate_Hz
     settings = DiagnosticsSettings.from_config(config["diagnostics"])
     fit_circuit = nominal_circuit(config, config["calibration"]["initial_resistance_ohm"])
     p = PressProtocol.from_config(config["synthesis"])

@@ -48,7 +48,7 @@ def read_all(data: Path, labels: list[dict], spectra: list, cache: Path) -> list
     readings = []
     for i, s in enumerate(spectra):
         start = time.process_time()
-        readings.append([envelope_detector.without_spectra(envelope_detector.measure(r.samples, r.rate_Hz, k, s))
+        readings.append([envelope_detector.without_spectra(envelope_detector.measure(r.samples, r.sample_rate_Hz, k, s))
                          for r, k in records])
         print(f"spectrum setting {i + 1}/{len(spectra)}: {tuning.settings_dict(s, tuning.SPECTRUM_GRID)} "
               f"({time.process_time() - start:.1f} s CPU)", flush=True)

@@ -71,10 +71,10 @@ def main() -> None:
     for lab in healthy:
         rig = read_rig(data / f"{lab['record']}.yaml")
         full = read_vibration_record(data / f"{lab['record']}.mat", rig.channel, rig.sample_rate_Hz)
-        n = int(STRETCH_S * full.rate_Hz)
+        n = int(STRETCH_S * full.sample_rate_Hz)
         kin = rig.bearing.kinematics(rig.shaft_speed_rpm / 60.0).to_dict()
         for k in range(full.samples.size // n):
-            d = envelope_detector.detect(full.samples[k * n:(k + 1) * n], full.rate_Hz, kin, settings)
+            d = envelope_detector.detect(full.samples[k * n:(k + 1) * n], full.sample_rate_Hz, kin, settings)
             stretches.append({"record": lab["record"], "start_s": k * STRETCH_S, "call": d.fault_type,
                               "margin_dB": d.margin_dB})
     drive_end = RollingBearing.from_designation("SKF 6205")
@@ -82,7 +82,7 @@ def main() -> None:
     for lab in labels:
         rec = read_vibration_record(data / f"{lab['record']}.mat", "_DE_time", 12000.0)
         kin = drive_end.kinematics(float(lab["shaft_speed_rpm_nominal"]) / 60.0).to_dict()
-        d = envelope_detector.detect(rec.samples, rec.rate_Hz, kin, settings)
+        d = envelope_detector.detect(rec.samples, rec.sample_rate_Hz, kin, settings)
         de_rows.append({"record": lab["record"], "channel": rec.channel, "call": d.fault_type, "margin_dB": d.margin_dB})
     summary = {
         "data": str(data), "detector": "envelope", "settings": {k: getattr(settings, k) for k in settings.__dataclass_fields__},

@@ -92,21 +92,21 @@ def test_matlab_v73_csv_and_wav_give_the_same_samples(tmp_path):
     np.savetxt(tmp_path / "r.csv", np.column_stack([t, fe]), delimiter=",", header="time_s,acc_g", comments="",
                fmt="%.10g")
     csv = read_vibration_record(tmp_path / "r.csv")
-    assert csv.rate_Hz == pytest.approx(12000.0, rel=1e-6) and np.allclose(csv.samples, fe, rtol=1e-9)
+    assert csv.sample_rate_Hz == pytest.approx(12000.0, rel=1e-6) and np.allclose(csv.samples, fe, rtol=1e-9)
     wavfile.write(tmp_path / "r.wav", 12000, fe.astype(np.float32))
     wav = read_vibration_record(tmp_path / "r.wav")
-    assert wav.rate_Hz == 12000.0 and np.allclose(wav.samples, fe, rtol=1e-6)
+    assert wav.sample_rate_Hz == 12000.0 and np.allclose(wav.samples, fe, rtol=1e-6)
     with pytest.raises(MeasurementError, match="time axis says 12000 Hz, the rate given is 48000 Hz"):
-        read_vibration_record(tmp_path / "r.wav", rate_Hz=48000.0)
+        read_vibration_record(tmp_path / "r.wav", sample_rate_Hz=48000.0)
 
 
 def test_a_short_or_dead_record_and_a_bad_rig_file_are_refused(tmp_path):
     savemat(tmp_path / "short.mat", {"x": np.random.default_rng(0).standard_normal(1000)})
     with pytest.raises(MeasurementError, match="at least 0.5 s: record longer"):
-        read_vibration_record(tmp_path / "short.mat", rate_Hz=12000.0)
+        read_vibration_record(tmp_path / "short.mat", sample_rate_Hz=12000.0)
     savemat(tmp_path / "dead.mat", {"x": np.zeros(12000)})
     with pytest.raises(MeasurementError, match="constant .* a dead channel"):
-        read_vibration_record(tmp_path / "dead.mat", rate_Hz=12000.0)
+        read_vibration_record(tmp_path / "dead.mat", sample_rate_Hz=12000.0)
     rig = tmp_path / "rig.yaml"
     rig.write_text("bearing: {designation: SKF 6203}\nshaft_speed: 1797\n")
     with pytest.raises(RigError, match="key 'shaft_speed' unknown; a rig file holds bearing, shaft_speed_rpm"):

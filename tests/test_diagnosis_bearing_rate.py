@@ -10,8 +10,8 @@ from piezobearing.diagnosis.bearing.subject import model_rate
 from piezobearing.io import BearingRecord, average_blocks
 
 
-def record(rate_Hz: float, duration_s: float = 0.5, clip_at: int | None = None) -> BearingRecord:
-    t = np.arange(int(round(rate_Hz * duration_s))) / rate_Hz
+def record(sample_rate_Hz: float, duration_s: float = 0.5, clip_at: int | None = None) -> BearingRecord:
+    t = np.arange(int(round(sample_rate_Hz * duration_s))) / sample_rate_Hz
     clipped = np.zeros(t.size, dtype=bool)
     if clip_at is not None:
         clipped[clip_at] = True

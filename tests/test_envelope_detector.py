@@ -16,10 +16,10 @@ FS = 12_000.0
 BEARING = RollingBearing.from_designation("SKF 6205")
 
 
-def machine(rng: np.random.Generator, shaft_Hz: float, seconds: float, rate_Hz: float = FS) -> np.ndarray:
+def machine(rng: np.random.Generator, shaft_Hz: float, seconds: float, sample_rate_Hz: float = FS) -> np.ndarray:
     """A healthy machine: white noise modulated at the shaft rate, its first 8 harmonics far above the noise,
-    and a 31 x shaft mesh tone with +-1, +-2 shaft-rate sidebands [g], sampled at ``rate_Hz``."""
-    t = np.arange(int(rate_Hz * seconds)) / rate_Hz
+    and a 31 x shaft mesh tone with +-1, +-2 shaft-rate sidebands [g], sampled at ``sample_rate_Hz``."""
+    t = np.arange(int(sample_rate_Hz * seconds)) / sample_rate_Hz
     phase = 2 * np.pi * shaft_Hz * t
     x = (1.0 + 0.5 * np.cos(phase + rng.uniform(0, 2 * np.pi))) * rng.standard_normal(t.size)
     for k in range(1, 9):

@@ -136,7 +136,7 @@ def test_a_nested_struct_is_read_by_its_dotted_path_with_its_rate_and_speed_in_f
     WRITERS[version](path, _published(fe, de))
     rec = read_vibration_record(path, "bearing.gs", "bearing.sr")
     assert np.array_equal(rec.samples, fe.ravel() + 2.5)
-    assert rec.rate_Hz == RATE and rec.rate_source == "field bearing.sr" and rec.channel == "bearing.gs"
+    assert rec.sample_rate_Hz == RATE and rec.rate_source == "field bearing.sr" and rec.channel == "bearing.gs"
     held = read_record_contents(path)
     assert held.kind == f"MATLAB {version}"
     assert held.scalars == {"bearing.sr": RATE, "bearing.rate": pytest.approx(RPM / 60.0, rel=1e-15),
@@ -193,7 +193,7 @@ def test_a_cell_array_of_channel_structs_and_of_plain_vectors(version, cwru, tmp
     WRITERS[version](path, {"run": {"signals": [{"label": "DE", "values": de.T}, {"label": "FE", "values": fe.T}],
                                     "raw": [de, fe], "fs": "12000"}})
     rec = read_vibration_record(path, "FE", "run.fs")  # a row vector; the rate as text
-    assert rec.channel == "run.signals{2}.values" and rec.rate_Hz == RATE
+    assert rec.channel == "run.signals{2}.values" and rec.sample_rate_Hz == RATE
     assert np.array_equal(rec.samples, fe.ravel())
     assert np.array_equal(read_vibration_record(path, "run.raw{1}", RATE).samples, de.ravel())
 
@@ -243,7 +243,7 @@ def test_a_rate_field_that_is_missing_or_text_stops_with_one_line(cwru, tmp_path
         read_vibration_record(path, "bearing.gs", "bearing.gs")
     csv = tmp_path / "r.csv"
     np.savetxt(csv, fe[:12000], header="acc", comments="")
-    rec = read_vibration_record(csv, rate_Hz=12000.0)
+    rec = read_vibration_record(csv, sample_rate_Hz=12000.0)
     with pytest.raises(MeasurementError, match="names a field, but a .csv file holds no fields"):
         rec.field_value("bearing.rate", "the shaft speed")
 
@@ -280,5 +280,5 @@ def test_a_csv_header_with_units_in_brackets_is_listed_and_named(cwru, tmp_path,
     assert cli.main(["detect", str(path), "--list"]) == 0
     assert "acc (g)                          60000 samples" in capsys.readouterr().out
     with pytest.raises(MeasurementError, match=r"holds 2 channels \(acc \(g\), vel \(mm/s\)\); choose one"):
-        read_vibration_record(path, rate_Hz=RATE)
+        read_vibration_record(path, sample_rate_Hz=RATE)
     assert np.array_equal(read_vibration_record(path, "acc (g)", RATE).samples, fe.ravel())

@@ -14,11 +14,11 @@ DT = 1.0 / FS
 BPFO = FS / 36  # the paper's dt is exactly 1/(36 BPFO)
 
 
-def am_impulse_train(n, dt, rate_Hz, carrier_Hz, mod_Hz, mod_depth=0.5, decay_s=2e-3, t0=0.0):
-    """Decaying resonance bursts at ``rate_Hz``, amplitude-modulated at ``mod_Hz`` (an inner-race-like signal)."""
+def am_impulse_train(n, dt, sample_rate_Hz, carrier_Hz, mod_Hz, mod_depth=0.5, decay_s=2e-3, t0=0.0):
+    """Decaying resonance bursts at ``sample_rate_Hz``, amplitude-modulated at ``mod_Hz`` (an inner-race-like signal)."""
     t = np.arange(n) * dt
     x = np.zeros(n)
-    for tk in np.arange(t0, t[-1], 1.0 / rate_Hz):
+    for tk in np.arange(t0, t[-1], 1.0 / sample_rate_Hz):
         m = t >= tk
         tau = t[m] - tk
         a = 1.0 + mod_depth * np.cos(2 * np.pi * mod_Hz * tk)
@@ -122,22 +122,22 @@ def test_band_gain_is_a_zero_phase_butterworth():
 # --------------------------------------------------------------------------- envelope spectrum
 
 
-@pytest.mark.parametrize("rate_Hz", [53.7, BPFO])
-def test_envelope_peak_of_am_impulse_train_within_one_bin(rate_Hz):
+@pytest.mark.parametrize("sample_rate_Hz", [53.7, BPFO])
+def test_envelope_peak_of_am_impulse_train_within_one_bin(sample_rate_Hz):
     """Bursts at a known rate, amplitude-modulated at 8 Hz, in noise at 0 dB: the envelope spectrum's
     largest peak near the rate lies within one bin of it, its harmonics too, and the modulation
     sidebands rate +- 8 Hz stand out of the floor."""
-    n = detection.whole_period_samples(5100, DT, rate_Hz)
-    x = am_impulse_train(n, DT, rate_Hz, 900.0, 8.0)
+    n = detection.whole_period_samples(5100, DT, sample_rate_Hz)
+    x = am_impulse_train(n, DT, sample_rate_Hz, 900.0, 8.0)
     x += detection.noise_std_for_snr(x, 0.0) * np.random.default_rng(5).standard_normal(n)
     spec = envelope.envelope_spectrum(x, DT, (600.0, 1200.0))
     f, a = spec.frequency_Hz, spec.amplitude_V
     df = spec.resolution_Hz
     for k in (1, 2, 3):
-        win = (f > (k - 0.5) * rate_Hz) & (f < (k + 0.5) * rate_Hz)
-        assert abs(f[win][np.argmax(a[win])] - k * rate_Hz) <= df
+        win = (f > (k - 0.5) * sample_rate_Hz) & (f < (k + 0.5) * sample_rate_Hz)
+        assert abs(f[win][np.argmax(a[win])] - k * sample_rate_Hz) <= df
     floor = np.median(a[(f > 20) & (f < 400)])
-    for side in (rate_Hz - 8.0, rate_Hz + 8.0):
+    for side in (sample_rate_Hz - 8.0, sample_rate_Hz + 8.0):
         assert a[np.argmin(np.abs(f - side))] > 5 * floor
 
 

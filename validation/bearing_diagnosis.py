@@ -64,13 +64,13 @@ CASES = {
 TACHOMETER = ("healthy_1500rpm_tachometer", "outer_race_defect_ramp_tachometer")
 
 
-def run_case(config: dict, influence, name: str, rate_Hz: float, duration_s: float, seed: int,
+def run_case(config: dict, influence, name: str, sample_rate_Hz: float, duration_s: float, seed: int,
              record_dir: Path | None = None) -> dict:
     hidden, effects = CASES[name]
-    rec = lpm_record(config, influence, hidden, rate_Hz, duration_s, 30.0, seed, tachometer=name in TACHOMETER)
+    rec = lpm_record(config, influence, hidden, sample_rate_Hz, duration_s, 30.0, seed, tachometer=name in TACHOMETER)
     if record_dir is not None:
         record_dir.mkdir(parents=True, exist_ok=True)
-        write_bearing_record(rec, record_dir / f"{name}_{rate_Hz:.0f}Hz.csv")
+        write_bearing_record(rec, record_dir / f"{name}_{sample_rate_Hz:.0f}Hz.csv")
     c0 = time.process_time()
     d = SUBJECT.diagnose((rec, influence), config)[1]
     cpu = time.process_time() - c0
@@ -83,7 +83,7 @@ def run_case(config: dict, influence, name: str, rate_Hz: float, duration_s: flo
         found[k] = {"hidden": v, "found": val, "ci95": ci, "inside": inside}
     return {
         "case": name,
-        "sample_rate_Hz": rate_Hz,
+        "sample_rate_Hz": sample_rate_Hz,
         "duration_s": duration_s,
         "hidden_effects": effects,
         "selected": d["selected"],

@@ -37,10 +37,10 @@ RATES_HZ = (12000.0, 25600.0)
 KINDS = ("white noise", "healthy machine")
 
 
-def record(kind: str, rng: np.random.Generator, shaft_Hz: float, seconds: float, rate_Hz: float) -> np.ndarray:
+def record(kind: str, rng: np.random.Generator, shaft_Hz: float, seconds: float, sample_rate_Hz: float) -> np.ndarray:
     if kind == "white noise":
-        return rng.standard_normal(int(seconds * rate_Hz))
-    return machine(rng, shaft_Hz, seconds, rate_Hz)
+        return rng.standard_normal(int(seconds * sample_rate_Hz))
+    return machine(rng, shaft_Hz, seconds, sample_rate_Hz)
 
 
 def main() -> None:

@@ -32,6 +32,7 @@ _EXPORTS = {
     "Kinematics": "piezobearing.bearing.kinematics",
     "RollingBearing": "piezobearing.bearing.kinematics",
     "Detection": "piezobearing.signals.detectors",
+    "Record": "piezobearing.io.records",
 }
 
 #: The subpackages and modules reachable as attributes (``piezobearing.signals``), imported on first access.

@@ -17,8 +17,8 @@ from . import config as configuration
 from .bearing.kinematics import Kinematics, RollingBearing
 from .chain import calibration as sensor_outputs
 from .diagnosis.calibration.record import check_record
-from .io import BearingRecord, Measurement, read_bearing_record, read_measurement
-from .io.vibration import VibrationRecord, read_vibration_record
+from .io import Measurement, Record, read_bearing_record, read_measurement
+from .io.vibration import read_vibration_record
 from .signals import detectors
 from .signals.detectors import Detection
 
@@ -30,8 +30,8 @@ def _config(config: dict | None) -> dict:
     return configuration.load() if config is None else config
 
 
-def read_record(path: str | Path, channel: str | None = None, rate_Hz: float | None = None, kind: str = "vibration",
-                channels: dict | None = None) -> VibrationRecord | BearingRecord | Measurement:
+def read_record(path: str | Path, channel: str | None = None, sample_rate_Hz: float | None = None, kind: str = "vibration",
+                channels: dict | None = None) -> Record:
     """Read a record file of any supported format (CSV, MATLAB .mat v5/v7.3, UFF58, TDMS, WAV).
 
     Parameters
@@ -41,7 +41,7 @@ def read_record(path: str | Path, channel: str | None = None, rate_Hz: float | N
     channel : str, optional
         ``kind="vibration"``: the channel's name or a unique suffix of it (``"DE_time"``); None for a file
         with one channel.
-    rate_Hz : float, optional
+    sample_rate_Hz : float, optional
         ``kind="vibration"``: the sampling rate [Hz] where the file has no time axis (a DAQ's .mat file).
     kind : {"vibration", "bearing", "calibration"}
         One channel of any recording (:func:`piezobearing.io.vibration.read_vibration_record`; a scalar
@@ -53,8 +53,10 @@ def read_record(path: str | Path, channel: str | None = None, rate_Hz: float | N
 
     Returns
     -------
-    VibrationRecord, BearingRecord or Measurement
-        The samples with their rate (``rate_Hz`` or ``sample_rate_Hz``) [Hz] and the channels.
+    Record
+        The samples with their rate ``sample_rate_Hz`` [Hz], time axis ``time_s`` [s] and columns by name
+        ``data``, whatever the kind (a ``VibrationRecord``, a ``BearingRecord`` or a ``Measurement``, each with its own
+        columns as attributes too: ``samples``; ``voltage_V``, ``speed_rpm``; ``force_N``, ``voltage_V``).
 
     Examples
     --------
@@ -63,11 +65,11 @@ def read_record(path: str | Path, channel: str | None = None, rate_Hz: float | N
     >>> t = np.arange(12000) / 4000.0
     >>> pd.DataFrame({"time_s": t, "accel_g": np.sin(2 * np.pi * 70.8 * t)}).to_csv(path, index=False)
     >>> record = read_record(path, channel="accel_g")
-    >>> record.rate_Hz, record.samples.size, record.channel
+    >>> record.sample_rate_Hz, record.samples.size, record.channel
     (4000.0, 12000, 'accel_g')
     """
     if kind == "vibration":
-        return read_vibration_record(path, channel, rate_Hz)
+        return read_vibration_record(path, channel, sample_rate_Hz)
     if kind == "bearing":
         return read_bearing_record(path, channels)
     if kind == "calibration":
@@ -109,7 +111,7 @@ class Calibration:
     resistance: dict
 
 
-def calibrate(force_N, voltage_V, rate_Hz: float, config: dict | None = None) -> Calibration:
+def calibrate(force_N, voltage_V, sample_rate_Hz: float, config: dict | None = None) -> Calibration:
     """Sensitivity and resistance of the sensor from a calibration record's force and voltage.
 
     The workflow's calibration rules (extract_sensitivity, fit_resistance) on the arrays, after the checks the
@@ -119,7 +121,7 @@ def calibrate(force_N, voltage_V, rate_Hz: float, config: dict | None = None) ->
     ----------
     force_N, voltage_V : array_like
         The press's force [N] and the sensor's voltage [V], sample by sample.
-    rate_Hz : float
+    sample_rate_Hz : float
         Sampling rate [Hz].
     config : dict, optional
         The config (its ``sensor``, ``calibration`` and ``diagnostics`` sections); the package's default if None.
@@ -141,9 +143,9 @@ def calibrate(force_N, voltage_V, rate_Hz: float, config: dict | None = None) ->
     force, voltage = np.asarray(force_N, dtype=float), np.asarray(voltage_V, dtype=float)
     if force.shape != voltage.shape or force.ndim != 1:
         raise ValueError(f"force_N {force.shape} and voltage_V {voltage.shape}: give two 1-D arrays of one length")
-    if not rate_Hz > 0:
-        raise ValueError(f"rate_Hz = {rate_Hz!r}: give the sampling rate in Hz (> 0)")
-    m = Measurement(np.arange(force.size) / float(rate_Hz), force, voltage, "arrays")
+    if not sample_rate_Hz > 0:
+        raise ValueError(f"sample_rate_Hz = {sample_rate_Hz!r}: give the sampling rate in Hz (> 0)")
+    m = Measurement(np.arange(force.size) / float(sample_rate_Hz), force, voltage, "arrays")
     impulses = check_record(m, cfg, "the arrays")
     s = sensor_outputs.extract_sensitivity(m, impulses, cfg)
     r, _ = sensor_outputs.fit_resistance(m, cfg)
@@ -159,7 +161,7 @@ class Simulation:
     ----------
     kinematics : Kinematics
         The bearing's kinematic frequencies [Hz].
-    rate_Hz : float
+    sample_rate_Hz : float
         The DAQ's sampling rate of ``noisy`` and ``noiseless`` [Hz].
     noisy, noiseless : dict
         Case (``healthy``, ``faulty``) -> the DAQ's record with and without its noise [V].
@@ -170,7 +172,7 @@ class Simulation:
     """
 
     kinematics: Kinematics
-    rate_Hz: float
+    sample_rate_Hz: float
     noisy: dict
     noiseless: dict
     voltage: dict
@@ -222,7 +224,7 @@ def simulate(config: dict | None = None, resistance_ohm: float | None = None) ->
                       run["indicator"])
 
 
-def detect(samples, rate_Hz: float, bearing: RollingBearing | str, shaft_speed_rpm: float, method: str = "envelope",
+def detect(samples, sample_rate_Hz: float, bearing: RollingBearing | str, shaft_speed_rpm: float, method: str = "envelope",
            settings=None, reference=None) -> Detection:
     """Detect a fault of any rolling bearing in a record.
 
@@ -230,7 +232,7 @@ def detect(samples, rate_Hz: float, bearing: RollingBearing | str, shaft_speed_r
     ----------
     samples : array_like
         One channel of the record (an accelerometer's or this sensor's; any unit).
-    rate_Hz : float
+    sample_rate_Hz : float
         Its sampling rate [Hz].
     bearing : RollingBearing or str
         The bearing's geometry, or a designation of the table (``"SKF 6205"``).
@@ -243,7 +245,7 @@ def detect(samples, rate_Hz: float, bearing: RollingBearing | str, shaft_speed_r
         The method's ``Settings``; None: ``envelope`` its defaults for real recordings, the others the
         package's default config.
     reference : array_like, optional
-        The healthy record at ``rate_Hz`` (``baseline`` only).
+        The healthy record at ``sample_rate_Hz`` (``baseline`` only).
 
     Returns
     -------
@@ -275,7 +277,7 @@ def detect(samples, rate_Hz: float, bearing: RollingBearing | str, shaft_speed_r
     kinematics = geometry.kinematics(float(shaft_speed_rpm) / 60.0)
     if settings is None and method == "envelope":
         settings = detectors.envelope.Settings()
-    return detectors.detect(samples, rate_Hz, kinematics, method, settings, reference)
+    return detectors.detect(samples, sample_rate_Hz, kinematics, method, settings, reference)
 
 
 @dataclass(frozen=True)

@@ -34,6 +34,7 @@ _EXPORTS = {
     "MIN_BEARING_RATE_HZ": "piezobearing.io.records",
     "MIN_SAMPLE_RATE_HZ": "piezobearing.io.records",
     "Measurement": "piezobearing.io.records",
+    "Record": "piezobearing.io.records",
     "UNIFORM_RTOL": "piezobearing.io.records",
     "average_blocks": "piezobearing.io.records",
     "check_channels": "piezobearing.io.records",

@@ -26,8 +26,37 @@ MIN_SAMPLE_RATE_HZ = 20.0
 #: Largest relative deviation of a time step from the median step for a uniform clock.
 UNIFORM_RTOL = 0.01
 
+class Record:
+    """What every record :func:`piezobearing.read_record` returns has, whatever its kind.
+
+    :class:`VibrationRecord` (one channel of any recording), :class:`BearingRecord` (this project's running-bearing
+    record) and :class:`Measurement` (its calibration record) are records: each has its sampling rate, its
+    time axis, its length, its source, and its sampled columns by name in ``data``.
+
+    Attributes
+    ----------
+    sample_rate_Hz : float
+        Sampling rate [Hz].
+    time_s : ndarray
+        Sample times [s].
+    duration_s : float
+        Length of the record [s].
+    source : str
+        Where it came from (a path or "synthetic").
+    data : dict of str to ndarray
+        The sampled columns by name (a vibration record: its channel's name; a bearing record: ``voltage_V``
+        and, with a tachometer, ``speed_rpm``; a calibration record: ``force_N`` and ``voltage_V``).
+    """
+
+    __slots__ = ()
+
+    @property
+    def duration_s(self) -> float:
+        return float(self.time_s.size / self.sample_rate_Hz)
+
+
 @dataclass(frozen=True)
-class Measurement:
+class Measurement(Record):
     """A calibration record on a uniform clock.
 
     Attributes
@@ -55,6 +84,10 @@ class Measurement:
     @property
     def sample_rate_Hz(self) -> float:
         return 1.0 / self.dt_s
+
+    @property
+    def data(self) -> dict[str, np.ndarray]:
+        return {"force_N": self.force_N, "voltage_V": self.voltage_V}
 
     def to_frame(self) -> pd.DataFrame:
         return pd.DataFrame({"time_s": self.time_s, "force_N": self.force_N, "voltage_V": self.voltage_V})
@@ -257,7 +290,7 @@ CLIP_RUN = 3
 
 
 @dataclass(frozen=True)
-class BearingRecord:
+class BearingRecord(Record):
     """A running-bearing record on a uniform clock: the sensor voltage and, optionally, a tachometer.
 
     Attributes
@@ -292,6 +325,13 @@ class BearingRecord:
     @property
     def duration_s(self) -> float:
         return float(self.time_s[-1] - self.time_s[0] + self.dt_s)
+
+    @property
+    def data(self) -> dict[str, np.ndarray]:
+        d = {"voltage_V": self.voltage_V}
+        if self.speed_rpm is not None:
+            d["speed_rpm"] = self.speed_rpm
+        return d
 
     def to_frame(self) -> pd.DataFrame:
         d = {"time_s": self.time_s, "voltage_V": self.voltage_V}

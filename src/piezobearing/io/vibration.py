@@ -26,6 +26,7 @@ import pandas as pd
 
 from .formats import _BINARY_READERS, RECORD_FORMATS, MeasurementError, check_readable, mat_arrays
 from .matlab import mat_contents
+from .records import Record
 
 #: Shortest record the detector can use [s] (a few revolutions of a slow shaft).
 MIN_DURATION_S = 0.5
@@ -53,7 +54,7 @@ class RecordContents:
         Path -> text (MATLAB ``char`` variables and fields).
     names : dict
         A channel's name from its struct's name field -> its path ("" where two channels share it).
-    rate_Hz : float or None
+    sample_rate_Hz : float or None
         The rate the file states: its time axis, or a top-level scalar of :data:`RATE_VARIABLES` [Hz].
     kind : str
         The format, as :data:`RECORD_FORMATS` names it (MATLAB with its version).
@@ -64,7 +65,7 @@ class RecordContents:
     scalars: dict[str, float] = field(default_factory=dict)
     texts: dict[str, str] = field(default_factory=dict)
     names: dict[str, str] = field(default_factory=dict)
-    rate_Hz: float | None = None
+    sample_rate_Hz: float | None = None
     kind: str = ""
 
     def _labelled(self) -> list[tuple[str, str]]:
@@ -88,7 +89,7 @@ class RecordContents:
 
     def listing(self) -> str:
         """What ``piezobearing detect FILE --list`` prints: a line per channel, scalar and text field."""
-        lines = [f"{self.path}: {self.kind}" + (f", {self.rate_Hz:g} Hz stated by the file" if self.rate_Hz else "")]
+        lines = [f"{self.path}: {self.kind}" + (f", {self.sample_rate_Hz:g} Hz stated by the file" if self.sample_rate_Hz else "")]
         lines.append(f"channels ({len(self.channels)}):" if self.channels else "channels: none")
         lines += [f"  {label:<32} {self.channels[c].size} samples" for c, label in self._labelled()]
         if self.scalars:
@@ -127,14 +128,14 @@ def _shown(text: str) -> str:
 
 
 @dataclass(frozen=True)
-class VibrationRecord:
+class VibrationRecord(Record):
     """One channel of a record on a uniform clock.
 
     Attributes
     ----------
     samples : ndarray
         The channel's samples (the file's unit: g, m/s^2, V).
-    rate_Hz : float
+    sample_rate_Hz : float
         Sampling rate [Hz].
     channel : str
         The channel's name in the file (its MATLAB path).
@@ -151,7 +152,7 @@ class VibrationRecord:
     """
 
     samples: np.ndarray
-    rate_Hz: float
+    sample_rate_Hz: float
     channel: str
     speed_rpm: float | None
     source: str
@@ -160,8 +161,12 @@ class VibrationRecord:
     contents: RecordContents | None = None
 
     @property
-    def duration_s(self) -> float:
-        return self.samples.size / self.rate_Hz
+    def time_s(self) -> np.ndarray:
+        return np.arange(self.samples.size) / self.sample_rate_Hz
+
+    @property
+    def data(self) -> dict[str, np.ndarray]:
+        return {self.channel: self.samples}
 
     def field_value(self, name: str, what: str) -> float:
         """:meth:`RecordContents.field_value` of the record's file."""
@@ -306,10 +311,10 @@ def read_record_contents(path: str | Path, key: str = "record") -> RecordContent
     except Exception as e:  # noqa: BLE001 - a library's own error on a damaged file: one line, no traceback
         first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
         raise MeasurementError(f"{path}: not a readable {RECORD_FORMATS[ext]} file ({first}); export it again") from None
-    return RecordContents(path, found, rate_Hz=file_rate, kind=RECORD_FORMATS[ext])
+    return RecordContents(path, found, sample_rate_Hz=file_rate, kind=RECORD_FORMATS[ext])
 
 
-def read_vibration_record(path: str | Path, channel: str | None = None, rate_Hz: float | str | None = None,
+def read_vibration_record(path: str | Path, channel: str | None = None, sample_rate_Hz: float | str | None = None,
                           key: str = "record") -> VibrationRecord:
     """Read one channel of a record as a DAQ writes it (see the module docstring).
 
@@ -319,7 +324,7 @@ def read_vibration_record(path: str | Path, channel: str | None = None, rate_Hz:
         The record file.
     channel : str, optional
         The channel's name or path, or a unique suffix of it; None for a file with one channel.
-    rate_Hz : float or str, optional
+    sample_rate_Hz : float or str, optional
         The sampling rate [Hz] where the file has no time axis (checked against it where it has one), or the
         path of the file's scalar field that holds it (``"bearing.sr"``).
     key : str
@@ -332,11 +337,11 @@ def read_vibration_record(path: str | Path, channel: str | None = None, rate_Hz:
     """
     contents = read_record_contents(path, key)
     path = contents.path
-    file_rate = contents.rate_Hz
-    given, given_source = rate_Hz, "the rate given"
-    if isinstance(rate_Hz, str):
-        given = contents.field_value(rate_Hz, "the sampling rate, --fs or sample_rate_Hz")
-        given_source = f"field {rate_Hz}"
+    file_rate = contents.sample_rate_Hz
+    given, given_source = sample_rate_Hz, "the rate given"
+    if isinstance(sample_rate_Hz, str):
+        given = contents.field_value(sample_rate_Hz, "the sampling rate, --fs or sample_rate_Hz")
+        given_source = f"field {sample_rate_Hz}"
     name = pick_channel(contents, channel)
     samples = pd.to_numeric(pd.Series(np.asarray(contents.channels[name]).ravel()), errors="coerce").to_numpy(dtype=float)
     bad = np.flatnonzero(~np.isfinite(samples))

@@ -98,10 +98,10 @@ class NoiseSettings:
 # --------------------------------------------------------------------------- sampling
 
 
-def anti_alias_gain(frequency_Hz: np.ndarray, fs_Hz: float, passband_fraction: float = 0.45) -> np.ndarray:
+def anti_alias_gain(frequency_Hz: np.ndarray, sample_rate_Hz: float, passband_fraction: float = 0.45) -> np.ndarray:
     """Zero-phase gain of the DAQ's anti-alias filter: 1 to f_p = passband_fraction f_s, raised cosine to 0 at f_s/2."""
     f = np.abs(np.asarray(frequency_Hz, dtype=float))
-    fp, fn = passband_fraction * fs_Hz, 0.5 * fs_Hz
+    fp, fn = passband_fraction * sample_rate_Hz, 0.5 * sample_rate_Hz
     g = np.where(f <= fp, 1.0, 0.0)
     tr = (f > fp) & (f < fn)
     g[tr] = 0.5 * (1.0 + np.cos(np.pi * (f[tr] - fp) / (fn - fp)))
@@ -130,7 +130,7 @@ class Sampled:
     anti_alias: str
 
 
-def sample(x: np.ndarray, dt_s: float, fs_Hz: float, passband_fraction: float = 0.45) -> Sampled:
+def sample(x: np.ndarray, dt_s: float, sample_rate_Hz: float, passband_fraction: float = 0.45) -> Sampled:
     """Filter and sample a model voltage on the DAQ clock t_i = i / f_s.
 
     Parameters
@@ -139,27 +139,27 @@ def sample(x: np.ndarray, dt_s: float, fs_Hz: float, passband_fraction: float = 
         Model voltage on a uniform step [V].
     dt_s : float
         Its step [s]; 1/dt_s must be at least f_s.
-    fs_Hz : float
+    sample_rate_Hz : float
         DAQ sampling rate [Hz].
     passband_fraction : float
         Anti-alias passband edge over f_s [-].
     """
     x = np.asarray(x, dtype=float)
     fs_in = 1.0 / dt_s
-    if abs(fs_in - fs_Hz) <= SAME_CLOCK_RTOL * fs_Hz:
+    if abs(fs_in - sample_rate_Hz) <= SAME_CLOCK_RTOL * sample_rate_Hz:
         return Sampled(x.copy(), float(dt_s), 0, "none: the model is on the DAQ clock (its step averaging filters)")
-    if fs_in < fs_Hz:
+    if fs_in < sample_rate_Hz:
         raise ValueError(
             f"model step {dt_s:.6g} s ({fs_in:.6g} Hz) is coarser than the DAQ rate signals.sample_rate_Hz = "
-            f"{fs_Hz:.6g} Hz; set bearing.time_step_s <= 1/sample_rate_Hz"
+            f"{sample_rate_Hz:.6g} Hz; set bearing.time_step_s <= 1/sample_rate_Hz"
         )
-    ratio = Fraction(fs_Hz / fs_in).limit_denominator(100000)  # output samples per input sample
+    ratio = Fraction(sample_rate_Hz / fs_in).limit_denominator(100000)  # output samples per input sample
     q = ratio.denominator
     n_in = (x.size // q) * q
     if n_in < q:
-        raise ValueError(f"record of {x.size} samples too short for the DAQ rate {fs_Hz:.6g} Hz")
+        raise ValueError(f"record of {x.size} samples too short for the DAQ rate {sample_rate_Hz:.6g} Hz")
     n_out = n_in * ratio.numerator // q
-    X = np.fft.rfft(x[:n_in]) * anti_alias_gain(np.fft.rfftfreq(n_in, dt_s), fs_Hz, passband_fraction)
+    X = np.fft.rfft(x[:n_in]) * anti_alias_gain(np.fft.rfftfreq(n_in, dt_s), sample_rate_Hz, passband_fraction)
     m = n_out // 2 + 1
     Y = np.zeros(m, dtype=complex)
     k = min(m, X.size)
@@ -174,9 +174,9 @@ def sample(x: np.ndarray, dt_s: float, fs_Hz: float, passband_fraction: float = 
 # --------------------------------------------------------------------------- noise and ADC
 
 
-def absolute_noise_std_V(settings: NoiseSettings, fs_Hz: float) -> float:
+def absolute_noise_std_V(settings: NoiseSettings, sample_rate_Hz: float) -> float:
     """Standard deviation of the input noise over the Nyquist band, e_n sqrt(f_s/2) [V]."""
-    return float(settings.noise_density_V_per_sqrtHz * np.sqrt(0.5 * fs_Hz))
+    return float(settings.noise_density_V_per_sqrtHz * np.sqrt(0.5 * sample_rate_Hz))
 
 
 def tone_sum(t_s: np.ndarray, lines, rng: np.random.Generator) -> np.ndarray:

@@ -93,17 +93,17 @@ def prewhiten(x: np.ndarray) -> np.ndarray:
 # --------------------------------------------------------------------------- band-pass and envelope
 
 
-def band_gain(frequency_Hz: np.ndarray, fs_Hz: float, band_Hz: tuple[float, float], order: int) -> np.ndarray:
+def band_gain(frequency_Hz: np.ndarray, sample_rate_Hz: float, band_Hz: tuple[float, float], order: int) -> np.ndarray:
     """Zero-phase gain |H(f)|^2 of a Butterworth band-pass (a high-pass if the band reaches Nyquist) [-]."""
-    nyq = fs_Hz / 2
+    nyq = sample_rate_Hz / 2
     lo, hi = float(band_Hz[0]), float(band_Hz[1])
     if not 0 < lo < hi <= nyq * (1 + 1e-9):
         raise ValueError(f"band {band_Hz} Hz must satisfy 0 < low < high <= Nyquist = {nyq:.6g} Hz")
     if hi >= nyq * (1 - 1e-6):
-        sos = butter(order, lo, btype="highpass", fs=fs_Hz, output="sos")
+        sos = butter(order, lo, btype="highpass", fs=sample_rate_Hz, output="sos")
     else:
-        sos = butter(order, [lo, hi], btype="bandpass", fs=fs_Hz, output="sos")
-    _, h = sosfreqz(sos, worN=np.asarray(frequency_Hz, dtype=float), fs=fs_Hz)
+        sos = butter(order, [lo, hi], btype="bandpass", fs=sample_rate_Hz, output="sos")
+    _, h = sosfreqz(sos, worN=np.asarray(frequency_Hz, dtype=float), fs=sample_rate_Hz)
     return np.abs(h) ** 2
 
 
@@ -230,13 +230,13 @@ def spectral_kurtosis(z: np.ndarray) -> float:
     return float(np.mean(p * p) / np.mean(p) ** 2 - 2.0)
 
 
-def kurtogram_bands(fs_Hz: float, min_bandwidth_Hz: float) -> list[tuple[float, float]]:
+def kurtogram_bands(sample_rate_Hz: float, min_bandwidth_Hz: float) -> list[tuple[float, float]]:
     """The filter bank of :func:`kurtogram`: bandwidths Nyquist/{1.5, 2, 3, 4, 6, 8, ...}, half overlapping.
 
     Bands that would start at 0 Hz are left out (their envelope would carry
     the low-frequency content itself, not a modulation).
     """
-    nyq = fs_Hz / 2
+    nyq = sample_rate_Hz / 2
     bands = []
     level = 0
     while True:
@@ -305,13 +305,13 @@ def choose_band(x: np.ndarray, dt_s: float, settings: EnvelopeSettings) -> tuple
 # --------------------------------------------------------------------------- fast kurtogram
 
 
-def tree_bands(fs_Hz: float, max_level: float) -> list[tuple[float, float, float]]:
+def tree_bands(sample_rate_Hz: float, max_level: float) -> list[tuple[float, float, float]]:
     """Antoni's 1/3-binary tree: (level, low, high) of every band down to ``max_level`` [-], [Hz], [Hz].
 
     Level k (integer) splits [0, Nyquist] into 2^k bands of width Nyquist / 2^k; level k + log2(3) - 1
     (1.585, 2.585, ...) into 3 x 2^(k-1) bands of width Nyquist / (3 x 2^(k-1)). Level 0 is the whole band.
     """
-    nyq = fs_Hz / 2
+    nyq = sample_rate_Hz / 2
     out = []
     levels = [0.0]
     k = 1

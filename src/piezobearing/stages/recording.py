@@ -169,7 +169,7 @@ class RecordingDetection:
             "shaft_speed_given_rpm": self.speed_rpm,
             "shaft_speed_source": self.speed_source,
             "families": d["families"],
-            "record": {"file": self.record.source, "channel": self.record.channel, "rate_Hz": self.record.rate_Hz,
+            "record": {"file": self.record.source, "channel": self.record.channel, "rate_Hz": self.record.sample_rate_Hz,
                        "duration_s": self.record.duration_s, "channels_in_file": list(self.record.channels)},
             "bearing": {"designation": self.bearing.designation, "n_rolling_elements": self.bearing.n_rolling_elements,
                         "rolling_element_diameter_m": self.bearing.rolling_element_diameter_m,
@@ -276,7 +276,7 @@ def detect_recording(record: str | Path, rig: str | Path | Rig | None = None, be
     kinematics = bearing.kinematics(speed / 60.0)
     settings = settings or envelope_detector.Settings()
     try:
-        detection = envelope_detector.detect(rec.samples, rec.rate_Hz, kinematics.to_dict(), settings)
+        detection = envelope_detector.detect(rec.samples, rec.sample_rate_Hz, kinematics.to_dict(), settings)
     except ValueError as e:
         raise RigError(f"{record}: {e}") from None
     return RecordingDetection(detection, rec, bearing, speed, speed_source, kinematics)

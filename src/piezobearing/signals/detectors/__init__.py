@@ -1,6 +1,6 @@
 """Fault detectors behind one interface: samples, a rate and a bearing's kinematics in, a :class:`Detection` out.
 
->>> detection = detect(samples, rate_Hz, kinematics, "envelope")            # doctest: +SKIP
+>>> detection = detect(samples, sample_rate_Hz, kinematics, "envelope")            # doctest: +SKIP
 >>> detection.fault_type, detection.families["outer_race"].margin_dB          # doctest: +SKIP
 
 Three methods (:data:`METHODS`), each a module with a frozen ``Settings``
@@ -71,14 +71,14 @@ def _settings(method: str, settings):
     return settings_from_config(method, config.load()["signals"])
 
 
-def detect(samples, rate_Hz: float, kinematics, method: str, settings=None, reference=None) -> Detection:
+def detect(samples, sample_rate_Hz: float, kinematics, method: str, settings=None, reference=None) -> Detection:
     """Detect a bearing fault in one record.
 
     Parameters
     ----------
     samples : array_like
         The record, one channel [V] (or any unit: every test is a ratio).
-    rate_Hz : float
+    sample_rate_Hz : float
         Its sampling rate [Hz].
     kinematics : Kinematics or dict
         The bearing's kinematic frequencies at its shaft speed, without slip [Hz].
@@ -87,21 +87,21 @@ def detect(samples, rate_Hz: float, kinematics, method: str, settings=None, refe
     settings : optional
         The method's ``Settings``; None: from the package's default config.
     reference : array_like or baseline.Baseline, optional
-        The healthy record [V] at ``rate_Hz`` (or its :class:`.baseline.Baseline`); the baseline method's,
+        The healthy record [V] at ``sample_rate_Hz`` (or its :class:`.baseline.Baseline`); the baseline method's,
         not read by the others.
 
     Returns
     -------
     Detection
     """
-    return detect_many([samples], rate_Hz, kinematics, method, settings, reference)[0]
+    return detect_many([samples], sample_rate_Hz, kinematics, method, settings, reference)[0]
 
 
-def detect_many(records, rate_Hz: float, kinematics, method: str, settings=None, reference=None) -> list[Detection]:
-    """:func:`detect` of each record (a sequence of arrays, or the rows of an array), all at ``rate_Hz``; each
+def detect_many(records, sample_rate_Hz: float, kinematics, method: str, settings=None, reference=None) -> list[Detection]:
+    """:func:`detect` of each record (a sequence of arrays, or the rows of an array), all at ``sample_rate_Hz``; each
     detection is the record's alone (the baseline method runs its searches of all records together)."""
-    if not rate_Hz > 0:
-        raise ValueError(f"rate_Hz = {rate_Hz!r}: give the record's sampling rate in Hz (> 0)")
+    if not sample_rate_Hz > 0:
+        raise ValueError(f"sample_rate_Hz = {sample_rate_Hz!r}: give the record's sampling rate in Hz (> 0)")
     module = _module(method)
-    return module.detect_many(records, float(rate_Hz), kinematics_dict(kinematics), _settings(method, settings),
+    return module.detect_many(records, float(sample_rate_Hz), kinematics_dict(kinematics), _settings(method, settings),
                               reference)

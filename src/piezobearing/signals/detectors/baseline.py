@@ -573,17 +573,17 @@ def _decide_clipped(x, front, outer, levels, dt_s, baseline, settings, shaft_Hz)
 # --------------------------------------------------------------------------- the detector
 
 
-def reference_baseline(reference, rate_Hz: float, kinematics: dict, settings: Settings) -> Baseline:
-    """The healthy baseline from ``reference``: a :class:`Baseline`, or a healthy record [V] at ``rate_Hz``."""
+def reference_baseline(reference, sample_rate_Hz: float, kinematics: dict, settings: Settings) -> Baseline:
+    """The healthy baseline from ``reference``: a :class:`Baseline`, or a healthy record [V] at ``sample_rate_Hz``."""
     if isinstance(reference, Baseline):
         return reference
     if reference is None:
         raise ValueError("the baseline detector needs a healthy reference record (reference=...); give one, "
                          "or choose the envelope detector")
-    return Baseline.from_record(np.asarray(reference, float), 1.0 / rate_Hz, kinematics, settings)
+    return Baseline.from_record(np.asarray(reference, float), 1.0 / sample_rate_Hz, kinematics, settings)
 
 
-def detect(samples: np.ndarray, rate_Hz: float, kinematics: dict, settings: Settings, reference) -> Detection:
+def detect(samples: np.ndarray, sample_rate_Hz: float, kinematics: dict, settings: Settings, reference) -> Detection:
     """Test every fault type of ``settings`` in the record against the healthy ``reference``
     (:func:`detect_many` of one record).
 
@@ -591,24 +591,24 @@ def detect(samples: np.ndarray, rate_Hz: float, kinematics: dict, settings: Sett
     ----------
     samples : ndarray
         The record [V].
-    rate_Hz : float
+    sample_rate_Hz : float
         Its sampling rate [Hz] (the reference's).
     kinematics : dict
         Kinematic frequencies without slip [Hz].
     settings : Settings
     reference : Baseline or ndarray
-        The healthy bearing: its :class:`Baseline`, or its record [V] at ``rate_Hz``.
+        The healthy bearing: its :class:`Baseline`, or its record [V] at ``sample_rate_Hz``.
     """
-    return detect_many([samples], rate_Hz, kinematics, settings, reference)[0]
+    return detect_many([samples], sample_rate_Hz, kinematics, settings, reference)[0]
 
 
 @one_blas_thread
-def detect_many(records, rate_Hz: float, kinematics: dict, settings: Settings, reference) -> list[Detection]:
+def detect_many(records, sample_rate_Hz: float, kinematics: dict, settings: Settings, reference) -> list[Detection]:
     """:func:`detect` of each record of ``records`` (a sequence, or the rows of an array) [V]; records with clipped
     samples (:func:`clip_levels`) through the clipped-noise model. The outer-race tests of records of one length
     run together (:func:`..outer_race.harmonic_tests`); each detection is the record's alone (tests)."""
-    dt_s = 1.0 / rate_Hz
-    baseline = reference_baseline(reference, rate_Hz, kinematics, settings)
+    dt_s = 1.0 / sample_rate_Hz
+    baseline = reference_baseline(reference, sample_rate_Hz, kinematics, settings)
     xs = [np.asarray(x, float) for x in records]
     levels = [clip_levels(x, settings.end_codes_V) for x in xs]
     plain = [i for i, (_, _, frac) in enumerate(levels) if frac == 0.0]

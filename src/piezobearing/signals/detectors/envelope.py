@@ -444,12 +444,12 @@ class Reading:
     top_Hz: float
 
 
-def measure(samples: np.ndarray, rate_Hz: float, kinematics: dict, settings: Settings) -> Reading:
+def measure(samples: np.ndarray, sample_rate_Hz: float, kinematics: dict, settings: Settings) -> Reading:
     """Steps 1-5 of the module docstring: the rate, the bands, every family's line ratios (``settings``'
     decision fields, ``false_alarm_probability``, ``min_lines_above`` and ``min_type_separation_dB``, are
     not read)."""
     x = np.asarray(samples, dtype=float)
-    dt = 1.0 / float(rate_Hz)
+    dt = 1.0 / float(sample_rate_Hz)
     nominal = float(kinematics["shaft_Hz"])
     if settings.refine_speed:
         shaft = refine_shaft_rate(x, dt, nominal, settings.speed_tolerance)
@@ -563,7 +563,7 @@ def type_call(tests: list[BandTest], call: str, separation_dB: float | None) -> 
     }
 
 
-def detect(samples: np.ndarray, rate_Hz: float, kinematics: dict, settings: Settings, reference=None) -> Detection:
+def detect(samples: np.ndarray, sample_rate_Hz: float, kinematics: dict, settings: Settings, reference=None) -> Detection:
     """Detect and classify a bearing fault in one record (``reference`` is not used): :func:`decide` of
     :func:`measure`.
 
@@ -571,7 +571,7 @@ def detect(samples: np.ndarray, rate_Hz: float, kinematics: dict, settings: Sett
     ----------
     samples : ndarray
         The record (any unit: every test is a ratio).
-    rate_Hz : float
+    sample_rate_Hz : float
         Its sampling rate [Hz].
     kinematics : dict
         The bearing's kinematic frequencies at the given shaft rate, without slip [Hz]
@@ -587,7 +587,7 @@ def detect(samples: np.ndarray, rate_Hz: float, kinematics: dict, settings: Sett
         lost), and, for a report, ``kurtogram`` and ``spectrum`` (the chosen band's squared envelope spectrum
         up to the highest line) as lists.
     """
-    return decide(measure(samples, rate_Hz, kinematics, settings), settings)
+    return decide(measure(samples, sample_rate_Hz, kinematics, settings), settings)
 
 
 def _call(tests: list[BandTest]) -> tuple[str, int]:
@@ -604,6 +604,6 @@ def _call(tests: list[BandTest]) -> tuple[str, int]:
     return "none", int(np.argmax(margins))
 
 
-def detect_many(records, rate_Hz: float, kinematics: dict, settings: Settings, reference=None) -> list[Detection]:
+def detect_many(records, sample_rate_Hz: float, kinematics: dict, settings: Settings, reference=None) -> list[Detection]:
     """:func:`detect` of each record."""
-    return [detect(x, rate_Hz, kinematics, settings) for x in records]
+    return [detect(x, sample_rate_Hz, kinematics, settings) for x in records]

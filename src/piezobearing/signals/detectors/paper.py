@@ -75,23 +75,23 @@ def from_indicator(result: dict, kinematics: dict) -> Detection:
                                    tuple(result["band_Hz"]), kinematics["shaft_Hz"], pfa, result)
 
 
-def detect(samples: np.ndarray, rate_Hz: float, kinematics: dict, settings: Settings, reference=None) -> Detection:
+def detect(samples: np.ndarray, sample_rate_Hz: float, kinematics: dict, settings: Settings, reference=None) -> Detection:
     """The paper's indicator on one record (``reference`` is not used).
 
     Parameters
     ----------
     samples : ndarray
         The record [V] (any unit: the test is a ratio).
-    rate_Hz : float
+    sample_rate_Hz : float
         Its sampling rate [Hz].
     kinematics : dict
         Kinematic frequencies without slip [Hz] (``bpfo_Hz``, ``shaft_Hz`` read).
     settings : Settings
     """
-    a = detection.analyse(samples, 1.0 / rate_Hz, kinematics["bpfo_Hz"], settings.envelope, settings.indicator)
+    a = detection.analyse(samples, 1.0 / sample_rate_Hz, kinematics["bpfo_Hz"], settings.envelope, settings.indicator)
     return from_indicator(a.result, kinematics)
 
 
-def detect_many(records, rate_Hz: float, kinematics: dict, settings: Settings, reference=None) -> list[Detection]:
+def detect_many(records, sample_rate_Hz: float, kinematics: dict, settings: Settings, reference=None) -> list[Detection]:
     """:func:`detect` of each record."""
-    return [detect(x, rate_Hz, kinematics, settings) for x in records]
+    return [detect(x, sample_rate_Hz, kinematics, settings) for x in records]
