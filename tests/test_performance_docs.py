@@ -25,6 +25,8 @@ NOT_FROM_SNAPSHOT = {
     "docs/guides/detect.md": "quotes a folder run timed by hand; the snapshot's row detect_folder is the generated one",
     "docs/guides/running_bearing.md": "quotes the dynamic rung's CPU from a run by hand, in no benchmark file",
     "docs/validation/bearing_diagnosis.md": "quotes validation runs timed by hand, in no benchmark file",
+    "docs/validation/sensor_comparison.md": "quotes the calibrated test's CPU per seed from its run's own file "
+                                            "(results/validation/calibrated_*.jsonl.cpu.jsonl), in no benchmark file",
 }
 
 
