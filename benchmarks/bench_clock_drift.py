@@ -55,8 +55,11 @@ def kernel_previous(frac: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return m, h / h.sum(axis=1, keepdims=True)
 
 
-def noise_gain_previous(f_per_sample: np.ndarray, epsilon: float, n: int, k: int = 16) -> np.ndarray:
-    """The previous noise gain: the taps x frequencies complex products, a chunk of frequencies at a time."""
+def noise_gain_previous(f_per_sample: np.ndarray, epsilon: float, n: int, k: int = 16,
+                        cosines: np.ndarray | None = None) -> np.ndarray:
+    """The previous noise gain: the taps x frequencies complex products, a chunk of frequencies at a time.
+
+    ``cosines`` is the current method's table, which the effect passes; this method has no use for it."""
     shift = epsilon * np.linspace(0, n - 1, k)
     m, h = kernel_previous(shift - np.floor(shift))
     f = np.asarray(f_per_sample, dtype=float)

@@ -9,6 +9,7 @@ it, the command's row is left out) writes results/benchmarks/detect_record.json.
 
 from __future__ import annotations
 
+import argparse
 import json
 import resource
 import subprocess
@@ -53,6 +54,10 @@ def cpu_seconds(run) -> float:
 
 
 def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("data", nargs="?", default="../shared/data/cwru_fan_end",
+                    help="a CWRU fan-end folder with fe03.mat and fe03.yaml: also time the command on it")
+    args = ap.parse_args()
     x, kin = record()
     new = cpu_seconds(lambda: envelope_detector.detect(x, FS, kin, envelope_detector.Settings()))
     old_settings = search_detector.DetectorSettings()
@@ -61,7 +66,7 @@ def main() -> None:
     out = {"record": f"{SECONDS:g} s at {FS:g} Hz", "repeat": REPEAT,
            "envelope_detector_cpu_s": new, "search_detector_full_length_kurtogram_cpu_s": old,
            "ratio_old_over_new": old / new, "target_cpu_s": 0.5}
-    data = Path(sys.argv[1] if len(sys.argv) > 1 else "../shared/data/cwru_fan_end")
+    data = Path(args.data)
     if (data / "fe39.mat").exists():
         walls, cpus = [], []
         with tempfile.TemporaryDirectory() as tmp:

@@ -22,6 +22,7 @@ Usage: python benchmarks/bench_detector.py
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import time
@@ -141,6 +142,7 @@ def baseline_rows(fs: float, rng) -> tuple:
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.split("\n")[0]).parse_args()  # no options: --help only
     rng = np.random.default_rng(1)
     env = EnvelopeSettings(band_rule="fixed", band_Hz=(500.0, 1250.0))
     st = search_detector.DetectorSettings()

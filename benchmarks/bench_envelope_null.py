@@ -10,6 +10,7 @@ Usage: python benchmarks/bench_envelope_null.py
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 import time
@@ -57,6 +58,7 @@ def judge_all(data: list[tuple[np.ndarray, dict]]) -> tuple[float, list[str]]:
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.split("\n")[0]).parse_args()  # no options: --help only
     data = records()
     new_s, new_calls = judge_all(data)
     closed_form = envelope_detector._null_on_grid

@@ -35,17 +35,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-CONFIG = Path(__file__).resolve().parents[1] / "config"  # the checkout's configs (ci.yaml)
-
 REPO = Path(__file__).resolve().parents[1]
+CI_CONFIG = REPO / "config" / "ci.yaml"  # the checkout's reduced config: the record's rate and presses
 OUT = REPO / "results" / "benchmarks" / "large_record.json"
 
 CHILD = r"""
 import json, sys, time
 from pathlib import Path
 from piezobearing import config
-what, record, work = sys.argv[1], sys.argv[2], Path(sys.argv[3])
-c = config.load(CONFIG / "ci.yaml")
+what, record, work, config_file = sys.argv[1], sys.argv[2], Path(sys.argv[3]), sys.argv[4]
+c = config.load(config_file)
 c["calibration"]["measurement"] = record
 t0 = time.perf_counter()
 extra = {}
@@ -78,7 +77,7 @@ def make_record(rows: int, path: Path) -> float:
     from piezobearing.diagnosis.calibration.presses import PressProtocol, synthesize
     from piezobearing.stages.calibration import nominal_circuit
 
-    c = config.load(CONFIG / "ci.yaml")
+    c = config.load(CI_CONFIG)
     m = synthesize(PressProtocol.from_config(c["synthesis"]), nominal_circuit(c), c["seed"])
     n = m.time_s.size - 1
     reps = -(-rows // n)
@@ -97,7 +96,7 @@ def measure(what: str, record: Path, work: Path, src: str | None = None) -> dict
         env["PYTHONPATH"] = os.pathsep.join([str(Path(src).resolve()), env.get("PYTHONPATH", "")])
     t0 = time.perf_counter()
     out = subprocess.run(
-        [sys.executable, "-c", CHILD, what, str(record), str(work)],
+        [sys.executable, "-c", CHILD, what, str(record), str(work), str(CI_CONFIG)],
         capture_output=True,
         text=True,
         check=True,

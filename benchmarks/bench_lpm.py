@@ -13,6 +13,7 @@ Run from the repository root: ``python benchmarks/bench_lpm.py``.
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import subprocess
@@ -73,6 +74,7 @@ def stage_seconds(config: dict, method: str, outdir: Path) -> float:
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.split("\n")[0]).parse_args()  # no options: --help only
     config = load_config()
     b = config["bearing"]
     out: dict = {"cpu_count": os.cpu_count(), "bearing_time_s": 1.0}

@@ -156,7 +156,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--accuracy", action="store_true")
     ap.add_argument("--search", action="store_true")
-    ap.add_argument("--case", action="append", help=f"cases (default all): {', '.join(CASES)}")
+    ap.add_argument("--case", action="append", help="cases (default all): " + ", ".join(CASES).replace("%", "%%"))
     ap.add_argument("--out", default="results/benchmarks/shaft_dynamics.json")
     args = ap.parse_args()
     config = cfg.load()

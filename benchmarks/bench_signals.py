@@ -6,6 +6,7 @@ Writes results/benchmarks/signals.json: seconds per record for the kurtogram and
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import time
@@ -33,6 +34,7 @@ def seconds_per_record(n: int, rule: str, repeat: int = 20) -> float:
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.split("\n")[0]).parse_args()  # no options: --help only
     out = {"cpu_count": os.cpu_count(), "sample_rate_Hz": FS}
     for secs in (1, 10):
         for rule in ("kurtogram", "fixed"):

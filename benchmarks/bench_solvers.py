@@ -8,7 +8,8 @@
 * snr_study: the sweep of one record (the paper's healthy stand-in) over the study's SNR grid and
   seeds, record by record (method='loop', the previous method) against batched over SNRs.
 
-Writes results/benchmarks/solvers.json. Usage: python benchmarks/bench_solvers.py [--ci] [--only housing,sensor,snr] [--max-level 1.0]
+Writes results/benchmarks/solvers.json (a run of some parts keeps the others of an earlier run on the same
+config). Usage: python benchmarks/bench_solvers.py [--ci] [--only housing,sensor,snr] [--max-level 1.0]
 """
 
 from __future__ import annotations
@@ -25,6 +26,15 @@ import piezobearing.config
 from piezobearing.numerics import sparse_solve
 
 CONFIG = Path(__file__).resolve().parents[1] / "config"  # the checkout's configs (ci.yaml)
+
+
+def factor_entries(lu) -> int:
+    """Entries of a factorisation: ``factor_nnz`` of :func:`piezobearing.numerics.sparse_solve.factorize`'s
+    factors; SciPy's ``SuperLU`` (the housing's :func:`~piezobearing.housing.fem.splu_symmetric`) has none, and
+    its entries are those of L and U."""
+    if hasattr(lu, "factor_nnz"):
+        return int(lu.factor_nnz)
+    return int(lu.L.nnz + lu.U.nnz)
 
 
 def _timed(fn):
@@ -49,7 +59,7 @@ def bench_housing(config: dict, max_level: float) -> dict:
             model.solver, model._lu = solver, None
             lu, secs = _timed(model.factor)
             (gy, gz, radial), solve_s = _timed(model.influence_line)
-            row[solver] = {"factor_s": secs, "influence_line_s": solve_s, "factor_nnz": int(lu.factor_nnz)}
+            row[solver] = {"factor_s": secs, "influence_line_s": solve_s, "factor_nnz": factor_entries(lu)}
             if level == h["mesh_level"]:
                 modes, row[solver]["modes_s"] = _timed(
                     lambda mdl=model: housing_fem.compute_modes(mdl, h["n_modes"], config["seed"])
@@ -87,7 +97,7 @@ def bench_sensor(config: dict) -> dict:
         rs = fem.reduce(asm, fem.stack_conditions(p.geometry.z_interfaces_m, "SS"), solver=solver)
         lu, fs = _timed(lambda rs=rs: rs._saddle_lu)
         m, ms = _timed(lambda rs=rs: fem.modes(rs, p.n_ritz_modes, "short"))
-        out[solver] = {"factor_s": fs, "modes_s": ms, "factor_nnz": int(lu.factor_nnz)}
+        out[solver] = {"factor_s": fs, "modes_s": ms, "factor_nnz": factor_entries(lu)}
         freqs[solver] = m.frequency_Hz
         del rs, lu
     out["speedup"] = (out["superlu"]["factor_s"] + out["superlu"]["modes_s"]) / (
@@ -143,6 +153,11 @@ def main() -> None:
     )
     args = ap.parse_args()
     config = piezobearing.config.load(CONFIG / "ci.yaml") if args.ci else piezobearing.config.load()
+    path = Path(args.out)
+    # a run of some parts (--only) keeps the other parts of an earlier run of the same config
+    kept = json.loads(path.read_text()) if path.exists() else {}
+    kept = {k: kept[k] for k in ("snr_study", "sensor", "housing") if k in kept} if kept.get("config") == (
+        "ci" if args.ci else "paper") else {}
     out = {
         "cpu_count": os.cpu_count(),
         "load_average_at_start": os.getloadavg()[0],
@@ -157,7 +172,7 @@ def main() -> None:
     if "housing" in parts:
         out["housing"] = bench_housing(config, args.max_level)
     out["load_average_at_end"] = os.getloadavg()[0]
-    path = Path(args.out)
+    out.update({k: v for k, v in kept.items() if k not in out})
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(out, indent=2) + "\n")
 

@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from piezobearing import config as cfg
-from piezobearing.bearing import lpm
 from piezobearing.bearing import surrogate as sg
+from piezobearing.bearing.geometry import BearingGeometry
 from piezobearing.housing import fem
 from piezobearing.housing import transient as st
 from piezobearing.housing.mesh import build_housing_mesh
@@ -40,7 +40,7 @@ def main() -> None:
     config = cfg.load(CONFIG / "ci.yaml") if args.ci else cfg.load()
     b, h = config["bearing"], config["housing"]
     dt = b["time_step_s"]
-    geo = lpm.BearingGeometry.from_config(b)
+    geo = BearingGeometry.from_config(b)
     op = sg.Operating(b["radial_load_N"], b["radial_clearance_m"])
     out: dict = {"cpu_count": os.cpu_count(), "config": "ci" if args.ci else "paper", "cases": {}}
     for case in ("healthy", "faulty"):

@@ -34,8 +34,10 @@ PROTOCOLS = {"leave one fault size out": "size_mil", "leave one fault location o
 def read_all(data: Path, labels: list[dict], spectra: list, cache: Path) -> list[list]:
     """Per spectrum setting, per record, the detector's reading (without spectra), from the cache where its
     key matches."""
+    # the key holds the reading's fields: a cache of another version of the reading is read again
     key = hashlib.sha256(repr((sorted((lab["record"], (data / f"{lab['record']}.mat").stat().st_size)
-                                       for lab in labels), spectra)).encode()).hexdigest()
+                                       for lab in labels), spectra,
+                               sorted(envelope_detector.Reading.__dataclass_fields__))).encode()).hexdigest()
     if cache.is_file():
         stored = pickle.loads(cache.read_bytes())
         if stored["key"] == key:

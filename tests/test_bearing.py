@@ -7,6 +7,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from piezobearing.bearing import lpm
+from piezobearing.bearing.geometry import BearingGeometry, kinematic_frequencies
 
 
 @pytest.fixture(scope="module")
@@ -16,7 +17,7 @@ def bcfg(paper_config):
 
 @pytest.fixture(scope="module")
 def geo(bcfg):
-    return lpm.BearingGeometry.from_config(bcfg)
+    return BearingGeometry.from_config(bcfg)
 
 
 def _params(bcfg, faulty=False, **over):
@@ -32,7 +33,7 @@ def _params(bcfg, faulty=False, **over):
 
 
 def test_bpfo_matches_paper(geo):
-    kin = lpm.kinematic_frequencies(geo, 1000 / 60)
+    kin = kinematic_frequencies(geo, 1000 / 60)
     assert kin.bpfo_Hz == pytest.approx(70.8, rel=1e-3)
     # the paper's time step is 1/(36 BPFO) to its 6 digits
     assert 1 / (36 * kin.bpfo_Hz) == pytest.approx(0.392156e-3, abs=1e-9)
@@ -40,7 +41,7 @@ def test_bpfo_matches_paper(geo):
 
 def test_kinematic_identities(geo):
     fr = 23.0
-    kin = lpm.kinematic_frequencies(geo, fr)
+    kin = kinematic_frequencies(geo, fr)
     z, g = geo.n_rollers, geo.roller_diameter_m / geo.pitch_diameter_m
     assert kin.bpfo_Hz + kin.bpfi_Hz == pytest.approx(z * fr)
     assert kin.ftf_Hz == pytest.approx(fr / 2 * (1 - g))
@@ -51,7 +52,7 @@ def test_kinematic_identities(geo):
 def test_bad_geometry_names_the_key(bcfg):
     bad = {**bcfg, "pitch_diameter_m": 60e-3}
     with pytest.raises(ValueError, match="pitch_diameter_m"):
-        lpm.BearingGeometry.from_config(bad)
+        BearingGeometry.from_config(bad)
 
 
 # --- contact law and defect ---------------------------------------------------
@@ -160,7 +161,7 @@ def test_clearance_shrinks_the_load_zone(bcfg):
 def test_load_equilibrium_over_a_record(bcfg):
     """Averaged over roller passages the rollers carry the radial load (inertia averages out)."""
     p = _params(bcfg)
-    kin = lpm.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
+    kin = kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
     h = bcfg["time_step_s"] / bcfg["substeps"]
     n = int(round(5 / kin.bpfo_Hz / h))
     res = lpm.simulate_lpm(p, 0.0, n, h)
@@ -176,7 +177,7 @@ def test_defect_impacts_repeat_at_bpfo(bcfg):
     from piezobearing.housing.checks import impact_intervals
 
     p = _params(bcfg, faulty=True)
-    kin = lpm.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
+    kin = kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
     h = bcfg["time_step_s"] / bcfg["substeps"]
     n = int(round(8 / kin.bpfo_Hz / h))
     res = lpm.simulate_lpm(p, 0.0, n, h)
@@ -241,7 +242,7 @@ def test_compiled_kernel_matches_the_python_loop(bcfg):
     different CPUs.
     """
     p = _params(bcfg, faulty=True, start_angle_rad=-0.3)
-    kin = lpm.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
+    kin = kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
     h = bcfg["time_step_s"] / bcfg["substeps"]
     n = int(round(2 / kin.bpfo_Hz / h))
     rc = lpm.simulate_lpm(p, 0.0, n, h, method="compiled")

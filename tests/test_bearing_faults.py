@@ -11,6 +11,7 @@ from scipy.special import gamma
 
 from piezobearing import config
 from piezobearing.bearing import lpm as bearing_lpm
+from piezobearing.bearing.geometry import kinematic_frequencies
 
 
 @pytest.fixture(scope="module")
@@ -35,7 +36,7 @@ def _episodes(active: np.ndarray) -> np.ndarray:
 def test_kinematic_frequencies_with_slip(base):
     g, s = base.geometry, 0.015
     fr = 1000 / 60
-    k0, ks = bearing_lpm.kinematic_frequencies(g, fr), bearing_lpm.kinematic_frequencies(g, fr, s)
+    k0, ks = kinematic_frequencies(g, fr), kinematic_frequencies(g, fr, s)
     ratio = g.roller_diameter_m / g.pitch_diameter_m
     assert ks.ftf_Hz == pytest.approx((1 - s) * 0.5 * fr * (1 - ratio), rel=1e-14)
     assert ks.bpfo_Hz == pytest.approx(11 * ks.ftf_Hz, rel=1e-14)
@@ -49,7 +50,7 @@ def test_kinematic_frequencies_with_slip(base):
 def test_cage_slip_and_jitter_in_the_motion(base):
     """The simulated cage turns at the slipped FTF on average; the per-passage jitter spreads the passages."""
     p = replace(base, cage_slip=0.015, slip_jitter=0.005)
-    kin = bearing_lpm.kinematic_frequencies(p.geometry, p.shaft_speed_Hz, p.cage_slip)
+    kin = kinematic_frequencies(p.geometry, p.shaft_speed_Hz, p.cage_slip)
     t = np.linspace(0.0, 10.0, 200001)
     phi = p.cage_angle(t)
     # mean speed over ~700 passages: within a few sigma/sqrt(n) of the slipped cage
@@ -153,7 +154,7 @@ def test_outer_race_defect_anywhere(base):
     """A fixed groove at 40 deg: every roller sinks when its angle passes 40 deg, by the concave drop."""
     d = bearing_lpm.Defect(np.radians(40.0), 0.9e-3, 1e-3, "outer_race")
     p = replace(base, defects=(d,))
-    kin = bearing_lpm.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
+    kin = kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
     t = np.linspace(0, 1, 400001)
     mo = p.motion(t)
     drop = p.drops(mo)
@@ -166,7 +167,7 @@ def test_outer_race_defect_anywhere(base):
 def test_inner_race_defect_turns_with_the_shaft_and_is_loaded_only_in_the_load_zone(bcfg, base):
     d = bearing_lpm.Defect(0.0, 0.9e-3, 1e-3, "inner_race")
     p = replace(base, defects=(d,))
-    kin = bearing_lpm.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
+    kin = kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
     t = np.linspace(0, 1, 400001)
     mo = p.motion(t)
     drop = p.drops(mo)
@@ -192,7 +193,7 @@ def test_rolling_element_flat_strikes_both_races_at_twice_bsf(bcfg, base):
     concave (16.5 um) and the convex (26.3 um) drop; only roller 0; felt only in the load zone (FTF)."""
     d = bearing_lpm.Defect(0.0, 0.9e-3, 1e-3, "rolling_element")
     p = replace(base, defects=(d,))
-    kin = bearing_lpm.kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
+    kin = kinematic_frequencies(p.geometry, p.shaft_speed_Hz)
     t = np.linspace(0, 2, 800001)
     mo = p.motion(t)
     drop = p.drops(mo)

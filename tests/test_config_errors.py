@@ -95,3 +95,35 @@ def test_workflow_stops_with_one_line_not_the_schema(tmp_path, override, fragmen
     assert out.returncode != 0
     assert len(err) == 1 and fragment in err[0] and "user.yaml" in err[0], out.stderr[-2000:]
     assert "Failed validating" not in out.stderr and "Traceback" not in out.stderr
+
+
+CHANGES = [
+    ({}, None),
+    ({("synthesis", "resistance_ohm"): 30.0e6}, None),
+    ({("synthesis", "resistance_ohm"): -5.0}, "less than the minimum"),
+    ({("synthesis", "resistance_ohm"): "50e6"}, "signed exponent"),
+    ({("synthesis", "resistance_ohm"): -5.0, ("sensor", "cable_length_m"): "x"}, "key 'sensor.cable_length_m'"),
+    ({("synthesis", "resistance_ohm"): float("nan")}, "not a finite number"),
+    ({("synthesis", "resistence_ohm"): 1.0}, "did you mean 'synthesis.resistance_ohm'"),
+    ({("signals", "detector"): "nonsense"}, "key 'signals.detector'"),
+]
+
+
+@pytest.mark.parametrize("changes, fragment", CHANGES)
+def test_a_case_checked_by_its_changed_sections_is_checked_as_a_whole(paper_config, changes, fragment):
+    """validate_changes (a study case against its valid base) gives validate's result and one-line error."""
+    base = piezobearing.config.validate(copy.deepcopy(paper_config))
+    case = copy.deepcopy(base)
+    for (section, key), value in changes.items():
+        case[section][key] = value
+    outcomes = []
+    for check in (piezobearing.config.validate, lambda c, source: piezobearing.config.validate_changes(c, base, source)):
+        try:
+            outcomes.append(check(copy.deepcopy(case), source="my.yaml"))
+        except piezobearing.config.ConfigError as e:
+            outcomes.append(str(e))
+    assert outcomes[0] == outcomes[1]
+    if fragment is None:
+        assert outcomes[0] == case
+    else:
+        assert isinstance(outcomes[0], str) and fragment in outcomes[0], outcomes[0]

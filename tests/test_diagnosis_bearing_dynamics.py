@@ -16,7 +16,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from piezobearing.bearing.lpm import BearingGeometry
+from piezobearing.bearing.geometry import BearingGeometry
 from piezobearing.bearing.shaft_dynamics import ShaftDynamics, contact_stiffness_N_per_m, sensor_force
 from piezobearing.diagnosis.bearing import chain, lpm_records
 from piezobearing.diagnosis.bearing.rung import unidentified_defects

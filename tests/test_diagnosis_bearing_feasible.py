@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from piezobearing import config as cfg
-from piezobearing.bearing import lpm
 from piezobearing.bearing import surrogate as sg
+from piezobearing.bearing.geometry import BearingGeometry
 from piezobearing.diagnosis.bearing.lpm_records import draw_conditions, lpm_record
 from piezobearing.diagnosis.bearing.subject import SUBJECT
 from piezobearing.fitting.least_squares import InfeasibleError, fit
@@ -24,7 +24,7 @@ from piezobearing.stages.bearing_diagnosis import influence_from_config
 
 @pytest.fixture(scope="module")
 def geometry(paper_config):
-    return lpm.BearingGeometry.from_config(paper_config["bearing"])
+    return BearingGeometry.from_config(paper_config["bearing"])
 
 
 def test_tables_meet_their_tolerance_across_the_parameters_bounds(geometry):

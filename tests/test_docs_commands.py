@@ -16,6 +16,7 @@ import re
 import shlex
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -85,6 +86,24 @@ def test_kinds():
     assert kind("snakemake --cores 2 study_sensor_design") == "snakemake"
     assert kind("pip install -e '.[docs]' && sphinx-build -W -b html docs docs/_build/html") == "install"
     assert kind("rm -rf /") == "unknown"
+
+
+PYTHON_PAGES = [p for p in PAGES[1:] if "```python" in p.read_text()]
+
+
+def test_a_guide_shows_python():
+    assert PYTHON_PAGES, "no guide shows a Python example"
+
+
+@pytest.mark.parametrize("page", PYTHON_PAGES, ids=lambda p: str(p.relative_to(REPO)))
+def test_python_examples_run(page):
+    """Every ``python`` block of getting started and the guides runs as written from the repository root and
+    prints what its ``# comments`` say (the README's: tests/test_readme.py)."""
+    for code in _blocks(page.read_text(), "python"):
+        run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, timeout=300)
+        assert run.returncode == 0, run.stderr[-2000:]
+        for expected in re.findall(r"#\s*(.+)$", code, flags=re.MULTILINE):
+            assert expected.strip() in run.stdout, (expected, run.stdout)
 
 
 @pytest.fixture(scope="module")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 import yaml
 
-from piezobearing.bearing import lpm
+from piezobearing.bearing.geometry import BearingGeometry, kinematic_frequencies
 from piezobearing.bearing.kinematics import (
     BearingError,
     Kinematics,
@@ -79,8 +79,8 @@ def test_contact_angle_and_slip_enter_as_the_textbook_formulas():
 
 
 def test_kinematics_json_round_trip_and_the_models_formula_is_this_one():
-    geometry = lpm.BearingGeometry(11, 0.010, 0.044, 0.00976, 20e-6, 0.062, 0.017)
-    from_lpm = lpm.kinematic_frequencies(geometry, 1000 / 60, 0.015)
+    geometry = BearingGeometry(11, 0.010, 0.044, 0.00976, 20e-6, 0.062, 0.017)
+    from_lpm = kinematic_frequencies(geometry, 1000 / 60, 0.015)
     direct = Kinematics.from_geometry(RollingBearing(11, 0.010, 0.044), 1000 / 60, 0.015)
     assert from_lpm == direct
     assert Kinematics.from_dict(direct.to_dict()) == direct

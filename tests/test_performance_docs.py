@@ -19,17 +19,6 @@ QUOTED = [
     re.compile(r"\b(?:takes|took|costs?|lasts?|runs? (?:in|for)|finishes in|about) " + TIME + r"\b"),
 ]
 
-#: pages whose quoted times the snapshot cannot hold yet, with what is missing
-NOT_FROM_SNAPSHOT = {
-    "docs/validation/cwru.md": "the CWRU run's detector CPU is printed by scripts/validate_cwru.py, in no benchmark file",
-    "docs/guides/detect.md": "quotes a folder run timed by hand; the snapshot's row detect_folder is the generated one",
-    "docs/guides/running_bearing.md": "quotes the dynamic rung's CPU from a run by hand, in no benchmark file",
-    "docs/validation/bearing_diagnosis.md": "quotes validation runs timed by hand, in no benchmark file",
-    "docs/validation/sensor_comparison.md": "quotes the calibrated test's CPU per seed from its run's own file "
-                                            "(results/validation/calibrated_*.jsonl.cpu.jsonl), in no benchmark file",
-}
-
-
 def _pages() -> list[Path]:
     pages = [REPO / "README.md", REPO / "data" / "README.md", *sorted((REPO / "docs").rglob("*.md"))]
     return [p for p in pages if "_build" not in p.parts and p.name != "changelog.md"]
@@ -92,8 +81,6 @@ def test_performance_page_types_no_number():
 @pytest.mark.parametrize("page", _pages(), ids=lambda p: str(p.relative_to(REPO)))
 def test_pages_quote_only_measured_times(page):
     rel = str(page.relative_to(REPO))
-    if rel in NOT_FROM_SNAPSHOT:
-        pytest.skip(NOT_FROM_SNAPSHOT[rel])
     held = _snapshot_texts(json.loads(SNAPSHOT.read_text()))
     missing = [q for q in _quotes(page.read_text()) if q not in held]
     assert not missing, f"{rel} quotes run times the performance snapshot does not hold: {missing}"

@@ -10,6 +10,7 @@ import pytest
 from test_signals_stages import inputs, run_chain  # noqa: F401  (the fixture)
 
 from piezobearing.signals.detectors import Detection
+from piezobearing.stages import fault_types
 from piezobearing.stages import signals as signal_stages
 
 CASES = ("healthy", "faulty")
@@ -115,7 +116,7 @@ def test_fault_type_records_and_their_confusion_rows(tmp_path, inputs, ci_config
     types, line = [], {}
     for t in ("outer_race", "inner_race"):
         paths = [tmp_path / f"sensor_force_{t}.csv", tmp_path / f"voltage_{t}.csv", tmp_path / f"voltage_{t}.json"]
-        signal_stages.fault_type_voltage(t, inputs["resistance"], None, *paths, cfg)
+        fault_types.fault_type_voltage(t, inputs["resistance"], None, *paths, cfg)
         f = pd.read_csv(paths[0])["force_N"].to_numpy()
         dt = 1.0 / json.loads(paths[2].read_text())["sample_rate_Hz"]
         w = np.hanning(f.size)

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from piezobearing import config
-from piezobearing.bearing.lpm import BearingGeometry, kinematic_frequencies
+from piezobearing.bearing.geometry import BearingGeometry, kinematic_frequencies
 from piezobearing.signals import detectors
 
 FS = 2550.0

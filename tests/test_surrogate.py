@@ -9,12 +9,13 @@ import pytest
 
 from piezobearing.bearing import lpm
 from piezobearing.bearing import surrogate as sg
+from piezobearing.bearing.geometry import BearingGeometry
 
 
 @pytest.fixture(scope="module")
 def setup(paper_config):
     b = paper_config["bearing"]
-    geo = lpm.BearingGeometry.from_config(b)
+    geo = BearingGeometry.from_config(b)
     # a smooth stand-in of the housing's influence line: 0.24 N/N over the sensor, falling off over ~25 deg
     a = np.linspace(-np.pi, np.pi, 721)
     infl = sg.InfluenceLine(a, 0.24 * np.exp(-0.5 * (a / 0.3) ** 2) + 0.01 * np.cos(a))

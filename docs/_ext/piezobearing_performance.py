@@ -4,7 +4,7 @@ The snapshot is written by ``scripts/performance_snapshot.py`` from benchmark re
 is typed. Four directives:
 
 ``performance-table``
-    every measured row: what, the value, memory, the command that measures it, the machine (a short id).
+    every measured row: its id and what it measures, the value, memory, the command that measures it, the machine (a short id).
 ``performance-machines``
     the machines the rows were measured on.
 ``performance-rules``
@@ -55,7 +55,8 @@ class _SnapshotDirective(SphinxDirective):
 
 class PerformanceTable(_SnapshotDirective):
     def lines(self, s: dict) -> list[str]:
-        rows = [[r["what"], r["value"], r["memory"], r["command"], f"`{r['machine']}`"] for r in s["rows"]]
+        rows = [[f"`{r['id']}`: {r['what']}", r["value"], r["memory"], r["command"], f"`{r['machine']}`"]
+                for r in s["rows"]]
         return _table(["what", "time", "memory", "command", "machine"], rows)
 
 
@@ -81,7 +82,7 @@ class PerformanceUnmeasured(_SnapshotDirective):
     def lines(self, s: dict) -> list[str]:
         if not s["not_measured"]:
             return ["Every row is measured."]
-        return [f"- {r['what']}: {r['command']}" for r in s["not_measured"]]
+        return [f"- `{r['id']}`: {r['what']}: {r['command']}" for r in s["not_measured"]]
 
 
 def setup(app):

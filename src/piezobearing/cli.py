@@ -446,7 +446,8 @@ def _detect(args) -> int:
     except UserError as e:
         return _fail(str(e))
     options = {"bearing": args.bearing, "rpm": args.rpm, "fs": args.fs, "channel": args.channel,
-               "shaft_Hz": args.shaft_hz}
+               "shaft_Hz": args.shaft_hz, "tachometer": args.tachometer, "pulses_per_rev": args.pulses_per_rev,
+               "speed_channel": args.speed_channel}
     if batch:
         try:
             files = record_files(args.record, args.glob)
@@ -623,6 +624,12 @@ def _parser() -> argparse.ArgumentParser:
                    "field holding it (bearing.sr)")
     t.add_argument("--channel", metavar="NAME",
                    help="the channel: its name or path (bearing.gs), or a unique suffix such as _DE_time")
+    t.add_argument("--tachometer", metavar="CHANNEL", help="the record's tachometer (pulse) channel: the record is "
+                   "order-tracked (resampled at uniform shaft angles) before the envelope analysis")
+    t.add_argument("--pulses-per-rev", type=int, metavar="N", help="the tachometer's pulses per shaft revolution "
+                   "(default: the rig file's, else 1)")
+    t.add_argument("--speed-channel", metavar="CHANNEL", help="the record's shaft-speed channel [rpm], sample by "
+                   "sample: the record is order-tracked (default: a channel named speed_rpm)")
     t.add_argument("--time-field", metavar="FIELD", help="several records: each record's time from this field "
                    "(a number, or a date and time as text)")
     t.add_argument("--time-from-name", metavar="PATTERN", help="several records: each record's time from its file "

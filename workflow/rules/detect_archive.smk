@@ -2,7 +2,7 @@
 # record of detect_archive.folder, so a rerun detects only new or changed records, then the table and the
 # trend. Outside rule all: `snakemake detect_archive --configfile my_archive.yaml` (a large archive on the
 # cluster profile, `--profile workflow/profiles/<cluster>`).
-from piezobearing.stages.detect_archive import archive_records, record_rig
+from piezobearing.io.archive import archive_records, record_rig
 
 ARCHIVE = archive_records(config["detect_archive"])
 

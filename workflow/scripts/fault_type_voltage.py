@@ -2,7 +2,7 @@ import sys
 
 sys.stderr = open(snakemake.log[0], "w")
 
-from piezobearing.stages.signals import fault_type_voltage
+from piezobearing.stages.fault_types import fault_type_voltage
 from piezobearing.workflow.registry import declared_config
 
 config = declared_config(snakemake.params.reads, snakemake.rule)  # only what the rule declares

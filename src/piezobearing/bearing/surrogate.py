@@ -41,7 +41,8 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from .lpm import BearingGeometry, chord_drop_m, contact_law, kinematic_frequencies, line_contact_stiffness
+from .geometry import BearingGeometry, kinematic_frequencies
+from .lpm import chord_drop_m, contact_law, line_contact_stiffness
 from .surrogate_kernel import newton_rows
 
 #: Points of the cage-phase table over one roller pitch.

@@ -15,6 +15,7 @@ from dataclasses import asdict
 import pandas as pd
 
 from ..bearing import lpm
+from ..bearing.geometry import BearingGeometry, kinematic_frequencies
 from ..housing.checks import lpm_checks
 from ..housing.fem import spring_share_factor
 from ..housing.mesh import HousingMesh, build_housing_mesh, mesh_quality
@@ -43,11 +44,11 @@ def bearing_lpm(config: dict, method: str = "compiled") -> dict:
     (simulate_lpm), for the benchmark.
     """
     b = config["bearing"]
-    geo = lpm.BearingGeometry.from_config(b)
+    geo = BearingGeometry.from_config(b)
     # top level: the kinematic (no-slip) lines, which signals.fault_bands slips itself; "with_slip": at the
     # configured mean cage slip, what the LPM's cage does on average
-    kin0 = lpm.kinematic_frequencies(geo, b["shaft_speed_rpm"] / 60.0)
-    kin = lpm.kinematic_frequencies(geo, b["shaft_speed_rpm"] / 60.0, b["cage_slip"])
+    kin0 = kinematic_frequencies(geo, b["shaft_speed_rpm"] / 60.0)
+    kin = kinematic_frequencies(geo, b["shaft_speed_rpm"] / 60.0, b["cage_slip"])
     operating = {
         "cage_slip": b["cage_slip"],
         "slip_jitter": b["slip_jitter"],

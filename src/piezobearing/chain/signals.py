@@ -15,7 +15,7 @@ import sys
 import numpy as np
 import pandas as pd
 
-from ..bearing.lpm import BearingGeometry, kinematic_frequencies
+from ..bearing.geometry import BearingGeometry, kinematic_frequencies
 from ..io import SignalFileError
 from ..sensor.calibration import SensorCircuit, design_resistance_ohm, rc_voltage
 from ..sensor.response import sensor_model

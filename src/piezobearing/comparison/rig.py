@@ -39,7 +39,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..bearing import lpm, surface
+from ..bearing import surface
+from ..bearing.geometry import kinematic_frequencies
 from ..chain import signals as signal_outputs
 from ..housing import base_motion, transient
 from ..housing import fem as housing_fem
@@ -152,7 +153,7 @@ def run_rig(config: dict, housing: Housing, faulty: bool, surroundings: base_mot
         "acceleration_m_per_s2": res["acceleration_m_per_s2"][0],
         "base_m_per_s2": a,
         "disturbance_rms_m_per_s2": base_motion.rms_m_per_s2(a),
-        "kinematics": lpm.kinematic_frequencies(run["params"].geometry, run["params"].shaft_speed_Hz),
+        "kinematics": kinematic_frequencies(run["params"].geometry, run["params"].shaft_speed_Hz),
     }
 
 

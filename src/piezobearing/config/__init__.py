@@ -274,6 +274,40 @@ def validate(config: dict, source: str = "config", schema_path: str | Path = SCH
     return config
 
 
+
+def validate_changes(config: dict, base: dict, source: str = "config", schema_path: str | Path = SCHEMA_PATH) -> dict:
+    """:func:`validate` of ``config``, a copy of ``base`` (a config that passed :func:`validate`) with some values
+    changed (a study case), checking against the schema only the top-level sections that differ from ``base``.
+
+    The same result and the same one-line error as :func:`validate`: the schema has no keyword across sections
+    (no ``$ref``, no conditional at its top level), so each section is valid on its own, and a section equal to
+    ``base``'s passes as it did there; the cross-field checks still see the whole config. A study's parse validates
+    one config per case, and most of a whole-config check is the sections a case does not touch.
+    """
+    if not isinstance(config, dict) or not isinstance(base, dict) or set(config) != set(base):
+        return validate(config, source, schema_path)
+    bad = _non_finite(config)
+    if bad:
+        written = ".nan" if math.isnan(bad[1]) else f"{'-' if bad[1] < 0 else ''}.inf"
+        raise ConfigError(f"{source}: key '{bad[0]}': {written} is not a finite number; write a finite value")
+    validator = _validator(str(schema_path))
+    sections = validator.schema.get("properties", {})
+    errors = []
+    for key in sorted(k for k in config if config[k] != base[k]):
+        if key not in sections:
+            return validate(config, source, schema_path)
+        for e in validator.evolve(schema=sections[key]).iter_errors(config[key]):
+            e.path.appendleft(key)
+            errors.append(e)
+    errors.sort(key=lambda e: list(map(str, e.path)))
+    if errors:
+        raise ConfigError(f"{source}: {_message(errors[0])}")
+    _defect_defaults(config, validator.schema)
+    problems = physical_problems(config)
+    if problems:
+        raise ConfigError(f"{source}: {problems[0]}")
+    return config
+
 def read_yaml(path: str | Path) -> dict:
     """A config file as a dict; one-line :class:`ConfigError` for a missing, unreadable or invalid file."""
     p = Path(path)

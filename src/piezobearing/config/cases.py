@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from . import ConfigError, validate
+from . import ConfigError, validate_changes
 
 SEP = "__"
 
@@ -76,7 +76,12 @@ def _plain(value):
 
 
 def case_config(config: dict, overrides: dict, source: str = "study case") -> dict:
-    """The workflow's config with one case's overrides merged in, validated."""
+    """The workflow's config with one case's overrides merged in, validated.
+
+    ``config`` is a config that passed :func:`~piezobearing.config.validate` (the workflow's); the sections the
+    overrides change are checked against the schema, and the whole by the cross-field checks
+    (:func:`~piezobearing.config.validate_changes`).
+    """
     out = copy.deepcopy(config)
     for col, value in overrides.items():
         keys = col.split(SEP)
@@ -94,4 +99,4 @@ def case_config(config: dict, overrides: dict, source: str = "study case") -> di
         ):
             value = int(value)
         node[last] = value
-    return validate(out, source=source)
+    return validate_changes(out, config, source=source)

@@ -15,6 +15,7 @@ import pandas as pd
 from scipy.signal import find_peaks
 
 from ..bearing import lpm
+from ..bearing.geometry import BearingGeometry, kinematic_frequencies
 from ..bearing.kinematics import Kinematics
 from . import fem as housing_fem
 from .mesh import build_housing_mesh
@@ -135,7 +136,7 @@ def mesh_convergence(contact: dict, config: dict, known: dict | None = None) -> 
     not monotone or the levels not in geometric progression).
     """
     h, b = config["housing"], config["bearing"]
-    kin = lpm.kinematic_frequencies(lpm.BearingGeometry.from_config(b), b["shaft_speed_rpm"] / 60.0)
+    kin = kinematic_frequencies(BearingGeometry.from_config(b), b["shaft_speed_rpm"] / 60.0)
     geo = housing_geometry(config)
     rows = []
     for level in h["convergence_levels"]:
@@ -216,7 +217,7 @@ def sampling_phase(
     """
     b = bearing
     p = lpm.LPMParameters.from_config(b, True, seed)
-    kin = lpm.kinematic_frequencies(p.geometry, p.shaft_speed_Hz, p.cage_slip)
+    kin = kinematic_frequencies(p.geometry, p.shaft_speed_Hz, p.cage_slip)
     tf = contact["fine_time_s"]
     psi = p.roller_angles(tf)
     order = np.argsort(angle_rad)

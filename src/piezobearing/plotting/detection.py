@@ -49,11 +49,13 @@ def detection_figure(detection: dict, title: str = ""):
         ax.axhline(threshold, color="k", lw=0.6, ls="--", label="line threshold")
     ax.set_xlim(0, f[-1])
     ax.set_ylim(-5, top + 3)
-    ax.set_xlabel("frequency [Hz]")
+    # order-tracked: the spectrum is in orders (cycles per shaft revolution), the band still in Hz
+    unit = "order" if details.get("order_tracking") else "Hz"
+    ax.set_xlabel("order [cycles per revolution]" if unit == "order" else "frequency [Hz]")
     ax.set_ylabel("squared envelope over local median [dB]")
     band = detection["band_Hz"]
     call = detection["fault_type"].replace("_", " ")
-    ax.set_title(f"{title}  call: {call}  band {band[0]:.0f}-{band[1]:.0f} Hz  shaft {shaft:.3f} Hz".strip())
+    ax.set_title(f"{title}  call: {call}  band {band[0]:.0f}-{band[1]:.0f} Hz  shaft {shaft:.3f} {unit}".strip())
     ax.legend(loc="upper right", fontsize=7, ncol=2)
     if kurtogram:
         kax = axes[1, 0]

@@ -18,7 +18,7 @@ its electrodes, the SS family of :mod:`piezobearing.sensor.fem` gives:
   displacement of the loaded face, open and short circuit).
 
 Everything is computed once per design on one mesh; the mesh level of a
-study is chosen by a convergence check (docs/guides/design.md).
+study is chosen by a convergence check (docs/theory/sensor_design.md).
 """
 
 from __future__ import annotations

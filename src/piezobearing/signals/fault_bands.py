@@ -2,7 +2,7 @@
 
 The role of MATLAB's ``bearingFaultBands`` and ``faultBandMetrics``: from the
 bearing's kinematic frequencies (no slip: shaft f_r, cage FTF_0, BPFO_0,
-BPFI_0, BSF_0 [Hz], as ``bearing.lpm.kinematic_frequencies`` writes them to
+BPFI_0, BSF_0 [Hz], as ``bearing.geometry.kinematic_frequencies`` writes them to
 ``kinematics.json``) the frequencies of the lines a defect puts into the
 envelope spectrum, and for each line the band in which a detector must look
 for it when the cage slip is only known to lie in [0, s_max].

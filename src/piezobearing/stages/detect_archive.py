@@ -14,24 +14,8 @@ from __future__ import annotations
 from datetime import datetime
 from pathlib import Path
 
-from ..io import RECORD_FORMATS, read_json, write_json
-from .recording import detect_one, rig_beside, write_batch
-
-
-def archive_records(archive: dict) -> dict[str, str]:
-    """The archive's records by name (``detect_archive`` config section); {} where no folder is set."""
-    folder = archive["folder"]
-    if not folder:
-        return {}
-    files = sorted(f for f in Path(folder).glob(archive["glob"])
-                   if f.is_file() and f.suffix.lower() in RECORD_FORMATS)
-    return {f.stem: str(f) for f in files}
-
-
-def record_rig(record: str, archive: dict) -> list[str]:
-    """The rig file of a record (its own beside it, else ``detect_archive.rig``), as a rule's input list."""
-    rig = rig_beside(Path(record), archive["rig"])
-    return [] if rig is None else [str(rig)]
+from ..io import read_json, write_json
+from .recording import detect_one, write_batch
 
 
 def detect_record(record: str, row_json: str, config: dict) -> None:

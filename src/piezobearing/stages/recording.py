@@ -17,10 +17,18 @@ The rig file is YAML with the keys the rig's user knows (every key optional; arg
     shaft_speed_rpm: 1730.0
     sample_rate_Hz: 12000.0
     channel: X700_FE_time
+    tachometer: tacho_V            # a pulse channel of the record (order tracking), with
+    pulses_per_rev: 1              #   its pulses per shaft revolution
+    speed_channel: speed_rpm       # or a channel of the shaft speed [rpm], sample by sample
 
 A rate or a speed the record holds in a field is named by the field's path in the file: ``sample_rate_Hz:
 bearing.sr``; the speed's key names the field's unit, ``shaft_speed_Hz: bearing.rate`` (revolutions per
 second) or ``shaft_speed_rpm: bearing.rpm``.
+
+A record with a tachometer (``tachometer``, ``--tachometer``) or a speed channel (``speed_channel``,
+``--speed-channel``, or a channel named ``speed_rpm``) is order-tracked before the envelope analysis
+(:func:`piezobearing.signals.order.detect_tracked`): resampled at uniform shaft angles, so that a fault's lines
+stay sharp while the speed changes; its frequencies are then orders (cycles per shaft revolution).
 """
 
 from __future__ import annotations
@@ -32,20 +40,30 @@ from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import yaml
 
 from ..bearing.kinematics import BearingError, Kinematics, RollingBearing
 from ..io import MeasurementError, write_json
+from ..io.archive import rig_beside
 from ..io.formats import RECORD_FORMATS
-from ..io.vibration import VibrationRecord, read_vibration_record
+from ..io.vibration import VibrationRecord, pick_channel, read_vibration_record
 from ..plotting import save
 from ..plotting.detection import detection_figure, trend_figure
+from ..signals import order
 from ..signals.detectors import UNKNOWN, Detection
 from ..signals.detectors import envelope as envelope_detector
 
 #: The keys of a rig file.
-RIG_KEYS = ("bearing", "shaft_speed_rpm", "shaft_speed_Hz", "sample_rate_Hz", "channel")
+RIG_KEYS = ("bearing", "shaft_speed_rpm", "shaft_speed_Hz", "sample_rate_Hz", "channel", "tachometer",
+            "pulses_per_rev", "speed_channel")
+#: The name of a speed channel [rpm] that order-tracks a record without being named.
+SPEED_COLUMN = "speed_rpm"
+#: The fewest tachometer pulses that track a record, and the largest ratio of two successive pulse intervals
+#: (a speed that doubles from one pulse to the next is a noisy or wrong channel, not a shaft).
+MIN_PULSES = 4
+MAX_INTERVAL_JUMP = 2.0
 #: A speed's unit by its key, as a factor to rpm.
 SPEED_UNITS = {"shaft_speed_rpm": 1.0, "shaft_speed_Hz": 60.0}
 
@@ -70,6 +88,12 @@ class Rig:
         The rig file, or "" where none was given.
     shaft_speed_Hz : float or str or None
         [Hz] (revolutions per second), or the path of the record's field that holds it in Hz.
+    tachometer : str or None
+        The record's pulse channel (order tracking).
+    pulses_per_rev : int or None
+        The tachometer's pulses per shaft revolution (default 1).
+    speed_channel : str or None
+        The record's channel of the shaft speed [rpm] (order tracking).
     """
 
     bearing: RollingBearing | None = None
@@ -78,6 +102,9 @@ class Rig:
     channel: str | None = None
     source: str = ""
     shaft_speed_Hz: float | str | None = None
+    tachometer: str | None = None
+    pulses_per_rev: int | None = None
+    speed_channel: str | None = None
 
 
 def read_rig(path: str | Path) -> Rig:
@@ -101,10 +128,29 @@ def read_rig(path: str | Path) -> Rig:
         raise RigError(str(e)) from None
     if d.get("shaft_speed_rpm") is not None and d.get("shaft_speed_Hz") is not None:
         raise RigError(f"{path}: both shaft_speed_rpm and shaft_speed_Hz given; keep the one in the unit you know")
+    if d.get("tachometer") is not None and d.get("speed_channel") is not None:
+        raise RigError(f"{path}: both tachometer and speed_channel given; keep the one the record has")
     return Rig(bearing, number_or_field(d.get("shaft_speed_rpm"), f"{path}: shaft_speed_rpm"),
                number_or_field(d.get("sample_rate_Hz"), f"{path}: sample_rate_Hz"),
                None if d.get("channel") is None else str(d["channel"]), str(path),
-               number_or_field(d.get("shaft_speed_Hz"), f"{path}: shaft_speed_Hz"))
+               number_or_field(d.get("shaft_speed_Hz"), f"{path}: shaft_speed_Hz"),
+               None if d.get("tachometer") is None else str(d["tachometer"]),
+               check_pulses(d.get("pulses_per_rev"), f"{path}: pulses_per_rev"),
+               None if d.get("speed_channel") is None else str(d["speed_channel"]))
+
+
+def check_pulses(value, where: str) -> int | None:
+    """A tachometer's pulses per revolution: a positive whole number (``where`` names the key or option)."""
+    if value is None:
+        return None
+    try:
+        n = float(value)
+    except (TypeError, ValueError):
+        raise RigError(f"{where} = {value!r} is not a number; give the tachometer's pulses per revolution (1 for "
+                       "a once-per-revolution mark)") from None
+    if isinstance(value, bool) or n != int(n) or n < 1:
+        raise RigError(f"{where} = {value!r}; give the tachometer's pulses per revolution, a whole number of 1 or more")
+    return int(n)
 
 
 def number_or_field(value, where: str) -> float | str | None:
@@ -145,6 +191,10 @@ class RecordingDetection:
         Where the speed came from (``--rpm``, the rig file, the record's RPM variable).
     kinematics : Kinematics
         At the given speed, no slip [Hz].
+    tracking : dict or None
+        Order tracking (the record had a tachometer or a speed channel): which channel, its kind
+        (``tachometer``, ``speed channel``), the pulses per revolution; None at a fixed speed. The
+        detection's frequencies are then orders (``detection.details["order_tracking"]``).
     """
 
     detection: Detection
@@ -153,19 +203,23 @@ class RecordingDetection:
     speed_rpm: float
     speed_source: str
     kinematics: Kinematics
+    tracking: dict | None = None
 
     def to_dict(self) -> dict:
         """``detection.json``: the call, per family its evidence, the band, the shaft speed found, the call's
         false-alarm probability, and what the record and the bearing were."""
         d = self.detection.to_dict()
         details = {k: v for k, v in d["details"].items() if k not in ("spectrum", "kurtogram")}
+        tracked = d["details"].get("order_tracking")
+        # order-tracked: the detector's shaft rate is in orders (1 where the tachometer's rate holds); the mean's rpm
+        scale = 1.0 if tracked is None else tracked["mean_speed_rpm"] / 60.0
         return {
             "fault_type": d["fault_type"],
             "summary": summary(self.detection),
             "false_alarm_probability": d["false_alarm_probability"],
             "margin_dB": d["margin_dB"],
             "band_Hz": d["band_Hz"],
-            "shaft_speed_found_rpm": 60.0 * d["shaft_rate_Hz"],
+            "shaft_speed_found_rpm": 60.0 * d["shaft_rate_Hz"] * scale,
             "shaft_speed_given_rpm": self.speed_rpm,
             "shaft_speed_source": self.speed_source,
             "families": d["families"],
@@ -178,6 +232,7 @@ class RecordingDetection:
                         "multiples_of_shaft_rate": self.bearing.multiples()},
             "kinematics_at_given_speed_Hz": self.kinematics.to_dict(),
             "type_call": d["details"].get("type_call"),
+            "order_tracking": None if tracked is None else {**self.tracking, **tracked},
             "method": d["method"],
             "details": details,
         }
@@ -231,7 +286,8 @@ def type_lines(d: dict) -> list[str]:
 def detect_recording(record: str | Path, rig: str | Path | Rig | None = None, bearing: str | RollingBearing | None = None,
                      rpm: float | str | None = None, fs: float | str | None = None, channel: str | None = None,
                      settings: envelope_detector.Settings | None = None,
-                     shaft_Hz: float | str | None = None) -> RecordingDetection:
+                     shaft_Hz: float | str | None = None, tachometer: str | None = None,
+                     pulses_per_rev: int | None = None, speed_channel: str | None = None) -> RecordingDetection:
     """Detect a bearing fault in a recording.
 
     Parameters
@@ -254,6 +310,13 @@ def detect_recording(record: str | Path, rig: str | Path | Rig | None = None, be
         Default: ``Settings()`` (pre-whitening, fast kurtogram and whole band, pfa 1e-3).
     shaft_Hz : float or str, optional
         The shaft speed [Hz] (revolutions per second), or the path of the record's field holding it in Hz.
+    tachometer : str, optional
+        The record's tachometer channel: the record is order-tracked (module docstring); else the rig file's.
+    pulses_per_rev : int, optional
+        The tachometer's pulses per revolution; else the rig file's, else 1.
+    speed_channel : str, optional
+        The record's channel of the shaft speed [rpm]: the record is order-tracked; else the rig file's, else
+        a channel named ``speed_rpm``.
 
     Returns
     -------
@@ -272,14 +335,89 @@ def detect_recording(record: str | Path, rig: str | Path | Rig | None = None, be
     rpm, fs, shaft_Hz = (number_or_field(v, k) for v, k in ((rpm, "--rpm"), (fs, "--fs"), (shaft_Hz, "--shaft-hz")))
     rec = read_vibration_record(record, channel if channel is not None else rig.channel,
                                 fs if fs is not None else rig.sample_rate_Hz)
+    settings = settings or envelope_detector.Settings()
+    pulses_per_rev = check_pulses(pulses_per_rev, "--pulses-per-rev")
+    tracked = tracking_angle(rec, tachometer if tachometer is not None else rig.tachometer,
+                             pulses_per_rev if pulses_per_rev is not None else rig.pulses_per_rev,
+                             speed_channel if speed_channel is not None else rig.speed_channel)
+    if tracked is not None:
+        angle, tracking = tracked
+        try:
+            detection, track = order.detect_tracked(rec.samples, 1.0 / rec.sample_rate_Hz, angle,
+                                                    bearing.kinematics(1.0).to_dict(), settings)
+        except ValueError as e:
+            raise RigError(f"{record}: {tracking['kind']} {tracking['channel']}: {e}") from None
+        speed = 60.0 * track.mean_shaft_Hz
+        return RecordingDetection(detection, rec, bearing, speed, f"the {tracking['kind']} {tracking['channel']} "
+                                  "(mean over the record)", bearing.kinematics(speed / 60.0), tracking)
     speed, speed_source = shaft_speed(rec, rig, rpm, shaft_Hz)
     kinematics = bearing.kinematics(speed / 60.0)
-    settings = settings or envelope_detector.Settings()
     try:
         detection = envelope_detector.detect(rec.samples, rec.sample_rate_Hz, kinematics.to_dict(), settings)
     except ValueError as e:
         raise RigError(f"{record}: {e}") from None
     return RecordingDetection(detection, rec, bearing, speed, speed_source, kinematics)
+
+
+def tracking_angle(rec: VibrationRecord, tachometer: str | None, pulses: int | None,
+                   speed_channel: str | None) -> tuple[object, dict] | None:
+    """The shaft angle over the record from its tachometer or speed channel (a channel named
+    :data:`SPEED_COLUMN` where neither is named), and what it came from; None where the record has neither.
+
+    Raises
+    ------
+    RigError
+        One line naming the channel: both named, a channel of another length or not finite, a tachometer
+        without pulses, with too few or irregular ones, a speed that is not positive.
+    """
+    contents = rec.contents
+    if tachometer is None and speed_channel is None:
+        if contents is None or SPEED_COLUMN not in contents.channels or rec.channel == SPEED_COLUMN:
+            return None
+        speed_channel = SPEED_COLUMN
+    if tachometer is not None and speed_channel is not None:
+        raise RigError(f"{rec.source}: both a tachometer ({tachometer}) and a speed channel ({speed_channel}) given; "
+                       "name the one channel the shaft's angle comes from")
+    kind, named = ("tachometer", tachometer) if tachometer is not None else ("speed channel", speed_channel)
+    option = "--tachometer" if tachometer is not None else "--speed-channel"
+    if contents is None:
+        raise RigError(f"{rec.source}: {kind} '{named}' asked for, but the file holds one channel; record the "
+                       f"{kind} beside the vibration or leave {option} out")
+    name = pick_channel(contents, named)
+    if name == rec.channel:
+        raise RigError(f"{rec.source}: the {kind} {name} is the channel analysed; name the vibration channel with "
+                       f"--channel and the {kind} with {option}")
+    v = pd.to_numeric(pd.Series(np.asarray(contents.channels[name]).ravel()), errors="coerce").to_numpy(dtype=float)
+    where = f"{rec.source}: {kind} {name}"
+    if v.size != rec.samples.size:
+        raise RigError(f"{where} holds {v.size} samples, the channel analysed {rec.samples.size}; give a {kind} "
+                       f"sampled with the vibration ({option})")
+    bad = np.flatnonzero(~np.isfinite(v))
+    if bad.size:
+        raise RigError(f"{where}, sample {int(bad[0]) + 1}: not a finite number; fix the channel or cut the record")
+    dt = 1.0 / rec.sample_rate_Hz
+    if kind == "speed channel":
+        low = np.flatnonzero(v <= 0)
+        if low.size:
+            raise RigError(f"{where}, sample {int(low[0]) + 1}: {v[low[0]]:g} rpm; order tracking needs a positive "
+                           "speed throughout: check the channel (--speed-channel) or cut the record")
+        return order.speed_angle(v, dt), {"kind": kind, "channel": name, "pulses_per_rev": None}
+    ppr = pulses or 1
+    if np.ptp(v) == 0:
+        raise RigError(f"{where} is constant ({v[0]:g}): no pulses; check the channel, or name the pulse channel "
+                       "with --tachometer")
+    times = order.pulse_times(v, dt)
+    if times.size < MIN_PULSES:
+        raise RigError(f"{where} holds {times.size} pulses; order tracking needs at least {MIN_PULSES}: check the "
+                       "channel (--tachometer) or record longer")
+    gaps = np.diff(times)
+    jump = np.maximum(gaps[1:] / gaps[:-1], gaps[:-1] / gaps[1:])
+    if jump.size and jump.max() > MAX_INTERVAL_JUMP:
+        i = int(np.argmax(jump))
+        raise RigError(f"{where}: the interval after pulse {i + 2} ({gaps[i + 1] * 1e3:.3g} ms) is {jump[i]:.1f} times "
+                       f"the one before ({gaps[i] * 1e3:.3g} ms): a noisy or wrong channel, not a shaft; check the "
+                       "channel (--tachometer) and its pulses per revolution")
+    return order.shaft_angle(times, ppr), {"kind": kind, "channel": name, "pulses_per_rev": ppr}
 
 
 def shaft_speed(rec: VibrationRecord, rig: Rig, rpm: float | str | None = None,
@@ -336,6 +474,14 @@ def report_markdown(d: dict, figure: str) -> str:
         f"- false-alarm probability of the call: {d['false_alarm_probability']:g}",
         "",
     ]
+    tracked = d.get("order_tracking")
+    unit = "order" if tracked else "Hz"
+    if tracked:
+        lines[-1:-1] = [
+            f"- order-tracked from the {tracked['kind']} `{tracked['channel']}`: {tracked['min_speed_rpm']:.0f}-"
+            f"{tracked['max_speed_rpm']:.0f} rpm, resampled at {tracked['samples_per_rev']} samples per revolution "
+            f"({tracked['n_revolutions']:.0f} revolutions); the band is chosen in time, the lines' frequencies "
+            "and the spectrum are in orders (cycles per revolution)"]
     why = type_lines(d)
     if why:
         lines += ["## Why this call", "", *[f"- {w}" for w in why], ""]
@@ -344,7 +490,7 @@ def report_markdown(d: dict, figure: str) -> str:
         "|---|---:|---:|---:|---|---|",
     ]
     for name, f in d["families"].items():
-        above = ", ".join(f"{ln['label']} ({ln['frequency_Hz']:.2f} Hz, {ln['level_dB']:.1f} dB)"
+        above = ", ".join(f"{ln['label']} ({ln['frequency_Hz']:.2f} {unit}, {ln['level_dB']:.1f} dB)"
                           for ln in f["lines"] if ln["above"]) or "-"
         lines.append(f"| {name.replace('_', ' ')} | {f['statistic']:.1f} | {f['threshold']:.1f} | "
                      f"{f['margin_dB']:+.1f} | {'yes' if f['detected'] else 'no'} | {above} |")
@@ -398,12 +544,6 @@ def check_names(files: list[Path]) -> None:
                        "rename one or run the folders one at a time")
 
 
-def rig_beside(record: Path, rig: str | Path | None) -> str | Path | None:
-    """The record's own rig file (same name, ``.yaml``) where there is one, else ``rig``."""
-    own = record.with_suffix(".yaml")
-    return own if own.is_file() else rig
-
-
 def time_from_name(name: str, pattern: str) -> datetime:
     """The time a file name states by a strftime ``pattern`` (``%Y%m%d_%H%M%S``), found anywhere in the name."""
     regex = re.escape(pattern)
@@ -439,7 +579,8 @@ def detect_one(job: dict) -> dict:
     row = {c: None for c in BATCH_COLUMNS} | {"order": job["order"], "file": str(path), "status": "ok", "error": ""}
     try:
         result = detect_recording(path, rig_beside(path, job["rig"]), job["bearing"], job["rpm"], job["fs"],
-                                  job["channel"], shaft_Hz=job["shaft_Hz"])
+                                  job["channel"], shaft_Hz=job["shaft_Hz"], tachometer=job.get("tachometer"),
+                                  pulses_per_rev=job.get("pulses_per_rev"), speed_channel=job.get("speed_channel"))
         if job["time_field"]:
             row["time"] = record_time(result.record, job["time_field"])
         elif job["time_pattern"]:
@@ -465,7 +606,8 @@ def detect_records(records: list[str | Path], out: str | Path, rig: str | Path |
                    bearing: str | None = None, rpm: float | str | None = None, fs: float | str | None = None,
                    channel: str | None = None, shaft_Hz: float | str | None = None, time_field: str | None = None,
                    time_pattern: str | None = None, jobs: int = 1, progress=None,
-                   pattern: str | None = None) -> pd.DataFrame:
+                   pattern: str | None = None, tachometer: str | None = None, pulses_per_rev: int | None = None,
+                   speed_channel: str | None = None) -> pd.DataFrame:
     """Detect a fault in every record (files, or folders of them), each record's outputs in ``out/<name>/``,
     and write ``out/detections.csv`` (:data:`BATCH_COLUMNS`, a row per record) and ``out/trend.png`` (the
     margins over the records: their time from ``time_field`` or ``time_pattern``, else their order by name).
@@ -474,12 +616,14 @@ def detect_records(records: list[str | Path], out: str | Path, rig: str | Path |
     cannot be read gets its row with the one-line error (``status`` ``error``) and stops nothing.
     ``progress``: called with each finished row. ``jobs``: records detected at once (processes). ``pattern``:
     a folder's records are the files matching this glob (``*.mat``), else every file of a record format.
+    ``tachometer``, ``pulses_per_rev``, ``speed_channel``: order tracking (:func:`detect_recording`).
     """
     files = record_files(records, pattern)
     check_names(files)
     out = Path(out)
     base = {"rig": rig, "bearing": bearing, "rpm": rpm, "fs": fs, "channel": channel, "shaft_Hz": shaft_Hz,
-            "time_field": time_field, "time_pattern": time_pattern, "out": str(out)}
+            "time_field": time_field, "time_pattern": time_pattern, "out": str(out), "tachometer": tachometer,
+            "pulses_per_rev": pulses_per_rev, "speed_channel": speed_channel}
     todo = [base | {"record": str(f), "order": i + 1} for i, f in enumerate(sorted(files, key=lambda f: f.name))]
     rows = []
     if jobs > 1:

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..bearing.lpm import BearingGeometry, kinematic_frequencies
+from ..bearing.geometry import BearingGeometry, kinematic_frequencies
 from ..chain import signals as signal_outputs
 from ..comparison import calibrated
 from ..comparison import rig as comparison

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..bearing.lpm import BearingGeometry
+from ..bearing.geometry import BearingGeometry
 from ..chain import bearing as bearing_outputs
 from ..chain import calibration as sensor_outputs
 from ..chain import signals as signals_outputs

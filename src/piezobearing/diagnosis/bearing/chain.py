@@ -30,7 +30,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ...bearing.lpm import BearingGeometry, kinematic_frequencies
+from ...bearing.geometry import BearingGeometry, kinematic_frequencies
 from ...bearing.shaft_dynamics import ShaftDynamics, shaft_mode, steps_per_sample
 from ...bearing.shaft_dynamics import sensor_force as dyn_sensor_force
 from ...bearing.surrogate import (
@@ -119,7 +119,7 @@ class Rig(UniformClock):
         return kinematic_frequencies(self.geometry, 1.0).ftf_Hz
 
     def frequencies(self, shaft_Hz: float, slip: float = 0.0) -> dict[str, float]:
-        """Kinematic frequencies at a shaft speed with cage slip (``bearing.lpm.kinematic_frequencies``) [Hz]."""
+        """Kinematic frequencies at a shaft speed with cage slip (``bearing.geometry.kinematic_frequencies``) [Hz]."""
         return kinematic_frequencies(self.geometry, shaft_Hz, slip).to_dict()
 
     def substeps(self) -> int:

@@ -19,7 +19,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...bearing.lpm import BearingGeometry
+from ...bearing.geometry import BearingGeometry
 from ...bearing.shaft_dynamics import ShaftDynamics
 from ...bearing.surrogate import InfluenceLine, cage_phase
 from ...io import MIN_BEARING_RATE_HZ, BearingRecord, average_blocks, read_bearing_record

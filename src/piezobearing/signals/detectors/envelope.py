@@ -23,8 +23,12 @@ The chain (Randall & Antoni, MSSP 25 (2011) 485-520; Smith & Randall, MSSP 64-65
    window. Under noise alone R_l is the largest of M_l Exp(1) bins over a median floor of effective Gamma
    shape M_f = ln(2)^2 n_floor / 1.94 (the median's variance; Hann-correlated bins); the distribution of the
    sum is computed (densities convolved, the floor by quadrature), and the family is detected when its sum
-   passes the (1 - alpha) quantile, alpha = pfa / (n_families n_bands) (Bonferroni over families and
-   bands: the probability that a record without a fault is called any fault is at most ``pfa``). Of several
+   passes the (1 - alpha) quantile. The level alpha per test is the calibration table's for ``pfa`` and the
+   record's length (:mod:`.null_calibration`: made on simulated records without a fault, so that such a
+   record is called any fault with probability ``pfa``); with ``calibrated_null`` off it is
+   pfa / (n_families n_bands) (Bonferroni over families and bands: an upper bound, which the tests'
+   correlation and each test's conservative null leave far above the measured rate on records of a few
+   seconds). Of several
    families detected, the call is the one with the largest margin (the statistic over its threshold,
    in dB), taken in its better band.
 
@@ -40,12 +44,13 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from scipy.signal import fftconvolve
+from scipy.fft import irfft, next_fast_len, rfft
 from scipy.special import roots_legendre
 from scipy.stats import gamma as gamma_distribution
 
 from ..envelope import EnvelopeSpectrum, Kurtogram, envelope_spectrum, fast_kurtogram, prewhiten
 from ..fault_bands import FaultLine, ShaftRate, fault_lines, peak_over_median, refine_shaft_rate, window_bins
+from . import null_calibration
 from .result import FAULT_TYPES, Detection, FamilyEvidence, LineEvidence, margin_dB
 
 #: The carrier and sideband names of each family's line labels.
@@ -60,7 +65,12 @@ _N_QUAD = 32
 _N_GRID = 2**13
 #: The smallest false-alarm probability a family's null distribution reaches, and its grid's growths at most.
 NULL_REACH = 1e-7
+#: Where a line's density of the largest bin is cut, beyond ln M + this: the mass left out is e^-40 = 4e-18,
+#: far below NULL_REACH [nats].
+_TAIL_NATS = 40.0
 _MAX_GROWTH = 3
+#: The circular convolution's length over the grid's [-].
+_CONV_PAD = 3
 
 
 @dataclass(frozen=True)
@@ -112,6 +122,11 @@ class Settings:
         A fault's type is called only where the winning family's margin stands at least this far above
         every other family's [dB]; nearer, the call is ``unknown`` with its candidates (:func:`type_call`).
         None turns the rule and its record in ``details`` off (the workflow's simulated records).
+    calibrated_null : bool
+        The level of each test from the calibration table (:mod:`.null_calibration`: made on simulated records
+        without a fault, so that a record without a fault is called faulty at the stated probability);
+        False: Bonferroni, ``false_alarm_probability`` over the families and bands (an upper bound, far
+        above the measured rate).
 
     The defaults of ``frequency_tolerance``, ``mains_Hz``, ``cage_lines``, ``min_lines_above`` and
     ``min_type_separation_dB`` are chosen on the 46 records of the CWRU fan-end set, by the procedure whose
@@ -136,6 +151,7 @@ class Settings:
     cage_lines: bool = True
     min_lines_above: int = 1
     min_type_separation_dB: float | None = 1.0
+    calibrated_null: bool = True
 
     def __post_init__(self):
         if not 0 < self.false_alarm_probability < 1:
@@ -158,7 +174,7 @@ class Settings:
         return cls(n_harmonics=d["n_harmonics"], n_sidebands=d["n_sidebands"], slip_max=d["slip_max"],
                    speed_tolerance=0.0, frequency_tolerance=0.0, false_alarm_probability=signals["false_alarm_probability"],
                    band_Hz=band, refine_speed=False, prewhiten=False, mains_Hz=(), cage_lines=False,
-                   min_lines_above=2, min_type_separation_dB=None)
+                   min_lines_above=2, min_type_separation_dB=None, calibrated_null=False)
 
 
 # --------------------------------------------------------------------------- null distribution
@@ -247,10 +263,17 @@ def _null_on_grid(window_bins: tuple[int, ...], floor_shape: float, span: float,
     """:func:`null_distribution` on the grid of ``n_grid`` points over [0, ``span``]."""
     x = np.linspace(0.0, span, n_grid)
     h = x[1]
-    total = None
-    for m in window_bins:
-        g = _line_ratio_density(m, floor_shape, span, n_grid)
-        total = g if total is None else fftconvolve(total, g)[: x.size] * h
+    if len(window_bins) == 1:
+        total = np.array(_line_ratio_density(window_bins[0], floor_shape, span, n_grid))
+    else:
+        # the densities' product in the frequency domain (each line's transform cached): the circular convolution
+        # of length _CONV_PAD n folds only sums beyond _CONV_PAD - 1 spans onto the grid, whose probability is far
+        # below the span's own, NULL_REACH at most
+        n_fft = next_fast_len(_CONV_PAD * n_grid, real=True)
+        spectrum = np.ones(n_fft // 2 + 1, dtype=complex)
+        for m in window_bins:
+            spectrum = spectrum * _line_ratio_spectrum(m, floor_shape, span, n_grid, n_fft)
+        total = irfft(spectrum, n_fft)[:n_grid] * h ** (len(window_bins) - 1)
     total = np.clip(total, 0.0, None)
     cdf = np.concatenate([[0.0], np.cumsum(0.5 * (total[1:] + total[:-1]) * h)])
     return NullDistribution(x, np.clip(1.0 - cdf / max(cdf[-1], 1.0), 0.0, 1.0), tuple(window_bins), float(floor_shape))
@@ -263,9 +286,25 @@ def _line_ratio_density(m: int, floor_shape: float, span: float, n_grid: int) ->
     f(r) = E_Y[Y f_Z(r Y)] (read-only: shared by every family with a line of ``m`` bins)."""
     x = np.linspace(0.0, span, n_grid)
     y, w = _gamma_nodes(round(floor_shape, 3))
-    u = x[None, :] * y[:, None]
-    z = m * np.exp(-u) * (-np.expm1(-u)) ** (m - 1)
-    g = np.sum((w * y)[:, None] * z, axis=0)
+    # f_Z(v) = exp(ln m - v + (m - 1) ln(1 - e^-v)) is below e^-_TAIL_NATS of its peak beyond v = ln m + _TAIL_NATS
+    # (the mass beyond, e^-_TAIL_NATS): each node's sum runs over the grid points below that only, a tenth of the grid
+    # or less
+    v_max = math.log(m) + _TAIL_NATS
+    g = np.zeros(n_grid)
+    ends = np.minimum(np.searchsorted(x, v_max / y, side="right"), n_grid)
+    with np.errstate(divide="ignore"):  # ln(1 - e^0) = -inf at v = 0: the density's exact 0 there
+        for yj, wj, k in zip(y, w, ends, strict=True):
+            v = x[:k] * yj
+            z = np.exp(-v) if m == 1 else np.exp(math.log(m) - v + (m - 1) * np.log(-np.expm1(-v)))
+            g[:k] += (wj * yj) * z
+    g.setflags(write=False)
+    return g
+
+
+@lru_cache(maxsize=128)
+def _line_ratio_spectrum(m: int, floor_shape: float, span: float, n_grid: int, n_fft: int) -> np.ndarray:
+    """The real FFT of :func:`_line_ratio_density` zero-padded to ``n_fft`` points (read-only)."""
+    g = rfft(_line_ratio_density(m, floor_shape, span, n_grid), n_fft)
     g.setflags(write=False)
     return g
 
@@ -442,6 +481,9 @@ class Reading:
     kurtogram: Kurtogram | None
     lines: dict[str, list[FaultLine]]
     top_Hz: float
+    #: The record's length [s] (the calibrated null's level depends on it); unknown: infinite, whose level is
+    #: the longest calibrated length's, at most Bonferroni's.
+    seconds: float = math.inf
 
 
 def measure(samples: np.ndarray, sample_rate_Hz: float, kinematics: dict, settings: Settings) -> Reading:
@@ -465,7 +507,7 @@ def measure(samples: np.ndarray, sample_rate_Hz: float, kinematics: dict, settin
     excluded_rates = [shaft] + ([mains] if mains is not None else [])
     measured = tuple(band_ratios(envelope_spectrum(w, dt, band, window="hann", squared=True), lines, excluded_rates,
                                  settings) for band in bands)
-    return Reading(shaft, mains, measured, kurtogram, lines, top)
+    return Reading(shaft, mains, measured, kurtogram, lines, top, x.size * dt)
 
 
 def decide(m: Reading, settings: Settings) -> Detection:
@@ -508,7 +550,7 @@ def decide(m: Reading, settings: Settings) -> Detection:
 def _judge(m: Reading, settings: Settings) -> tuple[float, list[BandTest], str, int]:
     """Every band judged: the level per test, the band tests, the detected family of largest margin (or none)
     and its band."""
-    alpha = settings.false_alarm_probability / (len(settings.families) * len(m.bands))
+    alpha = alpha_per_test(settings, len(m.bands), m.seconds)
     tests = [judge_band(b, alpha, settings) for b in m.bands]
     call, chosen = _call(tests)
     return alpha, tests, call, chosen
@@ -527,7 +569,7 @@ def without_spectra(m: Reading) -> Reading:
     """The reading with its bands' spectra and the kurtogram dropped: what :func:`call_of` needs, a few
     kilobytes instead of megabytes (for a settings search over many records)."""
     bands = tuple(BandRatios(b.band_Hz, None, None, b.floor_shape, b.lines) for b in m.bands)
-    return Reading(m.shaft, m.mains, bands, None, m.lines, m.top_Hz)
+    return Reading(m.shaft, m.mains, bands, None, m.lines, m.top_Hz, m.seconds)
 
 
 def type_call(tests: list[BandTest], call: str, separation_dB: float | None) -> dict | None:
@@ -561,6 +603,44 @@ def type_call(tests: list[BandTest], call: str, separation_dB: float | None) -> 
         "detected": detected,
         "why_not": why,
     }
+
+
+def alpha_per_test(settings: Settings, n_bands: int, seconds: float) -> float:
+    """The level of each family's test in each band: the calibration table's level for the stated false-alarm
+    probability and a record of ``seconds`` (:func:`.null_calibration.alpha_per_test`), or, with ``calibrated_null`` off, the probability
+    split over the families and bands (Bonferroni)."""
+    if settings.calibrated_null:
+        return null_calibration.alpha_per_test(settings.false_alarm_probability, seconds,
+                                               len(settings.families) * n_bands)
+    return settings.false_alarm_probability / (len(settings.families) * n_bands)
+
+
+def critical_alpha(m: Reading, settings: Settings) -> float:
+    """The level per test below which the record raises no alarm: at any level ``alpha`` above it some family
+    is detected in some band (its sum passes its threshold and at least ``min_lines_above`` of its lines
+    pass theirs), at any level below, none [-].
+
+    Per family and band it is the larger of the sum's p-value (beyond the grid: the union bound's level) and
+    the ``min_lines_above``-th smallest p-value of a line, 1 - (1 - e^-R)^M; the record's is the smallest over
+    families and bands. What :mod:`.null_calibration` is made of: the stated probability's level is the
+    quantile of this over records without a fault."""
+    best = math.inf
+    for band in m.bands:
+        for measured in band.lines.values():
+            if len(measured) < max(settings.min_lines_above, 1):
+                continue
+            sizes = tuple(x.n_bins for x in measured)
+            total = sum(x.ratio for x in measured)
+            null = null_distribution(sizes, round(band.floor_shape, 3))
+            if total <= null.x[-1]:
+                p_sum = null.p_value(total)
+            else:  # beyond the grid the threshold is the union bound's: its level at this sum
+                m_f = null.floor_shape or round(band.floor_shape, 3)
+                p_sum = min(float(null.survival[-1]), sum(sizes) * (1.0 + total / (len(sizes) * m_f)) ** -m_f)
+            p_lines = sorted(float(-np.expm1(x.n_bins * np.log1p(-np.exp(-x.ratio)))) for x in measured)
+            p_line = p_lines[settings.min_lines_above - 1] if settings.min_lines_above >= 1 else 0.0
+            best = min(best, max(p_sum, p_line))
+    return best
 
 
 def detect(samples: np.ndarray, sample_rate_Hz: float, kinematics: dict, settings: Settings, reference=None) -> Detection:
