@@ -114,6 +114,8 @@ def workdir() -> Path:
         "flat_roller.yaml": "bearing:\n  defects:\n    - {type: rolling_element, width_m: 0.9e-3, depth_m: 1.0e-3, "
         "angle_deg: 0.0, roller: 11}\n",
         "band.yaml": "signals:\n  band_Hz: [1250.0, 500.0]\n",
+        "waviness.yaml": "bearing:\n  waviness_orders: [2, 3]\n  waviness_amplitudes_m: [1.0e-6]\n",
+        "tail.yaml": "sensor_comparison:\n  tail_false_alarm_rate: 0.2\n  tail_fraction: 0.1\n",
         "effect.yaml": CI + "model: {effects: [ringing]}\n",
     }
     for name, body in configs.items():
@@ -207,6 +209,9 @@ CASES = [
     Case("config: flat on a roller that does not exist", (*V, REC, "--config", f"{W}/flat_roller.yaml"),
          "does not exist"),
     Case("config: band decreasing", (*V, REC, "--config", f"{W}/band.yaml"), "write [low, high]"),
+    Case("config: waviness amplitudes short", (*V, REC, "--config", f"{W}/waviness.yaml"),
+         "one amplitude per order"),
+    Case("config: tail rate above its fraction", (*V, REC, "--config", f"{W}/tail.yaml"), "below the fraction"),
     # diagnose --out (point 4)
     Case(
         "--out is a file", ("diagnose", REC, "--out", f"{W}/out_file", "--quiet"), "is a file, not a folder"

@@ -10,9 +10,13 @@ from piezobearing.chain import signals as sout
 from piezobearing.comparison import rig as cmp
 
 
-def _rig(config: dict, level: float) -> dict:
-    """The paper's case on a short record and a coarse housing mesh (modes to 2.5 x 12.8 kHz), one seed."""
+def _rig(config: dict, level: float, floor: bool = False) -> dict:
+    """The paper's case on a short record and a coarse housing mesh (modes to 2.5 x 12.8 kHz), one seed; the
+    ideal bearing (``floor`` False: no roughness, waviness or unbalance) or the comparison's floor."""
     cfg = copy.deepcopy(config)
+    if not floor:
+        cfg["sensor_comparison"]["bearing_floor"].update(roughness_rms_m=0.0, waviness_orders=[],
+                                                         waviness_amplitudes_m=[], unbalance_kg_m=0.0)
     cfg["bearing"].update(duration_s=0.5, settle_s=0.02)
     cfg["housing"]["mesh_level"] = 0.35
     cfg["signals"]["sensor_fem_correction"] = False
@@ -26,6 +30,14 @@ def at_rest(paper_config):
     cfg = _rig(paper_config, 0.0)
     circuit = sout.sensor_circuit(cfg, {"resistance_ohm": 50.0e6})  # the paper's DAQ input resistance
     return cmp.compare(cfg, circuit, None)
+
+
+@pytest.fixture(scope="module")
+def at_rest_floor(paper_config):
+    """The frame at rest with the comparison's floor: three healthy and one faulty realisation."""
+    cfg = _rig(paper_config, 0.0, floor=True)
+    circuit = sout.sensor_circuit(cfg, {"resistance_ohm": 50.0e6})
+    return cmp.compare(cfg, circuit, None, n_seeds=(3, 1))
 
 
 def test_model_step_must_serve_the_faster_daq(paper_config):
@@ -66,3 +78,17 @@ def test_paper_case_at_rest_both_sensors(at_rest):
     assert accel["detection_healthy"]["families"]["outer_race"]["margin_dB"] > 0.0
     # the PZT's voltage is volts, the accelerometer's millivolts: absolute noise per channel keeps the gains
     assert pzt["levels"]["faulty"]["clean_rms_V"] > 100 * accel["levels"]["faulty"]["clean_rms_V"]
+
+
+@pytest.mark.slow
+def test_floor_makes_every_seed_a_new_bearing(at_rest, at_rest_floor):
+    """With the healthy bearing's floor on, every seed at rest is another bearing (its surfaces drawn anew):
+    the healthy statistic spreads over the seeds, where the ideal bearing's at rest is one rig run; and the
+    random floor between the roller passage's lines lowers the healthy outer-race family's margin below the
+    ideal bearing's, on both sensors."""
+    assert at_rest_floor["n_healthy_seeds"] == 3 and at_rest_floor["n_faulty_seeds"] == 1
+    for s in cmp.SENSORS:
+        healthy = at_rest_floor["sensors"][s]["healthy_margin_dB_per_seed"]
+        assert len(set(healthy)) == 3, healthy
+        ideal = at_rest["sensors"][s]["detection_healthy"]["families"]["outer_race"]["margin_dB"]
+        assert max(healthy) < ideal, (s, healthy, ideal)

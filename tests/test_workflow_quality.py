@@ -75,6 +75,34 @@ def test_study_runs_and_gathers_its_summary(ci_run: Path):
 
 
 @pytest.mark.slow
+def test_sensor_comparison_study_gives_the_calibrated_test(ci_run: Path):
+    """The CI run's sensor comparison study (12 healthy and 6 faulty seeds a case): per case and sensor the
+    threshold set on the healthy seeds holds their false-alarm rate, the detection probability lies in its
+    Clopper-Pearson interval, the earlier columns stay, and the calibrated figures are drawn."""
+    import pandas as pd
+
+    d = ci_run / "results/studies/sensor_comparison"
+    df = pd.read_csv(d / "summary.csv")
+    assert len(df) == 8 and set(df["sensor"]) == {"pzt", "accelerometer"}
+    for col in ("detection_rate", "false_alarm_rate", "margin_dB", "margin_over_healthy_dB",
+                "detection_rate_over_healthy", "calibrated_threshold_dB", "calibrated_detection_probability",
+                "roc_auc", "type_correct_rate", "alarm_rate_faulty", "smallest_detected_width_m"):
+        assert col in df, col
+    assert (df["n_healthy_seeds"] == 12).all() and (df["n_faulty_seeds"] == 6).all()
+    p = df["calibrated_detection_probability"]
+    assert ((df["calibrated_detection_ci_low"] <= p) & (p <= df["calibrated_detection_ci_high"])).all()
+    for case in d.glob("*/summary.json"):
+        summary = json.loads(case.read_text())["summary"]
+        rows = {r["sensor"]: r for r in summary["rows"]}
+        for per in summary["per_seed"]:
+            healthy = per["healthy_margin_dB"]
+            above = sum(h > rows[per["sensor"]]["calibrated_threshold_dB"] for h in healthy)
+            assert len(healthy) == 12 and above <= 0.05 * len(healthy)
+    for name in ("summary.png", "healthy_statistic.png", "roc.png"):
+        assert (d / name).stat().st_size > 0
+
+
+@pytest.mark.slow
 def test_report_holds_every_figure_with_its_caption(ci_run: Path):
     out = snakemake("--configfile", "config/ci.yaml", "--report", "report.html", cwd=ci_run)
     assert out.returncode == 0, out.stderr[-3000:]

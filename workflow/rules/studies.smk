@@ -171,9 +171,60 @@ rule study_summary:
         "../scripts/study_summary.py"
 
 
+# The sensor comparison's calibrated test, drawn from its cases' seeds: the healthy statistic's distribution
+# and the ROC curves, beside its summary (piezobearing.stages.studies.calibrated_figures).
+STUDY_FIGURES = {
+    "sensor_comparison": [
+        f"{RESULTS}/studies/sensor_comparison/healthy_statistic.png",
+        f"{RESULTS}/studies/sensor_comparison/roc.png",
+    ]
+}
+
+
+if "sensor_comparison" in STUDIES:
+
+    rule sensor_comparison_calibrated_figures:
+        input:
+            cases=expand(
+                f"{RESULTS}/studies/sensor_comparison/{{case}}/summary.json",
+                case=STUDIES["sensor_comparison"].instance_patterns,
+            ),
+        output:
+            healthy=report(
+                f"{RESULTS}/studies/sensor_comparison/healthy_statistic.png",
+                caption="../report/study.rst",
+                category="Studies",
+                subcategory="sensor_comparison",
+            ),
+            roc=report(
+                f"{RESULTS}/studies/sensor_comparison/roc.png",
+                caption="../report/study.rst",
+                category="Studies",
+                subcategory="sensor_comparison",
+            ),
+        log:
+            f"{RESULTS}/logs/studies/sensor_comparison_calibrated_figures.log",
+        benchmark:
+            f"{RESULTS}/benchmarks/rules/sensor_comparison_calibrated_figures.tsv"
+        conda:
+            "../envs/piezobearing.yaml"
+        threads: 1
+        resources:
+            mem_mb=500,
+            runtime=2,
+        params:
+            **stage_params(
+                "sensor_comparison_calibrated_figures",
+                "workflow/scripts/sensor_comparison_calibrated_figures.py",
+            ),
+        script:
+            "../scripts/sensor_comparison_calibrated_figures.py"
+
+
 rule study_all:
     input:
         [f"{RESULTS}/studies/{name}/summary.png" for name in STUDIES],
+        [f for name in STUDIES for f in STUDY_FIGURES.get(name, [])],
 
 
 # One target per study: `snakemake --cores 2 study_<name>` runs that study's cases and its summary only.
@@ -184,4 +235,5 @@ for _study in STUDIES:
             f"study_{_study}"
         input:
             f"{RESULTS}/studies/{_study}/summary.png",
+            STUDY_FIGURES.get(_study, []),
         localrule: True

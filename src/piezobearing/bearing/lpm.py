@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
+from . import surface
 from .geometry import BearingGeometry, kinematic_frequencies
 from .lpm_kernel import newmark_lpm
 
@@ -247,6 +248,9 @@ class LPMParameters:
         A larger roller closes its gap by the difference.
     seed : int
         Seed of the per-passage slip draws.
+    surfaces : Surfaces or None
+        The healthy bearing's floor, one realisation (:mod:`piezobearing.bearing.surface`: roughness and
+        waviness of the raceways and rollers, the shaft's unbalance); None: ideal surfaces, no unbalance.
     """
 
     geometry: BearingGeometry
@@ -264,13 +268,17 @@ class LPMParameters:
     speed_ramp_Hz_per_s: float = 0.0
     roller_diameter_deviation_m: tuple[float, ...] = ()
     seed: int = 0
+    surfaces: surface.Surfaces | None = None
 
     @classmethod
-    def from_config(cls, bearing: dict, faulty: bool, seed: int = 0) -> LPMParameters:
+    def from_config(cls, bearing: dict, faulty: bool, seed: int = 0, realisation: int = 0) -> LPMParameters:
         """From the ``bearing`` section; ``faulty`` adds its ``defects``; ``seed``: the config's ``seed``.
 
         The roller diameters scatter by ``roller_diameter_scatter_m`` (standard
-        deviation, drawn per roller from the seed: the same in both cases).
+        deviation, drawn per roller from the seed: the same in both cases). The
+        surfaces' roughness, waviness and the unbalance's phase
+        (:mod:`piezobearing.bearing.surface`) are drawn per ``faulty`` and
+        ``realisation`` from the seed: each realisation is another bearing.
         """
         b = bearing
         geo = BearingGeometry.from_config(b)
@@ -278,6 +286,11 @@ class LPMParameters:
         dev = ()
         if scatter > 0:
             dev = tuple(float(x) for x in scatter * np.random.default_rng([seed, 1]).standard_normal(geo.n_rollers))
+        floor = surface.SurfaceSettings.from_config(b)
+        surfaces = None
+        if floor.active:
+            surfaces = surface.draw(floor, geo, contact_half_widths_m(geo, b["radial_load_N"]), seed, faulty,
+                                    realisation)
         return cls(
             geometry=geo,
             radial_load_N=b["radial_load_N"],
@@ -294,6 +307,7 @@ class LPMParameters:
             speed_ramp_Hz_per_s=b.get("speed_ramp_rpm_per_s", 0.0) / 60.0,
             roller_diameter_deviation_m=dev,
             seed=int(seed),
+            surfaces=surfaces,
         )
 
     @property
@@ -398,11 +412,21 @@ class LPMParameters:
         return out
 
     def contact_offsets(self, motion: Motion) -> np.ndarray:
-        """What each roller's overlap loses besides the rings' offset: defect drops minus diameter excess [m]."""
+        """What each roller's overlap loses besides the rings' offset: defect drops minus diameter excess,
+        minus the surfaces' heights where roughness or waviness is on [m]."""
         off = self.drops(motion)
         if self.roller_diameter_deviation_m:
             off = off - np.asarray(self.roller_diameter_deviation_m)[None, :]
+        if self.surfaces is not None and (self.surfaces.outer.profile_m.size or self.surfaces.outer.orders.size):
+            off = off - self.surfaces.heights_m(motion.psi_rad, motion.shaft_angle_rad, motion.spin_rad)
         return off
+
+    def unbalance_force_N(self, t_s: np.ndarray) -> np.ndarray | None:
+        """The unbalance's force on the shaft (n, 2) (y, z) at the instants t [N]; None without unbalance."""
+        if self.surfaces is None or self.surfaces.unbalance_kg_m == 0:
+            return None
+        return surface.unbalance_force_N(self.surfaces.unbalance_kg_m, self.surfaces.unbalance_phase_rad,
+                                         self.shaft_angle(t_s), self.shaft_speed_at(t_s))
 
     def defect_max_drops_m(self) -> list[float]:
         """Deepest drop of each defect [m] (a flat: the deeper of its two contacts, the convex inner race)."""
@@ -534,6 +558,20 @@ def harris_discrete_loads(
     return k_contact * np.maximum(dr * cos - gap_m, 0.0) ** (10 / 9), dr
 
 
+def contact_half_widths_m(geometry: BearingGeometry, radial_load_N: float) -> dict[str, float]:
+    """Hertzian half-width b of the most loaded roller's contacts, outer and inner race [m].
+
+    The most loaded roller's load from Harris's discrete distribution with a roller on the load line
+    (:func:`harris_discrete_loads`); b by :func:`piezobearing.bearing.surface.contact_half_width_m`. For the
+    N 305 at 500 N: 51 um outside, 41 um inside.
+    """
+    psi = geometry.roller_pitch_rad * np.arange(geometry.n_rollers)
+    k = line_contact_stiffness(geometry.roller_length_m)
+    q = float(np.max(harris_discrete_loads(radial_load_N, psi, 0.5 * geometry.radial_clearance_m, k)[0]))
+    return {race: surface.contact_half_width_m(q, geometry.relative_radius_m(race), geometry.roller_length_m)
+            for race in ("outer", "inner")}
+
+
 @dataclass(frozen=True)
 class LPMResult:
     """Time history of the lumped-parameter model on its integration grid.
@@ -595,7 +633,9 @@ def lpm_rhs(p: LPMParameters):
         u, v = y[:4], y[4:]
         psi, off = at(t)
         f = bearing_force(u[:2] - u[2:], psi, gap, off, kc)[0]
-        return np.concatenate((v, minv @ (fext - c @ v - k @ u - np.concatenate((f, -f)))))
+        unbalance = p.unbalance_force_N(np.array([t]))
+        fe = fext if unbalance is None else fext + np.r_[unbalance[0], 0.0, 0.0]
+        return np.concatenate((v, minv @ (fe - c @ v - k @ u - np.concatenate((f, -f)))))
 
     def jac(t, y):
         u = y[:4]
@@ -669,6 +709,9 @@ def simulate_lpm(
         fext[:, 2:] -= p.pedestal_mass_kg * ab
     kc, gap = p.k_contact, p.gap_m
     t = t_start_s + step_s * np.arange(n_steps + 1)
+    unbalance = p.unbalance_force_N(t)
+    if unbalance is not None:
+        fext[:, :2] += unbalance
     mo = p.motion(t)
     psi = mo.psi_rad
     drop = p.contact_offsets(mo)

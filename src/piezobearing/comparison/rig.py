@@ -39,6 +39,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..bearing import surface
 from ..bearing.geometry import kinematic_frequencies
 from ..chain import signals as signal_outputs
 from ..housing import base_motion, transient
@@ -104,9 +105,12 @@ class ComparisonSettings:
 
 
 def rig_config(config: dict, settings: ComparisonSettings) -> dict:
-    """The config with the bearing on the comparison's model step and the envelope detector's band rule."""
+    """The config with the bearing on the comparison's model step, the healthy bearing's floor
+    (``sensor_comparison.bearing_floor`` over ``bearing``: roughness, waviness, unbalance) and the envelope
+    detector's band rule."""
     cfg = copy.deepcopy(config)
     cfg["bearing"].update(time_step_s=settings.time_step_s, substeps=settings.substeps)
+    cfg["bearing"].update(copy.deepcopy(config["sensor_comparison"]["bearing_floor"]))
     cfg["signals"]["band_rule"] = settings.band_rule
     return cfg
 
@@ -138,7 +142,7 @@ def run_rig(config: dict, housing: Housing, faulty: bool, surroundings: base_mot
     """
     b = config["bearing"]
     motion = base_motion.realisation(surroundings, config["seed"], replicate) if surroundings.active else None
-    run = transient.run_lpm(b, faulty, "compiled", config["seed"], base_motion=motion)
+    run = transient.run_lpm(b, faulty, "compiled", config["seed"], base_motion=motion, realisation=replicate)
     t = run["time_s"]
     a = run.get("base_acceleration_m_per_s2", np.zeros((t.size, 2)))
     g, f = housing_fem.project_roller_loads(housing.columns, housing.ops, run["load_N"], run["angle_rad"])
@@ -206,18 +210,81 @@ def true_type(config: dict) -> str:
     return config["bearing"]["defects"][0]["type"] if config["bearing"]["defects"] else "none"
 
 
+@dataclass(frozen=True)
+class Rig:
+    """What every realisation of one comparison case shares (:func:`prepare`)."""
+
+    config: dict
+    settings: ComparisonSettings
+    surroundings: base_motion.BaseMotionSettings
+    sensor: accelerometer.AccelerometerSettings
+    pzt_noise: daq.NoiseSettings
+    accelerometer_noise: daq.NoiseSettings
+    fault: str
+    redraw: bool
+    housings: dict
+    circuit: object
+    harmonic: object
+
+
+def prepare(config: dict, circuit, harmonic, housings: dict | None = None) -> Rig:
+    """One case's rig: the comparison's config (:func:`rig_config`), its settings, the housings at the
+    accelerometer's place (built when not given), and whether each seed is a new rig run (``redraw``: the
+    bearing's floor or the surroundings random)."""
+    settings = ComparisonSettings.from_config(config)
+    cfg = rig_config(config, settings)
+    surroundings = base_motion.BaseMotionSettings.from_config(cfg["base_motion"])
+    if housings is None:
+        housings = {faulty: build_housing(cfg, faulty) for faulty in (False, True)}
+    return Rig(cfg, settings, surroundings, accelerometer.AccelerometerSettings.from_config(cfg["accelerometer"]),
+               pzt_noise_settings(cfg), accelerometer_daq_settings(cfg), true_type(cfg),
+               surroundings.active or surface.SurfaceSettings.from_config(cfg["bearing"]).active,
+               {faulty: h.at(settings.position) for faulty, h in housings.items()}, circuit, harmonic)
+
+
+def realise(rig: Rig, faulty: bool, replicate: int) -> tuple[dict, dict]:
+    """One realisation of the rig (:func:`run_rig`) and both sensors' noiseless DAQ voltages."""
+    run = run_rig(rig.config, rig.housings[faulty], faulty, rig.surroundings, replicate)
+    clean = {"pzt": pzt_clean(run, rig.circuit, rig.harmonic, rig.config, rig.settings),
+             "accelerometer": accelerometer_clean(run, rig.sensor, rig.config, rig.settings)}
+    return run, clean
+
+
+def observe(rig: Rig, run: dict, clean: dict, faulty: bool, replicate: int) -> tuple[dict, dict]:
+    """Both sensors' DAQ records of one realisation (their noise drawn for ``replicate``) through the detector.
+
+    Returns per sensor ``called`` (the detector's call), ``margin_dB`` (the true family's margin; the call's
+    where there is no fault), ``clipped`` and ``detection``; and the DAQ records.
+    """
+    cfg, fault = rig.config, rig.fault
+    out = {"pzt": pzt_record(clean["pzt"], rig.pzt_noise, noise_rng(cfg["seed"], "pzt", faulty, replicate))}
+    out["accelerometer"], n_sat = accelerometer_record(
+        clean["accelerometer"], rig.sensor, rig.accelerometer_noise,
+        noise_rng(cfg["seed"], "accelerometer", faulty, replicate))
+    seen = {}
+    for s in SENSORS:
+        d = judge(out[s].voltage_V, clean[s].dt_s, run["kinematics"], cfg)
+        family = d.families.get(fault) if fault != "none" else None
+        seen[s] = {"called": d.fault_type, "margin_dB": family.margin_dB if family is not None else d.margin_dB,
+                   "clipped": out[s].n_clipped + (n_sat if s == "accelerometer" else 0), "detection": d}
+    return seen, out
+
+
 # --------------------------------------------------------------------------- a case over seeds
 
 
 def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_records: bool = False,
-            log=sys.stderr) -> dict:
-    """Both sensors on the healthy and the faulty bearing over ``sensor_comparison.n_seeds`` realisations.
+            log=sys.stderr, n_seeds: tuple[int, int] | None = None) -> dict:
+    """Both sensors on the healthy and the faulty bearing over ``sensor_comparison.n_seeds`` realisations each
+    (``n_seeds``: healthy and faulty realisations instead, as the calibrated test draws them).
 
     ``config``: the workflow's (the comparison's step is applied here). ``circuit``: the PZT's measuring circuit
     (:func:`piezobearing.chain.signals.sensor_circuit`); ``harmonic``: the sensor FEM's response where
     ``signals.sensor_fem_correction``, else None. ``housings``: the healthy and faulty :class:`Housing` when
-    already built. With the base motion at rest the rig runs once per case and the seeds draw the DAQs'
-    noise only; otherwise every seed is a new realisation of the surroundings through the whole rig.
+    already built. Every seed is a new realisation of the rig where anything in it is random: the bearing's
+    floor (``sensor_comparison.bearing_floor``: its surfaces and unbalance phase, drawn per case and seed) and
+    the surroundings (the k-th healthy and faulty seeds share the k-th base motion); with both off (the frame
+    at rest, an ideal bearing) the rig runs once per case and the seeds draw the DAQs' noise only.
 
     Returns the per-sensor summary (``sensors``), the disturbance's RMS, the housing's records, and with
     ``keep_records`` the first replicate's DAQ records (``records``: per sensor and case the samples and
@@ -234,40 +301,24 @@ def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_
       ``detection_rate_over_healthy``: share of seeds where it is positive: the healthy rig as the
       reference, a false-alarm probability of at most 1 / (n_seeds + 1) for both sensors alike.
     """
-    settings = ComparisonSettings.from_config(config)
-    cfg = rig_config(config, settings)
-    surroundings = base_motion.BaseMotionSettings.from_config(cfg["base_motion"])
-    sensor = accelerometer.AccelerometerSettings.from_config(cfg["accelerometer"])
-    pzt_noise, acc_noise = pzt_noise_settings(cfg), accelerometer_daq_settings(cfg)
-    fault = true_type(cfg)
-    if housings is None:
-        housings = {faulty: build_housing(cfg, faulty) for faulty in (False, True)}
-    housings = {faulty: h.at(settings.position) for faulty, h in housings.items()}
+    rig = prepare(config, circuit, harmonic, housings)
+    cfg, settings, fault = rig.config, rig.settings, rig.fault
+    n_healthy, n_faulty = n_seeds if n_seeds is not None else (settings.n_seeds, settings.n_seeds)
+    housings = rig.housings
     rows = {s: {"faulty": [], "healthy": []} for s in SENSORS}
     records, levels, rms = {}, {s: {} for s in SENSORS}, []
     for faulty in (False, True):
         case = "faulty" if faulty else "healthy"
         run = clean = None
-        for rep in range(settings.n_seeds):
-            if run is None or surroundings.active:
-                run = run_rig(cfg, housings[faulty], faulty, surroundings, rep)
-                clean = {"pzt": pzt_clean(run, circuit, harmonic, cfg, settings),
-                         "accelerometer": accelerometer_clean(run, sensor, cfg, settings)}
+        for rep in range(n_faulty if faulty else n_healthy):
+            if run is None or rig.redraw:
+                run, clean = realise(rig, faulty, rep)
                 rms.append(run["disturbance_rms_m_per_s2"])
                 print(f"sensor_comparison: {case} replicate {rep}: base motion "
                       f"{run['disturbance_rms_m_per_s2']:.3g} m/s^2 rms", file=log)
-            out = {"pzt": pzt_record(clean["pzt"], pzt_noise, noise_rng(cfg["seed"], "pzt", faulty, rep))}
-            out["accelerometer"], n_sat = accelerometer_record(
-                clean["accelerometer"], sensor, acc_noise, noise_rng(cfg["seed"], "accelerometer", faulty, rep))
+            seen, out = observe(rig, run, clean, faulty, rep)
             for s in SENSORS:
-                d = judge(out[s].voltage_V, clean[s].dt_s, run["kinematics"], cfg)
-                family = d.families.get(fault) if fault != "none" else None
-                rows[s][case].append({
-                    "called": d.fault_type,
-                    "margin_dB": family.margin_dB if family is not None else d.margin_dB,
-                    "clipped": out[s].n_clipped + (n_sat if s == "accelerometer" else 0),
-                    "detection": d if rep == 0 else None,
-                })
+                rows[s][case].append({**seen[s], "detection": seen[s]["detection"] if rep == 0 else None})
                 if rep == 0:
                     v = clean[s].voltage_V
                     levels[s][case] = {"clean_rms_V": float(np.sqrt(np.mean(v * v))),
@@ -297,7 +348,9 @@ def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_
         }
     out = {
         "fault_type": fault,
-        "n_seeds": settings.n_seeds,
+        "n_seeds": n_faulty,
+        "n_healthy_seeds": n_healthy,
+        "n_faulty_seeds": n_faulty,
         "disturbance_rms_m_per_s2": float(np.mean(rms)),
         "false_alarm_probability": cfg["signals"]["false_alarm_probability"],
         "accelerometer_position": settings.position,

@@ -222,6 +222,20 @@ def physical_problems(config: dict) -> list[str]:
                 f"key 'bearing.defects[{i}].roller': roller {d['roller']} does not exist in a bearing of "
                 f"{b['n_rollers']} rollers; use 0 to {b['n_rollers'] - 1}"
             )
+    c = config.get("sensor_comparison", {})
+    for sec, node in (("bearing", b), ("sensor_comparison.bearing_floor", c.get("bearing_floor", {}))):
+        orders, amps = node.get("waviness_orders"), node.get("waviness_amplitudes_m")
+        if isinstance(orders, list) and isinstance(amps, list) and len(orders) != len(amps):
+            out.append(
+                f"key '{sec}.waviness_amplitudes_m': {len(amps)} amplitudes for {len(orders)} waviness_orders; give "
+                "one amplitude per order"
+            )
+    if "tail_false_alarm_rate" in c and "tail_fraction" in c and c["tail_false_alarm_rate"] >= c["tail_fraction"]:
+        out.append(
+            f"key 'sensor_comparison.tail_false_alarm_rate': {c['tail_false_alarm_rate']:g} is not below "
+            f"sensor_comparison.tail_fraction ({c['tail_fraction']:g}); the tail fit extrapolates beyond the seeds "
+            "it takes: use a rate below the fraction (0.01 with 0.2)"
+        )
     f = config.get("sensor_fem", {})
     if "mesh_level" in f and "refinement_multipliers" in f:
         n = len(f["refinement_multipliers"])

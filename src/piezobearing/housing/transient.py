@@ -35,7 +35,8 @@ def time_grid(bearing: dict) -> np.ndarray:
     return dt * np.arange(int(round(bearing["duration_s"] / dt)))
 
 
-def run_lpm(bearing: dict, faulty: bool, method: str = "compiled", seed: int = 0, base_motion=None) -> dict:
+def run_lpm(bearing: dict, faulty: bool, method: str = "compiled", seed: int = 0, base_motion=None,
+            realisation: int = 0) -> dict:
     """The LPM on its fine grid and resampled at the FEM step (dict of arrays; ``params``: the LPMParameters).
 
     ``method`` as in :func:`~piezobearing.bearing.lpm.simulate_lpm`; ``seed``: the config's seed (roller
@@ -45,8 +46,10 @@ def run_lpm(bearing: dict, faulty: bool, method: str = "compiled", seed: int = 0
     :func:`piezobearing.housing.base_motion.realisation`); the dict then holds it on the fine grid
     (``fine_base_acceleration_m_per_s2``) and at the FEM step (``base_acceleration_m_per_s2``, treated as the
     roller loads are, ``bearing.resample``), and the displacements are relative to the ground.
+    ``realisation``: which draw of the bearing's surfaces and unbalance phase (``bearing.roughness_rms_m``,
+    ``waviness_*``, ``unbalance_kg_m``; :mod:`piezobearing.bearing.surface`); nothing is drawn where they are off.
     """
-    p = lpm.LPMParameters.from_config(bearing, faulty, seed)
+    p = lpm.LPMParameters.from_config(bearing, faulty, seed, realisation)
     dt = bearing["time_step_s"]
     h = dt / bearing["substeps"]
     t_out = time_grid(bearing)

@@ -8,10 +8,12 @@ from __future__ import annotations
 import copy
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from ..bearing.geometry import BearingGeometry, kinematic_frequencies
 from ..chain import signals as signal_outputs
+from ..comparison import calibrated
 from ..comparison import rig as comparison
 from ..io import read_harmonic, read_json, write_csv, write_json
 from . import housing_model
@@ -82,7 +84,8 @@ def sensor_comparison(resistance_json: str, harmonic_csv: str | None, housing_he
             "per condition and sensor: detection_rate = share of seeds on the faulty bearing the envelope "
             "detector calls the true fault type; false_alarm_rate = share of seeds on the healthy bearing it "
             "calls any fault; margin_dB = median over seeds of the true family's 10 log10(statistic / threshold); "
-            "detection: the first seed's Detection. Each seed is a new realisation of the base motion (through "
+            "detection: the first seed's Detection. Each seed is a new realisation of the bearing's floor "
+            "(sensor_comparison.bearing_floor: roughness, waviness, unbalance phase), of the base motion (through "
             "the LPM and the housing) and of both DAQs' noise."
         ),
         "kinematics": kin.to_dict(),
@@ -99,14 +102,22 @@ def sensor_comparison(resistance_json: str, harmonic_csv: str | None, housing_he
 
 def study_case(config: dict, outdir: Path, resistance: str, harmonic: str | None = None,
                housing_healthy: str | None = None, housing_faulty: str | None = None) -> dict:
-    """Study kind sensor_comparison: one case (speed, fault, disturbance level, mounting place) compared.
+    """Study kind sensor_comparison: one case (speed, fault, disturbance level, mounting place) compared by the
+    calibrated test (:mod:`piezobearing.comparison.calibrated`): ``sensor_comparison.n_healthy_seeds`` and
+    ``n_faulty_seeds`` independent realisations of the rig.
 
     ``housing_*``: the case's housing models (rule sensor_comparison_housing); without them the case builds
-    its own. Returns the case's summary with ``rows``: one per sensor (the study's summary.csv rows).
+    its own. Returns the case's summary with ``rows``: one per sensor (the study's summary.csv rows), and
+    ``per_seed``: per sensor the true family's margin on every healthy and faulty seed (the ROC's and the
+    healthy distribution's figures).
     """
     circuit, harmonic_fem = _inputs(config, resistance, harmonic)
-    res = comparison.compare(config, circuit, harmonic_fem, read_housings(config, housing_healthy, housing_faulty))
+    c = config["sensor_comparison"]
+    res = comparison.compare(config, circuit, harmonic_fem, read_housings(config, housing_healthy, housing_faulty),
+                             n_seeds=(c["n_healthy_seeds"], c["n_faulty_seeds"]))
+    tests = calibrated.evaluate(res, c)
     b = config["bearing"]
+    floor = c["bearing_floor"]
     common = {
         "shaft_speed_rpm": b["shaft_speed_rpm"],
         "fault_type": res["fault_type"],
@@ -116,6 +127,9 @@ def study_case(config: dict, outdir: Path, resistance: str, harmonic: str | None
         "disturbance_rms_m_per_s2": res["disturbance_rms_m_per_s2"],
         "n_seeds": res["n_seeds"],
         "false_alarm_probability": res["false_alarm_probability"],
+        "roughness_rms_m": floor["roughness_rms_m"],
+        "waviness_rms_m": float(np.sqrt(0.5 * np.sum(np.square(floor["waviness_amplitudes_m"])))),
+        "unbalance_kg_m": floor["unbalance_kg_m"],
     }
     rows = []
     for s in comparison.SENSORS:
@@ -127,8 +141,14 @@ def study_case(config: dict, outdir: Path, resistance: str, harmonic: str | None
                      "band_low_Hz": r["detection"]["band_Hz"][0], "band_high_Hz": r["detection"]["band_Hz"][1],
                      "clean_rms_V": r["levels"]["faulty"]["clean_rms_V"],
                      "noise_std_V": r["levels"]["faulty"]["noise_std_V"],
-                     "clipped_samples": r["clipped_samples"]})
+                     "clipped_samples": r["clipped_samples"], **tests[s]})
+    per_seed = [{"sensor": s, "healthy_margin_dB": res["sensors"][s]["healthy_margin_dB_per_seed"],
+                 "faulty_margin_dB": res["sensors"][s]["margin_dB_per_seed"],
+                 "called_healthy": res["sensors"][s]["called_healthy"],
+                 "called_faulty": res["sensors"][s]["called_faulty"]} for s in comparison.SENSORS]
     housing = res["housing"]["faulty"]
-    return {**common, "rows": rows, "housing_n_modes": housing["n_modes"], "housing_first_mode_Hz": housing["first_mode_Hz"],
+    return {**common, "rows": rows, "per_seed": per_seed, "housing_n_modes": housing["n_modes"],
+            "housing_first_mode_Hz": housing["first_mode_Hz"],
             "housing_effective_mass_fraction_y": housing["effective_mass_fraction_y"],
             "housing_effective_mass_fraction_z": housing["effective_mass_fraction_z"]}
+

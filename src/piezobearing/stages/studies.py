@@ -21,6 +21,7 @@ from ..bearing.geometry import BearingGeometry
 from ..chain import bearing as bearing_outputs
 from ..chain import calibration as sensor_outputs
 from ..chain import signals as signals_outputs
+from ..comparison import calibrated
 from ..config.cases import case_config
 from ..diagnosis.calibration.record import check_record
 from ..housing import transient as bearing_transient
@@ -39,6 +40,7 @@ from ..io import (
     write_json,
 )
 from ..plotting import save, use_style
+from ..plotting import sensor_comparison as comparison_figures
 from ..plotting.studies import SUMMARY_FIGURES
 from ..sensor import design as sensor_design
 from ..sensor import fem as sensor_fem
@@ -333,6 +335,12 @@ KINDS = {
 }
 
 
+#: Columns a kind's summary table derives across its cases, by kind: name -> function of the table.
+SUMMARY_COLUMNS = {
+    "sensor_comparison": {"smallest_detected_width_m": calibrated.smallest_detected_width},
+}
+
+
 def run_case(
     study: str, case: str, overrides: dict, config: dict, out_json: str, inputs: dict | None = None
 ) -> None:
@@ -358,7 +366,21 @@ def summarize(study: str, case_jsons: list[str], out_csv: str, out_png: str) -> 
         # a kind with several rows per case (one per sensor) lists them under "rows"
         rows.extend([{**case, **r} for r in d["summary"]["rows"]] if "rows" in d["summary"] else [case])
     df = pd.DataFrame(rows)
+    if study in SUMMARY_COLUMNS:
+        df = df.assign(**{name: f(df) for name, f in SUMMARY_COLUMNS[study].items()})
     Path(out_csv).parent.mkdir(parents=True, exist_ok=True)
     df.to_csv(out_csv, index=False)
     use_style()
     save(SUMMARY_FIGURES[study](df), out_png)
+
+
+def calibrated_figures(case_jsons: list[str], out_healthy: str, out_roc: str) -> None:
+    """Rule sensor_comparison_calibrated_figures: the study's healthy statistic distributions and ROC curves from
+    its cases' summary.json files."""
+    cases = [read_json(p) for p in case_jsons]
+    cases.sort(key=lambda c: (c["summary"]["shaft_speed_rpm"], c["summary"]["fault_type"],
+                              c["summary"]["defect_width_m"], c["summary"]["roughness_rms_m"],
+                              c["summary"]["disturbance_level"]))
+    use_style()
+    save(comparison_figures.healthy_distributions(cases), out_healthy)
+    save(comparison_figures.roc_curves(cases), out_roc)

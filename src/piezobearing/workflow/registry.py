@@ -126,6 +126,11 @@ _BEARING = [
     "bearing.speed_ramp_rpm_per_s",
     "bearing.tachometer_pulses_per_rev",
     "bearing.roller_diameter_scatter_m",
+    "bearing.roughness_rms_m",
+    "bearing.roughness_correlation_length_m",
+    "bearing.waviness_orders",
+    "bearing.waviness_amplitudes_m",
+    "bearing.unbalance_kg_m",
     "bearing.start_angle_deg",
     "bearing.time_step_s",
     "bearing.duration_s",
@@ -190,6 +195,8 @@ READS: dict[str, list[str]] = {
         "seed", *_BEARING, *_HOUSING_GEOMETRY, "housing", *_PZT, *_ALUMINA_DISK, *_CIRCUIT, "signals",
         "base_motion", "accelerometer", "sensor_comparison",
     ],
+    # studies.smk: the sensor comparison's calibrated figures (from its cases' files alone)
+    "sensor_comparison_calibrated_figures": [],
     # diagnostics.smk
     "diagnose": ["seed", "sensor", "synthesis", "calibration", "model", "diagnostics"],
     # diagnostics_bearing.smk
