@@ -274,9 +274,13 @@ def observe(rig: Rig, run: dict, clean: dict, faulty: bool, replicate: int) -> t
 
 
 def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_records: bool = False,
-            log=sys.stderr, n_seeds: tuple[int, int] | None = None) -> dict:
+            log=sys.stderr, n_seeds: tuple[int, int] | None = None, floor_per_seed: bool = True) -> dict:
     """Both sensors on the healthy and the faulty bearing over ``sensor_comparison.n_seeds`` realisations each
     (``n_seeds``: healthy and faulty realisations instead, as the calibrated test draws them).
+
+    ``floor_per_seed=False`` (the workflow's own comparison, kept light): with the frame at rest the rig runs once
+    per case, on the first seed's floor, and the seeds draw the DAQs' noise on it; under base motion every seed is
+    a new realisation as always.
 
     ``config``: the workflow's (the comparison's step is applied here). ``circuit``: the PZT's measuring circuit
     (:func:`piezobearing.chain.signals.sensor_circuit`); ``harmonic``: the sensor FEM's response where
@@ -311,7 +315,7 @@ def compare(config: dict, circuit, harmonic, housings: dict | None = None, keep_
         case = "faulty" if faulty else "healthy"
         run = clean = None
         for rep in range(n_faulty if faulty else n_healthy):
-            if run is None or rig.redraw:
+            if run is None or (rig.redraw if floor_per_seed else rig.surroundings.active):
                 run, clean = realise(rig, faulty, rep)
                 rms.append(run["disturbance_rms_m_per_s2"])
                 print(f"sensor_comparison: {case} replicate {rep}: base motion "

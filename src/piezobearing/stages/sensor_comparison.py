@@ -74,7 +74,7 @@ def sensor_comparison(resistance_json: str, harmonic_csv: str | None, housing_he
     housings = read_housings(config, housing_healthy, housing_faulty)
     results, spectra = {}, []
     for condition, c in zip(CONDITIONS, (at_rest(config), config), strict=True):
-        res = comparison.compare(c, circuit, harmonic, housings, keep_records=True)
+        res = comparison.compare(c, circuit, harmonic, housings, keep_records=True, floor_per_seed=False)
         spectra.append(envelope_spectra(res, condition))
         results[condition] = _summary(res)
     b = config["bearing"]
@@ -84,9 +84,11 @@ def sensor_comparison(resistance_json: str, harmonic_csv: str | None, housing_he
             "per condition and sensor: detection_rate = share of seeds on the faulty bearing the envelope "
             "detector calls the true fault type; false_alarm_rate = share of seeds on the healthy bearing it "
             "calls any fault; margin_dB = median over seeds of the true family's 10 log10(statistic / threshold); "
-            "detection: the first seed's Detection. Each seed is a new realisation of the bearing's floor "
-            "(sensor_comparison.bearing_floor: roughness, waviness, unbalance phase), of the base motion (through "
-            "the LPM and the housing) and of both DAQs' noise."
+            "detection: the first seed's Detection. The bearing has its floor (sensor_comparison.bearing_floor: "
+            "roughness, waviness, unbalance). Frame at rest: one realisation of the rig per case (the first "
+            "seed's floor), the seeds draw both DAQs' noise; under base motion each seed is a new realisation of "
+            "the floor, of the base motion (through the LPM and the housing) and of both DAQs' noise. The "
+            "calibrated test with independent realisations is the study's (study_sensor_comparison)."
         ),
         "kinematics": kin.to_dict(),
         "shaft_speed_rpm": b["shaft_speed_rpm"],
