@@ -1,8 +1,8 @@
 """The envelope detector's null distribution: closed-form line densities cached by window size against the
 interpolated densities computed per line (``baselines/null_interpolated.py``), CPU seconds and thresholds.
 
-Two measurements. Speed: 20 healthy-machine records (2 s at 12 kHz, shaft 29-30 Hz, the records of
-tests/test_envelope_detector.py), each judged at the false-alarm probabilities 0.05 and 1e-3, every cache
+Two measurements. Speed: 20 healthy-machine records (2 s at 12 kHz, shaft 29-30 Hz, ``null_calibration.healthy_machine``,
+as tests/test_envelope_detector.py draws them), each judged at the false-alarm probabilities 0.05 and 1e-3, every cache
 cleared before each method. Accuracy: the thresholds of four families at five probabilities by each method,
 against the closed form on a grid four times finer (same span). Writes results/benchmarks/envelope_null.json.
 Usage: python benchmarks/bench_envelope_null.py
@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 import time
 from pathlib import Path
 
@@ -21,9 +20,9 @@ from baselines import null_interpolated  # benchmarks/ is the script's folder, f
 
 from piezobearing.bearing.kinematics import RollingBearing
 from piezobearing.signals.detectors import envelope as envelope_detector
+from piezobearing.signals.detectors.null_calibration import healthy_machine
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from test_envelope_detector import FS, machine  # noqa: E402
+FS = 12_000.0  # the records' sampling rate [Hz]
 
 BEARING = RollingBearing.from_designation("SKF 6205")
 N_RECORDS = 20
@@ -43,7 +42,7 @@ def records() -> list[tuple[np.ndarray, dict]]:
     for j in range(N_RECORDS):
         rng = np.random.default_rng([17, j])
         shaft = rng.uniform(29.0, 30.0)
-        x = machine(rng, shaft, 2.0)
+        x = healthy_machine(rng, shaft, 2.0, FS)
         out.append((x, BEARING.kinematics(shaft * rng.uniform(0.99, 1.01)).to_dict()))
     return out
 

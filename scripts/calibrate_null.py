@@ -10,7 +10,7 @@ without a bearing fault, each at 2, 5 and 10 s and at 12 and 25.6 kHz, an SKF 62
 - **resonant noise**: white noise through a structural resonance (two poles, a centre drawn in 1-4 kHz, Q in
   5-30) over a white floor a tenth of its rms: the colour of an accelerometer on a housing;
 - **healthy machine**: noise modulated at the shaft rate, its first 8 harmonics far above the noise, a mesh tone
-  with shaft-rate sidebands (``machine``: a healthy machine's lines where a fault's would fall).
+  with shaft-rate sidebands (``null_calibration.healthy_machine``: a healthy machine's lines where a fault's would fall).
 
 Each record is read once with the detector's default settings (:func:`~piezobearing.signals.detectors.envelope.measure`)
 and its critical level per test computed (:func:`~piezobearing.signals.detectors.envelope.critical_alpha`); the
@@ -45,18 +45,6 @@ PROBABILITIES = (0.01, 0.02, 0.05, 0.1, 0.2)
 SEED = 101
 
 
-def machine(rng: np.random.Generator, shaft_Hz: float, seconds: float, sample_rate_Hz: float) -> np.ndarray:
-    """A healthy machine: white noise modulated at the shaft rate, its first 8 harmonics far above the noise,
-    and a 31 x shaft mesh tone with +-1, +-2 shaft-rate sidebands."""
-    t = np.arange(int(sample_rate_Hz * seconds)) / sample_rate_Hz
-    phase = 2 * np.pi * shaft_Hz * t
-    x = (1.0 + 0.5 * np.cos(phase + rng.uniform(0, 2 * np.pi))) * rng.standard_normal(t.size)
-    for k in range(1, 9):
-        x += 3.0 / k * np.cos(k * phase + rng.uniform(0, 2 * np.pi))
-    x += 2.0 * (1 + 0.6 * np.cos(phase) + 0.3 * np.cos(2 * phase)) * np.cos(31 * phase)
-    return x
-
-
 def resonant_noise(rng: np.random.Generator, seconds: float, sample_rate_Hz: float) -> np.ndarray:
     """White noise through a two-pole resonance (centre 1-4 kHz, Q 5-30) over a white floor a tenth of its rms."""
     n = int(sample_rate_Hz * seconds)
@@ -83,7 +71,7 @@ def record(kind: str, rng: np.random.Generator, shaft_Hz: float, seconds: float,
     if kind == "pink noise":
         return pink_noise(rng, seconds, sample_rate_Hz)
     if kind == "healthy machine":
-        return machine(rng, shaft_Hz, seconds, sample_rate_Hz)
+        return null_calibration.healthy_machine(rng, shaft_Hz, seconds, sample_rate_Hz)
     raise ValueError(f"kind '{kind}' unknown")
 
 

@@ -111,13 +111,13 @@ CHANGES = [
 
 @pytest.mark.parametrize("changes, fragment", CHANGES)
 def test_a_case_checked_by_its_changed_sections_is_checked_as_a_whole(paper_config, changes, fragment):
-    """validate_changes (a study case against its valid base) gives validate's result and one-line error."""
+    """validate with a base (a study case against its valid base) gives the whole check's result and error."""
     base = piezobearing.config.validate(copy.deepcopy(paper_config))
     case = copy.deepcopy(base)
     for (section, key), value in changes.items():
         case[section][key] = value
     outcomes = []
-    for check in (piezobearing.config.validate, lambda c, source: piezobearing.config.validate_changes(c, base, source)):
+    for check in (piezobearing.config.validate, lambda c, source: piezobearing.config.validate(c, source=source, base=base)):
         try:
             outcomes.append(check(copy.deepcopy(case), source="my.yaml"))
         except piezobearing.config.ConfigError as e:

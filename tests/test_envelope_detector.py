@@ -11,21 +11,10 @@ from scipy.stats import binom
 
 from piezobearing.bearing.kinematics import RollingBearing
 from piezobearing.signals.detectors import envelope as envelope_detector
+from piezobearing.signals.detectors.null_calibration import healthy_machine
 
 FS = 12_000.0
 BEARING = RollingBearing.from_designation("SKF 6205")
-
-
-def machine(rng: np.random.Generator, shaft_Hz: float, seconds: float, sample_rate_Hz: float = FS) -> np.ndarray:
-    """A healthy machine: white noise modulated at the shaft rate, its first 8 harmonics far above the noise,
-    and a 31 x shaft mesh tone with +-1, +-2 shaft-rate sidebands [g], sampled at ``sample_rate_Hz``."""
-    t = np.arange(int(sample_rate_Hz * seconds)) / sample_rate_Hz
-    phase = 2 * np.pi * shaft_Hz * t
-    x = (1.0 + 0.5 * np.cos(phase + rng.uniform(0, 2 * np.pi))) * rng.standard_normal(t.size)
-    for k in range(1, 9):
-        x += 3.0 / k * np.cos(k * phase + rng.uniform(0, 2 * np.pi))
-    x += 2.0 * (1 + 0.6 * np.cos(phase) + 0.3 * np.cos(2 * phase)) * np.cos(31 * phase)
-    return x
 
 
 def outer_race_impacts(rng: np.random.Generator, bpfo_Hz: float, seconds: float, amplitude: float) -> np.ndarray:
@@ -47,7 +36,7 @@ def test_outer_race_impulse_train_is_found_with_the_speed_off(speed_error, with_
     shaft = 1797.0 / 60.0
     true = BEARING.kinematics(shaft, cage_slip=0.01)
     x = outer_race_impacts(rng, true.bpfo_Hz, 4.0, amplitude=3.0)  # impacts about a third of the noise rms
-    x += machine(rng, shaft, 4.0) if with_harmonics else rng.standard_normal(x.size)
+    x += healthy_machine(rng, shaft, 4.0, FS) if with_harmonics else rng.standard_normal(x.size)
     given = BEARING.kinematics(shaft * (1 + speed_error)).to_dict()  # nominal speed 1.5 % off, no slip
     d = envelope_detector.detect(x, FS, given, envelope_detector.Settings())
     assert d.fault_type == "outer_race", {f: e.margin_dB for f, e in d.families.items()}
@@ -72,7 +61,7 @@ def test_healthy_machine_with_shaft_harmonics_and_sidebands_false_alarms_at_most
     for j in range(n_records):
         rng = np.random.default_rng([17, j])
         shaft = rng.uniform(29.0, 30.0)
-        x = machine(rng, shaft, 2.0)
+        x = healthy_machine(rng, shaft, 2.0, FS)
         kin = BEARING.kinematics(shaft * rng.uniform(0.99, 1.01)).to_dict()  # the given speed within 1 %
         alarms_loose += envelope_detector.detect(x, FS, kin, loose).fault_type != "none"
         alarms_strict += envelope_detector.detect(x, FS, kin, strict).fault_type != "none"

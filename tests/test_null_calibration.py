@@ -9,10 +9,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from scipy.stats import binom
-from test_envelope_detector import machine
 
 from piezobearing.bearing.kinematics import RollingBearing
 from piezobearing.signals.detectors import envelope, is_alarm, null_calibration
+from piezobearing.signals.detectors.null_calibration import healthy_machine
 
 BEARING = RollingBearing.from_designation("SKF 6205")
 FS = 12000.0
@@ -24,7 +24,7 @@ def _readings(n: int, seconds: float = 2.0):
     for j in range(n):
         rng = np.random.default_rng([71, j])
         shaft = rng.uniform(20.0, 30.0)
-        x = machine(rng, shaft, seconds, FS) if j % 2 else rng.standard_normal(int(seconds * FS))
+        x = healthy_machine(rng, shaft, seconds, FS) if j % 2 else rng.standard_normal(int(seconds * FS))
         out.append(envelope.measure(x, FS, BEARING.kinematics(shaft * 1.005).to_dict(), settings))
     return out, settings
 

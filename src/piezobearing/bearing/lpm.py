@@ -597,14 +597,24 @@ class LPMResult:
     newton_iterations: int
 
 
-def _matrices(p: LPMParameters) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Mass, damping and linear stiffness of the 4 DOFs (y_s, z_s, y_p, z_p)."""
+def shaft_pedestal_matrices(shaft_mass_kg: float, pedestal_mass_kg: float, bearing_damping_N_s_per_m: float,
+                            pedestal_damping_N_s_per_m: float, pedestal_stiffness_N_per_m: float
+                            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mass [kg], damping [N s/m] and linear stiffness [N/m] of the 4 DOFs (y_s, z_s, y_p, z_p): the shaft on
+    the bearing's damping to the pedestal, the pedestal on its spring and damper (the contacts are the nonlinear
+    rest)."""
     i2 = np.eye(2)
-    m = np.diag([p.shaft_mass_kg] * 2 + [p.pedestal_mass_kg] * 2)
-    cb, cp = p.bearing_damping_N_s_per_m, p.pedestal_damping_N_s_per_m
+    m = np.diag([shaft_mass_kg] * 2 + [pedestal_mass_kg] * 2)
+    cb, cp = bearing_damping_N_s_per_m, pedestal_damping_N_s_per_m
     c = np.block([[cb * i2, -cb * i2], [-cb * i2, (cb + cp) * i2]])
-    k = np.block([[0 * i2, 0 * i2], [0 * i2, p.pedestal_stiffness_N_per_m * i2]])
+    k = np.block([[0 * i2, 0 * i2], [0 * i2, pedestal_stiffness_N_per_m * i2]])
     return m, c, k
+
+
+def _matrices(p: LPMParameters) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mass, damping and linear stiffness of the 4 DOFs (y_s, z_s, y_p, z_p) of ``p``."""
+    return shaft_pedestal_matrices(p.shaft_mass_kg, p.pedestal_mass_kg, p.bearing_damping_N_s_per_m,
+                                   p.pedestal_damping_N_s_per_m, p.pedestal_stiffness_N_per_m)
 
 
 def lpm_rhs(p: LPMParameters):

@@ -29,7 +29,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .lpm import contact_law, line_contact_stiffness
+from .lpm import contact_law, line_contact_stiffness, shaft_pedestal_matrices
 from .lpm_kernel import newmark_lpm
 from .surrogate import NoEquilibriumError, quasi_static_loads
 
@@ -69,13 +69,9 @@ class ShaftDynamics:
                    float(bearing["pedestal_damping_N_s_per_m"]))
 
     def matrices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Mass, damping and linear stiffness of (y_s, z_s, y_p, z_p), as :func:`.lpm._matrices`."""
-        i2 = np.eye(2)
-        m = np.diag([self.shaft_mass_kg] * 2 + [self.pedestal_mass_kg] * 2)
-        cb, cp = self.bearing_damping_N_s_per_m, self.pedestal_damping_N_s_per_m
-        c = np.block([[cb * i2, -cb * i2], [-cb * i2, (cb + cp) * i2]])
-        k = np.block([[0 * i2, 0 * i2], [0 * i2, self.pedestal_stiffness_N_per_m * i2]])
-        return m, c, k
+        """Mass, damping and linear stiffness of (y_s, z_s, y_p, z_p) (:func:`.lpm.shaft_pedestal_matrices`)."""
+        return shaft_pedestal_matrices(self.shaft_mass_kg, self.pedestal_mass_kg, self.bearing_damping_N_s_per_m,
+                                       self.pedestal_damping_N_s_per_m, self.pedestal_stiffness_N_per_m)
 
 
 def modes_Hz(k_contact_N_per_m: float, m_s: float, m_p: float, k_p: float) -> tuple[float, float]:

@@ -251,9 +251,18 @@ def physical_problems(config: dict) -> list[str]:
     return out
 
 
-def validate(config: dict, source: str = "config", schema_path: str | Path = SCHEMA_PATH) -> dict:
+def validate(config: dict, source: str = "config", schema_path: str | Path = SCHEMA_PATH,
+             base: dict | None = None) -> dict:
     """Validate against the schema and the cross-field checks; raise :class:`ConfigError` with one
-    line naming the key and the fix."""
+    line naming the key and the fix.
+
+    ``base``: a config that passed :func:`validate`, of which ``config`` is a copy with some values changed (a
+    study case). Only the top-level sections that differ from ``base``'s are checked against the schema, with the
+    same result and the same one-line error: the schema has no keyword across sections (no ``$ref``, no
+    conditional at its top level), so each section is valid on its own, and a section equal to ``base``'s passes
+    as it did there. The cross-field checks still see the whole config. A study's parse validates one config per
+    case, and most of a whole-config check is the sections a case does not touch.
+    """
     if not isinstance(config, dict):
         raise ConfigError(
             f"{source}: the top level is a {type(config).__name__}, not a mapping of keys; write 'key: value' "
@@ -264,7 +273,7 @@ def validate(config: dict, source: str = "config", schema_path: str | Path = SCH
         written = ".nan" if math.isnan(bad[1]) else f"{'-' if bad[1] < 0 else ''}.inf"
         raise ConfigError(f"{source}: key '{bad[0]}': {written} is not a finite number; write a finite value")
     validator = _validator(str(schema_path))
-    errors = sorted(validator.iter_errors(config), key=lambda e: list(map(str, e.path)))
+    errors = sorted(_schema_errors(validator, config, base), key=lambda e: list(map(str, e.path)))
     if errors:
         raise ConfigError(f"{source}: {_message(errors[0])}")
     _defect_defaults(config, validator.schema)
@@ -274,39 +283,21 @@ def validate(config: dict, source: str = "config", schema_path: str | Path = SCH
     return config
 
 
-
-def validate_changes(config: dict, base: dict, source: str = "config", schema_path: str | Path = SCHEMA_PATH) -> dict:
-    """:func:`validate` of ``config``, a copy of ``base`` (a config that passed :func:`validate`) with some values
-    changed (a study case), checking against the schema only the top-level sections that differ from ``base``.
-
-    The same result and the same one-line error as :func:`validate`: the schema has no keyword across sections
-    (no ``$ref``, no conditional at its top level), so each section is valid on its own, and a section equal to
-    ``base``'s passes as it did there; the cross-field checks still see the whole config. A study's parse validates
-    one config per case, and most of a whole-config check is the sections a case does not touch.
-    """
-    if not isinstance(config, dict) or not isinstance(base, dict) or set(config) != set(base):
-        return validate(config, source, schema_path)
-    bad = _non_finite(config)
-    if bad:
-        written = ".nan" if math.isnan(bad[1]) else f"{'-' if bad[1] < 0 else ''}.inf"
-        raise ConfigError(f"{source}: key '{bad[0]}': {written} is not a finite number; write a finite value")
-    validator = _validator(str(schema_path))
+def _schema_errors(validator, config: dict, base: dict | None) -> list:
+    """The schema's errors of ``config``: of the whole, or where ``base`` (a valid config with the same
+    sections) is given, of the sections that differ from it (their paths from the top)."""
     sections = validator.schema.get("properties", {})
-    errors = []
-    for key in sorted(k for k in config if config[k] != base[k]):
-        if key not in sections:
-            return validate(config, source, schema_path)
-        for e in validator.evolve(schema=sections[key]).iter_errors(config[key]):
-            e.path.appendleft(key)
-            errors.append(e)
-    errors.sort(key=lambda e: list(map(str, e.path)))
-    if errors:
-        raise ConfigError(f"{source}: {_message(errors[0])}")
-    _defect_defaults(config, validator.schema)
-    problems = physical_problems(config)
-    if problems:
-        raise ConfigError(f"{source}: {problems[0]}")
-    return config
+    if base is not None and set(config) == set(base):
+        changed = [k for k in config if config[k] != base[k]]
+        if all(k in sections for k in changed):
+            errors = []
+            for key in changed:
+                for e in validator.evolve(schema=sections[key]).iter_errors(config[key]):
+                    e.path.appendleft(key)
+                    errors.append(e)
+            return errors
+    return list(validator.iter_errors(config))
+
 
 def read_yaml(path: str | Path) -> dict:
     """A config file as a dict; one-line :class:`ConfigError` for a missing, unreadable or invalid file."""

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from . import ConfigError, validate_changes
+from . import ConfigError, validate
 
 SEP = "__"
 
@@ -80,7 +80,7 @@ def case_config(config: dict, overrides: dict, source: str = "study case") -> di
 
     ``config`` is a config that passed :func:`~piezobearing.config.validate` (the workflow's); the sections the
     overrides change are checked against the schema, and the whole by the cross-field checks
-    (:func:`~piezobearing.config.validate_changes`).
+    (``validate``'s ``base``).
     """
     out = copy.deepcopy(config)
     for col, value in overrides.items():
@@ -99,4 +99,4 @@ def case_config(config: dict, overrides: dict, source: str = "study case") -> di
         ):
             value = int(value)
         node[last] = value
-    return validate_changes(out, config, source=source)
+    return validate(out, source=source, base=config)

@@ -106,3 +106,16 @@ def calibrate(critical: np.ndarray, probabilities: tuple[float, ...], seconds: f
         rows.append({"length_s": float(seconds), "false_alarm_probability": float(p), "alpha_per_test": level, "alarms_allowed": k,
                      "records": int(n), "effective_tests": float(p / level)})
     return rows
+
+
+def healthy_machine(rng: np.random.Generator, shaft_Hz: float, seconds: float, sample_rate_Hz: float) -> np.ndarray:
+    """A record of a healthy machine, one kind of the table's records without a fault (and of the null's
+    validation and tests): white noise modulated at the shaft rate, its first 8 harmonics far above the noise,
+    and a 31 x shaft mesh tone with +-1, +-2 shaft-rate sidebands [g], sampled at ``sample_rate_Hz`` [Hz]."""
+    t = np.arange(int(sample_rate_Hz * seconds)) / sample_rate_Hz
+    phase = 2 * np.pi * shaft_Hz * t
+    x = (1.0 + 0.5 * np.cos(phase + rng.uniform(0, 2 * np.pi))) * rng.standard_normal(t.size)
+    for k in range(1, 9):
+        x += 3.0 / k * np.cos(k * phase + rng.uniform(0, 2 * np.pi))
+    x += 2.0 * (1 + 0.6 * np.cos(phase) + 0.3 * np.cos(2 * phase)) * np.cos(31 * phase)
+    return x
