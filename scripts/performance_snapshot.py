@@ -263,6 +263,32 @@ def _large_record(d: dict) -> tuple[str, str, list[dict]]:
         q("first start peak RSS", a["peak_rss_MB"], "MB")]
 
 
+def _calibrated_seed(d: dict) -> tuple[str, str, list[dict]]:
+    """The comparison's calibrated test: median CPU per seed at rest / under base motion, and per case."""
+    parts, counts, qs, cases = [], [], [], []
+    for key, label in (("at_rest", "at rest"), ("base_motion", "under base motion")):
+        c = d["conditions"].get(key)
+        if not c or "healthy" not in c:
+            continue
+        seeds = [s for s in (c.get("healthy"), c.get("faulty")) if s]
+        median = c["healthy"]["median_cpu_s"]
+        parts.append((seconds(median), label))
+        counts.append(str(sum(s["seeds"] for s in seeds)))
+        qs.append(q(f"healthy seed, {label}", median, "s"))
+        if c.get("faulty"):
+            qs.append(q(f"faulty seed, {label}", c["faulty"]["median_cpu_s"], "s"))
+        if c.get("case_cpu_s") is not None:
+            cases.append(c["case_cpu_s"])
+            qs.append(q(f"case, {label}", c["case_cpu_s"], "s"))
+    nh, nf = d["case_seeds"]
+    text = (" / ".join(p for p, _ in parts) + " CPU per healthy seed " + " / ".join(lb for _, lb in parts)
+            + f" (median; {' / '.join(counts)} seeds)")
+    if cases:
+        text += f"; a case of {nh} + {nf} seeds {seconds(max(cases))} CPU"
+    memory = f"{megabytes(d['peak_rss_MB'])} largest process" if "peak_rss_MB" in d else "–"
+    return text, memory, qs
+
+
 ROWS = [
     Row("paper", "the whole paper workflow in a fresh clone (all figures, the scorecard, both diagnoses)",
         "command_paper.json", "`python benchmarks/bench_command.py paper -- snakemake --cores 2`", _command_row),
@@ -323,6 +349,11 @@ ROWS = [
     Row("clock_drift", "`clock_drift` effect's windowed-sinc reading of a 25001-sample record: a series for I0 and "
         "one sine a sample, against numpy's `i0` and `sinc` for every tap",
         "clock_drift.json", "`python benchmarks/bench_clock_drift.py`", _clock_drift),
+    Row("calibrated_seed", "the sensor comparison's calibrated test, one seed on the paper config (a rig realisation: "
+        "the LPM with the healthy bearing's floor, the housing, both sensors and the envelope detector)",
+        "calibrated_seed.json", "`python benchmarks/bench_calibrated_seed.py --from-runs "
+        "results/validation/calibrated_paper.jsonl.cpu.jsonl results/validation/calibrated_paper_rms.jsonl.cpu.jsonl`",
+        _calibrated_seed),
     Row("sensor_design", "sensor-design study mesh, one design at multiplier 1.0", "sensor_design.json",
         "`python benchmarks/bench_sensor_design.py`", _sensor_design),
     Row("large_record", "the workflow's check of a large calibration record, run at every start (`snakemake -n` "
