@@ -168,8 +168,7 @@ def report(args) -> None:
             tables.append({"case": label, "sensor": s, **overrides, "healthy_seeds_of": borrowed.get(label, label),
                            **{k: summary[k] for k in ("shaft_speed_rpm", "fault_type", "defect_width_m",
                                                       "disturbance_level", "roughness_rms_m")}, **test})
-        if label not in borrowed:  # the figures: each healthy distribution once
-            cases.append({"summary": summary})
+        cases.append({"summary": summary, "own_healthy": label not in borrowed})
     if tables:
         widths = calibrated.smallest_detected_width(pd.DataFrame(tables))
         for t, w in zip(tables, widths, strict=True):
@@ -177,7 +176,8 @@ def report(args) -> None:
     Path(args.report).write_text(json.dumps({"cases": tables}, indent=1, default=str))
     use_style()
     stem = Path(args.report).with_suffix("")
-    save(figures.healthy_distributions(cases), f"{stem}_healthy_statistic.png")
+    # each healthy distribution once (a width sweep's cases share their reference's); every case's ROC
+    save(figures.healthy_distributions([c for c in cases if c["own_healthy"]]), f"{stem}_healthy_statistic.png")
     save(figures.roc_curves(cases), f"{stem}_roc.png")
     keys = ("n_healthy_seeds", "n_faulty_seeds", "calibrated_threshold_dB", "calibrated_detection_probability",
             "calibrated_detection_ci_low", "calibrated_detection_ci_high", "tail_threshold_dB",
