@@ -13,7 +13,8 @@ the workflow's resistance fit, sensor FEM response and the comparison's housing 
 ``snakemake --cores 1 study_sensor_comparison --configfile config/sensor_comparison_calibrated.yaml --omit-from
 study_case`` first). ``--from-runs`` reads instead the per-seed CPU seconds the runner wrote beside its results
 (``<out>.cpu.jsonl``: every seed of a long run, each timed by ``time.process_time`` around the same two calls).
-Cases whose label is ``rest`` or ends in ``_rest`` count as at rest, the others as under base motion; a file's
+Cases whose label is ``frame`` or ends in ``_frame`` count as under base motion, the others as at rest (the
+labels of docs/validation/sensor_comparison.md's runs); a file's
 other cases (width sweeps: faulty seeds only) count too. CPU seconds, not wall: the machine may be shared.
 
 Writes results/benchmarks/calibrated_seed.json.
@@ -48,7 +49,7 @@ def summary(cpu: list[float]) -> dict:
 
 
 def condition_of(label: str) -> str:
-    return "at_rest" if label == "rest" or label.endswith("_rest") else "base_motion"
+    return "base_motion" if label == "frame" or label.endswith("_frame") else "at_rest"
 
 
 def from_runs(paths: list[str]) -> dict:
