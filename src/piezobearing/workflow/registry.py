@@ -371,8 +371,13 @@ def _module_imports(f: Path) -> tuple[Path, ...]:
 @lru_cache(maxsize=None)
 def package_modules(entry: str) -> tuple[Path, ...]:
     """Every file of this package that ``entry`` (a script or notebook path) imports, transitively, sorted."""
+    return _closure([f for f in map(_module_file, sorted(_imports(_source_text(Path(entry)), None, False)))
+                     if f is not None])
+
+
+def _closure(todo: list[Path]) -> tuple[Path, ...]:
+    """The module files ``todo`` and every package file they import, transitively, sorted."""
     seen: set[Path] = set()
-    todo = [f for f in map(_module_file, sorted(_imports(_source_text(Path(entry)), None, False))) if f is not None]
     while todo:
         f = todo.pop()
         if f not in seen:
@@ -400,6 +405,20 @@ def code_hash(entry: str) -> str:
     for f in package_modules(entry):
         if f != _REGISTRY_FILE:
             h.update(_hashed_part(f))
+    return h.hexdigest()
+
+
+@lru_cache(maxsize=None)
+def module_code_hash(name: str) -> str:
+    """SHA-256 over package module ``name`` (``piezobearing.x.y``) and the package modules it imports, as
+    :func:`code_hash` of an entry."""
+    f = _module_file(name)
+    if f is None:
+        raise ValueError(f"{name} is not a module of this package")
+    h = hashlib.sha256()
+    for g in _closure([f]):
+        if g != _REGISTRY_FILE:
+            h.update(_hashed_part(g))
     return h.hexdigest()
 
 
