@@ -14,17 +14,23 @@ from piezobearing.workflow import registry
 from piezobearing.workflow.checks import check_subject_once
 
 SUBJECTS = ("piezobearing.diagnosis.calibration.subject", "piezobearing.diagnosis.bearing.subject")
+RULES = dict(zip(SUBJECTS, ("diagnose", "diagnose_bearing"), strict=True))
 
 
 @pytest.mark.parametrize("subject", SUBJECTS)
 def test_a_config_that_passed_is_checked_once(subject, paper_config, tmp_path):
-    """The first start checks, the next one with the same config remembers; another config is checked again."""
-    assert check_subject_once(subject, paper_config, tmp_path) is True
-    assert check_subject_once(subject, paper_config, tmp_path) is False
+    """The first start checks, the next one with the same settings remembers; a change of a key the rule reads
+    is checked again, a change of another key is not."""
+    rule = RULES[subject]
+    assert check_subject_once(subject, rule, paper_config, tmp_path) is True
+    assert check_subject_once(subject, rule, paper_config, tmp_path) is False
     assert len(list(tmp_path.glob("*.ok"))) == 1
+    elsewhere = copy.deepcopy(paper_config)
+    elsewhere["housing"]["n_modes"] += 1
+    assert check_subject_once(subject, rule, elsewhere, tmp_path) is False
     other = copy.deepcopy(paper_config)
     other["seed"] += 1
-    assert check_subject_once(subject, other, tmp_path) is True
+    assert check_subject_once(subject, rule, other, tmp_path) is True
     assert len(list(tmp_path.glob("*.ok"))) == 2
 
 
@@ -36,7 +42,7 @@ def test_a_bad_effect_stops_every_start(subject, section, key, paper_config, tmp
     bad[section][key] = ["ringing"]
     for _ in range(2):
         with pytest.raises(EffectError, match="unknown effect 'ringing'") as e:
-            check_subject_once(subject, bad, tmp_path)
+            check_subject_once(subject, RULES[subject], bad, tmp_path)
         assert "\n" not in str(e.value)
     assert not list(tmp_path.glob("*.ok"))
 
@@ -44,12 +50,12 @@ def test_a_bad_effect_stops_every_start(subject, section, key, paper_config, tmp
 def test_a_remembered_check_imports_no_model(paper_config, tmp_path):
     """With the check remembered, a start reads neither the subjects nor scipy.signal or numba."""
     for subject in SUBJECTS:
-        check_subject_once(subject, paper_config, tmp_path)
+        check_subject_once(subject, RULES[subject], paper_config, tmp_path)
     code = (
         "import json, sys\n"
         "from piezobearing import config\n"
         "from piezobearing.workflow.checks import check_subject_once\n"
-        f"ran = [check_subject_once(s, config.load(), {str(tmp_path)!r}) for s in {SUBJECTS!r}]\n"
+        f"ran = [check_subject_once(s, r, config.load(), {str(tmp_path)!r}) for s, r in {tuple(RULES.items())!r}]\n"
         "print(json.dumps([ran, sorted(m for m in ('scipy.signal', 'numba', *" + repr(SUBJECTS) + ") "
         "if m in sys.modules)]))\n"
     )

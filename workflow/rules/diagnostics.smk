@@ -9,7 +9,10 @@ from piezobearing.workflow.checks import check_subject_once
 
 try:  # an unknown effect in model.effects or synthesis.hidden_effects stops before any job (once per config)
     check_subject_once(
-        "piezobearing.diagnosis.calibration.subject", config, f"{RESULTS}/.checked"
+        "piezobearing.diagnosis.calibration.subject",
+        "diagnose",
+        config,
+        f"{RESULTS}/.checked",
     )
 except EffectError as e:
     print(f"piezobearing: {e}", file=sys.stderr)

@@ -9,7 +9,10 @@ from piezobearing.workflow.checks import check_subject_once
 
 try:  # an unknown effect in bearing_diagnosis.effects or bearing.hidden_effects stops before any job (once per config)
     check_subject_once(
-        "piezobearing.diagnosis.bearing.subject", config, f"{RESULTS}/.checked"
+        "piezobearing.diagnosis.bearing.subject",
+        "diagnose_bearing",
+        config,
+        f"{RESULTS}/.checked",
     )
 except EffectError as e:
     print(f"piezobearing: {e}", file=sys.stderr)
