@@ -15,7 +15,11 @@ from piezobearing.workflow.registry import (
     declared,
     reads_digest,
     rule_params,
+    use_imports_cache,
 )
+
+# each package module's imports, parsed once and remembered from one start to the next (the code hashes)
+use_imports_cache(".snakemake/piezobearing/imports.json")
 
 CONFIG_FILES = [
     "config/config.yaml",

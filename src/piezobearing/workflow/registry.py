@@ -18,8 +18,10 @@ modification time (``cp -p``, unzip, ``rsync -a``) still reruns what reads it.
 from __future__ import annotations
 
 import ast
+import atexit
 import hashlib
 import json
+import os
 from functools import lru_cache
 from pathlib import Path
 
@@ -360,12 +362,54 @@ def _source_text(path: Path) -> str:
     return text
 
 
+#: Each module's imports by the SHA-256 of its bytes and its name, across workflow starts (:func:`use_imports_cache`).
+_IMPORTS_CACHE: dict[str, list[str]] = {}
+_IMPORTS_USED: dict[str, list[str]] = {}
+_IMPORTS_CACHE_FILE: list[Path] = []
+
+
+def use_imports_cache(path: str | Path) -> None:
+    """Remember every module's imports in ``path`` (JSON) from one start to the next: parsing the package's 220
+    modules is half of the code hash's and a third of a warm dry run's time, and between starts few of them change.
+    Keyed by each module's bytes (SHA-256) and name, so an edited module is parsed again; written at exit with
+    the entries this start used. The workflow calls it at its parse (``.snakemake/piezobearing/imports.json``)."""
+    path = Path(path)
+    try:
+        _IMPORTS_CACHE.update(json.loads(path.read_text()))
+    except (OSError, ValueError):
+        pass  # none yet, or unreadable: parse every module this time
+    if not _IMPORTS_CACHE_FILE:
+        atexit.register(_save_imports_cache)
+    _IMPORTS_CACHE_FILE[:] = [path]
+
+
+def _save_imports_cache() -> None:
+    path = _IMPORTS_CACHE_FILE[0]
+    if not _IMPORTS_USED or _IMPORTS_USED.keys() == _IMPORTS_CACHE.keys():
+        return
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f"{path.name}.{os.getpid()}")
+        tmp.write_text(json.dumps(_IMPORTS_USED, sort_keys=True))
+        os.replace(tmp, path)  # whole, even with another start writing beside it
+    except OSError:
+        pass  # a read-only folder only costs the next start the parse
+
+
 @lru_cache(maxsize=None)
 def _module_imports(f: Path) -> tuple[Path, ...]:
     """The package files module file ``f`` imports directly, parsed once per process (every rule's entry
-    reaches the same modules: parsing them once per entry was most of a dry run's time)."""
-    names = _imports(f.read_text(), _module_name(f), f.name == "__init__.py")
-    return tuple(p for p in map(_module_file, sorted(names)) if p is not None)
+    reaches the same modules: parsing them once per entry was most of a dry run's time), or read from the
+    imports cache (:func:`use_imports_cache`)."""
+    data = f.read_bytes()
+    name = _module_name(f)
+    key = f"{hashlib.sha256(data).hexdigest()} {name}"
+    names = _IMPORTS_CACHE.get(key) if _IMPORTS_CACHE_FILE else None
+    if names is None:
+        names = sorted(_imports(data.decode(), name, f.name == "__init__.py"))
+    if _IMPORTS_CACHE_FILE:
+        _IMPORTS_USED[key] = names
+    return tuple(p for p in map(_module_file, names) if p is not None)
 
 
 @lru_cache(maxsize=None)
