@@ -273,7 +273,8 @@ ROWS = [
         _command_row),
     Row("tests", "the test suite", "command_tests.json", "`python benchmarks/bench_command.py tests -- pytest -n 2`",
         _command_row),
-    Row("install", "the install: a new venv with `pip install .`", "command_install.json",
+    Row("install", "the install: a new venv with `pip install .`, its wheels at hand (pip's cache or a local "
+        "mirror; a first download adds its own time)", "command_install.json",
         "`python benchmarks/bench_command.py install --size /tmp/pb-venv -- sh -c "
         "'python3.11 -m venv /tmp/pb-venv && /tmp/pb-venv/bin/pip install .'`", _install_row),
     Row("sensor_fem", "sensor FEM, modal + harmonic, default mesh (quadratic)", "sensor_fem.json",
