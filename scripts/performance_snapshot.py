@@ -147,7 +147,15 @@ def _solver_level(pick: str) -> Callable[[dict], tuple[str, str, list[dict]] | N
         text = (f"{seconds(p['factor_s'])} against {seconds(s['factor_s'])} ({ratio(s['factor_s'] / p['factor_s'])}), "
                 f"{p['factor_nnz'] / 1e6:.1f} M against {s['factor_nnz'] / 1e6:.1f} M factor entries, "
                 f"level {level:g}, {row['n_dofs'] / 1000:.1f} k DOF")
-        return text, "–", [q("PARDISO", p["factor_s"], "s"), q("SuperLU", s["factor_s"], "s"), q("DOF", row["n_dofs"], "1")]
+        qs = [q("PARDISO", p["factor_s"], "s"), q("SuperLU", s["factor_s"], "s"), q("DOF", row["n_dofs"], "1")]
+        if "factor_cpu_s" in p:  # the process's CPU seconds of each factorisation, load-insensitive
+            text += f"; CPU {seconds(p['factor_cpu_s'])} against {seconds(s['factor_cpu_s'])}"
+            qs += [q("PARDISO CPU", p["factor_cpu_s"], "s"), q("SuperLU CPU", s["factor_cpu_s"], "s")]
+        memory = "–"
+        if pick == "finest" and "peak_rss_MB" in row:  # the levels run coarse to fine: the finest holds the peak
+            memory = f"{megabytes(row['peak_rss_MB'])} (the benchmark's whole process, both solvers)"
+            qs.append(q("peak RSS", row["peak_rss_MB"], "MB"))
+        return text, memory, qs
 
     return read
 
