@@ -1,9 +1,10 @@
 """Sparse solvers and the batched SNR sweep against the methods they replace, in one run each, as ratios.
 
-* housing: factorisation of K and the influence line (one solve) at each mesh level of the
-  convergence study, and the shift-invert modes, with SuperLU in the model's nested-dissection
+* housing: factorisation of K (wall and CPU seconds) and the influence line (one solve) at each mesh level
+  of the convergence study, and the shift-invert modes, with SuperLU in the model's nested-dissection
   numbering (the previous method) and with PARDISO (MKL); the relative difference of the influence
-  line and of the natural frequencies between the two;
+  line and of the natural frequencies between the two; the process's peak memory after each level (the
+  finest level, 151 k DOF on the paper config, holds the peak: SuperLU's factors);
 * sensor: the SS family's saddle factorisation and its short-circuit modes on the default mesh;
 * snr_study: the sweep of one record (the paper's healthy stand-in) over the study's SNR grid and
   seeds, record by record (method='loop', the previous method) against batched over SNRs.
