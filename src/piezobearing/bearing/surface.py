@@ -142,10 +142,14 @@ class Track:
         theta = np.asarray(angle_rad, dtype=float)
         h = np.zeros_like(theta)
         if self.profile_m.size:
+            # linear interpolation on the uniform periodic grid, by index: np.interp(period=) sorts and pads
+            # the grid at every call (it was a quarter of the sensor comparison's CPU)
             n = self.profile_m.size
-            x = np.arange(n) * (self.circumference_m / n)
-            s = np.mod(theta, 2 * np.pi) * (self.circumference_m / (2 * np.pi))
-            h += np.interp(s, x, self.profile_m, period=self.circumference_m)
+            u = np.mod(theta, 2 * np.pi) * (n / (2 * np.pi))
+            i = np.floor(u)
+            frac = u - i
+            i = i.astype(np.intp) % n
+            h += self.profile_m[i] + frac * (self.profile_m[(i + 1) % n] - self.profile_m[i])
         for order, amp, phase in zip(self.orders, self.amplitudes_m, self.phases_rad, strict=True):
             h += amp * np.cos(order * theta + phase)
         return h
