@@ -271,6 +271,19 @@ def _large_record(d: dict) -> tuple[str, str, list[dict]]:
         q("first start peak RSS", a["peak_rss_MB"], "MB")]
 
 
+def _comparison_kernels(d: dict) -> tuple[str, str, list[dict]]:
+    """The sensor comparison's heights and projection, compiled against numpy, per realisation."""
+    h, p = d["heights"], d["projection"]
+    text = (f"heights {seconds(h['compiled_cpu_s'])} against {seconds(h['numpy_cpu_s'])} "
+            f"({ratio(h['numpy_over_compiled'])}, {h['points'] / 1e6:.2f} M points); projection "
+            f"{seconds(p['compiled_cpu_s'])} against {seconds(p['numpy_cpu_s'])} ({ratio(p['numpy_over_compiled'])}, "
+            f"{p['samples'] / 1000:.1f} k samples); equal to "
+            f"{max(h['relative_difference'], p['relative_difference_sensor'], p['relative_difference_modal']):.0e}")
+    return text, "–", [q("heights, compiled", h["compiled_cpu_s"], "s"), q("heights, numpy", h["numpy_cpu_s"], "s"),
+                       q("projection, compiled", p["compiled_cpu_s"], "s"),
+                       q("projection, numpy", p["numpy_cpu_s"], "s")]
+
+
 ROWS = [
     Row("paper", "the whole paper workflow in a fresh clone (all figures, the scorecard, both diagnoses)",
         "command_paper.json", "`python benchmarks/bench_command.py paper -- snakemake --cores 2`", _command_row),
@@ -332,6 +345,9 @@ ROWS = [
     Row("clock_drift", "`clock_drift` effect's windowed-sinc reading of a 25001-sample record: a series for I0 and "
         "one sine a sample, against numpy's `i0` and `sinc` for every tap",
         "clock_drift.json", "`python benchmarks/bench_clock_drift.py`", _clock_drift),
+    Row("comparison_kernels", "sensor comparison, one realisation of the rig: the surfaces' heights on the LPM's "
+        "fine grid and the roller loads' projection on the housing, compiled against numpy (CPU, warm)",
+        "comparison_kernels.json", "`python benchmarks/bench_comparison_kernels.py`", _comparison_kernels),
     Row("sensor_design", "sensor-design study mesh, one design at multiplier 1.0", "sensor_design.json",
         "`python benchmarks/bench_sensor_design.py`", _sensor_design),
     Row("large_record", "the workflow's check of a large calibration record, run at every start (`snakemake -n` "
