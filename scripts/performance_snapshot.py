@@ -147,7 +147,15 @@ def _solver_level(pick: str) -> Callable[[dict], tuple[str, str, list[dict]] | N
         text = (f"{seconds(p['factor_s'])} against {seconds(s['factor_s'])} ({ratio(s['factor_s'] / p['factor_s'])}), "
                 f"{p['factor_nnz'] / 1e6:.1f} M against {s['factor_nnz'] / 1e6:.1f} M factor entries, "
                 f"level {level:g}, {row['n_dofs'] / 1000:.1f} k DOF")
-        return text, "–", [q("PARDISO", p["factor_s"], "s"), q("SuperLU", s["factor_s"], "s"), q("DOF", row["n_dofs"], "1")]
+        qs = [q("PARDISO", p["factor_s"], "s"), q("SuperLU", s["factor_s"], "s"), q("DOF", row["n_dofs"], "1")]
+        if "factor_cpu_s" in p:  # the process's CPU seconds of each factorisation, load-insensitive
+            text += f"; CPU {seconds(p['factor_cpu_s'])} against {seconds(s['factor_cpu_s'])}"
+            qs += [q("PARDISO CPU", p["factor_cpu_s"], "s"), q("SuperLU CPU", s["factor_cpu_s"], "s")]
+        memory = "–"
+        if pick == "finest" and "peak_rss_MB" in row:  # the levels run coarse to fine: the finest holds the peak
+            memory = f"{megabytes(row['peak_rss_MB'])} (the benchmark's whole process, both solvers)"
+            qs.append(q("peak RSS", row["peak_rss_MB"], "MB"))
+        return text, memory, qs
 
     return read
 
@@ -286,7 +294,8 @@ ROWS = [
         _command_row),
     Row("tests", "the test suite", "command_tests.json", "`python benchmarks/bench_command.py tests -- pytest -n 2`",
         _command_row),
-    Row("install", "the install: a new venv with `pip install .`", "command_install.json",
+    Row("install", "the install: a new venv with `pip install .`, its wheels at hand (pip's cache or a local "
+        "mirror; a first download adds its own time)", "command_install.json",
         "`python benchmarks/bench_command.py install --size /tmp/pb-venv -- sh -c "
         "'python3.11 -m venv /tmp/pb-venv && /tmp/pb-venv/bin/pip install .'`", _install_row),
     Row("sensor_fem", "sensor FEM, modal + harmonic, default mesh (quadratic)", "sensor_fem.json",
