@@ -16,10 +16,13 @@ from piezobearing.workflow.registry import (
     reads_digest,
     rule_params,
     use_imports_cache,
+    user_cache_dir,
 )
 
-# each package module's imports, parsed once and remembered from one start to the next (the code hashes)
-use_imports_cache(".snakemake/piezobearing/imports.json")
+# what a start computes that the next can reuse, keyed by content (registry.user_cache_dir): each package
+# module's imports (the code hashes) and the diagnosis subjects' checks of their settings
+CACHE = user_cache_dir()
+use_imports_cache(CACHE / "imports.json")
 
 CONFIG_FILES = [
     "config/config.yaml",

@@ -12,7 +12,7 @@ try:  # an unknown effect in model.effects or synthesis.hidden_effects stops bef
         "piezobearing.diagnosis.calibration.subject",
         "diagnose",
         config,
-        f"{RESULTS}/.checked",
+        CACHE / "checked",
     )
 except EffectError as e:
     print(f"piezobearing: {e}", file=sys.stderr)

@@ -12,7 +12,7 @@ try:  # an unknown effect in bearing_diagnosis.effects or bearing.hidden_effects
         "piezobearing.diagnosis.bearing.subject",
         "diagnose_bearing",
         config,
-        f"{RESULTS}/.checked",
+        CACHE / "checked",
     )
 except EffectError as e:
     print(f"piezobearing: {e}", file=sys.stderr)

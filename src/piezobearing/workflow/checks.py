@@ -4,7 +4,8 @@ A bad effect name in ``model.effects``, ``synthesis.hidden_effects``, ``bearing_
 ``bearing.hidden_effects`` stops Snakemake before any job, with the subject's one-line
 :class:`~piezobearing.diagnosis.effect.EffectError`. The check needs the subject's models, whose imports (scipy's
 signal and stats, numba) cost about 1.5 s of CPU, at every start and every dry run. A config that passed is
-remembered in the results folder (``.checked/<subject>_<digest>.ok``), keyed by the SHA-256 of the config keys the
+remembered in the user's cache folder (``checked/<subject>_<digest>.ok`` in
+:func:`~piezobearing.workflow.registry.user_cache_dir`), keyed by the SHA-256 of the config keys the
 subject's rule declares (:func:`~piezobearing.workflow.registry.declared`; the check sees only those, strictly) and
 of the subject's code (:func:`~piezobearing.workflow.registry.module_code_hash`): a start whose diagnosis settings
 did not change costs a hash. Failures are not remembered.
@@ -37,5 +38,5 @@ def check_subject_once(subject_module: str, rule: str, config: dict, cache_dir: 
         memo.parent.mkdir(parents=True, exist_ok=True)
         memo.write_text(f"{subject_module}: the config passed its check\n")
     except OSError:
-        pass  # a read-only results folder only costs the next start another check
+        pass  # a read-only cache folder only costs the next start another check
     return True

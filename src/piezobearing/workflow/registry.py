@@ -362,17 +362,29 @@ def _source_text(path: Path) -> str:
     return text
 
 
+def user_cache_dir() -> Path:
+    """Where a workflow start leaves what the next start (of any checkout of this user) can reuse, every entry
+    keyed by content: ``$PIEZOBEARING_CACHE_DIR``, else ``$XDG_CACHE_HOME/piezobearing``, else
+    ``~/.cache/piezobearing``. Deleting it costs the next start a second or two, nothing else."""
+    if os.environ.get("PIEZOBEARING_CACHE_DIR"):
+        return Path(os.environ["PIEZOBEARING_CACHE_DIR"])
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "piezobearing"
+
+
 #: Each module's imports by the SHA-256 of its bytes and its name, across workflow starts (:func:`use_imports_cache`).
 _IMPORTS_CACHE: dict[str, list[str]] = {}
 _IMPORTS_USED: dict[str, list[str]] = {}
 _IMPORTS_CACHE_FILE: list[Path] = []
+#: Entries the cache file holds at most (about 150 bytes each).
+_IMPORTS_CACHE_MAX = 20000
 
 
 def use_imports_cache(path: str | Path) -> None:
     """Remember every module's imports in ``path`` (JSON) from one start to the next: parsing the package's 220
     modules is half of the code hash's and a third of a warm dry run's time, and between starts few of them change.
     Keyed by each module's bytes (SHA-256) and name, so an edited module is parsed again; written at exit with
-    the entries this start used. The workflow calls it at its parse (``.snakemake/piezobearing/imports.json``)."""
+    the entries this start used and those another start wrote meanwhile. The workflow calls it at its parse
+    (``imports.json`` in :func:`user_cache_dir`)."""
     path = Path(path)
     try:
         _IMPORTS_CACHE.update(json.loads(path.read_text()))
@@ -385,12 +397,19 @@ def use_imports_cache(path: str | Path) -> None:
 
 def _save_imports_cache() -> None:
     path = _IMPORTS_CACHE_FILE[0]
-    if not _IMPORTS_USED or _IMPORTS_USED.keys() == _IMPORTS_CACHE.keys():
+    if not _IMPORTS_USED or _IMPORTS_USED.keys() <= _IMPORTS_CACHE.keys():
         return
+    try:
+        latest = json.loads(path.read_text())  # what other starts wrote since this one read it
+    except (OSError, ValueError):
+        latest = {}
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_name(f"{path.name}.{os.getpid()}")
-        tmp.write_text(json.dumps(_IMPORTS_USED, sort_keys=True))
+        merged = {**latest, **_IMPORTS_USED}
+        if len(merged) > _IMPORTS_CACHE_MAX:  # edits of many starts: keep this start's
+            merged = dict(_IMPORTS_USED)
+        tmp.write_text(json.dumps(merged, sort_keys=True))
         os.replace(tmp, path)  # whole, even with another start writing beside it
     except OSError:
         pass  # a read-only folder only costs the next start the parse
