@@ -51,3 +51,15 @@ def test_an_edited_module_is_parsed_again(tmp_path):
     cache.write_text(json.dumps({f"{'0' * 64} {k.split()[1]}": [] for k in entries}))
     again, parsed = _start(cache)
     assert again == first and len(parsed) == first[1] + 1
+
+
+def test_the_cache_folder_follows_the_environment(monkeypatch, tmp_path):
+    """$PIEZOBEARING_CACHE_DIR first, then $XDG_CACHE_HOME/piezobearing, then ~/.cache/piezobearing."""
+    monkeypatch.setenv("PIEZOBEARING_CACHE_DIR", str(tmp_path / "mine"))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert registry.user_cache_dir() == tmp_path / "mine"
+    monkeypatch.delenv("PIEZOBEARING_CACHE_DIR")
+    assert registry.user_cache_dir() == tmp_path / "xdg" / "piezobearing"
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    assert registry.user_cache_dir() == tmp_path / "home" / ".cache" / "piezobearing"
