@@ -373,8 +373,7 @@ ROWS = [
         "clock_drift.json", "`python benchmarks/bench_clock_drift.py`", _clock_drift),
     Row("calibrated_seed", "the sensor comparison's calibrated test, one seed on the paper config (a rig realisation: "
         "the LPM with the healthy bearing's floor, the housing, both sensors and the envelope detector)",
-        "calibrated_seed.json", "`python benchmarks/bench_calibrated_seed.py --from-runs "
-        "results/validation/calibrated_paper.jsonl.cpu.jsonl results/validation/calibrated_paper_rms.jsonl.cpu.jsonl`",
+        "calibrated_seed.json", "`python benchmarks/bench_calibrated_seed.py --seeds 5`",
         _calibrated_seed),
     Row("comparison_kernels", "sensor comparison, one realisation of the rig: the surfaces' heights on the LPM's "
         "fine grid and the roller loads' projection on the housing, compiled against numpy (CPU, warm)",
