@@ -13,10 +13,12 @@ describes ground surfaces (Whitehouse & Archard, Proc. R. Soc. Lond. A 316 (1970
     S(f) = \frac{2 \sigma^2 \beta}{1 + (2 \pi f \beta)^2}
 
 (S the two-sided spectral density per unit spatial frequency f [cycles/m]; sigma the RMS ``roughness_rms_m``,
-beta the correlation length ``roughness_correlation_length_m``). Ground bearing raceways and rollers have an RMS
-roughness of the order of 0.05-0.3 um (Harris & Kotzalas, Essential Concepts of Bearing Technology, 5th ed.,
-CRC 2007, ch. 4: the composite roughness of the lubricant film parameter Lambda; superfinished surfaces at the
-low end); correlation lengths of ground surfaces are micrometres to tens of micrometres (Whitehouse & Archard).
+beta the correlation length ``roughness_correlation_length_m``). The RMS is assumed: a bearing superfinishing
+guide gives raceways Ra 0.1 um ground and Ra <= 0.02 um superfinished (Rq about 1.25 Ra for a Gaussian profile),
+and 0.05-0.3 um is the range quoted with the lubricant film parameter Lambda (Harris & Kotzalas, Essential
+Concepts of Bearing Technology, 5th ed., CRC 2007; not checked against its text): docs/theory/bearing_housing.md
+gives the sources. Correlation lengths of ground surfaces are micrometres to tens of micrometres (Whitehouse &
+Archard).
 The profile is drawn on a periodic grid of the surface's circumference with exactly that covariance (a
 circulant embedding of R: its DFT is the discrete spectrum, :func:`discrete_spectrum`), so its variance is
 sigma^2 and its expected periodogram the discrete spectrum.
