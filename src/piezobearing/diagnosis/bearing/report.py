@@ -12,7 +12,6 @@ from ..report import sections as s
 from .figures import FIGURES
 
 
-
 def measurement(d: dict) -> list[str]:
     fl, base = d["noise_floor"], d["baseline"]
     out = [

@@ -10,8 +10,6 @@ the force channel), the per-impulse table, and the method's wording.
 from __future__ import annotations
 
 from ..report import sections as s
-from .figures import FIGURES
-
 
 
 def measurement(d: dict) -> list[str]:
