@@ -148,23 +148,8 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     share = float(np.clip(drop / max(d.final.excess, drop, 1e-12), 0.0, 1.0))
     delta_bic = float(d.final.bic - dr.final.bic)
     passes = delta_bic > settings.min_delta_bic and share >= settings.min_share
-    if passes and dr.final.nrmse < REMEASURE_BELOW * dr.final.floor_nrmse:
-        # the floor was lifted by the fault's lines the quasi-static model left: measured again on the rung's
-        # residual, and the rung run with it (as the quasi-static diagnosis does)
-        qm = problem.floor.quiet_mask
-        fl = noise_floor(dr.final.residual_V, problem.record.dt_s, None if qm is None else ~qm)
-        fl = replace(fl, method=f"{fl.method}, of the dynamic rung's final residual: the floor before "
-                     f"({problem.floor.voltage_noise_V:.4g} V) was lifted by the fault's lines")
-        (progress or (lambda _m: None))("dynamic rung: floor measured again")
-        rp = replace(rp, floor=fl)
-        dr = diagnose(rp, settings, progress, intervals=False)
     if passes:
-        fine = at_steps(rp, final_steps)
-        if fine is not None:
-            note(f"dynamic rung: final model at {fine.record.rig.steps_per_period} steps per period of the "
-                 "shaft's mode")
-            rp.record.rig.grid.clear()
-        dr = refit(dr, fine, progress)
+        dr, rp = final_model(dr, rp, problem, settings, progress, final_steps)
     bad = unidentified_defects(dr)
     ok = passes and not bad
     rung["steps_per_period"] = {"search": rp.record.rig.steps_per_period, "final": dr.record.rig.steps_per_period}
@@ -187,6 +172,28 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     )
     rung["pair"] = pair
     return (merged(d, dr, share, pair) if ok else d), rung
+
+
+def final_model(dr, rp: Problem, problem: Problem, settings, progress, final_steps: int | None):
+    """The rung's diagnosis ``dr`` (of ``rp``, without intervals) that passed the rule, made final: run again with
+    the floor measured on its residual where the quasi-static model's lines had lifted it (as the quasi-static
+    diagnosis does), then refitted at ``final_steps`` per period of the shaft's mode with its honest intervals
+    (:func:`at_steps`, :func:`~piezobearing.diagnosis.engine.refit`). Returns (diagnosis, the problem it ran on
+    before the refit)."""
+    note = progress or (lambda _m: None)
+    if dr.final.nrmse < REMEASURE_BELOW * dr.final.floor_nrmse:
+        qm = problem.floor.quiet_mask
+        fl = noise_floor(dr.final.residual_V, problem.record.dt_s, None if qm is None else ~qm)
+        fl = replace(fl, method=f"{fl.method}, of the dynamic rung's final residual: the floor before "
+                     f"({problem.floor.voltage_noise_V:.4g} V) was lifted by the fault's lines")
+        note("dynamic rung: floor measured again")
+        rp = replace(rp, floor=fl)
+        dr = diagnose(rp, settings, progress, intervals=False)
+    fine = at_steps(rp, final_steps)
+    if fine is not None:
+        note(f"dynamic rung: final model at {fine.record.rig.steps_per_period} steps per period of the shaft's mode")
+        rp.record.rig.grid.clear()
+    return refit(dr, fine, progress), rp
 
 
 def stand_ins(dr, names: list[str], settings) -> list[str]:
