@@ -112,6 +112,7 @@ def _record(c, influence, seed=11):
     return synthesise(c, seed, hidden, influence)
 
 
+@pytest.mark.slow
 def test_groove_20deg_with_the_shafts_dynamics_is_found_at_its_angle(setup):
     """Hide and find: the quasi-static search leaves it unexplained; the rung places and sizes it."""
     c, influence = setup
@@ -133,6 +134,7 @@ def test_groove_20deg_with_the_shafts_dynamics_is_found_at_its_angle(setup):
         assert key in d
 
 
+@pytest.mark.slow
 def test_without_the_rung_the_fault_is_named_from_its_lines(setup):
     """``dynamic_rung: off``: the quasi-static search selects no defect for the 20 deg groove, and the answer is the
     outer race named from its lines, never 'none'."""
@@ -244,7 +246,6 @@ def test_a_run_without_intervals_given_them_afterwards_is_the_run_with_them(setu
         np.testing.assert_allclose(later.final.result.ci95[k], ci, rtol=1e-9)
 
 
-@pytest.mark.slow
 def test_groove_20deg_in_an_lpm_record_is_sized_within_its_interval_at_the_final_step(setup):
     """Hide and find against another model: a 0.6 mm groove at 0.35 rad in a record of the LPM (its own
     integrator at 10.9 us; the rung searches at 24 steps per period of the shaft's mode, about 15 us, which
