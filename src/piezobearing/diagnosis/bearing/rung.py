@@ -75,7 +75,7 @@ def rung_wanted(d, config: dict) -> dict:
     residual shows a fault's lines (:func:`fault_evidence`): the shaft's ring after each dip and the deeper
     modulation of a moving defect are what the quasi-static chain leaves there. Other structure (a healthy
     bearing's bumps off by a housing's dynamics) is not the shaft's, and an evaluation of the dynamic chain costs
-    25-50 times the quasi-static one (benchmarks/bench_shaft_dynamics.py), so it is not tried there."""
+    12-50 times the quasi-static one (benchmarks/bench_shaft_dynamics.py), so it is not tried there."""
     mode = config["bearing_diagnosis"].get("dynamic_rung", "auto")
     if mode == "off":
         return {"tried": False, "accepted": False, "why": "bearing_diagnosis.dynamic_rung is off"}
