@@ -49,14 +49,34 @@ def measure(command: list[str]) -> dict:
     return record
 
 
-def main(argv: list[str] | None = None) -> int:
+def split_command(argv: list[str]) -> tuple[list[str], list[str]]:
+    """``argv`` cut at its first ``--``: the options, and the command to time.
+
+    Cut by hand because argparse gives a ``nargs="*"`` positional its (empty) value at the name, before
+    an option such as ``--size``, and then refuses the command after it.
+    """
+    if "--" not in argv:
+        return argv, []
+    cut = argv.index("--")
+    return argv[:cut], argv[cut + 1:]
+
+
+def parse_args(argv: list[str]) -> tuple[argparse.ArgumentParser, argparse.Namespace]:
+    """The parser and ``argv`` parsed by it, ``command`` the command to time (after ``--``)."""
+    options, command = split_command(argv)
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("name", help="the record's name: results/benchmarks/command_NAME.json")
     ap.add_argument("command", nargs="*", help="the command to time (after --)")
     ap.add_argument("--size", type=Path, help="a folder whose disk use to record after the command")
     ap.add_argument("--parse", type=Path, help="a GNU time -v report of a run made by hand, instead of running")
     ap.add_argument("--command", dest="command_text", help="with --parse: the command that report timed")
-    a = ap.parse_args(argv)
+    a = ap.parse_args(options)
+    a.command = [*a.command, *command]
+    return ap, a
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap, a = parse_args(sys.argv[1:] if argv is None else list(argv))
     if a.parse:
         if not a.command_text:
             ap.error("--parse needs --command, the command the report timed")

@@ -1,9 +1,10 @@
 """Sparse solvers and the batched SNR sweep against the methods they replace, in one run each, as ratios.
 
-* housing: factorisation of K and the influence line (one solve) at each mesh level of the
-  convergence study, and the shift-invert modes, with SuperLU in the model's nested-dissection
+* housing: factorisation of K (wall and CPU seconds) and the influence line (one solve) at each mesh level
+  of the convergence study, and the shift-invert modes, with SuperLU in the model's nested-dissection
   numbering (the previous method) and with PARDISO (MKL); the relative difference of the influence
-  line and of the natural frequencies between the two;
+  line and of the natural frequencies between the two; the process's peak memory after each level (the
+  finest level, 151 k DOF on the paper config, holds the peak: SuperLU's factors);
 * sensor: the SS family's saddle factorisation and its short-circuit modes on the default mesh;
 * snr_study: the sweep of one record (the paper's healthy stand-in) over the study's SNR grid and
   seeds, record by record (method='loop', the previous method) against batched over SNRs.
@@ -17,6 +18,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import time
 from pathlib import Path
 
@@ -43,6 +45,19 @@ def _timed(fn):
     return out, time.perf_counter() - t0
 
 
+def _timed_cpu(fn):
+    """``fn()``, its wall seconds and the CPU seconds of this process's threads meanwhile (PARDISO's threads
+    counted together; unlike the wall seconds, unmoved by other processes on a shared machine)."""
+    c0, t0 = time.process_time(), time.perf_counter()
+    out = fn()
+    return out, time.perf_counter() - t0, time.process_time() - c0
+
+
+def peak_rss_MB() -> float:
+    """This process's peak resident memory so far [MB]."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
 def bench_housing(config: dict, max_level: float) -> dict:
     from piezobearing.housing import fem as housing_fem
     from piezobearing.housing import transient
@@ -57,9 +72,10 @@ def bench_housing(config: dict, max_level: float) -> dict:
         lines = {}
         for solver in ("superlu", "pardiso"):
             model.solver, model._lu = solver, None
-            lu, secs = _timed(model.factor)
+            lu, secs, cpu = _timed_cpu(model.factor)
             (gy, gz, radial), solve_s = _timed(model.influence_line)
-            row[solver] = {"factor_s": secs, "influence_line_s": solve_s, "factor_nnz": factor_entries(lu)}
+            row[solver] = {"factor_s": secs, "factor_cpu_s": cpu, "influence_line_s": solve_s,
+                           "factor_nnz": factor_entries(lu)}
             if level == h["mesh_level"]:
                 modes, row[solver]["modes_s"] = _timed(
                     lambda mdl=model: housing_fem.compute_modes(mdl, h["n_modes"], config["seed"])
@@ -78,6 +94,7 @@ def bench_housing(config: dict, max_level: float) -> dict:
             row["natural_frequency_max_rel_diff"] = float(
                 np.max(np.abs(lines["pardiso_freq"] / lines["superlu_freq"] - 1))
             )
+        row["peak_rss_MB"] = peak_rss_MB()  # the process's peak so far: this level's where it is the largest
         out[f"level_{level}"] = row
         print(json.dumps({f"level_{level}": row}), flush=True)
         del model

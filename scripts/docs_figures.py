@@ -11,6 +11,15 @@ the code hash and the config digest and stops when a figure is not the current c
 Usage, from the repository root, after the workflow has run on the same configuration::
 
     python scripts/docs_figures.py --configfile config/ci.yaml
+
+A guide's figure made by another run (:data:`RUN_FIGURES`: ``piezobearing detect`` on the CWRU records of
+``tests/data/cwru/``, through the workflow's ``detect_archive``) carries that run's config file in its own
+record, and is refreshed on its own, after that run::
+
+    snakemake --cores 2 detect_archive --configfile docs/_data/detect_archive.yaml
+    python scripts/docs_figures.py --only detect
+
+A refresh of the paper's figures keeps these records as they are (the build checks them all alike).
 """
 
 from __future__ import annotations
@@ -56,6 +65,16 @@ FIGURES = [
 ]
 
 
+#: figures of other runs, by group: the run's config file, its Snakemake target, and per figure its file name on
+#: the site, the rule that writes it, that rule's script, a title, and its path in the run's results folder
+RUN_FIGURES = {
+    "detect": ("docs/_data/detect_archive.yaml", "detect_archive", [
+        ("detect_fe44.png", "detect_record", "workflow/scripts/detect_record.py",
+         "piezobearing detect on the CWRU fan-end record fe44", "detect_archive/fe44/detection.png"),
+    ]),
+}
+
+
 def sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
@@ -90,10 +109,30 @@ def provenance(cfg: dict, configfiles: list[str], results: Path) -> dict:
             + " ".join(f"--configfile {c}" for c in configfiles), "figures": figures}
 
 
-def run_is_current(configfiles: list[str], targets: list[Path]) -> None:
-    """Stop unless Snakemake has nothing to do for ``targets`` (the figures come from the current code)."""
+def run_figures(group: str) -> dict:
+    """The records of ``group``'s figures (:data:`RUN_FIGURES`), each naming its run's config file."""
+    configfile, target, figures = RUN_FIGURES[group]
+    cfg = config_loader.load(ROOT / configfile)
+    results = results_dir(cfg)
+    out = {}
+    for name, rule, entry, title, path in figures:
+        src = results / path
+        if not src.exists():
+            raise SystemExit(f"{src} does not exist: run the workflow first "
+                             f"(snakemake --cores 2 {target} --configfile {configfile})")
+        out[name] = {"rule": rule, "entry": entry, "title": title, "source": str(src.relative_to(ROOT)),
+                     "code_hash": code_hash(str(ROOT / entry)), "config_digest": reads_digest(cfg, rule),
+                     "sha256": sha256(src), "scorecard": [], "configfiles": [configfile],
+                     "made_by": f"python scripts/docs_figures.py --only {group}"}
+    return out
+
+
+def run_is_current(configfiles: list[str], targets: list[Path | str]) -> None:
+    """Stop unless Snakemake has nothing to do for ``targets`` (files, or rule names; the figures come from the
+    current code)."""
     cmd = [str(Path(sys.executable).parent / "snakemake"), "-n", "--cores", "1"]
-    cmd += [str(t.relative_to(ROOT)) for t in targets]  # before --configfile, which takes every name after it
+    # before --configfile, which takes every name after it
+    cmd += [str(t.relative_to(ROOT)) if isinstance(t, Path) else t for t in targets]
     for c in configfiles:
         cmd += ["--configfile", c]
     run = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
@@ -107,14 +146,29 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--configfile", action="append", default=[], help="the run's config files (as for snakemake)")
     ap.add_argument("--no-dry-run", action="store_true", help="skip the check that the run is current")
+    ap.add_argument("--only", choices=sorted(RUN_FIGURES), help="refresh only this group of another run's figures")
     a = ap.parse_args(argv)
-    cfg = config_loader.load(*a.configfile)
-    results = results_dir(cfg)
-    record = provenance(cfg, a.configfile, results)
-    if not a.no_dry_run:
-        run_is_current(a.configfile, [results / "figures" / n for n in record["figures"]])
+    previous = json.loads((OUT / "provenance.json").read_text()) if (OUT / "provenance.json").exists() else None
+    if a.only:
+        if previous is None:
+            raise SystemExit(f"{OUT / 'provenance.json'} does not exist: copy the paper's figures first")
+        configfile, target, _ = RUN_FIGURES[a.only]
+        copied = run_figures(a.only)
+        if not a.no_dry_run:
+            run_is_current([configfile], [target])
+        record = {**previous, "figures": {**previous["figures"], **copied}}
+    else:
+        cfg = config_loader.load(*a.configfile)
+        results = results_dir(cfg)
+        record = provenance(cfg, a.configfile, results)
+        if not a.no_dry_run:
+            run_is_current(a.configfile, [results / "figures" / n for n in record["figures"]])
+        copied = dict(record["figures"])
+        # the other runs' figures stay as they are (refreshed with --only)
+        record["figures"].update({n: f for n, f in (previous or {"figures": {}})["figures"].items()
+                                  if "configfiles" in f})
     OUT.mkdir(parents=True, exist_ok=True)
-    for name, fig in record["figures"].items():
+    for name, fig in copied.items():
         shutil.copyfile(ROOT / fig["source"], OUT / name)
     (OUT / "provenance.json").write_text(json.dumps(record, indent=1, ensure_ascii=False) + "\n")
     print(f"{len(record['figures'])} figures -> {OUT}")

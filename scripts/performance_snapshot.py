@@ -147,7 +147,15 @@ def _solver_level(pick: str) -> Callable[[dict], tuple[str, str, list[dict]] | N
         text = (f"{seconds(p['factor_s'])} against {seconds(s['factor_s'])} ({ratio(s['factor_s'] / p['factor_s'])}), "
                 f"{p['factor_nnz'] / 1e6:.1f} M against {s['factor_nnz'] / 1e6:.1f} M factor entries, "
                 f"level {level:g}, {row['n_dofs'] / 1000:.1f} k DOF")
-        return text, "–", [q("PARDISO", p["factor_s"], "s"), q("SuperLU", s["factor_s"], "s"), q("DOF", row["n_dofs"], "1")]
+        qs = [q("PARDISO", p["factor_s"], "s"), q("SuperLU", s["factor_s"], "s"), q("DOF", row["n_dofs"], "1")]
+        if "factor_cpu_s" in p:  # the process's CPU seconds of each factorisation, load-insensitive
+            text += f"; CPU {seconds(p['factor_cpu_s'])} against {seconds(s['factor_cpu_s'])}"
+            qs += [q("PARDISO CPU", p["factor_cpu_s"], "s"), q("SuperLU CPU", s["factor_cpu_s"], "s")]
+        memory = "–"
+        if pick == "finest" and "peak_rss_MB" in row:  # the levels run coarse to fine: the finest holds the peak
+            memory = f"{megabytes(row['peak_rss_MB'])} (the benchmark's whole process, both solvers)"
+            qs.append(q("peak RSS", row["peak_rss_MB"], "MB"))
+        return text, memory, qs
 
     return read
 
@@ -263,6 +271,45 @@ def _large_record(d: dict) -> tuple[str, str, list[dict]]:
         q("first start peak RSS", a["peak_rss_MB"], "MB")]
 
 
+def _calibrated_seed(d: dict) -> tuple[str, str, list[dict]]:
+    """The comparison's calibrated test: median CPU per seed at rest / under base motion, and per case."""
+    parts, counts, qs, cases = [], [], [], []
+    for key, label in (("at_rest", "at rest"), ("base_motion", "under base motion")):
+        c = d["conditions"].get(key)
+        if not c or "healthy" not in c:
+            continue
+        seeds = [s for s in (c.get("healthy"), c.get("faulty")) if s]
+        median = c["healthy"]["median_cpu_s"]
+        parts.append((seconds(median), label))
+        counts.append(str(sum(s["seeds"] for s in seeds)))
+        qs.append(q(f"healthy seed, {label}", median, "s"))
+        if c.get("faulty"):
+            qs.append(q(f"faulty seed, {label}", c["faulty"]["median_cpu_s"], "s"))
+        if c.get("case_cpu_s") is not None:
+            cases.append(c["case_cpu_s"])
+            qs.append(q(f"case, {label}", c["case_cpu_s"], "s"))
+    nh, nf = d["case_seeds"]
+    text = (" / ".join(p for p, _ in parts) + " CPU per healthy seed " + " / ".join(lb for _, lb in parts)
+            + f" (median; {' / '.join(counts)} seeds)")
+    if cases:
+        text += f"; a case of {nh} + {nf} seeds {seconds(max(cases))} CPU"
+    memory = f"{megabytes(d['peak_rss_MB'])} largest process" if "peak_rss_MB" in d else "–"
+    return text, memory, qs
+
+
+def _comparison_kernels(d: dict) -> tuple[str, str, list[dict]]:
+    """The sensor comparison's heights and projection, compiled against numpy, per realisation."""
+    h, p = d["heights"], d["projection"]
+    text = (f"heights {seconds(h['compiled_cpu_s'])} against {seconds(h['numpy_cpu_s'])} "
+            f"({ratio(h['numpy_over_compiled'])}, {h['points'] / 1e6:.2f} M points); projection "
+            f"{seconds(p['compiled_cpu_s'])} against {seconds(p['numpy_cpu_s'])} ({ratio(p['numpy_over_compiled'])}, "
+            f"{p['samples'] / 1000:.1f} k samples); equal to "
+            f"{max(h['relative_difference'], p['relative_difference_sensor'], p['relative_difference_modal']):.0e}")
+    return text, "–", [q("heights, compiled", h["compiled_cpu_s"], "s"), q("heights, numpy", h["numpy_cpu_s"], "s"),
+                       q("projection, compiled", p["compiled_cpu_s"], "s"),
+                       q("projection, numpy", p["numpy_cpu_s"], "s")]
+
+
 ROWS = [
     Row("paper", "the whole paper workflow in a fresh clone (all figures, the scorecard, both diagnoses)",
         "command_paper.json", "`python benchmarks/bench_command.py paper -- snakemake --cores 2`", _command_row),
@@ -273,7 +320,8 @@ ROWS = [
         _command_row),
     Row("tests", "the test suite", "command_tests.json", "`python benchmarks/bench_command.py tests -- pytest -n 2`",
         _command_row),
-    Row("install", "the install: a new venv with `pip install .`", "command_install.json",
+    Row("install", "the install: a new venv with `pip install .`, its wheels at hand (pip's cache or a local "
+        "mirror; a first download adds its own time)", "command_install.json",
         "`python benchmarks/bench_command.py install --size /tmp/pb-venv -- sh -c "
         "'python3.11 -m venv /tmp/pb-venv && /tmp/pb-venv/bin/pip install .'`", _install_row),
     Row("sensor_fem", "sensor FEM, modal + harmonic, default mesh (quadratic)", "sensor_fem.json",
@@ -323,6 +371,13 @@ ROWS = [
     Row("clock_drift", "`clock_drift` effect's windowed-sinc reading of a 25001-sample record: a series for I0 and "
         "one sine a sample, against numpy's `i0` and `sinc` for every tap",
         "clock_drift.json", "`python benchmarks/bench_clock_drift.py`", _clock_drift),
+    Row("calibrated_seed", "the sensor comparison's calibrated test, one seed on the paper config (a rig realisation: "
+        "the LPM with the healthy bearing's floor, the housing, both sensors and the envelope detector)",
+        "calibrated_seed.json", "`python benchmarks/bench_calibrated_seed.py --seeds 5`",
+        _calibrated_seed),
+    Row("comparison_kernels", "sensor comparison, one realisation of the rig: the surfaces' heights on the LPM's "
+        "fine grid and the roller loads' projection on the housing, compiled against numpy (CPU, warm)",
+        "comparison_kernels.json", "`python benchmarks/bench_comparison_kernels.py`", _comparison_kernels),
     Row("sensor_design", "sensor-design study mesh, one design at multiplier 1.0", "sensor_design.json",
         "`python benchmarks/bench_sensor_design.py`", _sensor_design),
     Row("large_record", "the workflow's check of a large calibration record, run at every start (`snakemake -n` "

@@ -125,3 +125,17 @@ def test_unbalance_force_reaches_the_rollers(bearing):
     c = np.mean(d * np.exp(-1j * angle))
     scale = u * (2 * np.pi * p.shaft_speed_Hz) ** 2
     assert abs(c - (-1j * scale)) < 0.01 * scale
+
+
+def test_roughness_heights_interpolate_the_periodic_grid(bearing):
+    """A track's roughness between grid points is the linear interpolation of its periodic profile (np.interp
+    with the period), at angles beyond one turn and negative ones too."""
+    b = {**bearing, "roughness_rms_m": 0.1e-6}
+    tr = lpm.LPMParameters.from_config(b, False, seed=5).surfaces.outer
+    n = tr.profile_m.size
+    x = np.arange(n) * (tr.circumference_m / n)
+    theta = np.random.default_rng(0).uniform(-7.0, 13.0, 5000)
+    theta[:3] = (0.0, 2 * np.pi, -2 * np.pi * (n - 1) / n)  # a grid point, the period, the last point
+    s = np.mod(theta, 2 * np.pi) * (tr.circumference_m / (2 * np.pi))
+    expect = np.interp(s, x, tr.profile_m, period=tr.circumference_m)
+    np.testing.assert_allclose(tr.height_m(theta), expect, rtol=1e-9, atol=1e-9 * np.std(tr.profile_m))

@@ -9,6 +9,7 @@ fresh process so that the package's modules are imported once.
 from __future__ import annotations
 
 import json
+import shlex
 import subprocess
 import sys
 from pathlib import Path
@@ -62,3 +63,29 @@ def test_every_benchmark_is_listed_in_the_readme() -> None:
     missing = [p.stem.removeprefix("bench_") for p in SCRIPTS if p.name != "run.py"
                and f"| `{p.stem.removeprefix('bench_')}` |" not in readme]
     assert not missing, f"benchmarks/README.md's table leaves out {missing}"
+
+
+def _bench_command():
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        import bench_command
+    finally:
+        sys.path.pop(0)
+    return bench_command
+
+
+def test_bench_command_parses_the_commands_the_performance_page_names() -> None:
+    """Each ``bench_command.py`` command of the snapshot's rows parses to its name, its options and the whole
+    command after ``--`` (an option before ``--`` once made argparse refuse the command)."""
+    snapshot = json.loads((ROOT / "docs" / "_data" / "performance.json").read_text())
+    listed = [r["command"].strip("`") for r in [*snapshot["rows"], *snapshot["not_measured"]]]
+    commands = [c for c in listed if c.startswith("python benchmarks/bench_command.py ")]
+    assert any("--size" in c for c in commands), "no command with an option before --: nothing tested"
+    bench_command = _bench_command()
+    for text in commands:
+        argv = shlex.split(text)[2:]
+        _, a = bench_command.parse_args(argv)
+        assert a.name == argv[0], text
+        assert a.command == argv[argv.index("--") + 1:], text
+        if "--size" in argv:
+            assert str(a.size) == argv[argv.index("--size") + 1], text

@@ -1,6 +1,6 @@
-"""`calibration.channels` for every row of the formats table (docs/guides/calibrate.md): a calibration
-record written by each format's own library under the channel names a DAQ gives it, read through the workflow's
-calibration loader with the config naming those channels, gives back the record."""
+"""`calibration.channels` for every row of the formats table (docs/reference/records.md, "Calibration records"):
+a calibration record written by each format's own library under the channel names a DAQ gives it, read through
+the workflow's calibration loader with the config naming those channels, gives back the record."""
 
 import copy
 

@@ -47,3 +47,20 @@ def test_a_figure_of_other_code_or_config_is_caught():
     assert set(ext.stale_figures(other_config)) - before == {
         f"{name}: made with other config values than rule {record['figures'][name]['rule']} now reads"
     }
+
+
+def test_a_figure_of_another_run_is_checked_against_its_own_config():
+    """A guide's figure made by another run (the detect guide's, on docs/_data/detect_archive.yaml) names that
+    run's config file; checked against the paper's config instead, its rule's config values differ."""
+    ext = _extension()
+    record = json.loads((FIGURES / "provenance.json").read_text())
+    others = [n for n, f in record["figures"].items() if "configfiles" in f]
+    assert "detect_fe44.png" in others
+    before = set(ext.stale_figures(record))
+    name = others[0]
+    assert not any(p.startswith(f"{name}:") for p in before)
+    without = copy.deepcopy(record)
+    del without["figures"][name]["configfiles"]
+    assert set(ext.stale_figures(without)) - before == {
+        f"{name}: made with other config values than rule {record['figures'][name]['rule']} now reads"
+    }

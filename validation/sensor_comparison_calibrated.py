@@ -7,7 +7,14 @@ functions) for several cases in turn, healthy and faulty seeds interleaved in th
 ``sensor_comparison.n_healthy_seeds`` to ``n_faulty_seeds``, and appends each seed's calls and true-family
 margins to a JSON-lines file as it finishes; a second start skips the seeds already there. ``--report`` reduces
 the file to the study's calibrated columns (:func:`piezobearing.comparison.calibrated.sensor_test`) over the
-seeds done, and draws the healthy-statistic and ROC figures. The CPU seconds of each seed go to a file of their
+seeds done, adds each sensor's smallest detected width over the cases that differ only in the defect's width
+(:func:`~piezobearing.comparison.calibrated.smallest_detected_width`), and draws the healthy-statistic and ROC
+figures.
+
+A width sweep judges its faulty seeds against one healthy threshold: ``--healthy-of CASE=REF`` runs only the
+faulty seeds of ``CASE`` and takes its healthy seeds from ``REF`` (a case whose config differs from ``CASE``'s
+only in the defect, so its healthy realisations are the same rigs: the healthy bearing has no defect and each
+realisation is seeded by ``seed`` and its replicate alone). The CPU seconds of each seed go to a file of their
 own (``<out>.cpu.jsonl``), not to the results.
 
     python validation/sensor_comparison_calibrated.py --configfile config/config.yaml \\
@@ -15,6 +22,8 @@ own (``<out>.cpu.jsonl``), not to the results.
         --case rest:base_motion__level=0.0 --case frame:base_motion__level=1.0 --out results/validation/calibrated.jsonl
     python validation/sensor_comparison_calibrated.py --configfile config/config.yaml --case ... \\
         --out results/validation/calibrated.jsonl --report results/validation/calibrated.json
+    python validation/sensor_comparison_calibrated.py ... --case rest:base_motion__level=0.0 \\
+        --case w02_rest:base_motion__level=0.0,bearing__defects__0__width_m=0.2e-3 --healthy-of w02_rest=rest ...
 """
 
 from __future__ import annotations
@@ -24,6 +33,8 @@ import json
 import sys
 import time
 from pathlib import Path
+
+import pandas as pd
 
 from piezobearing import config as config_loader
 from piezobearing.chain import signals as signal_outputs
@@ -68,6 +79,17 @@ def housings_for(cfg: dict, folder: str | None) -> dict | None:
     return {faulty: housing_model.load_housing(str(f), faulty, reads) for faulty, f in files.items()}
 
 
+def healthy_sources(pairs: list[str], labels: list[str]) -> dict:
+    """``CASE=REF`` items of ``--healthy-of`` -> {CASE: REF}; both must be cases of the run."""
+    out = {}
+    for item in pairs:
+        case, _, ref = item.partition("=")
+        if case not in labels or ref not in labels or case == ref:
+            raise SystemExit(f"--healthy-of {item}: write CASE=REF with two different --case labels ({', '.join(labels)})")
+        out[case] = ref
+    return out
+
+
 def done_seeds(path: Path) -> set:
     if not path.exists():
         return set()
@@ -81,7 +103,9 @@ def run(args) -> None:
     out.parent.mkdir(parents=True, exist_ok=True)
     done = done_seeds(out)
     rigs, plans, built = {}, {}, {}
-    for label, overrides in map(parse_case, args.case):
+    cases = list(map(parse_case, args.case))
+    borrowed = healthy_sources(args.healthy_of, [label for label, _ in cases])
+    for label, overrides in cases:
         cfg = case_config(base, overrides, source=f"case {label}")
         circuit = signal_outputs.sensor_circuit(cfg, resistance, args.resistance)
         harmonic = read_harmonic(args.harmonic) if cfg["signals"]["sensor_fem_correction"] else None
@@ -93,7 +117,8 @@ def run(args) -> None:
                     cfg)), faulty) for faulty in (False, True)}
         rigs[label] = comparison.prepare(cfg, circuit, harmonic, built[digest])
         c = cfg["sensor_comparison"]
-        plans[label] = [s for s in schedule(c["n_healthy_seeds"], c["n_faulty_seeds"]) if (label, *s) not in done]
+        plans[label] = [s for s in schedule(c["n_healthy_seeds"], c["n_faulty_seeds"])
+                        if (label, *s) not in done and (s[0] or label not in borrowed)]
         print(f"{label}: {len(plans[label])} seeds to run; rig prepared in {time.process_time() - t:.1f} s CPU",
               file=sys.stderr)
     while any(plans.values()):
@@ -117,11 +142,15 @@ def report(args) -> None:
     base = config_loader.load(*args.configfile)
     rows = [json.loads(x) for x in Path(args.out).read_text().splitlines()]
     cases, tables = [], []
-    for label, overrides in map(parse_case, args.case):
+    parsed = list(map(parse_case, args.case))
+    borrowed = healthy_sources(args.healthy_of, [label for label, _ in parsed])
+    for label, overrides in parsed:
         cfg = case_config(base, overrides, source=f"case {label}")
         c, b = cfg["sensor_comparison"], cfg["bearing"]
-        mine = sorted((r for r in rows if r["case"] == label), key=lambda r: (r["faulty"], r["replicate"]))
-        if not mine:
+        own = [r for r in rows if r["case"] == label and (r["faulty"] or label not in borrowed)]
+        lent = [r for r in rows if r["case"] == borrowed[label] and not r["faulty"]] if label in borrowed else []
+        mine = sorted(own + lent, key=lambda r: (r["faulty"], r["replicate"]))
+        if not any(r["faulty"] for r in mine) or all(r["faulty"] for r in mine):
             continue
         fault = b["defects"][0]["type"]
         summary = {"shaft_speed_rpm": b["shaft_speed_rpm"], "fault_type": fault,
@@ -136,17 +165,25 @@ def report(args) -> None:
             test["false_alarm_rate"] = sum(x != "none" for x in calls_h) / len(calls_h)
             summary["rows"].append({"sensor": s, **test})
             summary["per_seed"].append({"sensor": s, "healthy_margin_dB": h, "faulty_margin_dB": f})
-            tables.append({"case": label, "sensor": s, **overrides, **test})
-        cases.append({"summary": summary})
+            tables.append({"case": label, "sensor": s, **overrides, "healthy_seeds_of": borrowed.get(label, label),
+                           **{k: summary[k] for k in ("shaft_speed_rpm", "fault_type", "defect_width_m",
+                                                      "disturbance_level", "roughness_rms_m")}, **test})
+        cases.append({"summary": summary, "own_healthy": label not in borrowed})
+    if tables:
+        widths = calibrated.smallest_detected_width(pd.DataFrame(tables))
+        for t, w in zip(tables, widths, strict=True):
+            t["smallest_detected_width_m"] = None if pd.isna(w) else float(w)
     Path(args.report).write_text(json.dumps({"cases": tables}, indent=1, default=str))
     use_style()
     stem = Path(args.report).with_suffix("")
-    save(figures.healthy_distributions(cases), f"{stem}_healthy_statistic.png")
+    # each healthy distribution once (a width sweep's cases share their reference's); every case's ROC
+    save(figures.healthy_distributions([c for c in cases if c["own_healthy"]]), f"{stem}_healthy_statistic.png")
     save(figures.roc_curves(cases), f"{stem}_roc.png")
     keys = ("n_healthy_seeds", "n_faulty_seeds", "calibrated_threshold_dB", "calibrated_detection_probability",
             "calibrated_detection_ci_low", "calibrated_detection_ci_high", "tail_threshold_dB",
             "tail_detection_probability", "tail_shape", "tail_ks_p_value", "roc_auc", "type_correct_rate",
-            "alarm_rate_faulty", "false_alarm_rate", "healthy_statistic_median_dB", "faulty_statistic_median_dB")
+            "alarm_rate_faulty", "false_alarm_rate", "healthy_statistic_median_dB", "faulty_statistic_median_dB",
+            "smallest_detected_width_m")
     print("| case | sensor | " + " | ".join(keys) + " |")
     print("|" + "---|" * (len(keys) + 2))
     for t in tables:
@@ -161,6 +198,8 @@ def main(argv=None) -> None:
     ap.add_argument("--harmonic", default="results/sensor/harmonic.csv")
     ap.add_argument("--housing-dir", default=None, help="the workflow's housing models (results/.../housing)")
     ap.add_argument("--case", action="append", required=True, help="label:column=value,... (a study table's row)")
+    ap.add_argument("--healthy-of", action="append", default=[], metavar="CASE=REF",
+                    help="run only CASE's faulty seeds and judge them against REF's healthy ones (a width sweep)")
     ap.add_argument("--out", required=True, help="the seeds' JSON-lines file")
     ap.add_argument("--report", default=None, help="reduce the seeds done to this JSON (and its figures)")
     args = ap.parse_args(argv)

@@ -33,9 +33,13 @@ REMEDY = "rerun the workflow and then `python scripts/docs_figures.py --configfi
 
 def stale_figures(record: dict) -> list[str]:
     """Each figure of ``record`` that the current code, the current config or its own file contradicts."""
-    cfg = config_loader.load(*[REPO / c for c in record["configfiles"]])
+    configs: dict[tuple[str, ...], dict] = {}
     problems = []
     for name, fig in record["figures"].items():
+        files = tuple(fig.get("configfiles", record["configfiles"]))  # a figure of another run names its own
+        if files not in configs:
+            configs[files] = config_loader.load(*[REPO / c for c in files])
+        cfg = configs[files]
         png = FIGURES / name
         if not png.exists():
             problems.append(f"{name}: missing from docs/_static/figures/")
@@ -77,6 +81,8 @@ class FigureGallery(SphinxDirective):
         intro = [f"These come from a workflow run on {configs}, copied here by `{record['made_by']}`."]
         lines = []
         for name, fig in record["figures"].items():
+            if "configfiles" in fig:  # a guide's figure of another run (its guide shows it), not the paper's
+                continue
             lines += [f"## {fig['title']}", "", f"```{{figure}} /_static/figures/{name}", ":width: 100%",
                       f":alt: {fig['title']}", "",
                       f"`{fig['source']}`, rule `{fig['rule']}` (`{fig['entry']}`); code `{fig['code_hash'][:12]}`, "

@@ -15,7 +15,14 @@ from piezobearing.workflow.registry import (
     declared,
     reads_digest,
     rule_params,
+    use_imports_cache,
+    user_cache_dir,
 )
+
+# what a start computes that the next can reuse, keyed by content (registry.user_cache_dir): each package
+# module's imports (the code hashes) and the diagnosis subjects' checks of their settings
+CACHE = user_cache_dir()
+use_imports_cache(CACHE / "imports.json")
 
 CONFIG_FILES = [
     "config/config.yaml",

@@ -3,12 +3,17 @@
 # ranking, stepwise selection and verdict; report in results/diagnostics/.
 import sys
 
-from piezobearing.diagnosis.calibration.effects import EffectError
-from piezobearing.diagnosis.calibration.report import FIGURES as DIAGNOSIS_FIGURES
-from piezobearing.diagnosis.calibration.subject import SUBJECT as CALIBRATION_SUBJECT
+from piezobearing.diagnosis.effect import EffectError
+from piezobearing.diagnosis.calibration.figures import FIGURES as DIAGNOSIS_FIGURES
+from piezobearing.workflow.checks import check_subject_once
 
-try:  # an unknown effect in model.effects or synthesis.hidden_effects stops before any job
-    CALIBRATION_SUBJECT.check_config(config)
+try:  # an unknown effect in model.effects or synthesis.hidden_effects stops before any job (once per config)
+    check_subject_once(
+        "piezobearing.diagnosis.calibration.subject",
+        "diagnose",
+        config,
+        CACHE / "checked",
+    )
 except EffectError as e:
     print(f"piezobearing: {e}", file=sys.stderr)
     sys.exit(1)

@@ -4,11 +4,16 @@
 import sys
 
 from piezobearing.diagnosis.effect import EffectError
-from piezobearing.diagnosis.bearing.report import FIGURES as BEARING_FIGURES
-from piezobearing.diagnosis.bearing.subject import SUBJECT as BEARING_SUBJECT
+from piezobearing.diagnosis.bearing.figures import FIGURES as BEARING_FIGURES
+from piezobearing.workflow.checks import check_subject_once
 
-try:  # an unknown effect in bearing_diagnosis.effects or bearing.hidden_effects stops before any job
-    BEARING_SUBJECT.check_config(config)
+try:  # an unknown effect in bearing_diagnosis.effects or bearing.hidden_effects stops before any job (once per config)
+    check_subject_once(
+        "piezobearing.diagnosis.bearing.subject",
+        "diagnose_bearing",
+        config,
+        CACHE / "checked",
+    )
 except EffectError as e:
     print(f"piezobearing: {e}", file=sys.stderr)
     sys.exit(1)

@@ -18,8 +18,10 @@ modification time (``cp -p``, unzip, ``rsync -a``) still reruns what reads it.
 from __future__ import annotations
 
 import ast
+import atexit
 import hashlib
 import json
+import os
 from functools import lru_cache
 from pathlib import Path
 
@@ -360,19 +362,85 @@ def _source_text(path: Path) -> str:
     return text
 
 
+def user_cache_dir() -> Path:
+    """Where a workflow start leaves what the next start (of any checkout of this user) can reuse, every entry
+    keyed by content: ``$PIEZOBEARING_CACHE_DIR``, else ``$XDG_CACHE_HOME/piezobearing``, else
+    ``~/.cache/piezobearing``. Deleting it costs the next start a second or two, nothing else."""
+    if os.environ.get("PIEZOBEARING_CACHE_DIR"):
+        return Path(os.environ["PIEZOBEARING_CACHE_DIR"])
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "piezobearing"
+
+
+#: Each module's imports by the SHA-256 of its bytes and its name, across workflow starts (:func:`use_imports_cache`).
+_IMPORTS_CACHE: dict[str, list[str]] = {}
+_IMPORTS_USED: dict[str, list[str]] = {}
+_IMPORTS_CACHE_FILE: list[Path] = []
+#: Entries the cache file holds at most (about 150 bytes each).
+_IMPORTS_CACHE_MAX = 20000
+
+
+def use_imports_cache(path: str | Path) -> None:
+    """Remember every module's imports in ``path`` (JSON) from one start to the next: parsing the package's 220
+    modules is half of the code hash's and a third of a warm dry run's time, and between starts few of them change.
+    Keyed by each module's bytes (SHA-256) and name, so an edited module is parsed again; written at exit with
+    the entries this start used and those another start wrote meanwhile. The workflow calls it at its parse
+    (``imports.json`` in :func:`user_cache_dir`)."""
+    path = Path(path)
+    try:
+        _IMPORTS_CACHE.update(json.loads(path.read_text()))
+    except (OSError, ValueError):
+        pass  # none yet, or unreadable: parse every module this time
+    if not _IMPORTS_CACHE_FILE:
+        atexit.register(_save_imports_cache)
+    _IMPORTS_CACHE_FILE[:] = [path]
+
+
+def _save_imports_cache() -> None:
+    path = _IMPORTS_CACHE_FILE[0]
+    if not _IMPORTS_USED or _IMPORTS_USED.keys() <= _IMPORTS_CACHE.keys():
+        return
+    try:
+        latest = json.loads(path.read_text())  # what other starts wrote since this one read it
+    except (OSError, ValueError):
+        latest = {}
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f"{path.name}.{os.getpid()}")
+        merged = {**latest, **_IMPORTS_USED}
+        if len(merged) > _IMPORTS_CACHE_MAX:  # edits of many starts: keep this start's
+            merged = dict(_IMPORTS_USED)
+        tmp.write_text(json.dumps(merged, sort_keys=True))
+        os.replace(tmp, path)  # whole, even with another start writing beside it
+    except OSError:
+        pass  # a read-only folder only costs the next start the parse
+
+
 @lru_cache(maxsize=None)
 def _module_imports(f: Path) -> tuple[Path, ...]:
     """The package files module file ``f`` imports directly, parsed once per process (every rule's entry
-    reaches the same modules: parsing them once per entry was most of a dry run's time)."""
-    names = _imports(f.read_text(), _module_name(f), f.name == "__init__.py")
-    return tuple(p for p in map(_module_file, sorted(names)) if p is not None)
+    reaches the same modules: parsing them once per entry was most of a dry run's time), or read from the
+    imports cache (:func:`use_imports_cache`)."""
+    data = f.read_bytes()
+    name = _module_name(f)
+    key = f"{hashlib.sha256(data).hexdigest()} {name}"
+    names = _IMPORTS_CACHE.get(key) if _IMPORTS_CACHE_FILE else None
+    if names is None:
+        names = sorted(_imports(data.decode(), name, f.name == "__init__.py"))
+    if _IMPORTS_CACHE_FILE:
+        _IMPORTS_USED[key] = names
+    return tuple(p for p in map(_module_file, names) if p is not None)
 
 
 @lru_cache(maxsize=None)
 def package_modules(entry: str) -> tuple[Path, ...]:
     """Every file of this package that ``entry`` (a script or notebook path) imports, transitively, sorted."""
+    return _closure([f for f in map(_module_file, sorted(_imports(_source_text(Path(entry)), None, False)))
+                     if f is not None])
+
+
+def _closure(todo: list[Path]) -> tuple[Path, ...]:
+    """The module files ``todo`` and every package file they import, transitively, sorted."""
     seen: set[Path] = set()
-    todo = [f for f in map(_module_file, sorted(_imports(_source_text(Path(entry)), None, False))) if f is not None]
     while todo:
         f = todo.pop()
         if f not in seen:
@@ -400,6 +468,20 @@ def code_hash(entry: str) -> str:
     for f in package_modules(entry):
         if f != _REGISTRY_FILE:
             h.update(_hashed_part(f))
+    return h.hexdigest()
+
+
+@lru_cache(maxsize=None)
+def module_code_hash(name: str) -> str:
+    """SHA-256 over package module ``name`` (``piezobearing.x.y``) and the package modules it imports, as
+    :func:`code_hash` of an entry."""
+    f = _module_file(name)
+    if f is None:
+        raise ValueError(f"{name} is not a module of this package")
+    h = hashlib.sha256()
+    for g in _closure([f]):
+        if g != _REGISTRY_FILE:
+            h.update(_hashed_part(g))
     return h.hexdigest()
 
 

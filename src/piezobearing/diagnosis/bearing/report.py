@@ -9,9 +9,8 @@ orders) and the method's wording. Everything comes from ``diagnosis.json``.
 from __future__ import annotations
 
 from ..report import sections as s
+from .figures import FIGURES
 
-#: Figures of the report, in order (drawn by piezobearing.plotting.bearing_diagnosis).
-FIGURES = ("overlay", "per_passage", "synchronous_average", "envelope", "spectrum", "ranking", "ladder")
 
 
 def measurement(d: dict) -> list[str]:

@@ -10,9 +10,8 @@ the force channel), the per-impulse table, and the method's wording.
 from __future__ import annotations
 
 from ..report import sections as s
+from .figures import FIGURES
 
-#: Figures of a diagnosis, in the order the report shows them (drawn by piezobearing.plotting.diagnostics).
-FIGURES = ("overlay", "residuals", "spectrum", "correlations", "ranking", "ladder")
 
 
 def measurement(d: dict) -> list[str]:
