@@ -14,8 +14,16 @@ evaluation of the rung's voltage for a 2 s record.
 2550 Hz (and one at 25.6 kHz) with ``bearing_diagnosis.dynamic_rung: off`` (the method before the rung) and
 ``auto``, side by side: CPU time, verdict, selection, final and floor NRMSE.
 
+``--cost --old-src DIR``: what the dynamic rung costs, a previous package (``DIR``, its ``src``: e.g.
+``git archive main src config | tar -x -C DIR``) against this checkout, each in a fresh process with one BLAS
+thread: the whole diagnosis of 2 s LPM records (:data:`COST`: the inner-race groove at 2550 Hz, the slowest search
+of ``--search``; the 20 deg groove with 1.5 % slip at 2550 Hz and at 25.6 kHz), its CPU seconds and the rung's
+(the console's ``dynamic rung: ... s CPU``), the verdict, the selection and the hidden width against its 95 %
+interval; ratios old / new of the CPU.
+
 Writes results/benchmarks/shaft_dynamics.json. Usage:
-    python benchmarks/bench_shaft_dynamics.py [--accuracy] [--search] [--out FILE] [--case NAME ...]
+    python benchmarks/bench_shaft_dynamics.py [--accuracy] [--search] [--cost --old-src DIR] [--out FILE]
+        [--case NAME ...]
 """
 
 from __future__ import annotations
@@ -24,14 +32,15 @@ import argparse
 import copy
 import json
 import os
+import subprocess
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from piezobearing import config as cfg
-from piezobearing.bearing import shaft_dynamics as sd
 from piezobearing.bearing.lpm import line_contact_stiffness
 from piezobearing.bearing.surrogate import Operating, OuterGroove, phase_edges
 from piezobearing.diagnosis.bearing import chain, lpm_records
@@ -76,12 +85,8 @@ def linearised(rig, config, values: dict) -> np.ndarray:
     outer = None
     if values.get("outer_defect_width_m", 0.0) > 0:
         outer = OuterGroove(values["outer_defect_angle_rad"], values["outer_defect_width_m"], rig.geometry)
-    keep = sd.STEPS_PER_PERIOD
-    sd.STEPS_PER_PERIOD = 20
-    try:
-        first, s, psi, drop, _ = chain.fine_grid(rig, values, phase_edges(phi), op, outer, None, dyn)
-    finally:
-        sd.STEPS_PER_PERIOD = keep
+    rig20 = replace(rig, steps_per_period=20, cache={}, grid={})
+    first, s, psi, drop, _ = chain.fine_grid(rig20, values, phase_edges(phi), op, outer, None, dyn)
     f = linearised_shaft.sensor_force(psi, drop, op.radial_load_N, op.radial_clearance_m,
                                       line_contact_stiffness(rig.geometry.roller_length_m), rig.influence, dyn,
                                       rig.dt_s / s)
@@ -111,12 +116,10 @@ def accuracy(config: dict, influence, names) -> dict:
         cpu_lin = time.process_time() - c0
         row = {"lpm_records_step": err(own, ref), "quasi_static": err(qs, ref), "linearised": err(lin, ref),
                "cpu_lpm_0.5s_s": cpu_lpm, "cpu_linearised_0.5s_numpy_s": cpu_lin}
-        keep = sd.STEPS_PER_PERIOD
         for steps in (12, 24, 48):
-            sd.STEPS_PER_PERIOD = steps
-            f = chain.sensor_force(rig, {**values, "shaft_mass_kg": mass})[0][rig.n_pre:]
+            rs = replace(rig, steps_per_period=steps, cache={}, grid={})
+            f = chain.sensor_force(rs, {**values, "shaft_mass_kg": mass})[0][rig.n_pre:]
             row[f"rung_{steps}_per_period"] = err(f, ref)
-        sd.STEPS_PER_PERIOD = keep
         rig2 = rig_from_config(config, influence, t2)
         chain.voltage(rig2, {**values, "shaft_mass_kg": mass})  # compile and tabulate
         c0 = time.process_time()
@@ -152,13 +155,62 @@ def search(config: dict, influence, names, rates=(2550.0,)) -> dict:
     return out
 
 
+#: The records of ``--cost``: (case, sample rate [Hz]).
+COST = (("inner 0.6 mm at 0.7 rad", 2550.0), ("outer 0.6 mm at 0.35 rad, slip 1.5 %", 2550.0),
+        ("outer 0.6 mm at 0.35 rad, slip 1.5 %", 25600.0))
+
+
+def cost_worker(name: str, rate: float) -> dict:
+    """One ``--cost`` record diagnosed by whichever package this process imports (printed as JSON)."""
+    config = cfg.load()
+    influence = influence_from_config(config)
+    hidden = CASES[name]
+    rec = lpm_records.lpm_record(config, influence, hidden, rate, 2.0, 30.0, 26)
+    notes = []
+    c0 = time.process_time()
+    d = SUBJECT.diagnose((rec, influence), copy.deepcopy(config), notes.append)[1]
+    cpu = time.process_time() - c0
+    rung = [float(m.split()[2]) for m in notes if m.startswith("dynamic rung: ") and m.endswith(")") and " s CPU" in m]
+    key = next(k for k in hidden if k.endswith("width_m"))
+    ci = d["final"]["ci95"].get(key)
+    return {"cpu_s": cpu, "rung_cpu_s": rung[-1] if rung else 0.0, "verdict": d["verdict"],
+            "selected": d["selected"], "width_m": d["final"]["params"].get(key), "width_ci95_m": ci,
+            "hidden_width_m": hidden[key], "inside": None if not ci or ci[0] is None else bool(ci[0] <= hidden[key] <= ci[1]),
+            "rung_accepted": d["dynamic_rung"]["accepted"]}
+
+
+def cost(old_src: Path) -> dict:
+    """:data:`COST` by the package in ``old_src`` and by this checkout's, each record in a fresh process."""
+    here = Path(__file__).resolve()
+    out = {}
+    for name, rate in COST:
+        row = {}
+        for side, src in (("old", Path(old_src).resolve()), ("new", here.parents[1] / "src")):
+            env = {**os.environ, "PYTHONPATH": str(src), "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
+                   "MKL_NUM_THREADS": "1"}
+            p = subprocess.run([sys.executable, str(here), "--cost-worker", name, str(rate)], env=env,
+                               capture_output=True, text=True, check=True)
+            row[side] = json.loads(p.stdout.strip().splitlines()[-1])
+        row["cpu_ratio_old_over_new"] = row["old"]["cpu_s"] / row["new"]["cpu_s"]
+        row["rung_cpu_ratio_old_over_new"] = row["old"]["rung_cpu_s"] / max(row["new"]["rung_cpu_s"], 1e-9)
+        out[f"{name} @ {rate:.0f} Hz"] = row
+        print(f"{name} @ {rate:.0f} Hz: " + json.dumps(row), flush=True)
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--accuracy", action="store_true")
     ap.add_argument("--search", action="store_true")
     ap.add_argument("--case", action="append", help="cases (default all): " + ", ".join(CASES).replace("%", "%%"))
     ap.add_argument("--out", default="results/benchmarks/shaft_dynamics.json")
+    ap.add_argument("--cost", action="store_true")
+    ap.add_argument("--old-src", type=Path, default=None, help="the previous package's src folder (--cost)")
+    ap.add_argument("--cost-worker", nargs=2, metavar=("CASE", "RATE"), help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.cost_worker:
+        print(json.dumps(cost_worker(args.cost_worker[0], float(args.cost_worker[1]))))
+        return
     config = cfg.load()
     influence = influence_from_config(config)
     out_path = Path(args.out)
@@ -172,6 +224,11 @@ def main() -> None:
         res = search(config, influence, args.case or SEARCH)
         res.update(search(config, influence, ["outer 0.6 mm at 0.35 rad, slip 1.5 %"], (25600.0,)))
         out["search"] = res
+        out_path.write_text(json.dumps(out, indent=1))
+    if args.cost:
+        if args.old_src is None:
+            ap.error("--cost needs --old-src DIR (the previous package's src)")
+        out["cost"] = {"old_src": str(args.old_src), "records_s": 2.0, "cost": cost(args.old_src)}
         out_path.write_text(json.dumps(out, indent=1))
 
 

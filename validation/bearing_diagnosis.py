@@ -11,10 +11,12 @@ diagnosis itself). A markdown table goes beside it.
 
     python validation/bearing_diagnosis.py --out results/validation/bearing_diagnosis.json \
         [--influence results/bearing/influence_line_healthy.csv] [--rate 2550 --rate 25600] [--case NAME ...]
-        [--duration S] [--record-out DIR] [--steps-per-period N]
+        [--duration S] [--record-out DIR] [--steps-per-period N] [--final-steps-per-period N]
 
-``--steps-per-period``: the dynamic rung's integration steps per period of the shaft's mode (default
-:data:`piezobearing.bearing.shaft_dynamics.STEPS_PER_PERIOD`), to see what its time step does to a fitted width.
+``--steps-per-period`` and ``--final-steps-per-period``: the config's ``bearing_diagnosis.dynamic_steps_per_period``
+(the dynamic rung's integration steps per period of the shaft's mode in its search) and
+``dynamic_final_steps_per_period`` (in the selected dynamic model's final refit and intervals), to see what the
+time step does to a fitted width (the same keys a ``--config`` file sets).
 """
 
 from __future__ import annotations
@@ -28,7 +30,6 @@ import time
 from pathlib import Path
 
 from piezobearing import config as cfg
-from piezobearing.bearing import shaft_dynamics
 from piezobearing.diagnosis.bearing.lpm_records import lpm_record
 from piezobearing.diagnosis.bearing.subject import SUBJECT
 from piezobearing.io import write_bearing_record
@@ -144,11 +145,15 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=26)
     ap.add_argument("--record-out", type=Path, default=None, help="folder to write each case's record to (CSV)")
     ap.add_argument("--steps-per-period", type=int, default=None,
-                    help="the dynamic rung's steps per period of the shaft's mode (default: its setting)")
+                    help="bearing_diagnosis.dynamic_steps_per_period (default: the config's)")
+    ap.add_argument("--final-steps-per-period", type=int, default=None,
+                    help="bearing_diagnosis.dynamic_final_steps_per_period (default: the config's)")
     args = ap.parse_args()
-    if args.steps_per_period:
-        shaft_dynamics.STEPS_PER_PERIOD = args.steps_per_period
     config = cfg.load(*([args.config] if args.config else []))
+    for key, value in (("dynamic_steps_per_period", args.steps_per_period),
+                       ("dynamic_final_steps_per_period", args.final_steps_per_period)):
+        if value:
+            config["bearing_diagnosis"][key] = value
     influence = read_influence(args.influence) if args.influence else influence_from_config(config)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -33,10 +33,15 @@ from .lpm import contact_law, line_contact_stiffness, shaft_pedestal_matrices
 from .lpm_kernel import newmark_lpm
 from .surrogate import NoEquilibriumError, quasi_static_loads
 
-#: Integration steps per period of the shaft's mode on its rollers (:func:`modes_Hz`): 24 keeps the box-averaged
-#: sensor force within 0.2 % (rms) of the LPM at a 2.7 us step on the paper's rig (12: 0.7 %) with a groove
-#: 20 deg from the sensor (benchmarks/bench_shaft_dynamics.py).
+#: Integration steps per period of the shaft's mode on its rollers (:func:`modes_Hz`) of the diagnosis's search: 24
+#: keeps the box-averaged sensor force within 0.2 % (rms) of the LPM at a 2.7 us step on the paper's rig (12: 0.7 %)
+#: with a groove 20 deg from the sensor (benchmarks/bench_shaft_dynamics.py); the config's
+#: ``bearing_diagnosis.dynamic_steps_per_period``.
 STEPS_PER_PERIOD = 24
+#: Steps per period of the final refit of a selected dynamic model and its intervals: 48 keeps the force within
+#: 0.05 % of that LPM, and a 0.6 mm groove's width interval holds the LPM's hidden width where 24 misses it
+#: (docs/validation/bearing_diagnosis.md); the config's ``bearing_diagnosis.dynamic_final_steps_per_period``.
+FINAL_STEPS_PER_PERIOD = 48
 #: Newton tolerance of the kernel's step on the displacement [m] (the LPM's).
 TOL_M = 1e-16
 
@@ -120,14 +125,15 @@ def equilibrium(psi_rad: np.ndarray, extra_gap_m: np.ndarray, radial_load_N: flo
     return e[0]
 
 
-def steps_per_sample(mode_Hz: float, dt_s: float) -> int:
-    """Integration steps per DAQ sample: :data:`STEPS_PER_PERIOD` per period of the shaft's mode, at least 1."""
-    return max(int(np.ceil(STEPS_PER_PERIOD * mode_Hz * dt_s)), 1)
+def steps_per_sample(mode_Hz: float, dt_s: float, per_period: int = STEPS_PER_PERIOD) -> int:
+    """Integration steps per DAQ sample: ``per_period`` per period of the shaft's mode, at least 1."""
+    return max(int(np.ceil(per_period * mode_Hz * dt_s)), 1)
 
 
 def sensor_force(psi_rad: np.ndarray, extra_gap_m: np.ndarray, radial_load_N: float, radial_clearance_m: float,
                  roller_length_m: float, influence, dyn: ShaftDynamics, step_s: float,
-                 normals: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+                 normals: tuple[np.ndarray, np.ndarray] | None = None,
+                 influence_at: np.ndarray | None = None) -> np.ndarray:
     """The sensor force F_s [N] at every step of a uniform grid, the system starting at rest in static equilibrium.
 
     Parameters
@@ -144,6 +150,8 @@ def sensor_force(psi_rad: np.ndarray, extra_gap_m: np.ndarray, radial_load_N: fl
         The grid's step [s].
     normals : (ndarray, ndarray), optional
         sin psi and -cos psi (n, Z) where the caller holds them.
+    influence_at : ndarray (n, Z), optional
+        g(psi) where the caller holds it.
     """
     m, c, k = dyn.matrices()
     kc = line_contact_stiffness(roller_length_m)
@@ -160,4 +168,4 @@ def sensor_force(psi_rad: np.ndarray, extra_gap_m: np.ndarray, radial_load_N: fl
                                   TOL_M, 50)
     if failed >= 0:
         raise NoEquilibriumError(f"shaft dynamics: Newton's method did not converge at step {failed} of {n}")
-    return np.sum(q * influence(psi_rad), axis=1)
+    return np.sum(q * (influence(psi_rad) if influence_at is None else influence_at), axis=1)

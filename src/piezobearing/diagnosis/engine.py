@@ -30,7 +30,7 @@ import numpy as np
 from ..fitting.profile import honest_intervals
 from .describe import describe
 from .fit import ModelFit, fit_model, likelihood_residual
-from .identifiability import equivalences, identifiability
+from .identifiability import correlated_pairs, equivalences, identifiability
 from .noise import NoiseFloor
 from .record import Record, Segments
 from .residual_tests import Z99, ResidualTests, residual_tests
@@ -120,9 +120,12 @@ def diagnose(
     settings: DiagnosticsSettings | None = None,
     progress: Callable[[str], None] | None = None,
     baseline: ModelFit | None = None,
+    intervals: bool = True,
 ) -> Diagnosis:
     """The whole diagnosis of one record (see the module docstring); ``baseline``: the baseline already fitted to
-    this problem and ``settings`` (a subject's pre-pass fits it), not fitted again."""
+    this problem and ``settings`` (a subject's pre-pass fits it), not fitted again. ``intervals=False``: the final
+    model keeps the Jacobian's intervals (``identifiability.intervals`` empty), for a run whose final model a
+    subject only compares or refits (:func:`refit` gives the honest ones)."""
     settings = settings or DiagnosticsSettings()
     p = problem
     record, v, floor = p.record, np.asarray(p.voltage_V, dtype=float), p.floor
@@ -139,9 +142,7 @@ def diagnose(
     configured = current
 
     def tests_of(f: ModelFit) -> ResidualTests:
-        return residual_tests(
-            f.whitened, record.input, record.dt_s, settings, p.segments, record.time_s, record.left_out
-        )
+        return _tests_of(f, p, settings)
 
     tests = {"baseline": tests_of(baseline)}
     tests["configured"] = tests["baseline"] if configured is baseline else tests_of(configured)
@@ -155,12 +156,15 @@ def diagnose(
         r.key: {"baseline": r.judge(baseline, p, settings), "final": r.judge(final, p, settings)}
         for r in p.representations
     }
-    note("intervals of the final model")
-    intervals = final_intervals(final, record, v, floor, settings, p.profile_evaluations)
+    if intervals:
+        note("intervals of the final model")
+        honest = final_intervals(final, record, v, floor, settings, p.profile_evaluations)
+    else:
+        honest = {}
     found = findings(tests["final"], record.input_name, p.segments)
     for js in judgements.values():
         found += js["final"].findings
-    idf = how_firm(sel, final, cut, p, intervals)
+    idf = how_firm(sel, final, cut, p, honest)
     return Diagnosis(
         p,
         settings,
@@ -187,6 +191,46 @@ def diagnose(
             v,
             record.time_s,
         ),
+    )
+
+
+def _tests_of(f: ModelFit, p: Problem, settings) -> ResidualTests:
+    rec = p.record
+    return residual_tests(f.whitened, rec.input, rec.dt_s, settings, p.segments, rec.time_s, rec.left_out)
+
+
+def refit(d: Diagnosis, problem: Problem | None = None, progress: Callable[[str], None] | None = None) -> Diagnosis:
+    """``d`` with its final model refitted on ``problem`` from its final values, and the honest intervals.
+
+    ``problem``: the same record and voltage with the model held differently (a subject's finer integration step
+    of a costly model, whose search ran at a coarser one); None: ``d``'s own, the final fit kept (a run with
+    ``intervals=False`` given its intervals). The final fit's tests, judgements, findings, verdict, correlations
+    and intervals are the refit's; the search (ranking, steps, the fits before the final one) stays ``d``'s.
+    """
+    st = d.settings
+    note = progress or (lambda _msg: None)
+    p = problem or d.problem
+    record, v, floor = p.record, np.asarray(p.voltage_V, dtype=float), p.floor
+    final = d.final
+    if problem is not None:
+        note("final model refitted")
+        final = fit_model(d.final.model, record, v, floor, start=d.final.values, max_nfev=st.max_nfev, ftol=st.ftol)
+    tests = {**d.tests, "final": _tests_of(final, p, st) if final is not d.final else d.tests["final"]}
+    judgements = {r.key: {**d.judgements[r.key], "final": r.judge(final, p, st)} for r in p.representations}
+    note("intervals of the final model")
+    honest = final_intervals(final, record, v, floor, st, p.profile_evaluations)
+    found = findings(tests["final"], record.input_name, p.segments)
+    for js in judgements.values():
+        found += js["final"].findings
+    corr = final.result.correlation
+    idf = {**d.identifiability, "correlation": corr, "correlated_pairs": correlated_pairs(corr),
+           "intervals": {k: i.report() for k, i in honest.items()}}
+    fits = [final if f is d.final else f for f in d.fits]
+    return Diagnosis(
+        p, st, d.baseline, d.configured, d.ranking, d.steps, fits, list(d.selected), final, tests, judgements,
+        verdict(found), found, d.dropped, idf,
+        describe(final.whitened, tests["final"].window_t0_s, tests["final"].window_ratio, record.input,
+                 record.input_name, p.segments, v, record.time_s),
     )
 
 

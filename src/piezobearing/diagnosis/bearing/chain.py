@@ -31,7 +31,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ...bearing.geometry import BearingGeometry, kinematic_frequencies
-from ...bearing.shaft_dynamics import ShaftDynamics, shaft_mode, steps_per_sample
+from ...bearing.shaft_dynamics import STEPS_PER_PERIOD, ShaftDynamics, shaft_mode, steps_per_sample
 from ...bearing.shaft_dynamics import sensor_force as dyn_sensor_force
 from ...bearing.surrogate import (
     InfluenceLine,
@@ -57,6 +57,9 @@ AFTER_FORCE = frozenset({"load_share_ratio", "dc_offset_V"})
 #: within CACHE_BYTES for a long record.
 CACHE_SIZE = 24
 CACHE_BYTES = 64e6
+#: Most bytes of the dynamic rung's kinematic grid a rig keeps (:func:`kinematic_grid`: roller angles, their
+#: normals and the influence line at them; 4 arrays of steps x rollers); a larger grid is computed at every call.
+GRID_BYTES = 256e6
 
 
 @dataclass(frozen=True, eq=False)
@@ -81,6 +84,9 @@ class Rig(UniformClock):
     dynamics : ShaftDynamics or None
         The rig's shaft and pedestal (``bearing.shaft_mass_kg`` ...): the values the ``shaft_dynamics`` effect
         starts from and holds (None: the LPM's keys are not known, the effect cannot be added).
+    steps_per_period : int
+        The dynamic rung's integration steps per period of the shaft's mode
+        (:func:`~piezobearing.bearing.shaft_dynamics.steps_per_sample`; ``bearing_diagnosis.dynamic_steps_per_period``).
     """
 
     geometry: BearingGeometry
@@ -93,8 +99,11 @@ class Rig(UniformClock):
     time_s: np.ndarray
     tach_Hz: np.ndarray | None = None
     dynamics: ShaftDynamics | None = None
+    steps_per_period: int = STEPS_PER_PERIOD
     surrogate: Surrogate = field(default=None, repr=False)
     cache: dict = field(default_factory=dict, repr=False, compare=False)
+    #: The dynamic rung's last kinematic grid (:func:`kinematic_grid`).
+    grid: dict = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self):
         if self.surrogate is None:
@@ -258,9 +267,38 @@ def shaft_dynamics_force(rig: Rig, values: dict, edges: np.ndarray, op: Operatin
     """
     dyn = dynamics_of(rig, values)
     first, s, psi, drop, normals = fine_grid(rig, values, edges, op, outer, offsets, dyn)
+    g = kinematic_grid(rig, edges[first:], s)[3]
     f = dyn_sensor_force(psi, drop, op.radial_load_N, op.radial_clearance_m, rig.geometry.roller_length_m,
-                         rig.influence, dyn, rig.dt_s / s, normals)
+                         rig.influence, dyn, rig.dt_s / s, normals, g)
     return first, f.reshape(-1, s).mean(axis=1)
+
+
+def kinematic_grid(rig: Rig, e: np.ndarray, s: int) -> tuple[np.ndarray, np.ndarray, tuple, np.ndarray]:
+    """The cage phases (n S,), roller angles (n S, Z), their normals (sin psi, -cos psi) and the influence line at
+    them g(psi) (n S, Z) of :func:`fine_grid`'s grid: S steps in each window between the cage phases ``e``.
+
+    They depend on the kinematics only (the phases, not the loads, the defects or the damping): the rig keeps the
+    last grid (at most :data:`GRID_BYTES`), which serves every step of a finite-difference Jacobian in a parameter
+    other than the start phase, the speed or the slip (the same numbers as computed anew).
+    """
+    z = rig.geometry.n_rollers
+    hit = rig.grid
+    if hit and hit["s"] == s and np.array_equal(hit["edges"], e):
+        return hit["phi"], hit["psi"], hit["normals"], hit["g"]
+    frac = (np.arange(s) + 0.5) / s
+    phi = (e[:-1, None] + np.diff(e)[:, None] * frac[None, :]).ravel()
+    psi = rig.surrogate.roller_angles(phi)
+    # the normals by the angle sum (psi_j = phi + j pitch): two products instead of two transcendentals per roller
+    pj = rig.pitch_rad * np.arange(z)
+    sp, cp = np.sin(phi)[:, None], np.cos(phi)[:, None]
+    normals = (sp * np.cos(pj) + cp * np.sin(pj), -(cp * np.cos(pj) - sp * np.sin(pj)))
+    g = rig.influence(psi)
+    rig.grid.clear()
+    if 4 * psi.nbytes <= GRID_BYTES:
+        for a in (phi, psi, *normals, g):
+            a.flags.writeable = False
+        rig.grid.update(s=s, edges=np.array(e), phi=phi, psi=psi, normals=normals, g=g)
+    return phi, psi, normals, g
 
 
 def fine_grid(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, offsets,
@@ -278,18 +316,11 @@ def fine_grid(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, o
     f_mode, zeta = shaft_mode_Hz(rig, dyn, op)
     dt = rig.dt_s
     moving = values.get("inner_defect_width_m", 0.0) > 0 or values.get("roller_defect_width_m", 0.0) > 0
-    s = max(steps_per_sample(f_mode, dt), rig.substeps() if moving else 1)
+    s = max(steps_per_sample(f_mode, dt, rig.steps_per_period), rig.substeps() if moving else 1)
     settle = max(DYNAMICS_SETTLE_S, 10.0 / max(zeta * 2 * np.pi * f_mode, 1e-12))
     n_ext = edges.size - 1
     first = max(0, n_ext - rig.n - int(np.ceil(settle / dt)))
-    e = edges[first:]
-    frac = (np.arange(s) + 0.5) / s
-    phi = (e[:-1, None] + np.diff(e)[:, None] * frac[None, :]).ravel()
-    psi = rig.surrogate.roller_angles(phi)
-    # the normals by the angle sum (psi_j = phi + j pitch): two products instead of two transcendentals per roller
-    pj = rig.pitch_rad * np.arange(rig.geometry.n_rollers)
-    sp, cp = np.sin(phi)[:, None], np.cos(phi)[:, None]
-    normals = (sp * np.cos(pj) + cp * np.sin(pj), -(cp * np.cos(pj) - sp * np.sin(pj)))
+    phi, psi, normals, _ = kinematic_grid(rig, edges[first:], s)
     drop = _moving_drops(rig, values, phi) if moving else np.zeros(psi.shape)
     if isinstance(outer, OuterGroove) and outer.width_m < rig.geometry.outer_raceway_radius_m * rig.pitch_rad:
         j = np.mod(np.rint((outer.angle_rad - phi) / rig.pitch_rad), rig.geometry.n_rollers).astype(int)

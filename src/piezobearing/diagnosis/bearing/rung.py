@@ -13,7 +13,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..effect import Catalogue
-from ..engine import diagnose
+from ..engine import diagnose, refit
 from ..fit import fit_model
 from ..selection import Candidate, step_entry, strength
 from ..subject import Problem
@@ -75,7 +75,7 @@ def rung_wanted(d, config: dict) -> dict:
     residual shows a fault's lines (:func:`fault_evidence`): the shaft's ring after each dip and the deeper
     modulation of a moving defect are what the quasi-static chain leaves there. Other structure (a healthy
     bearing's bumps off by a housing's dynamics) is not the shaft's, and an evaluation of the dynamic chain costs
-    25-50 times the quasi-static one (benchmarks/bench_shaft_dynamics.py), so it is not tried there."""
+    12-50 times the quasi-static one (benchmarks/bench_shaft_dynamics.py), so it is not tried there."""
     mode = config["bearing_diagnosis"].get("dynamic_rung", "auto")
     if mode == "off":
         return {"tried": False, "accepted": False, "why": "bearing_diagnosis.dynamic_rung is off"}
@@ -90,7 +90,18 @@ def rung_wanted(d, config: dict) -> dict:
     return {"tried": True, "accepted": False, "why": why, "evidence": evidence}
 
 
-def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None = None):
+def at_steps(problem: Problem, steps: int | None) -> Problem | None:
+    """``problem`` with its rig's dynamic rung at ``steps`` per period of the shaft's mode (a rig of its own: its
+    caches hold the other step's forces); None where that is the rig's step already (or ``steps`` is None)."""
+    rec = problem.record
+    if steps is None or int(steps) == rec.rig.steps_per_period:
+        return None
+    rig = replace(rec.rig, steps_per_period=int(steps), cache={}, grid={})
+    return replace(problem, record=replace(rec, rig=rig))
+
+
+def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None = None,
+                 final_steps: int | None = None):
     """The engine once more with the shaft's dynamics (``shaft_dynamics``), judged against the quasi-static diagnosis.
 
     Configured: the quasi-static selection in its order (their fits start the rung where the quasi-static search
@@ -107,6 +118,13 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     rung's, else the quasi-static one. Returns
     (diagnosis, the ``dynamic_rung`` entry: why, evidence, accepted, the BIC drop and share, the ladder:
     baseline, quasi-static final, with the dynamics, floor NRMSE). ``rung``: :func:`rung_wanted`'s entry.
+
+    The search's runs keep the Jacobian's intervals (``diagnose(..., intervals=False)``): their final models are
+    only compared and refitted. Where the rung passes the rule's BIC drop and share, its final model is refitted
+    at ``final_steps`` per period of the shaft's mode (``bearing_diagnosis.dynamic_final_steps_per_period``; the
+    search's step leaves a bias in a groove's width of the order of its interval) and its honest intervals are
+    computed there (:func:`~piezobearing.diagnosis.engine.refit`); the defects are judged identified on those.
+    Where it does not pass, its defects are judged on the Jacobian's intervals (the entry's ``unidentified``).
     """
     rung = dict(rung or rung_wanted(d, {"bearing_diagnosis": {"dynamic_rung": "auto"}}))
     faults = [n for n in d.selected if n in FAULT_TYPES]
@@ -118,28 +136,23 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
                  catalogue=Catalogue("bearing"), profile_evaluations=RUNG_PROFILE_EVALUATIONS)
     note = progress or (lambda _m: None)
     note("dynamic rung: + " + " + ".join([*pair, "shaft_dynamics"]))
-    dr = diagnose(rp, settings, progress, d.baseline)
+    dr = diagnose(rp, settings, progress, d.baseline, intervals=False)
     # the quasi-static selection's other effects, each held to the selection rule with the dynamics on
     weak = stand_ins(dr, [n for n in names if n not in faults[:1]], settings)
     if weak:
         note(f"dynamic rung: without {', '.join(weak)} (not supported with the dynamics)")
         rp = replace(rp, configured=tuple(e for e in rp.configured if e.name not in weak))
-        dr = diagnose(rp, settings, progress, d.baseline)
+        dr = diagnose(rp, settings, progress, d.baseline, intervals=False)
     rung["left_out"] = weak
-    bad = unidentified_defects(dr)
     drop = d.final.chi2 - dr.final.chi2
     share = float(np.clip(drop / max(d.final.excess, drop, 1e-12), 0.0, 1.0))
     delta_bic = float(d.final.bic - dr.final.bic)
-    ok = delta_bic > settings.min_delta_bic and share >= settings.min_share and not bad
-    if ok and dr.final.nrmse < REMEASURE_BELOW * dr.final.floor_nrmse:
-        # the floor was lifted by the fault's lines the quasi-static model left: measured again on the rung's
-        # residual, and the rung run with it (as the quasi-static diagnosis does)
-        qm = problem.floor.quiet_mask
-        fl = noise_floor(dr.final.residual_V, problem.record.dt_s, None if qm is None else ~qm)
-        fl = replace(fl, method=f"{fl.method}, of the dynamic rung's final residual: the floor before "
-                     f"({problem.floor.voltage_noise_V:.4g} V) was lifted by the fault's lines")
-        (progress or (lambda _m: None))("dynamic rung: floor measured again")
-        dr = diagnose(replace(rp, floor=fl), settings, progress)
+    passes = delta_bic > settings.min_delta_bic and share >= settings.min_share
+    if passes:
+        dr, rp = final_model(dr, rp, problem, settings, progress, final_steps)
+    bad = unidentified_defects(dr)
+    ok = passes and not bad
+    rung["steps_per_period"] = {"search": rp.record.rig.steps_per_period, "final": dr.record.rig.steps_per_period}
     rung.update(
         accepted=bool(ok),
         unidentified=bad,
@@ -159,6 +172,28 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     )
     rung["pair"] = pair
     return (merged(d, dr, share, pair) if ok else d), rung
+
+
+def final_model(dr, rp: Problem, problem: Problem, settings, progress, final_steps: int | None):
+    """The rung's diagnosis ``dr`` (of ``rp``, without intervals) that passed the rule, made final: run again with
+    the floor measured on its residual where the quasi-static model's lines had lifted it (as the quasi-static
+    diagnosis does), then refitted at ``final_steps`` per period of the shaft's mode with its honest intervals
+    (:func:`at_steps`, :func:`~piezobearing.diagnosis.engine.refit`). Returns (diagnosis, the problem it ran on
+    before the refit)."""
+    note = progress or (lambda _m: None)
+    if dr.final.nrmse < REMEASURE_BELOW * dr.final.floor_nrmse:
+        qm = problem.floor.quiet_mask
+        fl = noise_floor(dr.final.residual_V, problem.record.dt_s, None if qm is None else ~qm)
+        fl = replace(fl, method=f"{fl.method}, of the dynamic rung's final residual: the floor before "
+                     f"({problem.floor.voltage_noise_V:.4g} V) was lifted by the fault's lines")
+        note("dynamic rung: floor measured again")
+        rp = replace(rp, floor=fl)
+        dr = diagnose(rp, settings, progress, intervals=False)
+    fine = at_steps(rp, final_steps)
+    if fine is not None:
+        note(f"dynamic rung: final model at {fine.record.rig.steps_per_period} steps per period of the shaft's mode")
+        rp.record.rig.grid.clear()
+    return refit(dr, fine, progress), rp
 
 
 def stand_ins(dr, names: list[str], settings) -> list[str]:

@@ -17,7 +17,7 @@ identifier              what it models
 ======================  ==========================================================
 
 ``shaft_dynamics`` is a rung of the model, not a candidate of the quasi-static search
-(:data:`RUNGS`): an evaluation with it costs 25-50 times one without (0.14-0.24 s against 3-9 ms for a 2 s record
+(:data:`RUNGS`): an evaluation with it costs 12-50 times one without (0.08-0.24 s against 3-9 ms for a 2 s record
 at 2550 Hz, benchmarks/bench_shaft_dynamics.py), and alone on a healthy bearing it changes
 the record by less than the noise. The subject adds it where the quasi-static model leaves a fault's lines or
 rings (:mod:`..rung`), or from the rig file (``bearing_diagnosis.effects``).
