@@ -10,6 +10,7 @@ the force channel), the per-impulse table, and the method's wording.
 from __future__ import annotations
 
 from ..report import sections as s
+from .figures import FIGURES
 
 
 def measurement(d: dict) -> list[str]:
@@ -103,3 +104,6 @@ def render(d: dict, figures: dict[str, str] | None = None) -> str:
             s.config_used(d),
         ]
     )
+
+
+__all__ = ["FIGURES", "render"]
