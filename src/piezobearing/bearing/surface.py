@@ -143,9 +143,8 @@ class Track:
     def height_m(self, angle_rad: np.ndarray) -> np.ndarray:
         """Height at the surface angle theta [rad] (the arc s = theta circumference / (2 pi)) [m]."""
         theta = np.asarray(angle_rad, dtype=float)
-        # compiled, one pass over the angles: np.interp(period=) sorts and pads the grid at every call, and the
-        # array expressions form a dozen arrays of the record's size (they were a third of the sensor
-        # comparison's CPU)
+        # compiled, one pass over the angles: np.interp(period=) sorts and pads the grid at every call, and
+        # array expressions form a dozen arrays of the record's size (benchmarks/bench_comparison_kernels.py)
         closed = np.append(self.profile_m, self.profile_m[:1]) if self.profile_m.size else self.profile_m
         return _track_heights(np.ascontiguousarray(theta).ravel(), closed, np.asarray(self.orders, dtype=float),
                               np.asarray(self.amplitudes_m, dtype=float),
