@@ -161,9 +161,7 @@ def diagnose(
         honest = final_intervals(final, record, v, floor, settings, p.profile_evaluations)
     else:
         honest = {}
-    found = findings(tests["final"], record.input_name, p.segments)
-    for js in judgements.values():
-        found += js["final"].findings
+    found = _final_findings(tests["final"], judgements, p)
     idf = how_firm(sel, final, cut, p, honest)
     return Diagnosis(
         p,
@@ -181,22 +179,28 @@ def diagnose(
         found,
         sel.dropped,
         idf,
-        describe(
-            final.whitened,
-            tests["final"].window_t0_s,
-            tests["final"].window_ratio,
-            record.input,
-            record.input_name,
-            p.segments,
-            v,
-            record.time_s,
-        ),
+        _describe(final, tests["final"], p, v),
     )
 
 
 def _tests_of(f: ModelFit, p: Problem, settings) -> ResidualTests:
     rec = p.record
     return residual_tests(f.whitened, rec.input, rec.dt_s, settings, p.segments, rec.time_s, rec.left_out)
+
+
+def _final_findings(tests_final: ResidualTests, judgements: dict, p: Problem) -> list:
+    """What the final model leaves: its residual tests' findings, then each representation's."""
+    found = findings(tests_final, p.record.input_name, p.segments)
+    for js in judgements.values():
+        found += js["final"].findings
+    return found
+
+
+def _describe(final: ModelFit, tests_final: ResidualTests, p: Problem, v: np.ndarray):
+    """The final model's residual as :func:`describe` puts it."""
+    rec = p.record
+    return describe(final.whitened, tests_final.window_t0_s, tests_final.window_ratio, rec.input, rec.input_name,
+                    p.segments, v, rec.time_s)
 
 
 def refit(d: Diagnosis, problem: Problem | None = None, progress: Callable[[str], None] | None = None) -> Diagnosis:
@@ -219,18 +223,14 @@ def refit(d: Diagnosis, problem: Problem | None = None, progress: Callable[[str]
     judgements = {r.key: {**d.judgements[r.key], "final": r.judge(final, p, st)} for r in p.representations}
     note("intervals of the final model")
     honest = final_intervals(final, record, v, floor, st, p.profile_evaluations)
-    found = findings(tests["final"], record.input_name, p.segments)
-    for js in judgements.values():
-        found += js["final"].findings
+    found = _final_findings(tests["final"], judgements, p)
     corr = final.result.correlation
     idf = {**d.identifiability, "correlation": corr, "correlated_pairs": correlated_pairs(corr),
            "intervals": {k: i.report() for k, i in honest.items()}}
     fits = [final if f is d.final else f for f in d.fits]
     return Diagnosis(
         p, st, d.baseline, d.configured, d.ranking, d.steps, fits, list(d.selected), final, tests, judgements,
-        verdict(found), found, d.dropped, idf,
-        describe(final.whitened, tests["final"].window_t0_s, tests["final"].window_ratio, record.input,
-                 record.input_name, p.segments, v, record.time_s),
+        verdict(found), found, d.dropped, idf, _describe(final, tests["final"], p, v),
     )
 
 

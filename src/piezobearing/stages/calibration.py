@@ -17,6 +17,7 @@ from ..io import Measurement, check_readable, read_json, write_csv, write_json, 
 from ..io import formats as io_formats
 from ..io import records as io_records
 from ..sensor import calibration as sensor_calibration
+from ..workflow.checks import remembered
 
 
 def synthesize_calibration(config: dict, out_csv: str) -> None:
@@ -53,24 +54,17 @@ def check_record_once(path: str, config: dict, cache_dir: str) -> dict:
     """
     check_readable(Path(path), text=False)  # a folder or unreadable file: one line before hashing
     key = _checks_digest(path, config)
-    memo = Path(cache_dir) / f"{key}.json"
-    if memo.is_file():
-        try:
-            return json.loads(memo.read_text())
-        except (OSError, json.JSONDecodeError):
-            pass
-    m, imps = load_record(path, config)
-    summary = {
-        "measurement": str(path),
-        "rows": int(m.time_s.size),
-        "sample_rate_Hz": m.sample_rate_Hz,
-        "impulses": len(imps),
-    }
-    try:
-        write_json(summary, memo)
-    except OSError:
-        pass  # a read-only results/ only costs the next start another check
-    return summary
+
+    def check() -> dict:
+        m, imps = load_record(path, config)
+        return {
+            "measurement": str(path),
+            "rows": int(m.time_s.size),
+            "sample_rate_Hz": m.sample_rate_Hz,
+            "impulses": len(imps),
+        }
+
+    return remembered(Path(cache_dir) / f"{key}.json", check)[0]
 
 
 def extract_sensitivity(measurement_csv: str, out_json: str, config: dict) -> None:

@@ -17,8 +17,30 @@ import hashlib
 import importlib
 import json
 from pathlib import Path
+from typing import Callable
 
+from ..io import write_json
 from .registry import declared, declared_config, module_code_hash
+
+
+def remembered(memo: str | Path, run: Callable[[], dict]) -> tuple[dict, bool]:
+    """``run()``'s result kept in the JSON file ``memo`` (its name: a digest of all the result depends on).
+
+    Returns (the result, True) after running, (the file's result, False) when ``memo`` holds one. What ``run``
+    raises is not remembered; a memo that cannot be read is run again, one that cannot be written only costs
+    the next start another run.
+    """
+    memo = Path(memo)
+    try:
+        return json.loads(memo.read_text()), False
+    except (OSError, ValueError):
+        pass  # none yet, or unreadable
+    result = run()
+    try:
+        write_json(result, memo)
+    except OSError:
+        pass
+    return result, True
 
 
 def check_subject_once(subject_module: str, rule: str, config: dict, cache_dir: str | Path) -> bool:
@@ -30,13 +52,9 @@ def check_subject_once(subject_module: str, rule: str, config: dict, cache_dir: 
     reads = declared(config, rule)
     key = hashlib.sha256(json.dumps(reads, sort_keys=True).encode() + b"\0"
                          + module_code_hash(subject_module).encode()).hexdigest()[:20]
-    memo = Path(cache_dir) / f"{subject_module.rsplit('.', 2)[-2]}_{key}.ok"
-    if memo.is_file():
-        return False
-    importlib.import_module(subject_module).SUBJECT.check_config(declared_config(reads, rule))
-    try:
-        memo.parent.mkdir(parents=True, exist_ok=True)
-        memo.write_text(f"{subject_module}: the config passed its check\n")
-    except OSError:
-        pass  # a read-only cache folder only costs the next start another check
-    return True
+
+    def check() -> dict:
+        importlib.import_module(subject_module).SUBJECT.check_config(declared_config(reads, rule))
+        return {"subject": subject_module, "rule": rule, "passed": True}
+
+    return remembered(Path(cache_dir) / f"{subject_module.rsplit('.', 2)[-2]}_{key}.ok", check)[1]

@@ -374,7 +374,7 @@ def user_cache_dir() -> Path:
 #: Each module's imports by the SHA-256 of its bytes and its name, across workflow starts (:func:`use_imports_cache`).
 _IMPORTS_CACHE: dict[str, list[str]] = {}
 _IMPORTS_USED: dict[str, list[str]] = {}
-_IMPORTS_CACHE_FILE: list[Path] = []
+_IMPORTS_CACHE_FILE: Path | None = None
 #: Entries the cache file holds at most (about 150 bytes each).
 _IMPORTS_CACHE_MAX = 20000
 
@@ -385,18 +385,18 @@ def use_imports_cache(path: str | Path) -> None:
     Keyed by each module's bytes (SHA-256) and name, so an edited module is parsed again; written at exit with
     the entries this start used and those another start wrote meanwhile. The workflow calls it at its parse
     (``imports.json`` in :func:`user_cache_dir`)."""
-    path = Path(path)
+    global _IMPORTS_CACHE_FILE
     try:
-        _IMPORTS_CACHE.update(json.loads(path.read_text()))
+        _IMPORTS_CACHE.update(json.loads(Path(path).read_text()))
     except (OSError, ValueError):
         pass  # none yet, or unreadable: parse every module this time
-    if not _IMPORTS_CACHE_FILE:
+    if _IMPORTS_CACHE_FILE is None:
         atexit.register(_save_imports_cache)
-    _IMPORTS_CACHE_FILE[:] = [path]
+    _IMPORTS_CACHE_FILE = Path(path)
 
 
 def _save_imports_cache() -> None:
-    path = _IMPORTS_CACHE_FILE[0]
+    path = _IMPORTS_CACHE_FILE
     if not _IMPORTS_USED or _IMPORTS_USED.keys() <= _IMPORTS_CACHE.keys():
         return
     try:
@@ -423,10 +423,10 @@ def _module_imports(f: Path) -> tuple[Path, ...]:
     data = f.read_bytes()
     name = _module_name(f)
     key = f"{hashlib.sha256(data).hexdigest()} {name}"
-    names = _IMPORTS_CACHE.get(key) if _IMPORTS_CACHE_FILE else None
+    names = _IMPORTS_CACHE.get(key) if _IMPORTS_CACHE_FILE is not None else None
     if names is None:
         names = sorted(_imports(data.decode(), name, f.name == "__init__.py"))
-    if _IMPORTS_CACHE_FILE:
+    if _IMPORTS_CACHE_FILE is not None:
         _IMPORTS_USED[key] = names
     return tuple(p for p in map(_module_file, names) if p is not None)
 
