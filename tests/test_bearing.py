@@ -10,6 +10,7 @@ from scipy.integrate import solve_ivp
 
 from piezobearing.bearing import lpm
 from piezobearing.bearing.geometry import BearingGeometry, kinematic_frequencies
+from piezobearing.config import ConfigError
 
 
 @pytest.fixture(scope="module")
@@ -178,6 +179,11 @@ def test_sharp_edges_are_the_default_and_unchanged(geo, bcfg):
     assert np.array_equal(round_p.drops(mo) > 0, p.drops(mo) > 0)
     with pytest.raises(ValueError, match="edge radius"):
         lpm.Defect(0.0, 0.6e-3, 1e-3, edge_radius_m=0.31e-3)
+    too_round = dict(bcfg["defects"][0], edge_radius_m=0.5e-3)  # the groove is 0.9 mm wide: at most 0.45 mm
+    with pytest.raises(ConfigError) as e:
+        lpm.defects_from_config({**bcfg, "defects": [too_round]})
+    msg = str(e.value)
+    assert "\n" not in msg and "key 'bearing.defects[0].edge_radius_m'" in msg and "at most half the width" in msg
 
 
 # --- quasi-static load distribution against Harris -------------------------------

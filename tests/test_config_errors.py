@@ -49,15 +49,6 @@ def test_unknown_key_is_named_by_its_path_with_the_closest_key(paper_config):
     assert "did you mean 'synthesis.resistance_ohm'?" in msg
 
 
-def test_a_defect_edge_radius_that_does_not_fit_is_named(paper_config):
-    c = copy.deepcopy(paper_config)
-    c["bearing"]["defects"][0]["edge_radius_m"] = 0.5e-3  # the groove is 0.9 mm wide: at most 0.45 mm
-    msg = error(c)
-    assert "key 'bearing.defects[0].edge_radius_m'" in msg and "at most half the width" in msg
-    c["bearing"]["defects"][0]["edge_radius_m"] = 0.2e-3
-    assert piezobearing.config.validate(c)["bearing"]["defects"][0]["edge_radius_m"] == 0.2e-3
-
-
 def test_unknown_top_level_key(paper_config):
     c = copy.deepcopy(paper_config)
     c["sead"] = 3

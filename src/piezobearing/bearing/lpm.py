@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
+from ..config import ConfigError
 from . import surface
 from .geometry import BearingGeometry, kinematic_frequencies
 from .lpm_kernel import newmark_lpm
@@ -214,9 +215,15 @@ def defects_from_config(bearing: dict) -> tuple[Defect, ...]:
     they are not, and the index picks which roller carries it.
     """
     out = []
-    for d in bearing.get("defects", []):
-        out.append(Defect(np.radians(d["angle_deg"]), d["width_m"], d["depth_m"], d["type"], d.get("roller", 0),
-                          d.get("edge_radius_m", 0.0)))
+    for i, d in enumerate(bearing.get("defects", [])):
+        rho = d.get("edge_radius_m", 0.0)
+        if rho > min(0.5 * d["width_m"], d["depth_m"]):
+            raise ConfigError(
+                f"key 'bearing.defects[{i}].edge_radius_m': a fillet of {rho:g} m does not fit a defect "
+                f"{d['width_m']:g} m wide and {d['depth_m']:g} m deep; use at most half the width and at most the "
+                "depth (0: sharp edges)"
+            )
+        out.append(Defect(np.radians(d["angle_deg"]), d["width_m"], d["depth_m"], d["type"], d.get("roller", 0), rho))
     return tuple(out)
 
 

@@ -217,13 +217,6 @@ def physical_problems(config: dict) -> list[str]:
                     "bearing.roller_diameter_m"
                 )
     for i, d in enumerate(b.get("defects") or []):
-        rho = d.get("edge_radius_m", 0.0) if isinstance(d, dict) else 0.0
-        if rho and "width_m" in d and rho > min(0.5 * d["width_m"], d.get("depth_m", rho)):
-            out.append(
-                f"key 'bearing.defects[{i}].edge_radius_m': a fillet of {rho:g} m does not fit a defect "
-                f"{d['width_m']:g} m wide and {d.get('depth_m', float('nan')):g} m deep; use at most half the "
-                "width and at most the depth (0: sharp edges)"
-            )
         if isinstance(d, dict) and "roller" in d and "n_rollers" in b and d["roller"] >= b["n_rollers"]:
             out.append(
                 f"key 'bearing.defects[{i}].roller': roller {d['roller']} does not exist in a bearing of "
