@@ -172,14 +172,16 @@ def geometry(config: dict, hidden: dict) -> dict:
 
 def edge_table(rows: list[dict]) -> str:
     """The rounded-edge and fine-step rows: verdict, angle, width against the surface and equivalent widths."""
-    out = ["| case | rate [Hz] | edge radius [mm] | verdict | angle found (hidden) [rad] | width found [95 % interval] "
-           "[mm] | surface width (in?) | equivalent sharp width (in?) | NRMSE % (baseline / quasi-static / dynamic / "
+    out = ["| case | rate [Hz] | edge radius [mm] | verdict | angle found [95 % interval] (hidden) [rad] | width found "
+           "[95 % interval] [mm] | surface width (in?) | equivalent sharp width (in?) | NRMSE % (baseline / quasi-static / dynamic / "
            "floor) |", "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         for key, geo in r["geometry"].items():
             v = r["values"][key]
-            ang = r["values"].get(key.replace("width", "angle"), {})
-            a = (f"{ang['found']:.4f} ({ang['hidden']:.2f})" if ang.get("found") is not None
+            ang = r["values"].get(key.replace("width_m", "angle_rad"), {})
+            aci = ang.get("ci95")
+            a = (f"{ang['found']:.4f} [{aci[0]:.4f}, {aci[1]:.4f}] ({ang['hidden']:.2f})"
+                 if ang.get("found") is not None and aci and aci[0] is not None
                  else f"not fitted ({ang.get('hidden', float('nan')):.2f})")
             ci = v["ci95"] if v["found"] is not None and v["ci95"] and v["ci95"][0] is not None else None
             w = f"{1e3 * v['found']:.4f} [{1e3 * ci[0]:.4f}, {1e3 * ci[1]:.4f}]" if ci else "not fitted"
