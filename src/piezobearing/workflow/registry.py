@@ -211,7 +211,9 @@ READS: dict[str, list[str]] = {
     "detect_archive": ["detect_archive"],
     # running_bearing_guide.smk: the running-bearing guide's example, without then with the dynamic rung (outside
     # rule all)
-    "running_bearing_guide": ["seed", "sensor", "signals", "bearing", "housing", "bearing_diagnosis", "diagnostics"],
+    "running_bearing_guide": [
+        "seed", "sensor", "sensor_fem", "signals", "bearing", "housing", "bearing_diagnosis", "diagnostics",
+    ],
 }
 
 
