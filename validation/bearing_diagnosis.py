@@ -20,7 +20,8 @@ catalogue's defects, which the rung fits, have sharp ones), and every one of the
 of the shaft's mode, about 9 us). ``fine_step_outer_race_defect_20deg`` keeps sharp edges: it separates what the
 step does from what the edges do. Their rows give, besides the width found, the hidden width at the surface and
 the width of the sharp groove a roller sinks as deep into (:meth:`piezobearing.bearing.lpm.Defect.equivalent_sharp_width_m`).
-``--group edges`` runs only these cases.
+``--group edges`` runs only these cases; ``--nearest`` then adds to each rounded row the width of the sharp groove
+whose noiseless force is nearest the record's (:func:`nearest_sharp_width`), with no diagnosis.
 
 ``--steps-per-period`` and ``--final-steps-per-period``: the config's ``bearing_diagnosis.dynamic_steps_per_period``
 (the dynamic rung's integration steps per period of the shaft's mode in its search) and
@@ -38,10 +39,12 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 from piezobearing import config as cfg
 from piezobearing.bearing.geometry import BearingGeometry
 from piezobearing.bearing.lpm import Defect
-from piezobearing.diagnosis.bearing.lpm_records import MAX_STEP_S, lpm_record
+from piezobearing.diagnosis.bearing.lpm_records import MAX_STEP_S, lpm_record, lpm_sensor_force
 from piezobearing.diagnosis.bearing.subject import SUBJECT
 from piezobearing.io import write_bearing_record
 from piezobearing.stages.bearing_diagnosis import influence_from_config, read_influence
@@ -101,6 +104,8 @@ EDGE_CASES = {
 CASES.update(EDGE_CASES)
 #: Record conditions that are not catalogue parameters and are not fitted (kept out of a row's values).
 CONDITIONS = ("defect_edge_radius_m",)
+#: The records' SNR [dB].
+SNR_DB = 30.0
 #: Cases whose record has a speed_rpm column (the tachometer): the speed the LPM ran at, 1500 rpm where the rig
 #: file says 1000; a ramp from 900 rpm at 100 rpm/s (900 to 1000 rpm over a 1 s record, 1100 over 2 s).
 TACHOMETER = ("healthy_1500rpm_tachometer", "outer_race_defect_ramp_tachometer")
@@ -110,7 +115,7 @@ def run_case(config: dict, influence, name: str, sample_rate_Hz: float, duration
              record_dir: Path | None = None) -> dict:
     hidden, effects = CASES[name]
     step = MAX_STEP_S / FINE_STEP_FACTOR if name in EDGE_CASES else MAX_STEP_S
-    rec = lpm_record(config, influence, hidden, sample_rate_Hz, duration_s, 30.0, seed, tachometer=name in TACHOMETER,
+    rec = lpm_record(config, influence, hidden, sample_rate_Hz, duration_s, SNR_DB, seed, tachometer=name in TACHOMETER,
                      max_step_s=step)
     if record_dir is not None:
         record_dir.mkdir(parents=True, exist_ok=True)
@@ -170,11 +175,36 @@ def geometry(config: dict, hidden: dict) -> dict:
     return out
 
 
+def nearest_sharp_width(config: dict, influence, hidden: dict, sample_rate_Hz: float, duration_s: float,
+                        step_s: float) -> dict:
+    """The sharp groove whose noiseless sensor force is nearest (rms over the record) the rounded groove's, every
+    other hidden value as in the record, both LPMs at ``step_s``: the width the sharp-edged catalogue can at best
+    find from the record (9 widths from 4 um below the equivalent width to 2 um above the surface width, the
+    least squares' parabola through the nearest three). Returns {key: {width_m, rms_N, noise_sigma_N}}."""
+    out = {}
+    t = np.arange(int(round(duration_s * sample_rate_Hz))) / sample_rate_Hz
+    for key, geo in geometry(config, hidden).items():
+        if not geo["edge_radius_m"]:
+            continue
+        ref = lpm_sensor_force(config, influence, hidden, t, step_s)
+        sharp = {k: v for k, v in hidden.items() if k not in CONDITIONS}
+        ws = np.linspace(geo["equivalent_sharp_width_m"] - 4e-6, geo["surface_width_m"] + 2e-6, 9)
+        d2 = np.array([np.mean((ref - lpm_sensor_force(config, influence, {**sharp, key: w}, t, step_s)) ** 2)
+                       for w in ws])
+        k = int(np.clip(np.argmin(d2), 1, ws.size - 2))
+        a, b, c = np.polyfit(ws[k - 1:k + 2], d2[k - 1:k + 2], 2)
+        best = float(-b / (2 * a)) if a > 0 else float(ws[np.argmin(d2)])
+        rms = float(np.sqrt(max(np.polyval([a, b, c], best), 0.0)))
+        sigma = float(np.sqrt(np.mean((ref - ref.mean()) ** 2)) / 10 ** (SNR_DB / 20))
+        out[key] = {"width_m": best, "rms_N": rms, "noise_sigma_N": sigma}
+    return out
+
+
 def edge_table(rows: list[dict]) -> str:
     """The rounded-edge and fine-step rows: verdict, angle, width against the surface and equivalent widths."""
     out = ["| case | rate [Hz] | edge radius [mm] | verdict | angle found [95 % interval] (hidden) [rad] | width found "
-           "[95 % interval] [mm] | surface width (in?) | equivalent sharp width (in?) | NRMSE % (baseline / quasi-static / dynamic / "
-           "floor) |", "|---|---|---|---|---|---|---|---|---|"]
+           "[95 % interval] [mm] | surface width (in?) | equivalent sharp width (in?) | nearest sharp width (in?) | "
+           "NRMSE % (baseline / quasi-static / dynamic / floor) |", "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         for key, geo in r["geometry"].items():
             v = r["values"][key]
@@ -188,10 +218,12 @@ def edge_table(rows: list[dict]) -> str:
 
             def held(x, ci=ci):
                 return "-" if not ci else ("yes" if ci[0] <= x <= ci[1] else "no")
+            n = (r.get("nearest_sharp") or {}).get(key)
+            near = f"{1e3 * n['width_m']:.4f} ({held(n['width_m'])})" if n else "-"
             out.append(f"| {r['case']} | {r['sample_rate_Hz']:.0f} | {1e3 * geo['edge_radius_m']:.2f} | {r['verdict']} "
                        f"| {a} | {w} | {1e3 * geo['surface_width_m']:.4f} ({held(geo['surface_width_m'])}) "
                        f"| {1e3 * geo['equivalent_sharp_width_m']:.4f} ({held(geo['equivalent_sharp_width_m'])}) "
-                       f"| {ladder(r)} |")
+                       f"| {near} | {ladder(r)} |")
     return "\n".join(out)
 
 
@@ -224,6 +256,9 @@ def main() -> None:
     ap.add_argument("--influence", default=None, help="influence_line_healthy.csv (default: solved from the config)")
     ap.add_argument("--rate", type=float, action="append", help="sample rates [Hz] (default 2550 and 25600)")
     ap.add_argument("--case", action="append", help=f"cases (default all): {', '.join(CASES)}")
+    ap.add_argument("--nearest", action="store_true",
+                    help="add to each rounded-edge row of --out the nearest sharp width (noiseless LPM forces; no "
+                         "diagnosis)")
     ap.add_argument("--group", choices=["edges"], default=None,
                     help="edges: the rounded-edge and fine-step cases only (with their own table, .edges.md)")
     ap.add_argument("--duration", type=float, default=1.0, help="record length [s]")
@@ -243,6 +278,15 @@ def main() -> None:
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     rows = json.loads(out.read_text())["cases"] if out.exists() else []
+    if args.nearest:
+        for r in rows:
+            if r["case"] in EDGE_CASES and "nearest_sharp" not in r:
+                r["nearest_sharp"] = nearest_sharp_width(config, influence, CASES[r["case"]][0], r["sample_rate_Hz"],
+                                                         r["duration_s"], r["lpm_max_step_s"])
+                print(r["case"], r["sample_rate_Hz"], r["nearest_sharp"], flush=True)
+        out.write_text(json.dumps({**json.loads(out.read_text()), "cases": rows}, indent=1))
+        out.with_suffix(".edges.md").write_text(edge_table([r for r in rows if r["case"] in EDGE_CASES]) + "\n")
+        return
     done = {(r["case"], r["sample_rate_Hz"]) for r in rows}
     for rate in args.rate or [2550.0, 25600.0]:
         for name in args.case or (list(EDGE_CASES) if args.group == "edges" else list(CASES)):
@@ -250,7 +294,7 @@ def main() -> None:
                 continue
             c = copy.deepcopy(config)
             rows.append(run_case(c, influence, name, rate, args.duration, args.seed, args.record_out))
-            out.write_text(json.dumps({"command": shlex.join(["python", *sys.argv]), "snr_dB": 30.0,
+            out.write_text(json.dumps({"command": shlex.join(["python", *sys.argv]), "snr_dB": SNR_DB,
                                        "cases": rows}, indent=1))
             out.with_suffix(".md").write_text(table(rows) + "\n")
             edges = [r for r in rows if r["case"] in EDGE_CASES]
