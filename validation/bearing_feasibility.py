@@ -4,8 +4,9 @@ Draws a rig file and a record's hidden truth (:func:`piezobearing.diagnosis.bear
 the file's load 100-2000 N and clearance 0-60 um; the record's load within x/÷ 1.5 of it, clearance 0-60 um,
 slip 0-3 %, speed -3..+3 %, roller scatter 0-2 um, a groove 0.1-1.2 mm at any angle on any race or a roller in
 two draws of three), makes the record with the dynamic LPM (0.5 s at 2550 Hz, 30 dB) and diagnoses it (the
-first ranking: ``diagnostics.max_steps`` 1). Writes each draw's conditions, verdict and selection, or its
-error, and the count of crashes.
+first ranking: ``diagnostics.max_steps`` 1). Writes each draw's conditions, verdict and selection, the fault's
+type and source, whether the dynamic rung was tried and accepted, and the diagnosis's CPU time, or its error, and
+the count of crashes.
 
     python validation/bearing_feasibility.py --draws 40 --out results/validation/bearing_feasibility.json \
         [--influence results/bearing/influence_line_healthy.csv]
@@ -16,6 +17,7 @@ from __future__ import annotations
 import argparse
 import copy
 import json
+import time
 from pathlib import Path
 
 import numpy as np
@@ -45,8 +47,12 @@ def main() -> None:
                "rig_radial_clearance_m": rig["bearing"]["radial_clearance_m"], "hidden": hidden}
         try:
             rec = lpm_record(rig, influence, hidden, 2550.0, 0.5, 30.0, i)
+            c0 = time.process_time()
             d = SUBJECT.diagnose((rec, influence), rig)[1]
-            row.update(verdict=d["verdict"], selected=d["selected"], fault_type=d["fault"]["type"])
+            rung = d.get("dynamic_rung") or {}
+            row.update(verdict=d["verdict"], selected=d["selected"], fault_type=d["fault"]["type"],
+                       fault_source=d["fault"].get("source"), cpu_s=time.process_time() - c0,
+                       dynamic_rung={"tried": rung.get("tried"), "accepted": rung.get("accepted")})
         except Exception as e:  # noqa: BLE001 - what this script counts
             row.update(verdict=None, error=f"{type(e).__name__}: {e}")
         rows.append(row)
