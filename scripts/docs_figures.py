@@ -80,9 +80,9 @@ RUN_FIGURES = {
     ]),
     "running_bearing": ("docs/_data/running_bearing_guide.yaml", "running_bearing_guide", [
         ("running_bearing_ladder_qs.png", "running_bearing_guide", "workflow/scripts/running_bearing_guide.py",
-         "diagnose-bearing on the guide's LPM record, dynamic rung off", "running_bearing_guide/diag_qs/figures/ladder.png"),
+         "diagnose-bearing on the guide's LPM record, dynamic rung off", "diagnostics_bearing/guide/diag_qs/figures/ladder.png"),
         ("running_bearing_ladder_dyn.png", "running_bearing_guide", "workflow/scripts/running_bearing_guide.py",
-         "diagnose-bearing on the guide's LPM record, dynamic rung on", "running_bearing_guide/diag_dyn/figures/ladder.png"),
+         "diagnose-bearing on the guide's LPM record, dynamic rung on", "diagnostics_bearing/guide/diag_dyn/figures/ladder.png"),
     ]),
 }
 

@@ -6,11 +6,11 @@
 
 rule running_bearing_guide:
     output:
-        record=f"{RESULTS}/running_bearing_guide/record.csv",
-        qs=f"{RESULTS}/running_bearing_guide/diag_qs/diagnosis.json",
-        qs_ladder=f"{RESULTS}/running_bearing_guide/diag_qs/figures/ladder.png",
-        dyn=f"{RESULTS}/running_bearing_guide/diag_dyn/diagnosis.json",
-        dyn_ladder=f"{RESULTS}/running_bearing_guide/diag_dyn/figures/ladder.png",
+        record=f"{RESULTS}/diagnostics_bearing/guide/record.csv",
+        qs=f"{RESULTS}/diagnostics_bearing/guide/diag_qs/diagnosis.json",
+        qs_ladder=f"{RESULTS}/diagnostics_bearing/guide/diag_qs/figures/ladder.png",
+        dyn=f"{RESULTS}/diagnostics_bearing/guide/diag_dyn/diagnosis.json",
+        dyn_ladder=f"{RESULTS}/diagnostics_bearing/guide/diag_dyn/figures/ladder.png",
     log:
         f"{RESULTS}/logs/running_bearing_guide.log",
     benchmark:

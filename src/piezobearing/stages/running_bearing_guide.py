@@ -8,6 +8,8 @@ seed), written to ``record.csv``. Each diagnosis is that of ``piezobearing diagn
 config's housing solved for its influence line and the paper sensor's response: ``diag_qs`` with
 ``bearing_diagnosis.dynamic_rung: off``, ``diag_dyn`` with the config's own (``auto``). The guide's figures are
 their ``figures/ladder.png``, copied to the site by ``python scripts/docs_figures.py --only running_bearing``.
+The rule writes into ``RESULTS/diagnostics_bearing/guide/`` (a folder of the run's diagnostics_bearing, beside the
+workflow's own record's diagnosis).
 """
 
 from __future__ import annotations
