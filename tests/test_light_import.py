@@ -75,6 +75,15 @@ def test_detect_on_a_record_loads_no_filter_design_distribution_or_spline(tmp_pa
     assert not {m for m in loaded if m in NOT_FOR_DETECTION}, sorted(m for m in loaded if m in NOT_FOR_DETECTION)
 
 
+@pytest.mark.parametrize("stage", ["signals", "scorecard", "calibration", "bearing", "sensor_fem"])
+def test_a_workflow_stage_that_filters_nothing_loads_no_filter_design_or_distribution(stage):
+    """The stages of most workflow jobs import the sensor's circuit types, the fit machinery and the effect
+    catalogue; scipy.signal and scipy.stats (about a second of import together) load only where a function
+    that needs them runs (a diagnosis, the calibration's impulses, the housing's peak check)."""
+    loaded = _loaded(f"import piezobearing.stages.{stage}")
+    assert not {m for m in loaded if m in ("scipy.signal", "scipy.stats")}
+
+
 def test_a_public_name_is_loaded_on_first_use_and_stays():
     loaded = _loaded("import piezobearing\npiezobearing.Kinematics")
     assert "piezobearing.bearing.kinematics" in loaded and "piezobearing.api" not in loaded

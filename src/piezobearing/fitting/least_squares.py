@@ -17,7 +17,7 @@ from typing import Callable, Sequence
 import numpy as np
 from scipy.optimize import least_squares
 from scipy.optimize._numdiff import approx_derivative
-from scipy.stats import t as student_t
+from scipy.special import stdtrit
 
 from .params import Param
 
@@ -128,7 +128,7 @@ def fit(
     jtj = sol.jac.T @ sol.jac
     cov = np.linalg.pinv(jtj) * s2
     sd = np.sqrt(np.clip(np.diag(cov), 0, None))
-    tq = float(student_t.ppf(0.975, dof))
+    tq = float(stdtrit(dof, 0.975))  # scipy.stats.t.ppf's own function, bit for bit, without scipy.stats' import
     values = unpack(sol.x)
     stderr, ci95, corr = {}, {}, {}
     for i, p in enumerate(free):
