@@ -47,7 +47,7 @@ import yaml
 from ..bearing.kinematics import BearingError, Kinematics, RollingBearing
 from ..io import MeasurementError, write_json
 from ..io.archive import rig_beside
-from ..io.formats import RECORD_FORMATS
+from ..io.record_formats import RECORD_FORMATS
 from ..io.vibration import VibrationRecord, pick_channel, read_vibration_record
 from ..plotting import save
 from ..plotting.detection import detection_figure, trend_figure
