@@ -17,7 +17,7 @@ The cases named ``rounded_*`` and ``fine_step_*`` hold the dynamic rung against 
 grooves have rounded edges (a fillet of :data:`EDGE_RADIUS_M`, ``bearing.defects[].edge_radius_m``; the
 catalogue's defects, which the rung fits, have sharp ones), and every one of them is integrated at a step
 :data:`FINE_STEP_FACTOR` times finer than the other records' (2.7 us, against the rung's final 48 steps a period
-of the shaft's mode, 7.7 us). ``fine_step_outer_race_defect_20deg`` keeps sharp edges: it separates what the
+of the shaft's mode, 7.7 us). ``fine_step_outer_race_defect_20deg`` and ``_0deg`` keep sharp edges: they separate what the
 step does from what the edges do. Their rows give, besides the width found, the hidden width at the surface and
 the width of the sharp groove a roller sinks as deep into (:meth:`piezobearing.bearing.lpm.Defect.equivalent_sharp_width_m`).
 ``--group edges`` runs only these cases; ``--nearest`` then adds to each rounded row the width of the sharp groove
@@ -100,6 +100,8 @@ EDGE_CASES = {
                                    "defect_edge_radius_m": EDGE_RADIUS_M}, ["inner_race_defect"]),
     "fine_step_outer_race_defect_20deg": ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.35},
                                           ["outer_race_defect"]),
+    "fine_step_outer_race_defect_0deg": ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.0},
+                                         ["outer_race_defect"]),
 }
 CASES.update(EDGE_CASES)
 #: Record conditions that are not catalogue parameters and are not fitted (kept out of a row's values).
