@@ -23,6 +23,7 @@ include: "workflow/rules/figures.smk"
 include: "workflow/rules/scorecard.smk"
 include: "workflow/rules/studies.smk"
 include: "workflow/rules/detect_archive.smk"
+include: "workflow/rules/running_bearing_guide.smk"
 
 
 rule all:

@@ -19,6 +19,17 @@ record, and is refreshed on its own, after that run::
     snakemake --cores 2 detect_archive --configfile docs/_data/detect_archive.yaml
     python scripts/docs_figures.py --only detect
 
+The running-bearing guide's ladder figures, its example record diagnosed without and with the dynamic rung
+(``running_bearing_guide``, about two minutes of CPU)::
+
+    snakemake --cores 1 running_bearing_guide --configfile docs/_data/running_bearing_guide.yaml
+    python scripts/docs_figures.py --only running_bearing
+
+The sensor-design study's figure (the design and studies guides) comes from the paper config's run of that study::
+
+    snakemake --cores 2 study_sensor_design
+    python scripts/docs_figures.py --only studies
+
 A refresh of the paper's figures keeps these records as they are (the build checks them all alike).
 """
 
@@ -71,6 +82,16 @@ RUN_FIGURES = {
     "detect": ("docs/_data/detect_archive.yaml", "detect_archive", [
         ("detect_fe44.png", "detect_record", "workflow/scripts/detect_record.py",
          "piezobearing detect on the CWRU fan-end record fe44", "detect_archive/fe44/detection.png"),
+    ]),
+    "studies": ("config/config.yaml", "study_sensor_design", [
+        ("study_sensor_design.png", "study_summary", "workflow/scripts/study_summary.py",
+         "The sensor_design study's summary on the paper's table of designs", "studies/sensor_design/summary.png"),
+    ]),
+    "running_bearing": ("docs/_data/running_bearing_guide.yaml", "running_bearing_guide", [
+        ("running_bearing_ladder_qs.png", "running_bearing_guide", "workflow/scripts/running_bearing_guide.py",
+         "diagnose-bearing on the guide's LPM record, dynamic rung off", "diagnostics_bearing/guide/diag_qs/figures/ladder.png"),
+        ("running_bearing_ladder_dyn.png", "running_bearing_guide", "workflow/scripts/running_bearing_guide.py",
+         "diagnose-bearing on the guide's LPM record, dynamic rung on", "diagnostics_bearing/guide/diag_dyn/figures/ladder.png"),
     ]),
 }
 

@@ -318,6 +318,10 @@ ROWS = [
     Row("study_all", "every parameter study on the paper config, `study_all`, after the paper",
         "command_study_all.json", "`python benchmarks/bench_command.py study_all -- snakemake --cores 2 study_all`",
         _command_row),
+    Row("study_sensor_design", "the sensor_design study on the paper config (its 25 designs), after the paper",
+        "command_study_sensor_design.json",
+        "`python benchmarks/bench_command.py study_sensor_design -- snakemake --cores 2 study_sensor_design`",
+        _command_row),
     Row("tests", "the test suite", "command_tests.json", "`python benchmarks/bench_command.py tests -- pytest -n 2`",
         _command_row),
     Row("install", "the install: a new venv with `pip install .`, its wheels at hand (pip's cache or a local "

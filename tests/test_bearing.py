@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
 from piezobearing.bearing import lpm
 from piezobearing.bearing.geometry import BearingGeometry, kinematic_frequencies
+from piezobearing.config import ConfigError
 
 
 @pytest.fixture(scope="module")
@@ -106,6 +109,81 @@ def test_concave_and_convex_raceway_drops(geo):
         geo.relative_radius_m("cage")
     with pytest.raises(ValueError, match="defect type"):
         lpm.Defect(0.0, 1e-3, 1e-3, "cage")
+
+
+def _rolling_circle_drop(x_c: np.ndarray, profile_x: np.ndarray, profile_y: np.ndarray, r: float) -> np.ndarray:
+    """How far a circle of radius r resting on the surface points (x, y) sinks below y = 0 at x_c: the
+    highest centre any point allows, found by brute force over the points (independent of the closed form)."""
+    dx = profile_x[None, :] - x_c[:, None]
+    reach = np.where(np.abs(dx) < r, profile_y[None, :] + np.sqrt(np.maximum(r * r - dx * dx, 0.0)), -np.inf)
+    return r - reach.max(axis=1)
+
+
+@pytest.mark.parametrize("race", ["outer", "inner"])
+def test_rounded_edge_drop_is_the_rolling_circle_over_its_fillets(geo, race):
+    """A groove 0.6 mm wide at the surface whose edges are fillets of rho = 0.15 mm, 1 mm deep: the roller's
+    drop from the closed form (the centre circles each fillet's centre at R + rho) against a circle of the
+    relative radius R rolled over the drawn profile (land, quarter-circle fillet, wall, floor, wall, fillet,
+    land), in the unrolled picture of the relative radius."""
+    r, w, rho, depth = geo.relative_radius_m(race), 0.6e-3, 0.15e-3, 1e-3
+    t = np.linspace(0.0, 0.5 * np.pi, 20001)
+    fil_x, fil_y = rho * np.sin(t), -rho + rho * np.cos(t)  # entry fillet: centre (0, -rho), from (0, 0) to (rho, -rho)
+    land = np.linspace(-2e-3, 0.0, 4001)
+    wall = np.linspace(-rho, -depth, 200)
+    floor = np.linspace(rho, w - rho, 400)
+    px = np.concatenate([land, fil_x, np.full(wall.size, rho), floor, np.full(wall.size, w - rho), w - fil_x[::-1],
+                         w - land[::-1]])
+    py = np.concatenate([0 * land, fil_y, wall, np.full(floor.size, -depth), wall[::-1], fil_y[::-1], 0 * land])
+    u = np.linspace(-0.1e-3, w + 0.1e-3, 701)
+    expect = _rolling_circle_drop(u, px, py, r)
+    got = lpm.chord_drop_m(u - 0.5 * w, w, depth, r, rho)
+    np.testing.assert_allclose(got, expect, rtol=0, atol=2e-4 * expect.max())
+    # the closed form itself: (R + rho) - sqrt((R + rho)^2 - m^2), m the distance to the nearer opening edge
+    m = np.minimum(u, w - u)
+    inside = (u > 0) & (u < w)
+    np.testing.assert_allclose(got[inside], (r + rho) - np.sqrt((r + rho) ** 2 - m[inside] ** 2), rtol=1e-12)
+    assert np.all(got[~inside] == 0)
+    # shallower than the sharp groove of the same surface width, as deep as the sharp groove of the equivalent width
+    d = lpm.Defect(0.0, w, depth, f"{race}_race", edge_radius_m=rho)
+    sharp = lpm.Defect(0.0, w, depth, f"{race}_race")
+    assert d.max_drop_m(r) == pytest.approx(got.max(), rel=1e-6)
+    assert d.max_drop_m(r) < sharp.max_drop_m(r)
+    w_eq = d.equivalent_sharp_width_m(r)
+    assert w_eq == pytest.approx(w * np.sqrt(r / (r + rho)), rel=2e-3)  # the sagitta's w^2 / (8 R) to first order
+    assert lpm.Defect(0.0, w_eq, depth).max_drop_m(r) == pytest.approx(d.max_drop_m(r), rel=1e-12)
+    assert sharp.equivalent_sharp_width_m(r) == pytest.approx(w, rel=1e-12)
+
+
+def test_sharp_edges_are_the_default_and_unchanged(geo, bcfg):
+    """Without an edge radius the drop is the sharp-edged chord drop, bit for bit, in the function, the defect and
+    the LPM's drops; a config defect without ``edge_radius_m`` reads as sharp, one with it carries it."""
+    r, w = geo.relative_radius_m("outer"), 0.9e-3
+    arc = np.linspace(-w, w, 2001)
+    u = arc + 0.5 * w
+    m = np.minimum(u, w - u)
+    sharp = np.where((u > 0) & (u < w), np.minimum(r - np.sqrt(np.maximum(r * r - m * m, 0.0)), 1e-3), 0.0)
+    assert np.array_equal(lpm.chord_drop_m(arc, w, 1e-3, r), sharp)
+    assert np.array_equal(lpm.chord_drop_m(arc, w, 1e-3, r, 0.0), sharp)
+    (d,) = lpm.defects_from_config(bcfg)
+    assert d.edge_radius_m == 0.0
+    rounded = dict(bcfg["defects"][0], edge_radius_m=0.2e-3)
+    (dr,) = lpm.defects_from_config({**bcfg, "defects": [rounded]})
+    assert dr.edge_radius_m == 0.2e-3
+    p = lpm.LPMParameters.from_config(bcfg, True)
+    mo = p.motion(np.linspace(0.0, 0.05, 2001))
+    explicit = replace(p, defects=(replace(d, edge_radius_m=0.0),))
+    assert np.array_equal(p.drops(mo), explicit.drops(mo))
+    round_p = replace(p, defects=(dr,))
+    # rounded: as long a dip (the surface width), never deeper
+    assert np.all(round_p.drops(mo) <= p.drops(mo))
+    assert np.array_equal(round_p.drops(mo) > 0, p.drops(mo) > 0)
+    with pytest.raises(ValueError, match="edge radius"):
+        lpm.Defect(0.0, 0.6e-3, 1e-3, edge_radius_m=0.31e-3)
+    too_round = dict(bcfg["defects"][0], edge_radius_m=0.5e-3)  # the groove is 0.9 mm wide: at most 0.45 mm
+    with pytest.raises(ConfigError) as e:
+        lpm.defects_from_config({**bcfg, "defects": [too_round]})
+    msg = str(e.value)
+    assert "\n" not in msg and "key 'bearing.defects[0].edge_radius_m'" in msg and "at most half the width" in msg
 
 
 # --- quasi-static load distribution against Harris -------------------------------

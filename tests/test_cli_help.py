@@ -4,7 +4,7 @@ and every command saying which config and which model it used."""
 import pytest
 
 from piezobearing import cli, config
-from piezobearing.io.formats import RECORD_FORMATS
+from piezobearing.io.record_formats import RECORD_FORMATS
 
 COMMANDS = ("diagnose", "diagnose-bearing", "validate", "hide-and-find")
 

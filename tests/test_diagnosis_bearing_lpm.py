@@ -7,7 +7,9 @@ sensor model by the standalone command: no gain effect; an inner-race groove sta
 """
 
 import copy
+import importlib.util
 import json
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -17,11 +19,17 @@ import yaml
 from piezobearing.chain.signals import noisy, sensor_voltage
 from piezobearing.cli import main
 from piezobearing.diagnosis.bearing import report
-from piezobearing.diagnosis.bearing.lpm_records import lpm_record, lpm_sensor_force
+from piezobearing.diagnosis.bearing.lpm_records import (
+    MAX_STEP_S,
+    lpm_parameters,
+    lpm_record,
+    lpm_sensor_force,
+)
 from piezobearing.diagnosis.bearing.subject import SUBJECT
 from piezobearing.io import write_bearing_record
 from piezobearing.sensor.calibration import SensorCircuit
 from piezobearing.stages.bearing_diagnosis import influence_from_config, run
+from piezobearing.stages.running_bearing_guide import EXAMPLE
 
 #: name -> hidden catalogue values (the catalogue's examples, the groove 0.9 mm over the sensor as the paper's)
 SUBSET = {
@@ -134,3 +142,42 @@ def test_fast_record_is_averaged_to_the_models_rate_and_its_groove_found(setup):
     # the LPM's shaft rings after the groove's edges: the dynamic rung joins the groove
     assert d["selected"][0] == "outer_race_defect" and set(d["selected"][1:]) <= {"shaft_dynamics"}, d["selected"]
     assert abs(d["final"]["params"]["outer_defect_width_m"] / 0.9e-3 - 1) < 0.05
+
+
+def test_rounded_edges_and_a_finer_step_reach_the_lpm_records(setup):
+    """``defect_edge_radius_m`` rounds the hidden groove's edges and ``max_step_s`` sets the LPM's step: the
+    sensor force converges with the step (the default step within 1 % rms of a 4x finer one), and the rounded
+    groove's dips are shallower than the sharp one's over the same surface width."""
+    c, influence = setup
+    sharp = {"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.0}
+    rounded = {**sharp, "defect_edge_radius_m": 0.15e-3}
+    p = lpm_parameters(c, rounded, 0.0)
+    assert [d.edge_radius_m for d in p.defects] == [0.15e-3]
+    assert lpm_parameters(c, sharp, 0.0).defects[0].edge_radius_m == 0.0
+    t = np.arange(int(0.1 * 2550)) / 2550.0
+    f_sharp = lpm_sensor_force(c, influence, sharp, t)
+    f_fine = lpm_sensor_force(c, influence, sharp, t, MAX_STEP_S / 4)
+    f_round = lpm_sensor_force(c, influence, rounded, t, MAX_STEP_S / 4)
+    rms = np.sqrt(np.mean((f_sharp - f_sharp.mean()) ** 2))
+    step_error = np.sqrt(np.mean((f_sharp - f_fine) ** 2)) / rms
+    edge_change = np.sqrt(np.mean((f_round - f_fine) ** 2)) / rms
+    assert 0 < step_error < 0.01, step_error
+    assert edge_change > 0, edge_change
+    # the groove under the sensor: its dips unload the sensor; rounded, they are less deep
+    assert f_round.min() > f_fine.min()
+
+
+def test_the_guide_example_is_the_validation_case():
+    """The rule running_bearing_guide's record is the guide's command's: the validation case
+    outer_race_defect+cage_slip, 2 s at 2550 Hz, 30 dB, the script's default seed."""
+    spec = importlib.util.spec_from_file_location("bearing_diagnosis_validation",
+                                                  Path(__file__).parents[1] / "validation" / "bearing_diagnosis.py")
+    val = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(val)
+    hidden, _ = val.CASES["outer_race_defect+cage_slip"]
+    assert EXAMPLE["hidden"] == hidden
+    assert (EXAMPLE["sample_rate_Hz"], EXAMPLE["duration_s"], EXAMPLE["snr_dB"]) == (2550.0, 2.0, 30.0)
+    guide = (Path(__file__).parents[1] / "docs" / "guides" / "running_bearing.md").read_text()
+    assert "--rate 2550 --duration 2 --case outer_race_defect+cage_slip" in guide
+    # the script's default seed is the example's
+    assert f'ap.add_argument("--seed", type=int, default={EXAMPLE["seed"]})' in Path(spec.origin).read_text()

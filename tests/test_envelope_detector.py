@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.stats import binom
+from scipy.special import roots_legendre
+from scipy.stats import binom, gamma
 
 from piezobearing.bearing.kinematics import RollingBearing
 from piezobearing.signals.detectors import envelope as envelope_detector
@@ -92,3 +93,12 @@ def test_the_null_threshold_beyond_the_grids_reach_is_the_union_bound_and_above_
     assert null.union_bound(1e-3) > null.threshold(1e-3) > 0
     alpha = 0.5 * null.survival[-1]
     assert null.threshold(alpha) == null.union_bound(alpha) > null.x[-1]
+
+
+@pytest.mark.parametrize("shape", [0.5, 1.0, 2.3, 7.0, 40.0, 300.5])
+def test_null_quadrature_nodes_are_scipys_gamma_quantiles(shape):
+    """The null distribution's nodes are scipy.stats' gamma quantiles bit for bit, from scipy.special alone."""
+    nodes, weights = envelope_detector._gamma_nodes(shape)
+    u, w = roots_legendre(envelope_detector._N_QUAD)
+    assert np.array_equal(nodes, gamma.ppf(0.5 * (u + 1.0), shape, scale=1.0 / shape))
+    assert np.array_equal(weights, 0.5 * w)

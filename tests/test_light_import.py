@@ -52,6 +52,38 @@ def test_detect_help_loads_the_command_line_and_the_config_only():
     ]
 
 
+#: What a detection on a record without a tachometer does without: filter design, distributions, splines,
+#: optimisers (each 0.2-1 s of import).
+NOT_FOR_DETECTION = ("scipy.signal", "scipy.stats", "scipy.interpolate", "scipy.optimize", "numba", "sfepy")
+
+
+def test_detect_on_a_record_loads_no_filter_design_distribution_or_spline(tmp_path):
+    """``piezobearing detect`` on a WAV record, with its report and figure written: the envelope detector's
+    Butterworth gains are closed-form, its null's gamma quantiles come from scipy.special, and order tracking's
+    splines load only for a tracked record."""
+    code = (
+        "import numpy as np\nfrom scipy.io import wavfile\n"
+        "t = np.arange(24000) / 12000.0\n"
+        "x = np.random.default_rng(0).normal(size=t.size) + np.sin(2 * np.pi * 3000.0 * t) * (np.sin(2 * np.pi * 107.4 * t) > 0.99)\n"
+        f"wavfile.write({str(tmp_path / 'r.wav')!r}, 12000, x.astype(np.float32))\n"
+        "from piezobearing.cli import main\n"
+        f"assert main(['detect', {str(tmp_path / 'r.wav')!r}, '--bearing', 'SKF 6205', '--rpm', '1797', "
+        f"'--out', {str(tmp_path / 'out')!r}]) == 0\n"
+    )
+    loaded = _loaded(code)
+    assert (tmp_path / "out" / "detection.png").is_file() and (tmp_path / "out" / "report.md").is_file()
+    assert not {m for m in loaded if m in NOT_FOR_DETECTION}, sorted(m for m in loaded if m in NOT_FOR_DETECTION)
+
+
+@pytest.mark.parametrize("stage", ["signals", "scorecard", "calibration", "bearing", "sensor_fem"])
+def test_a_workflow_stage_that_filters_nothing_loads_no_filter_design_or_distribution(stage):
+    """The stages of most workflow jobs import the sensor's circuit types, the fit machinery and the effect
+    catalogue; scipy.signal and scipy.stats (about a second of import together) load only where a function
+    that needs them runs (a diagnosis, the calibration's impulses, the housing's peak check)."""
+    loaded = _loaded(f"import piezobearing.stages.{stage}")
+    assert not {m for m in loaded if m in ("scipy.signal", "scipy.stats")}
+
+
 def test_a_public_name_is_loaded_on_first_use_and_stays():
     loaded = _loaded("import piezobearing\npiezobearing.Kinematics")
     assert "piezobearing.bearing.kinematics" in loaded and "piezobearing.api" not in loaded

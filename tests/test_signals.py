@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.signal import butter, sosfreqz
 
 from piezobearing.sensor.calibration import SensorCircuit, circuit_voltage, frequency_response
 from piezobearing.sensor.response import fem_ratio, sensor_model
@@ -117,6 +118,27 @@ def test_band_gain_is_a_zero_phase_butterworth():
     assert envelope.band_gain(np.array([600.0]), FS, (600.0, 1000.0), 4)[0] == pytest.approx(0.5, rel=1e-6)  # -3 dB x 2
     with pytest.raises(ValueError, match="Nyquist"):
         envelope.band_gain(f, FS, (600.0, 1400.0), 4)
+
+
+@pytest.mark.parametrize(("rate_Hz", "band_Hz", "order"), [
+    (12000.0, (1000.0, 3000.0), 4), (2550.0, (100.0, 400.0), 4), (25600.0, (3000.0, 6000.0), 2),
+    (12000.0, (500.0, 6000.0), 4), (48000.0, (12000.0, 24000.0), 3),
+])
+def test_band_gain_equals_scipys_butterworth_sections(rate_Hz, band_Hz, order):
+    """The closed form is the squared magnitude of ``butter(..., output="sos")`` evaluated by ``sosfreqz``,
+    band-pass and high-pass (a band to Nyquist), at every bin of a record, DC and Nyquist included."""
+    f = np.fft.rfftfreq(24000, 1.0 / rate_Hz)
+    lo, hi = band_Hz
+    if hi >= rate_Hz / 2:
+        sos = butter(order, lo, btype="highpass", fs=rate_Hz, output="sos")
+    else:
+        sos = butter(order, [lo, hi], btype="bandpass", fs=rate_Hz, output="sos")
+    reference = np.abs(sosfreqz(sos, worN=f, fs=rate_Hz)[1]) ** 2
+    gain = envelope.band_gain(f, rate_Hz, band_Hz, order)
+    assert gain[0] == 0.0
+    np.testing.assert_allclose(gain, reference, rtol=0, atol=1e-12 * reference.max())
+    passband = reference > 1e-3
+    np.testing.assert_allclose(gain[passband], reference[passband], rtol=1e-10)
 
 
 # --------------------------------------------------------------------------- envelope spectrum

@@ -13,6 +13,16 @@ diagnosis itself). A markdown table goes beside it.
         [--influence results/bearing/influence_line_healthy.csv] [--rate 2550 --rate 25600] [--case NAME ...]
         [--duration S] [--record-out DIR] [--steps-per-period N] [--final-steps-per-period N]
 
+The cases named ``rounded_*`` and ``fine_step_*`` hold the dynamic rung against another defect geometry: their
+grooves have rounded edges (a fillet of :data:`EDGE_RADIUS_M`, ``bearing.defects[].edge_radius_m``; the
+catalogue's defects, which the rung fits, have sharp ones), and every one of them is integrated at a step
+:data:`FINE_STEP_FACTOR` times finer than the other records' (2.7 us, against the rung's final 48 steps a period
+of the shaft's mode, 7.7 us). ``fine_step_outer_race_defect_20deg`` and ``_0deg`` keep sharp edges: they separate what the
+step does from what the edges do. Their rows give, besides the width found, the hidden width at the surface and
+the width of the sharp groove a roller sinks as deep into (:meth:`piezobearing.bearing.lpm.Defect.equivalent_sharp_width_m`).
+``--group edges`` runs only these cases; ``--nearest`` then adds to each rounded row the width of the sharp groove
+whose noiseless force is nearest the record's (:func:`nearest_sharp_width`), with no diagnosis.
+
 ``--steps-per-period`` and ``--final-steps-per-period``: the config's ``bearing_diagnosis.dynamic_steps_per_period``
 (the dynamic rung's integration steps per period of the shaft's mode in its search) and
 ``dynamic_final_steps_per_period`` (in the selected dynamic model's final refit and intervals), to see what the
@@ -29,8 +39,12 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 from piezobearing import config as cfg
-from piezobearing.diagnosis.bearing.lpm_records import lpm_record
+from piezobearing.bearing.geometry import BearingGeometry
+from piezobearing.bearing.lpm import Defect
+from piezobearing.diagnosis.bearing.lpm_records import MAX_STEP_S, lpm_record, lpm_sensor_force
 from piezobearing.diagnosis.bearing.subject import SUBJECT
 from piezobearing.io import write_bearing_record
 from piezobearing.stages.bearing_diagnosis import influence_from_config, read_influence
@@ -64,6 +78,36 @@ CASES = {
                                            "speed_deviation_ratio": -0.1, "speed_ramp_Hz_per_s": 100.0 / 60.0},
                                           ["outer_race_defect"]),
 }
+#: Fillet radius of the rounded-edge cases' grooves [m]: a quarter of the 0.6 mm width (the walls then 0.3 mm
+#: apart), a chosen test geometry between the sharp edge and the fully rounded one (rho = w/2), not a measured spall.
+EDGE_RADIUS_M = 0.15e-3
+#: The rounded-edge and fine-step cases' LPM step is MAX_STEP_S / FINE_STEP_FACTOR (2.7 us).
+FINE_STEP_FACTOR = 4
+EDGE_CASES = {
+    "rounded_outer_race_defect_0deg": ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.0,
+                                        "defect_edge_radius_m": EDGE_RADIUS_M}, ["outer_race_defect"]),
+    "rounded_outer_race_defect_20deg": ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.35,
+                                         "defect_edge_radius_m": EDGE_RADIUS_M}, ["outer_race_defect"]),
+    "rounded_outer_race_defect_26deg": ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.45,
+                                         "defect_edge_radius_m": EDGE_RADIUS_M}, ["outer_race_defect"]),
+    "rounded_outer_race_defect_20deg+cage_slip": ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.35,
+                                                   "cage_slip_ratio": 0.015, "defect_edge_radius_m": EDGE_RADIUS_M},
+                                                  ["outer_race_defect", "cage_slip"]),
+    "rounded_outer_race_defect_26deg+cage_slip": ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.45,
+                                                   "cage_slip_ratio": 0.015, "defect_edge_radius_m": EDGE_RADIUS_M},
+                                                  ["outer_race_defect", "cage_slip"]),
+    "rounded_inner_race_defect": ({"inner_defect_width_m": 0.6e-3, "inner_defect_angle_rad": 0.7,
+                                   "defect_edge_radius_m": EDGE_RADIUS_M}, ["inner_race_defect"]),
+    "fine_step_outer_race_defect_20deg": ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.35},
+                                          ["outer_race_defect"]),
+    "fine_step_outer_race_defect_0deg": ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.0},
+                                         ["outer_race_defect"]),
+}
+CASES.update(EDGE_CASES)
+#: Record conditions that are not catalogue parameters and are not fitted (kept out of a row's values).
+CONDITIONS = ("defect_edge_radius_m",)
+#: The records' SNR [dB].
+SNR_DB = 30.0
 #: Cases whose record has a speed_rpm column (the tachometer): the speed the LPM ran at, 1500 rpm where the rig
 #: file says 1000; a ramp from 900 rpm at 100 rpm/s (900 to 1000 rpm over a 1 s record, 1100 over 2 s).
 TACHOMETER = ("healthy_1500rpm_tachometer", "outer_race_defect_ramp_tachometer")
@@ -72,7 +116,9 @@ TACHOMETER = ("healthy_1500rpm_tachometer", "outer_race_defect_ramp_tachometer")
 def run_case(config: dict, influence, name: str, sample_rate_Hz: float, duration_s: float, seed: int,
              record_dir: Path | None = None) -> dict:
     hidden, effects = CASES[name]
-    rec = lpm_record(config, influence, hidden, sample_rate_Hz, duration_s, 30.0, seed, tachometer=name in TACHOMETER)
+    step = MAX_STEP_S / FINE_STEP_FACTOR if name in EDGE_CASES else MAX_STEP_S
+    rec = lpm_record(config, influence, hidden, sample_rate_Hz, duration_s, SNR_DB, seed, tachometer=name in TACHOMETER,
+                     max_step_s=step)
     if record_dir is not None:
         record_dir.mkdir(parents=True, exist_ok=True)
         write_bearing_record(rec, record_dir / f"{name}_{sample_rate_Hz:.0f}Hz.csv")
@@ -82,6 +128,8 @@ def run_case(config: dict, influence, name: str, sample_rate_Hz: float, duration
     final = d["final"]
     found = {}
     for k, v in hidden.items():
+        if k in CONDITIONS:
+            continue
         val = final["params"].get(k)
         ci = final["ci95"].get(k)
         inside = None if ci is None or ci[0] is None else bool(ci[0] <= v <= ci[1])
@@ -109,7 +157,76 @@ def run_case(config: dict, influence, name: str, sample_rate_Hz: float, duration
         "nrmse": final["nrmse"],
         "noise_floor_nrmse": final["noise_floor_nrmse"],
         "unexplained": [u.get("where") for u in d["unexplained"]],
+        "lpm_max_step_s": step,
+        "geometry": geometry(config, hidden),
     }
+
+
+def geometry(config: dict, hidden: dict) -> dict:
+    """Per hidden groove: its edge radius, its width at the surface and the width of the sharp groove a roller
+    sinks as deep into (what the sharp-edged catalogue can at best match by depth) [m]."""
+    g = BearingGeometry.from_config(config["bearing"])
+    rho = hidden.get("defect_edge_radius_m", 0.0)
+    out = {}
+    for key, race in (("outer_defect_width_m", "outer"), ("inner_defect_width_m", "inner")):
+        if hidden.get(key, 0.0) > 0:
+            d = Defect(0.0, hidden[key], 1.0e-3, f"{race}_race", edge_radius_m=rho)
+            out[key] = {"edge_radius_m": rho, "surface_width_m": hidden[key],
+                        "equivalent_sharp_width_m": d.equivalent_sharp_width_m(g.relative_radius_m(race)),
+                        "max_drop_m": d.max_drop_m(g.relative_radius_m(race))}
+    return out
+
+
+def nearest_sharp_width(config: dict, influence, hidden: dict, sample_rate_Hz: float, duration_s: float,
+                        step_s: float) -> dict:
+    """The sharp groove whose noiseless sensor force is nearest (rms over the record) the rounded groove's, every
+    other hidden value as in the record, both LPMs at ``step_s``: the width the sharp-edged catalogue can at best
+    find from the record (9 widths from 4 um below the equivalent width to 2 um above the surface width, the
+    least squares' parabola through the nearest three). Returns {key: {width_m, rms_N, noise_sigma_N}}."""
+    out = {}
+    t = np.arange(int(round(duration_s * sample_rate_Hz))) / sample_rate_Hz
+    for key, geo in geometry(config, hidden).items():
+        if not geo["edge_radius_m"]:
+            continue
+        ref = lpm_sensor_force(config, influence, hidden, t, step_s)
+        sharp = {k: v for k, v in hidden.items() if k not in CONDITIONS}
+        ws = np.linspace(geo["equivalent_sharp_width_m"] - 4e-6, geo["surface_width_m"] + 2e-6, 9)
+        d2 = np.array([np.mean((ref - lpm_sensor_force(config, influence, {**sharp, key: w}, t, step_s)) ** 2)
+                       for w in ws])
+        k = int(np.clip(np.argmin(d2), 1, ws.size - 2))
+        a, b, c = np.polyfit(ws[k - 1:k + 2], d2[k - 1:k + 2], 2)
+        best = float(-b / (2 * a)) if a > 0 else float(ws[np.argmin(d2)])
+        rms = float(np.sqrt(max(np.polyval([a, b, c], best), 0.0)))
+        sigma = float(np.sqrt(np.mean((ref - ref.mean()) ** 2)) / 10 ** (SNR_DB / 20))
+        out[key] = {"width_m": best, "rms_N": rms, "noise_sigma_N": sigma}
+    return out
+
+
+def edge_table(rows: list[dict]) -> str:
+    """The rounded-edge and fine-step rows: verdict, angle, width against the surface and equivalent widths."""
+    out = ["| case | rate [Hz] | edge radius [mm] | verdict | angle found [95 % interval] (hidden) [rad] | width found "
+           "[95 % interval] [mm] | surface width (in?) | equivalent sharp width (in?) | nearest sharp width (in?) | "
+           "NRMSE % (baseline / quasi-static / dynamic / floor) |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        for key, geo in r["geometry"].items():
+            v = r["values"][key]
+            ang = r["values"].get(key.replace("width_m", "angle_rad"), {})
+            aci = ang.get("ci95")
+            a = (f"{ang['found']:.4f} [{aci[0]:.4f}, {aci[1]:.4f}] ({ang['hidden']:.2f})"
+                 if ang.get("found") is not None and aci and aci[0] is not None
+                 else f"not fitted ({ang.get('hidden', float('nan')):.2f})")
+            ci = v["ci95"] if v["found"] is not None and v["ci95"] and v["ci95"][0] is not None else None
+            w = f"{1e3 * v['found']:.4f} [{1e3 * ci[0]:.4f}, {1e3 * ci[1]:.4f}]" if ci else "not fitted"
+
+            def held(x, ci=ci):
+                return "-" if not ci else ("yes" if ci[0] <= x <= ci[1] else "no")
+            n = (r.get("nearest_sharp") or {}).get(key)
+            near = f"{1e3 * n['width_m']:.4f} ({held(n['width_m'])})" if n else "-"
+            out.append(f"| {r['case']} | {r['sample_rate_Hz']:.0f} | {1e3 * geo['edge_radius_m']:.2f} | {r['verdict']} "
+                       f"| {a} | {w} | {1e3 * geo['surface_width_m']:.4f} ({held(geo['surface_width_m'])}) "
+                       f"| {1e3 * geo['equivalent_sharp_width_m']:.4f} ({held(geo['equivalent_sharp_width_m'])}) "
+                       f"| {near} | {ladder(r)} |")
+    return "\n".join(out)
 
 
 def ladder(r: dict) -> str:
@@ -141,6 +258,11 @@ def main() -> None:
     ap.add_argument("--influence", default=None, help="influence_line_healthy.csv (default: solved from the config)")
     ap.add_argument("--rate", type=float, action="append", help="sample rates [Hz] (default 2550 and 25600)")
     ap.add_argument("--case", action="append", help=f"cases (default all): {', '.join(CASES)}")
+    ap.add_argument("--nearest", action="store_true",
+                    help="add to each rounded-edge row of --out the nearest sharp width (noiseless LPM forces; no "
+                         "diagnosis)")
+    ap.add_argument("--group", choices=["edges"], default=None,
+                    help="edges: the rounded-edge and fine-step cases only (with their own table, .edges.md)")
     ap.add_argument("--duration", type=float, default=1.0, help="record length [s]")
     ap.add_argument("--seed", type=int, default=26)
     ap.add_argument("--record-out", type=Path, default=None, help="folder to write each case's record to (CSV)")
@@ -158,16 +280,28 @@ def main() -> None:
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     rows = json.loads(out.read_text())["cases"] if out.exists() else []
+    if args.nearest:
+        for r in rows:
+            if r["case"] in EDGE_CASES and "nearest_sharp" not in r:
+                r["nearest_sharp"] = nearest_sharp_width(config, influence, CASES[r["case"]][0], r["sample_rate_Hz"],
+                                                         r["duration_s"], r["lpm_max_step_s"])
+                print(r["case"], r["sample_rate_Hz"], r["nearest_sharp"], flush=True)
+        out.write_text(json.dumps({**json.loads(out.read_text()), "cases": rows}, indent=1))
+        out.with_suffix(".edges.md").write_text(edge_table([r for r in rows if r["case"] in EDGE_CASES]) + "\n")
+        return
     done = {(r["case"], r["sample_rate_Hz"]) for r in rows}
     for rate in args.rate or [2550.0, 25600.0]:
-        for name in args.case or list(CASES):
+        for name in args.case or (list(EDGE_CASES) if args.group == "edges" else list(CASES)):
             if (name, rate) in done:
                 continue
             c = copy.deepcopy(config)
             rows.append(run_case(c, influence, name, rate, args.duration, args.seed, args.record_out))
-            out.write_text(json.dumps({"command": shlex.join(["python", *sys.argv]), "snr_dB": 30.0,
+            out.write_text(json.dumps({"command": shlex.join(["python", *sys.argv]), "snr_dB": SNR_DB,
                                        "cases": rows}, indent=1))
             out.with_suffix(".md").write_text(table(rows) + "\n")
+            edges = [r for r in rows if r["case"] in EDGE_CASES]
+            if edges:
+                out.with_suffix(".edges.md").write_text(edge_table(edges) + "\n")
             print(table(rows[-1:]).splitlines()[-1], flush=True)
 
 

@@ -84,7 +84,7 @@ def _load_config(args) -> tuple[dict, str]:
     return config, " + ".join([str(d / "config.yaml"), *map(str, overrides)])
 
 
-#: The record formats the readers take (piezobearing.io.formats.RECORD_FORMATS; a test holds the two equal),
+#: The record formats the readers take (piezobearing.io.record_formats.RECORD_FORMATS; a test holds the two equal),
 #: written out here so that ``--help`` does not import the readers.
 FORMATS = ".csv, .mat (MATLAB v5 or v7.3), .uff/.unv (UFF58), .tdms (NI TDMS), .wav"
 

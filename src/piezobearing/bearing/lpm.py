@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
+from ..config import ConfigError
 from . import surface
 from .geometry import BearingGeometry, kinematic_frequencies
 from .lpm_kernel import newmark_lpm
@@ -95,27 +96,41 @@ def contact_law(delta_m: np.ndarray, k_contact: float) -> tuple[np.ndarray, np.n
     return k_contact * d * d19, (10 / 9) * k_contact * d19
 
 
-def chord_drop_m(arc_m: np.ndarray, width_m: float, depth_m: float, relative_radius_m: float) -> np.ndarray:
-    """How far a roller sinks over a sharp-edged gap of width w, at arc position u [m].
+def chord_drop_m(arc_m: np.ndarray, width_m: float, depth_m: float, relative_radius_m: float,
+                 edge_radius_m: float = 0.0) -> np.ndarray:
+    """How far a roller sinks over a gap of width w, at arc position u [m].
 
-    A roller whose contact point is the arc length u past the gap's entry edge
-    (0 <= u <= w) rests on the nearer edge; with the relative radius R of the
-    two surfaces (roller against raceway) its centre sinks
-    ``R - sqrt(R^2 - min(u, w - u)^2)``, capped at the depth; 0 outside.
+    Sharp edges (``edge_radius_m`` 0): a roller whose contact point is the arc length u past the gap's
+    entry edge (0 <= u <= w) rests on the nearer edge; with the relative radius R of the two surfaces
+    (roller against raceway) its centre sinks ``R - sqrt(R^2 - min(u, w - u)^2)``, capped at the depth;
+    0 outside.
+
+    Rounded edges (``edge_radius_m`` rho > 0): each edge is a fillet of radius rho, tangent to the raceway
+    where the gap opens (w is the width at the surface, from where one fillet leaves the raceway to where
+    the other rejoins it; the walls stand w - 2 rho apart). A roller over the fillet touches it on the
+    line through the fillet's centre, so its centre circles that centre at R + rho: the drop is the sharp
+    formula with R + rho for R, ``(R + rho) - sqrt((R + rho)^2 - min(u, w - u)^2)``, capped at the depth.
+    It holds while the contact stays on the fillet's quarter circle (u <= R + rho, always for a gap
+    narrower than the roller) and is exact in the unrolled picture of the relative radius (the fillet's
+    own curvature adds to the raceway's to first order in rho / raceway radius). The same deepest point is
+    reached by a sharp gap of width ``2 sqrt(R^2 - (R - drop)^2)`` (:meth:`Defect.equivalent_sharp_width_m`),
+    narrower than w; the dip lasts the whole surface width.
 
     Parameters
     ----------
     arc_m : ndarray
         Arc position of the contact from the gap's centre [m].
     width_m, depth_m : float
-        Gap width w and depth [m].
+        Gap width w at the surface and depth [m].
     relative_radius_m : float
         R [m] (:meth:`BearingGeometry.relative_radius_m`).
+    edge_radius_m : float
+        rho, the edges' fillet radius [m]; 0: sharp edges.
     """
     u = np.asarray(arc_m) + 0.5 * width_m
     inside = (u > 0) & (u < width_m)
     m = np.minimum(u, width_m - u)
-    r = relative_radius_m
+    r = relative_radius_m + edge_radius_m
     drop = r - np.sqrt(np.maximum(r * r - m * m, 0.0))
     return np.where(inside, np.minimum(drop, depth_m), 0.0)
 
@@ -127,7 +142,7 @@ def _wrap(angle_rad: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Defect:
-    """A local defect with sharp edges: a groove across a raceway or a flat on a roller.
+    """A local defect: a groove across a raceway or a flat on a roller, with sharp or rounded edges.
 
     Parameters
     ----------
@@ -144,6 +159,9 @@ class Defect:
     kind : {"outer_race", "inner_race", "rolling_element"}
     roller : int
         ``rolling_element``: index of the roller with the flat.
+    edge_radius_m : float
+        Radius rho of the fillet that rounds each edge [m] (:func:`chord_drop_m`); 0: sharp edges. At most
+        half the width and at most the depth.
     """
 
     angle_rad: float
@@ -151,10 +169,14 @@ class Defect:
     depth_m: float
     kind: str = "outer_race"
     roller: int = 0
+    edge_radius_m: float = 0.0
 
     def __post_init__(self):
         if self.kind not in DEFECT_TYPES:
             raise ValueError(f"defect type must be one of {', '.join(DEFECT_TYPES)}, got {self.kind!r}")
+        if not 0.0 <= self.edge_radius_m <= min(0.5 * self.width_m, self.depth_m):
+            raise ValueError(f"defect edge radius must be within [0, min(width/2, depth)] = "
+                             f"[0, {min(0.5 * self.width_m, self.depth_m):.4g}] m, got {self.edge_radius_m!r}")
 
     def max_drop_m(self, relative_radius_m: float) -> float:
         """Deepest a roller sinks at the defect's centre: min(depth, R - sqrt(R^2 - (w/2)^2)) [m].
@@ -162,16 +184,30 @@ class Defect:
         R is the relative radius of the surfaces in contact
         (:meth:`BearingGeometry.relative_radius_m`); R = r for a flat raceway.
         For the 0.9 mm groove on the N 305's outer race (R = 6.14 mm) 16.5 um,
-        against 20.3 um on a flat raceway.
+        against 20.3 um on a flat raceway. Rounded edges: R + rho for R (:func:`chord_drop_m`).
         """
-        r, hw = relative_radius_m, 0.5 * self.width_m
+        r, hw = relative_radius_m + self.edge_radius_m, 0.5 * self.width_m
         if hw >= r:
             return self.depth_m
         return float(min(self.depth_m, r - np.sqrt(r * r - hw * hw)))
 
+    def equivalent_sharp_width_m(self, relative_radius_m: float) -> float:
+        """Width of the sharp-edged gap whose roller sinks as deep as over this one [m].
+
+        ``2 sqrt(R^2 - (R - drop)^2)`` with the deepest drop of :meth:`max_drop_m`: the width itself for
+        sharp edges (while the depth does not cap the drop), narrower for rounded ones (0.6 mm with
+        rho = 0.15 mm on the N 305's outer race: 0.593 mm).
+        """
+        r, drop = relative_radius_m, self.max_drop_m(relative_radius_m)
+        if drop >= r:
+            return 2.0 * r
+        return float(2.0 * np.sqrt(r * r - (r - drop) ** 2))
+
 
 def defects_from_config(bearing: dict) -> tuple[Defect, ...]:
-    """The defects of ``bearing.defects`` (a list of {type, width_m, depth_m, angle_deg[, roller]}).
+    """The defects of ``bearing.defects`` (a list of {type, width_m, depth_m, angle_deg[, roller, edge_radius_m]}).
+
+    ``edge_radius_m`` (default 0, sharp edges): the fillet radius rounding both edges (:func:`chord_drop_m`).
 
     ``roller`` (rolling element only, default 0): the roller with the flat. With equal
     rollers a flat on roller j is the flat on roller 0 with ``start_angle_deg`` moved by
@@ -179,8 +215,15 @@ def defects_from_config(bearing: dict) -> tuple[Defect, ...]:
     they are not, and the index picks which roller carries it.
     """
     out = []
-    for d in bearing.get("defects", []):
-        out.append(Defect(np.radians(d["angle_deg"]), d["width_m"], d["depth_m"], d["type"], d.get("roller", 0)))
+    for i, d in enumerate(bearing.get("defects", [])):
+        rho = d.get("edge_radius_m", 0.0)
+        if rho > min(0.5 * d["width_m"], d["depth_m"]):
+            raise ConfigError(
+                f"key 'bearing.defects[{i}].edge_radius_m': a fillet of {rho:g} m does not fit a defect "
+                f"{d['width_m']:g} m wide and {d['depth_m']:g} m deep; use at most half the width and at most the "
+                "depth (0: sharp edges)"
+            )
+        out.append(Defect(np.radians(d["angle_deg"]), d["width_m"], d["depth_m"], d["type"], d.get("roller", 0), rho))
     return tuple(out)
 
 
@@ -397,17 +440,18 @@ class LPMParameters:
         for d in self.defects:
             if d.kind == "outer_race":
                 arc = g.outer_raceway_radius_m * _wrap(motion.psi_rad - d.angle_rad)
-                out += chord_drop_m(arc, d.width_m, d.depth_m, g.relative_radius_m("outer"))
+                out += chord_drop_m(arc, d.width_m, d.depth_m, g.relative_radius_m("outer"), d.edge_radius_m)
             elif d.kind == "inner_race":
                 pos = d.angle_rad + motion.shaft_angle_rad[:, None]
                 arc = g.inner_raceway_radius_m * _wrap(motion.psi_rad - pos)
-                out += chord_drop_m(arc, d.width_m, d.depth_m, g.relative_radius_m("inner"))
+                out += chord_drop_m(arc, d.width_m, d.depth_m, g.relative_radius_m("inner"), d.edge_radius_m)
             else:
                 j = d.roller % g.n_rollers
                 chi = motion.spin_rad - d.angle_rad
-                out[:, j] += chord_drop_m(r * _wrap(chi), d.width_m, d.depth_m, g.relative_radius_m("outer"))
+                out[:, j] += chord_drop_m(r * _wrap(chi), d.width_m, d.depth_m, g.relative_radius_m("outer"),
+                                          d.edge_radius_m)
                 out[:, j] += chord_drop_m(
-                    r * _wrap(chi - np.pi), d.width_m, d.depth_m, g.relative_radius_m("inner")
+                    r * _wrap(chi - np.pi), d.width_m, d.depth_m, g.relative_radius_m("inner"), d.edge_radius_m
                 )
         return out
 

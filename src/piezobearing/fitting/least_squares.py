@@ -15,9 +15,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
 import numpy as np
-from scipy.optimize import least_squares
-from scipy.optimize._numdiff import approx_derivative
-from scipy.stats import t as student_t
+from scipy.special import stdtrit
 
 from .params import Param
 
@@ -120,6 +118,10 @@ def fit(
     hi = np.array([p.to_internal(p.upper) if np.isfinite(p.upper) else np.inf for p in free])
     u0 = np.clip(u0, np.where(np.isfinite(lo), lo, u0), np.where(np.isfinite(hi), hi, u0))
     fun, jac = _fun_and_jacobian(residual_fn, free, unpack, lo, hi)
+    # Imported here: scipy.optimize costs about 0.2 s of import, which every workflow job that imports the
+    # sensor's circuit types (most of them; few fit anything) would pay.
+    from scipy.optimize import least_squares
+
     sol = least_squares(fun, u0, jac=jac, bounds=(lo, hi), x_scale="jac", max_nfev=max_nfev, ftol=ftol)
     r = sol.fun
     n, k = (r.size if n_data is None else n_data), len(free)
@@ -128,7 +130,7 @@ def fit(
     jtj = sol.jac.T @ sol.jac
     cov = np.linalg.pinv(jtj) * s2
     sd = np.sqrt(np.clip(np.diag(cov), 0, None))
-    tq = float(student_t.ppf(0.975, dof))
+    tq = float(stdtrit(dof, 0.975))  # scipy.stats.t.ppf's own function, bit for bit, without scipy.stats' import
     values = unpack(sol.x)
     stderr, ci95, corr = {}, {}, {}
     for i, p in enumerate(free):
@@ -157,6 +159,8 @@ def _fun_and_jacobian(residual_fn, free: list[Param], unpack, lo: np.ndarray, hi
     refuses the step and shrinks); a finite difference that lands on one gives its column 0 (the parameter
     stays where it is for that step). The start point must be feasible.
     """
+    from scipy.optimize._numdiff import approx_derivative  # imported here: see fit
+
     columns = getattr(residual_fn, "linear_columns", None)
 
     last: list = [None, None]  # the latest point evaluated and its residual: scipy asks the Jacobian there

@@ -12,7 +12,6 @@ import time
 
 import numpy as np
 import pandas as pd
-from scipy.signal import find_peaks
 
 from ..bearing import lpm
 from ..bearing.geometry import BearingGeometry, kinematic_frequencies
@@ -30,6 +29,10 @@ log = logging.getLogger("piezobearing.bearing.lpm")
 def impact_intervals(t: np.ndarray, qmax: np.ndarray, bpfo: float) -> np.ndarray:
     """Times between the defect's load peaks (largest roller load within each roller period) [s]."""
     dt = t[1] - t[0]
+    # Imported here: scipy.signal costs about a second of import, which every bearing job would pay for this
+    # check's peaks alone.
+    from scipy.signal import find_peaks
+
     peaks, _ = find_peaks(
         qmax, distance=max(1, int(0.6 / bpfo / dt)), prominence=0.05 * (qmax.max() - qmax.min())
     )

@@ -17,7 +17,7 @@ import importlib
 #: Each name and the module that defines it (the workflow's code hash follows an import of a name to its module).
 _EXPORTS = {
     "MeasurementError": "piezobearing.io.formats",
-    "RECORD_FORMATS": "piezobearing.io.formats",
+    "RECORD_FORMATS": "piezobearing.io.record_formats",
     "RawTable": "piezobearing.io.formats",
     "check_readable": "piezobearing.io.formats",
     "read_table": "piezobearing.io.formats",

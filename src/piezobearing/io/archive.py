@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .formats import RECORD_FORMATS
+from .record_formats import RECORD_FORMATS
 
 
 def rig_beside(record: Path, rig: str | Path | None) -> str | Path | None:

@@ -21,6 +21,7 @@ from nptdms import TdmsFile
 from scipy.io import wavfile
 
 from .matlab import mat_contents
+from .record_formats import RECORD_FORMATS
 
 
 class MeasurementError(ValueError):
@@ -115,17 +116,6 @@ def _line(i: int) -> int:
 
 
 # --------------------------------------------------------------------------- records as DAQs export them
-
-#: File extensions the record reader understands, and what they are.
-RECORD_FORMATS = {
-    ".csv": "comma-separated text with a header",
-    ".mat": "MATLAB v5 (scipy.io) or v7.3 (HDF5, h5py)",
-    ".uff": "universal file, dataset 58 (pyuff)",
-    ".unv": "universal file, dataset 58 (pyuff)",
-    ".tdms": "NI TDMS (npTDMS)",
-    ".wav": "WAV (scipy.io.wavfile)",
-}
-
 
 @dataclass(frozen=True, eq=False)
 class RawTable:

@@ -1,7 +1,7 @@
 """A vibration record as a DAQ writes it, for fault detection: one channel, its sampling rate and, where the
 file holds one, the shaft speed.
 
-Formats (:data:`piezobearing.io.formats.RECORD_FORMATS`): MATLAB v5 and v7.3 as published, with one variable
+Formats (:data:`piezobearing.io.record_formats.RECORD_FORMATS`): MATLAB v5 and v7.3 as published, with one variable
 per channel (CWRU's ``X105_DE_time``, ``X105_FE_time``, a 1 x 1 ``X105RPM``) or with structs, nested structs,
 struct arrays and cell arrays (:mod:`piezobearing.io.matlab`: a channel by its MATLAB path, ``bearing.gs``,
 ``ch(2).data``, or by the text of its struct's ``name`` field); CSV with a header (a ``time_s`` column, or
@@ -24,8 +24,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .formats import _BINARY_READERS, RECORD_FORMATS, MeasurementError, check_readable, mat_arrays
+from .formats import _BINARY_READERS, MeasurementError, check_readable, mat_arrays
 from .matlab import mat_contents
+from .record_formats import RECORD_FORMATS
 from .records import Record
 
 #: Shortest record the detector can use [s] (a few revolutions of a slow shaft).

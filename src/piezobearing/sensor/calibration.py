@@ -18,8 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.signal import find_peaks, lfilter
-from scipy.stats import t as student_t
+from scipy.special import stdtrit
 
 from ..fitting.least_squares import FitResult, fit
 from ..fitting.params import Param
@@ -150,6 +149,10 @@ def rc_voltage(force_N: np.ndarray, dt_s: float, gain_V_per_N: float, tau_s: flo
     a = np.exp(-dt_s / tau_s)
     b = gain_V_per_N * (tau_s / dt_s) * (-np.expm1(-dt_s / tau_s))
     df = np.diff(f, prepend=f[0])
+    # Imported here: scipy.signal costs about a second of import, which every job that imports this module
+    # for its circuit types (most of the workflow's) would pay.
+    from scipy.signal import lfilter
+
     v = lfilter([b], [1.0, -a], df)
     if period_s is not None:
         v = v + periodic_start_V(f, v, dt_s, gain_V_per_N, tau_s, period_s) * np.exp(-dt_s * np.arange(f.size) / tau_s)
@@ -257,6 +260,8 @@ def detect_impulses(
     span = float(np.ptp(f))
     if span <= 0:
         return []
+    from scipy.signal import find_peaks  # imported here: see rc_voltage
+
     peaks, _ = find_peaks(
         f, prominence=min_prominence_fraction * span, distance=max(1, int(round(min_separation_s / dt_s)))
     )
@@ -300,7 +305,8 @@ def sensitivity_summary(impulses: list[Impulse], time_s: np.ndarray) -> dict:
     n = len(s)
     mean = float(s.mean())
     std = float(s.std(ddof=1)) if n > 1 else float("nan")
-    half = float(student_t.ppf(0.975, n - 1) * std / np.sqrt(n)) if n > 1 else float("nan")
+    # stdtrit is scipy.stats.t.ppf's own function (bit for bit), without scipy.stats' import.
+    half = float(stdtrit(n - 1, 0.975) * std / np.sqrt(n)) if n > 1 else float("nan")
     return {
         "sensitivity_V_per_N": mean,
         "sensitivity_std_V_per_N": std,

@@ -47,11 +47,10 @@ import yaml
 from ..bearing.kinematics import BearingError, Kinematics, RollingBearing
 from ..io import MeasurementError, write_json
 from ..io.archive import rig_beside
-from ..io.formats import RECORD_FORMATS
+from ..io.record_formats import RECORD_FORMATS
 from ..io.vibration import VibrationRecord, pick_channel, read_vibration_record
 from ..plotting import save
 from ..plotting.detection import detection_figure, trend_figure
-from ..signals import order
 from ..signals.detectors import UNKNOWN, Detection
 from ..signals.detectors import envelope as envelope_detector
 
@@ -341,6 +340,9 @@ def detect_recording(record: str | Path, rig: str | Path | Rig | None = None, be
                              pulses_per_rev if pulses_per_rev is not None else rig.pulses_per_rev,
                              speed_channel if speed_channel is not None else rig.speed_channel)
     if tracked is not None:
+        # A tracked record only: order tracking's splines (scipy.interpolate) cost 0.4-0.6 s of import.
+        from ..signals import order
+
         angle, tracking = tracked
         try:
             detection, track = order.detect_tracked(rec.samples, 1.0 / rec.sample_rate_Hz, angle,
@@ -396,6 +398,9 @@ def tracking_angle(rec: VibrationRecord, tachometer: str | None, pulses: int | N
     if bad.size:
         raise RigError(f"{where}, sample {int(bad[0]) + 1}: not a finite number; fix the channel or cut the record")
     dt = 1.0 / rec.sample_rate_Hz
+    # A tracked record only: order tracking's splines (scipy.interpolate) cost 0.4-0.6 s of import.
+    from ..signals import order
+
     if kind == "speed channel":
         low = np.flatnonzero(v <= 0)
         if low.size:

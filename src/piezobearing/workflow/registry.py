@@ -209,6 +209,11 @@ READS: dict[str, list[str]] = {
     # detect_archive.smk: piezobearing detect over an archive of recordings (outside rule all)
     "detect_record": ["detect_archive"],
     "detect_archive": ["detect_archive"],
+    # running_bearing_guide.smk: the running-bearing guide's example, without then with the dynamic rung (outside
+    # rule all)
+    "running_bearing_guide": [
+        "seed", "sensor", "sensor_fem", "signals", "bearing", "housing", "bearing_diagnosis", "diagnostics",
+    ],
 }
 
 

@@ -44,21 +44,25 @@ def lpm_parameters(config: dict, hidden: dict, start_phase_rad: float, seed: int
     ``speed_ramp_Hz_per_s`` (not a catalogue parameter: a record's condition) changes it at that rate; ``roller_k_offset_m``
     makes roller k smaller by it (a gap larger by it, as the surrogate's offsets); the defects are grooves
     1 mm deep. A rolling-element groove at ``roller_defect_spin_rad`` faces the outer race at spin 0.
+    ``defect_edge_radius_m`` (not a catalogue parameter: a record's condition, as the ramp) rounds every
+    defect's edges with a fillet of that radius (:func:`~piezobearing.bearing.lpm.chord_drop_m`; the widths
+    are then the widths at the surface), where the catalogue's defects have sharp edges.
     """
     b = dict(config["bearing"], roller_diameter_scatter_m=0.0, cage_slip=0.0, slip_jitter=0.0,
              speed_ramp_rpm_per_s=0.0)
     p = LPMParameters.from_config(b, faulty=False, seed=seed)
     geo = replace(p.geometry, radial_clearance_m=hidden.get("radial_clearance_m", p.geometry.radial_clearance_m))
     defects = []
+    rho = hidden.get("defect_edge_radius_m", 0.0)
     if hidden.get("outer_defect_width_m", 0.0) > 0:
         defects.append(Defect(hidden.get("outer_defect_angle_rad", 0.0), hidden["outer_defect_width_m"], DEPTH_M,
-                              "outer_race"))
+                              "outer_race", edge_radius_m=rho))
     if hidden.get("inner_defect_width_m", 0.0) > 0:
         defects.append(Defect(hidden.get("inner_defect_angle_rad", 0.0), hidden["inner_defect_width_m"], DEPTH_M,
-                              "inner_race"))
+                              "inner_race", edge_radius_m=rho))
     if hidden.get("roller_defect_width_m", 0.0) > 0:
         defects.append(Defect(-hidden.get("roller_defect_spin_rad", 0.0), hidden["roller_defect_width_m"], DEPTH_M,
-                              "rolling_element", int(hidden.get("roller_defect_index", 0))))
+                              "rolling_element", int(hidden.get("roller_defect_index", 0)), rho))
     dev = tuple(-hidden.get(f"roller_{k}_offset_m", 0.0) for k in range(geo.n_rollers))
     return replace(
         p,
@@ -73,18 +77,19 @@ def lpm_parameters(config: dict, hidden: dict, start_phase_rad: float, seed: int
     )
 
 
-def lpm_sensor_force(config: dict, influence: InfluenceLine, hidden: dict, time_s: np.ndarray) -> np.ndarray:
+def lpm_sensor_force(config: dict, influence: InfluenceLine, hidden: dict, time_s: np.ndarray,
+                     max_step_s: float = MAX_STEP_S) -> np.ndarray:
     """The LPM's sensor force [N] averaged over each sample window of the uniform clock ``time_s`` [s].
 
     The LPM (:func:`lpm_parameters`, roller 0 at ``bearing_diagnosis.synthetic_start_phase_deg`` at t = 0) starts
-    from static equilibrium :data:`SETTLE_S` before the first window, steps at most :data:`MAX_STEP_S`; each
+    from static equilibrium :data:`SETTLE_S` before the first window, steps at most ``max_step_s``; each
     roller's load times the influence line at its angle, summed, is box-averaged over the windows, times
     ``load_share_ratio``.
     """
     t = np.asarray(time_s, dtype=float)
     dt = float(t[1] - t[0])
     p = lpm_parameters(config, hidden, float(np.radians(config["bearing_diagnosis"]["synthetic_start_phase_deg"])))
-    h = dt / int(np.ceil(dt / MAX_STEP_S))
+    h = dt / int(np.ceil(dt / max_step_s))
     t_start = t[0] - dt - SETTLE_S
     res = simulate_lpm(p, t_start, int(np.ceil((t[-1] + dt - t_start) / h)), h)
     fine = np.sum(res.load_N * influence(res.psi_rad), axis=1)
@@ -101,6 +106,7 @@ def lpm_record(
     seed: int,
     harmonic: tuple[np.ndarray, np.ndarray] | None = None,
     tachometer: bool = False,
+    max_step_s: float = MAX_STEP_S,
 ) -> BearingRecord:
     """A running-bearing record of the dynamic LPM with the ``hidden`` conditions (see the module docstring).
 
@@ -123,6 +129,9 @@ def lpm_record(
         The sensor FEM's response (else the paper sensor's, :func:`~piezobearing.sensor.response.sensor_model`).
     tachometer : bool
         Write the shaft speed as ``speed_rpm`` (with a ``speed_ramp_Hz_per_s``, the speed at each sample).
+    max_step_s : float
+        The LPM's longest integration step [s] (:data:`MAX_STEP_S`; shorter, for records at a finer step than
+        the dynamic rung's own).
     """
     dt = 1.0 / sample_rate_Hz
     t = dt * np.arange(int(round(duration_s * sample_rate_Hz)))
@@ -130,7 +139,7 @@ def lpm_record(
     # the circuit's pre-roll (as the chain's) on the LPM's own force
     n_pre = int(np.ceil(PRE_ROLL_TAU * rig.tau_s / dt))
     t_ext = t[0] + dt * np.arange(-n_pre, t.size)
-    force = lpm_sensor_force(config, influence, hidden, t_ext)
+    force = lpm_sensor_force(config, influence, hidden, t_ext, max_step_s)
     v = rig.gain_factor * rig.sensor.voltage(force, dt)[n_pre:]
     if any(k.startswith("mains_") for k in hidden):
         rr = RigRecord(t, None, "voltage", "V", rig=rig)

@@ -29,7 +29,7 @@ builds a method's settings from a config.
 from __future__ import annotations
 
 from ... import config
-from . import baseline, envelope, paper
+from . import envelope, paper
 from .result import (
     CALLS,
     FAULT_TYPES,
@@ -47,14 +47,24 @@ __all__ = ["CALLS", "FAULT_TYPES", "KINEMATIC_KEYS", "METHODS", "UNKNOWN", "Dete
            "LineEvidence", "detect", "detect_many", "is_alarm", "kinematics_dict", "margin_dB", "settings_from_config"]
 
 #: The detectors by name.
-_MODULES = {"paper": paper, "envelope": envelope, "baseline": baseline}
-METHODS = tuple(_MODULES)
+METHODS = ("paper", "envelope", "baseline")
+
+
+def __getattr__(name: str):
+    # The baseline detector is loaded on first use (``detectors.baseline``): its scipy.optimize costs about
+    # 0.2 s of import, which a detection with the envelope detector (``piezobearing detect``) does not need.
+    # (An absolute import: ``from . import baseline`` would ask this very ``__getattr__`` first.)
+    if name == "baseline":
+        import piezobearing.signals.detectors.baseline as baseline
+
+        return baseline
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def _module(method: str):
-    if method not in _MODULES:
+    if method not in METHODS:
         raise ValueError(f"detector method '{method}' unknown; use one of {', '.join(METHODS)}")
-    return _MODULES[method]
+    return envelope if method == "envelope" else paper if method == "paper" else __getattr__(method)
 
 
 def settings_from_config(method: str, signals: dict):

@@ -28,7 +28,6 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
-from scipy.stats import binom
 
 #: The committed table.
 TABLE = Path(__file__).with_name("null_calibration.json")
@@ -95,6 +94,10 @@ def calibrate(critical: np.ndarray, probabilities: tuple[float, ...], seconds: f
     (binomial): at that level k of the records raise an alarm. A probability whose bound is no alarm at all
     (n p too small) has no row: give more records.
     """
+    # Imported here: scipy.stats costs about 0.6 s of import, and only the table's making needs it (a
+    # detection reads the table).
+    from scipy.stats import binom
+
     a = np.sort(np.asarray(critical, dtype=float))
     n = a.size
     rows = []

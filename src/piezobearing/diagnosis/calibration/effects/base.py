@@ -20,7 +20,6 @@ from typing import Any, Callable
 
 import numpy as np
 from scipy import fft as sfft
-from scipy.signal import welch
 
 from ....fitting.params import Param
 from ... import effect as engine
@@ -63,6 +62,10 @@ def force_band_Hz(record: "ForceRecord", factor: float = 10.0) -> float:
     if "band" not in record._cache:
         fs = record.sample_rate_Hz
         seg = int(min(record.n, 2 ** np.ceil(np.log2(fs))))
+        # Imported here: scipy.signal costs about a second of import, which every calibration job that
+        # synthesises records through the catalogue (not diagnosing them) would pay.
+        from scipy.signal import welch
+
         f, p = welch(record.force_N - np.mean(record.force_N), fs, nperseg=seg)
         noise = np.median(p[f > 0.25 * fs])
         above = f[p > factor * noise]

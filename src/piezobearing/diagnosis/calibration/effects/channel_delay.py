@@ -28,7 +28,6 @@ Parameter: ``delay_s`` in [-0.1, 0.1] s.
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import correlate
 
 from ....fitting.params import Param
 from .base import Effect, ForceRecord, StartContext, fd_filter
@@ -49,6 +48,10 @@ def best_lag_s(ctx: StartContext) -> float:
     m = int(MAX_DELAY_S / ctx.record.dt_s)
     a = ctx.voltage_V - ctx.voltage_V.mean()
     b = ctx.model_V - ctx.model_V.mean()
+    # Imported here: the diagnosis's start only; a job that synthesises records through the catalogue would
+    # otherwise pay scipy.signal's second of import (see effects.base.force_band_Hz).
+    from scipy.signal import correlate
+
     c = correlate(a, b, mode="full", method="fft")
     mid = b.size - 1
     return (int(np.argmax(c[mid - m : mid + m + 1])) - m) * ctx.record.dt_s
