@@ -310,6 +310,19 @@ def _comparison_kernels(d: dict) -> tuple[str, str, list[dict]]:
                        q("projection, numpy", p["numpy_cpu_s"], "s")]
 
 
+def _startup(d: dict) -> tuple[str, str, list[dict]]:
+    """Start-up against a previous revision: ``piezobearing detect`` on one record, and the package imports of
+    every workflow script (what each job of its rule pays before its work), CPU seconds."""
+    det = d["commands"]["piezobearing detect (10 s at 12 kHz)"]
+    jobs = d["job_imports_cpu_s"]
+    text = (f"`piezobearing detect` on {d['record']}.mat: {seconds(det['new']['cpu_s'])} CPU against "
+            f"{seconds(det['old']['cpu_s'])} ({ratio(det['ratio_cpu'])}); the package imports of the "
+            f"{len(d['job_imports'])} workflow scripts, summed: {seconds(jobs['new'])} CPU against "
+            f"{seconds(jobs['old'])} ({ratio(jobs['old'] / jobs['new'])})")
+    return text, "–", [q("detect, CPU", det["new"]["cpu_s"], "s"), q("detect, CPU before", det["old"]["cpu_s"], "s"),
+                       q("job imports, CPU", jobs["new"], "s"), q("job imports, CPU before", jobs["old"], "s")]
+
+
 ROWS = [
     Row("paper", "the whole paper workflow in a fresh clone (all figures, the scorecard, both diagnoses)",
         "command_paper.json", "`python benchmarks/bench_command.py paper -- snakemake --cores 2`", _command_row),
@@ -360,6 +373,9 @@ ROWS = [
     Row("tune_cwru", "the call settings' grid on the 46 CWRU records and the grouped cross-validation",
         "command_tune_cwru.json", "`python benchmarks/bench_command.py tune_cwru -- python scripts/tune_cwru.py "
         "../shared/data/cwru_fan_end --out results/validation`", _command_row),
+    Row("startup", "start-up of `piezobearing detect` and of the workflow's jobs, against the revision before the "
+        "lighter imports (`--old`)", "startup.json",
+        "`python benchmarks/bench_startup.py --old e5a7f23 --data ../shared/data/cwru_fan_end --runs 5`", _startup),
     Row("detect_record", "envelope detector (`piezobearing detect`) on a 12 kHz record", "detect_record.json",
         "`python benchmarks/bench_detect_record.py`", _detect_record),
     Row("baseline", "baseline detector, 1 s record, CPU on one BLAS thread", "detector.json",
