@@ -22,6 +22,8 @@ rule running_bearing_guide:
         mem_mb=1500,
         runtime=10,
     params:
-        **stage_params("running_bearing_guide", "workflow/scripts/running_bearing_guide.py"),
+        **stage_params(
+            "running_bearing_guide", "workflow/scripts/running_bearing_guide.py"
+        ),
     script:
         "../scripts/running_bearing_guide.py"
