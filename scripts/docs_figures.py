@@ -87,6 +87,10 @@ RUN_FIGURES = {
         ("study_sensor_design.png", "study_summary", "workflow/scripts/study_summary.py",
          "The sensor_design study's summary on the paper's table of designs", "studies/sensor_design/summary.png"),
     ]),
+    "runs": ("docs/_data/speed1500.yaml", "results/speed1500/figures/fig10.png", [
+        ("runs_speed1500_fig10.png", "fig10", "notebooks/fig10_envelope.ipynb",
+         "Fig. 10 of the run speed1500: the paper's case at 1500 rpm", "figures/fig10.png"),
+    ]),
     "running_bearing": ("docs/_data/running_bearing_guide.yaml", "running_bearing_guide", [
         ("running_bearing_ladder_qs.png", "running_bearing_guide", "workflow/scripts/running_bearing_guide.py",
          "diagnose-bearing on the guide's LPM record, dynamic rung off", "diagnostics_bearing/guide/diag_qs/figures/ladder.png"),
