@@ -32,17 +32,11 @@ EXAMPLE = {
 }
 
 
-def _plain(node):
-    """A plain dict copy of a (declared) config, which the diagnosis changes."""
-    return {k: _plain(v) for k, v in node.items()} if isinstance(node, dict) else copy.deepcopy(node)
-
-
 def running_bearing_guide(out_dir: str | Path, config: dict) -> dict:
     """Write ``record.csv``, ``diag_qs/`` and ``diag_dyn/`` (each a ``diagnose-bearing`` folder) into ``out_dir``;
     returns the two diagnoses by folder name."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    config = _plain(config)
     influence = influence_from_config(config)
     e = EXAMPLE
     rec = lpm_record(config, influence, e["hidden"], e["sample_rate_Hz"], e["duration_s"], e["snr_dB"], e["seed"])
