@@ -15,6 +15,18 @@ With ``--envelope-only`` it makes the same records and runs the envelope detecto
 (:mod:`piezobearing.signals.detectors.envelope`, its default settings, the record's rig-file speed) on each instead
 of the diagnosis: whether the record itself shows a fault family above the detector's threshold (each family's
 call and margin over its threshold).
+
+With ``--visibility`` it makes the same records and measures, without any search, whether each record shows its
+hidden defect and which model could hold it (:func:`visibility`): the defect's own signal (the noiseless record less
+the noiseless record of the same draw without the defect) in units of the record's true noise, the lines of the
+record less that healthy record at k x BPFI, k x BPFI -/+ f_r and k x BPFO above the true white floor, the engine's
+measured floor (:func:`~piezobearing.diagnosis.bearing.floor.noise_floor` of the record) over the true noise, and
+the residual the quasi-static chain and the dynamic chain (``shaft_dynamics`` at the rig file's mass and damping)
+leave at the draw's hidden truth, unfitted, in units of the true noise (1.0: the model holds the record).
+
+    python validation/bearing_feasibility.py --visibility --draws 24 --out results/validation/bearing_feasibility_visibility.json
+
+``--first N`` starts at draw N (the draws are seeded by their index: draw N is the same record in any run).
 """
 
 from __future__ import annotations
@@ -29,10 +41,63 @@ import numpy as np
 
 from piezobearing import config as cfg
 from piezobearing.bearing.geometry import BearingGeometry, kinematic_frequencies
+from piezobearing.diagnosis.bearing.answer import _peak
+from piezobearing.diagnosis.bearing.effects import CATALOGUE, FAULT_TYPES
+from piezobearing.diagnosis.bearing.floor import noise_floor
 from piezobearing.diagnosis.bearing.lpm_records import draw_conditions, lpm_record
+from piezobearing.diagnosis.bearing.model import BearingModel
 from piezobearing.diagnosis.bearing.subject import SUBJECT
+from piezobearing.signals.detection import noise_std_for_snr
 from piezobearing.signals.detectors import envelope as envelope_detector
 from piezobearing.stages.bearing_diagnosis import influence_from_config, read_influence
+
+
+#: The record's parameters that are no catalogue effect's: the draw's speed goes into the nuisance shaft speed.
+NOT_EFFECTS = ("shaft_speed", "shaft_dynamics", "mains_pickup")
+
+
+def visibility(rig: dict, influence, hidden: dict, rec, index: int) -> dict:
+    """Whether the record ``rec`` of draw ``index`` shows its hidden defect, and which model holds it (the
+    module docstring, ``--visibility``); all levels against the record's true noise sigma."""
+    kw = dict(sample_rate_Hz=2550.0, duration_s=0.5, seed=index)
+    clean = lpm_record(rig, influence, hidden, snr_dB=float("inf"), **kw).voltage_V
+    sigma = noise_std_for_snr(clean, 30.0)
+    healthy_truth = {k: x for k, x in hidden.items() if not k.startswith(("outer_defect", "inner_defect", "roller_defect"))}
+    healthy = lpm_record(rig, influence, healthy_truth, snr_dB=float("inf"), **kw).voltage_V
+    v = rec.voltage_V
+    p = SUBJECT.problem((rec, influence), rig)
+    r = p.record
+    shaft = rig["bearing"]["shaft_speed_rpm"] / 60.0 * (1.0 + hidden["speed_deviation_ratio"])
+    kin = r.rig.frequencies(shaft, hidden["cage_slip_ratio"])
+    n, dt = v.size, r.dt_s
+    w = np.hanning(n)
+    floor = sigma**2 * float(np.sum(w**2))
+    res = v - healthy
+    spec = np.abs(np.fft.rfft((res - res.mean()) * w))
+    df = 1.0 / (n * dt)
+
+    def levels(base: float, shift: float = 0.0) -> list[float]:
+        return [round(float(10 * np.log10(_peak(spec, k * base + shift, df) ** 2 / floor)), 1)
+                for k in range(1, int(0.45 / dt // base) + 1)]
+
+    out = {"sigma_V": sigma, "engine_floor_over_sigma": noise_floor(v, dt).voltage_noise_V / sigma,
+           "defect_rms_over_sigma": float(np.std(clean - healthy) / sigma),
+           "lines_dB": {"kBPFI": levels(kin["bpfi_Hz"]), "kBPFI-fr": levels(kin["bpfi_Hz"], -kin["shaft_Hz"]),
+                        "kBPFI+fr": levels(kin["bpfi_Hz"], kin["shaft_Hz"]), "kBPFO": levels(kin["bpfo_Hz"])}}
+    names = [name for name, e in CATALOGUE.items() if name not in NOT_EFFECTS
+             and any(q.name in hidden for q in e.params(r))]
+    truth = {k: x for k, x in hidden.items() if k != "speed_deviation_ratio"}
+    for label, extra in (("quasi_static", []), ("dynamic", ["shaft_dynamics"])):
+        model = BearingModel(tuple(CATALOGUE[k] for k in [*names, *extra]))
+        values = {**model.defaults(r), **truth, "shaft_speed_Hz": shaft,
+                  "start_phase_rad": float(np.radians(rig["bearing_diagnosis"]["synthetic_start_phase_deg"]))}
+        if extra:
+            dyn = r.rig.dynamics
+            values.update(shaft_mass_kg=dyn.shaft_mass_kg, bearing_damping_N_s_per_m=dyn.bearing_damping_N_s_per_m)
+        left = v - model.simulate(values, r)
+        out[f"{label}_at_truth_over_sigma"] = float(np.std(left) / sigma)
+    out["defects"] = [k for k in FAULT_TYPES if any(q.name in hidden for q in CATALOGUE[k].params(r))]
+    return out
 
 
 def main() -> None:
@@ -41,6 +106,9 @@ def main() -> None:
     ap.add_argument("--out", default="results/validation/bearing_feasibility.json")
     ap.add_argument("--influence", default=None, help="influence_line_healthy.csv (default: solved from the config)")
     ap.add_argument("--seed", type=int, default=26)
+    ap.add_argument("--first", type=int, default=0, help="the first draw (draw i is the same record in any run)")
+    ap.add_argument("--visibility", action="store_true",
+                    help="measure whether each record shows its defect and which model holds it, instead of the diagnosis")
     ap.add_argument("--envelope-only", action="store_true",
                     help="run the envelope detector on each record instead of the diagnosis")
     args = ap.parse_args()
@@ -50,7 +118,7 @@ def main() -> None:
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     rows = []
-    for i in range(args.draws):
+    for i in range(args.first, args.first + args.draws):
         rig, hidden = draw_conditions(np.random.default_rng([args.seed, i]), copy.deepcopy(config))
         row = {"draw": i, "rig_radial_load_N": rig["bearing"]["radial_load_N"],
                "rig_radial_clearance_m": rig["bearing"]["radial_clearance_m"], "hidden": hidden}
@@ -68,6 +136,16 @@ def main() -> None:
                 out.write_text(json.dumps({"command": "python validation/bearing_feasibility.py --envelope-only",
                                            "draws": len(rows), "rows": rows}, indent=1))
                 print(f"draw {i}: envelope detector {e.fault_type}", flush=True)
+                continue
+            if args.visibility:
+                row.update(verdict="measured", visibility=visibility(rig, influence, hidden, rec, i))
+                rows.append(row)
+                out.write_text(json.dumps({"command": "python validation/bearing_feasibility.py --visibility",
+                                           "draws": len(rows), "rows": rows}, indent=1))
+                vis = row["visibility"]
+                print(f"draw {i}: {vis['defects']} defect {vis['defect_rms_over_sigma']:.2f} sigma, quasi-static at the "
+                      f"truth {vis['quasi_static_at_truth_over_sigma']:.2f}, dynamic {vis['dynamic_at_truth_over_sigma']:.2f}, "
+                      f"engine floor {vis['engine_floor_over_sigma']:.2f} sigma", flush=True)
                 continue
             c0 = time.process_time()
             d = SUBJECT.diagnose((rec, influence), rig)[1]
