@@ -51,7 +51,6 @@ from piezobearing.signals.detection import noise_std_for_snr
 from piezobearing.signals.detectors import envelope as envelope_detector
 from piezobearing.stages.bearing_diagnosis import influence_from_config, read_influence
 
-
 #: The record's parameters that are no catalogue effect's: the draw's speed goes into the nuisance shaft speed.
 NOT_EFFECTS = ("shaft_speed", "shaft_dynamics", "mains_pickup")
 
