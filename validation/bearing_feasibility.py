@@ -4,9 +4,10 @@ Draws a rig file and a record's hidden truth (:func:`piezobearing.diagnosis.bear
 the file's load 100-2000 N and clearance 0-60 um; the record's load within x/÷ 1.5 of it, clearance 0-60 um,
 slip 0-3 %, speed -3..+3 %, roller scatter 0-2 um, a groove 0.1-1.2 mm at any angle on any race or a roller in
 two draws of three), makes the record with the dynamic LPM (0.5 s at 2550 Hz, 30 dB) and diagnoses it (the
-first ranking: ``diagnostics.max_steps`` 1). Writes each draw's conditions, verdict and selection, the fault's
-type and source, whether the dynamic rung was tried and accepted, and the diagnosis's CPU time, or its error, and
-the count of crashes.
+first ranking: ``diagnostics.max_steps`` 1; ``--max-steps 4`` the config's full ladder). Writes each draw's
+conditions, verdict and selection, the steps kept and those cut (each with the share of the misfit it explained),
+the families the lines rule reads, the fault's type and source, whether the dynamic rung was tried and accepted,
+and the diagnosis's CPU time, or its error, and the count of crashes.
 
     python validation/bearing_feasibility.py --draws 40 --out results/validation/bearing_feasibility.json \
         [--influence results/bearing/influence_line_healthy.csv]
@@ -20,7 +21,8 @@ With ``--visibility`` it makes the same records and measures, without any search
 hidden defect and which model could hold it (:func:`visibility`): the defect's own signal (the noiseless record less
 the noiseless record of the same draw without the defect) in units of the record's true noise, the lines of the
 record less that healthy record at k x BPFI, k x BPFI -/+ f_r and k x BPFO above the true white floor, the engine's
-measured floor (:func:`~piezobearing.diagnosis.bearing.floor.noise_floor` of the record) over the true noise, and
+measured floor (:func:`~piezobearing.diagnosis.bearing.floor.noise_floor` of the record) over the true noise, the
+same floor of the record less the healthy record (what the defect alone lifts it by), and
 the residual the quasi-static chain and the dynamic chain (``shaft_dynamics`` at the rig file's mass and damping)
 leave at the draw's hidden truth, unfitted, in units of the true noise (1.0: the model holds the record).
 
@@ -64,11 +66,12 @@ def visibility(rig: dict, influence, hidden: dict, rec, index: int) -> dict:
     healthy_truth = {k: x for k, x in hidden.items() if not k.startswith(("outer_defect", "inner_defect", "roller_defect"))}
     healthy = lpm_record(rig, influence, healthy_truth, snr_dB=float("inf"), **kw).voltage_V
     v = rec.voltage_V
+    dt = 1.0 / kw["sample_rate_Hz"]
     p = SUBJECT.problem((rec, influence), rig)
     r = p.record
     shaft = rig["bearing"]["shaft_speed_rpm"] / 60.0 * (1.0 + hidden["speed_deviation_ratio"])
     kin = r.rig.frequencies(shaft, hidden["cage_slip_ratio"])
-    n, dt = v.size, r.dt_s
+    n = v.size
     w = np.hanning(n)
     floor = sigma**2 * float(np.sum(w**2))
     res = v - healthy
@@ -80,6 +83,7 @@ def visibility(rig: dict, influence, hidden: dict, rec, index: int) -> dict:
                 for k in range(1, int(0.45 / dt // base) + 1)]
 
     out = {"sigma_V": sigma, "engine_floor_over_sigma": noise_floor(v, dt).voltage_noise_V / sigma,
+           "floor_without_healthy_over_sigma": noise_floor(v - healthy, dt).voltage_noise_V / sigma,
            "defect_rms_over_sigma": float(np.std(clean - healthy) / sigma),
            "lines_dB": {"kBPFI": levels(kin["bpfi_Hz"]), "kBPFI-fr": levels(kin["bpfi_Hz"], -kin["shaft_Hz"]),
                         "kBPFI+fr": levels(kin["bpfi_Hz"], kin["shaft_Hz"]), "kBPFO": levels(kin["bpfo_Hz"])}}
@@ -105,6 +109,8 @@ def main() -> None:
     ap.add_argument("--out", default="results/validation/bearing_feasibility.json")
     ap.add_argument("--influence", default=None, help="influence_line_healthy.csv (default: solved from the config)")
     ap.add_argument("--seed", type=int, default=26)
+    ap.add_argument("--max-steps", type=int, default=1,
+                    help="diagnostics.max_steps (1: the first ranking; the config's 4: the full ladder)")
     ap.add_argument("--first", type=int, default=0, help="the first draw (draw i is the same record in any run)")
     ap.add_argument("--visibility", action="store_true",
                     help="measure whether each record shows its defect and which model holds it, instead of the diagnosis")
@@ -112,7 +118,7 @@ def main() -> None:
                     help="run the envelope detector on each record instead of the diagnosis")
     args = ap.parse_args()
     config = cfg.load()
-    config["diagnostics"]["max_steps"] = 1
+    config["diagnostics"]["max_steps"] = args.max_steps
     influence = read_influence(args.influence) if args.influence else influence_from_config(config)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -151,6 +157,9 @@ def main() -> None:
             rung = d.get("dynamic_rung") or {}
             row.update(verdict=d["verdict"], selected=d["selected"], fault_type=d["fault"]["type"],
                        fault_source=d["fault"].get("source"), cpu_s=time.process_time() - c0,
+                       steps=[[st.get("added"), st.get("excess_explained")] for st in d["steps"][1:]],
+                       dropped_steps=[[st.get("added"), st.get("excess_explained")] for st in d["dropped_steps"]],
+                       lines=[[ev["type"], [[h["line"], h["excess_dB"]] for h in ev["lines"]]] for ev in d["fault"]["evidence"]],
                        dynamic_rung={"tried": rung.get("tried"), "accepted": rung.get("accepted")})
         except Exception as e:  # noqa: BLE001 - what this script counts
             row.update(verdict=None, error=f"{type(e).__name__}: {e}")
