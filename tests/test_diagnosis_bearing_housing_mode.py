@@ -1,11 +1,31 @@
 """A housing mode inside the DAQ's band, as a record condition of the LPM records: the one-mode filter against its
-closed form, and the condition reaching the record's force."""
+closed form, the condition reaching the record's force, and the diagnosis of records that hold one (no rung holds
+the mode): a groove under the sensor still named, a healthy bearing not named faulty from the roller passage's own
+harmonics the mode lifts (docs/validation/bearing_diagnosis.md, "A housing mode inside the band")."""
+
+import copy
 
 import numpy as np
 import pytest
 
-from piezobearing.diagnosis.bearing.lpm_records import MAX_STEP_S, lpm_sensor_force, through_housing_mode
+from piezobearing.diagnosis.bearing.lpm_records import (
+    MAX_STEP_S,
+    lpm_record,
+    lpm_sensor_force,
+    through_housing_mode,
+)
+from piezobearing.diagnosis.bearing.subject import SUBJECT
 from piezobearing.stages.bearing_diagnosis import influence_from_config
+
+#: A mode inside a 2550 Hz record's band (Nyquist 1275 Hz), as a housing's lowest mode at 2 % damping.
+MODE = {"housing_mode_Hz": 1100.0, "housing_mode_damping_ratio": 0.02}
+
+
+@pytest.fixture(scope="module")
+def setup(ci_config):
+    c = copy.deepcopy(ci_config)
+    c["diagnostics"]["max_steps"] = 1
+    return c, influence_from_config(c)
 
 
 def steady_gain(mode_Hz: float, zeta: float, f_Hz: float, step_s: float) -> complex:
@@ -38,16 +58,38 @@ def test_a_constant_force_passes_unchanged():
     np.testing.assert_allclose(y, 500.0, rtol=1e-5)
 
 
-def test_the_records_force_rings_at_the_mode(ci_config):
+def test_the_records_force_rings_at_the_mode(setup):
     """A healthy bearing's force with a 1.1 kHz mode: the same mean (static gain 1), and what the mode adds is
     largest near 1.1 kHz (the roller passage's harmonics there amplified)."""
-    c = ci_config
-    influence = influence_from_config(c)
+    c, influence = setup
     fs = 2550.0
     t = np.arange(int(0.5 * fs)) / fs
     plain = lpm_sensor_force(c, influence, {}, t)
-    ringing = lpm_sensor_force(c, influence, {"housing_mode_Hz": 1100.0, "housing_mode_damping_ratio": 0.02}, t)
+    ringing = lpm_sensor_force(c, influence, MODE, t)
     assert ringing.mean() == pytest.approx(plain.mean(), rel=1e-3)
     diff = np.abs(np.fft.rfft((ringing - plain) * np.hanning(t.size)))
     f = np.fft.rfftfreq(t.size, 1 / fs)
     assert abs(f[np.argmax(diff)] - 1100.0) < 150.0, f[np.argmax(diff)]
+
+
+def test_a_healthy_bearing_through_a_housing_mode_is_not_named_faulty(setup):
+    """The mode lifts the roller passage's own harmonics near it (14 and 15 x BPFO) above the lines rule's threshold in
+    single bins, while the best healthy model leaves the record at its floor: no fault, and the statement says why."""
+    c, influence = setup
+    rec = lpm_record(c, influence, MODE, 2550.0, 0.5, 30.0, 7)
+    d = SUBJECT.diagnose((rec, influence), c)[1]
+    assert d["fault"]["type"] == "none", d["fault"]["statement"]
+    assert not any(s.endswith("_defect") for s in d["selected"]), d["selected"]
+    # the lines were seen (the rule without the energy test names the outer race here) and set aside, saying why
+    assert "BPFO" in d["fault"]["statement"] and "lines without energy above the floor" in d["fault"]["statement"]
+
+
+def test_a_groove_through_a_housing_mode_is_still_named(setup):
+    """A 0.9 mm groove under the sensor seen through the same mode: the outer race, from the model."""
+    c, influence = setup
+    c = copy.deepcopy(c)
+    c["bearing_diagnosis"]["dynamic_rung"] = "off"
+    rec = lpm_record(c, influence, {"outer_defect_width_m": 0.9e-3, "outer_defect_angle_rad": 0.0, **MODE}, 2550.0,
+                     0.5, 30.0, 7)
+    d = SUBJECT.diagnose((rec, influence), c)[1]
+    assert d["fault"]["type"] == "outer_race", d["fault"]["statement"]

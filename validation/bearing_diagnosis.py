@@ -23,6 +23,10 @@ the width of the sharp groove a roller sinks as deep into (:meth:`piezobearing.b
 ``--group edges`` runs only these cases; ``--nearest`` then adds to each rounded row the width of the sharp groove
 whose noiseless force is nearest the record's (:func:`nearest_sharp_width`), with no diagnosis.
 
+``--group housing_mode`` runs the records seen through one housing mode inside the DAQ's band
+(:data:`HOUSING_MODE_CASES`): the effect no rung of the diagnosis holds, where a groove must still be named and a
+healthy bearing must not be.
+
 ``--steps-per-period`` and ``--final-steps-per-period``: the config's ``bearing_diagnosis.dynamic_steps_per_period``
 (the dynamic rung's integration steps per period of the shaft's mode in its search) and
 ``dynamic_final_steps_per_period`` (in the selected dynamic model's final refit and intervals), to see what the
@@ -104,8 +108,23 @@ EDGE_CASES = {
                                          ["outer_race_defect"]),
 }
 CASES.update(EDGE_CASES)
+#: A housing mode inside the DAQ's band (record conditions ``housing_mode_Hz``, ``housing_mode_damping_ratio``:
+#: :func:`~piezobearing.diagnosis.bearing.lpm_records.through_housing_mode`), which no rung of the diagnosis holds:
+#: 1.1 kHz at 2 % inside a 2550 Hz record's band; the paper housing's first mode (2731 Hz at 1.16 %,
+#: results/bearing/housing_modes_healthy.json) inside a 25.6 kHz record's. A groove under the sensor must still be
+#: named; a healthy bearing must not be.
+HOUSING_MODE_CASES = {
+    f"housing_mode_{name}_{kind}": ({**hidden, "housing_mode_Hz": f, "housing_mode_damping_ratio": zeta}, effects)
+    for name, f, zeta in (("1100Hz", 1100.0, 0.02), ("2731Hz", 2731.0, 0.0116))
+    for kind, (hidden, effects) in (
+        ("outer_race_defect_0deg", ({"outer_defect_width_m": 0.9e-3, "outer_defect_angle_rad": 0.0},
+                                    ["outer_race_defect"])),
+        ("healthy", ({}, [])),
+    )
+}
+CASES.update(HOUSING_MODE_CASES)
 #: Record conditions that are not catalogue parameters and are not fitted (kept out of a row's values).
-CONDITIONS = ("defect_edge_radius_m",)
+CONDITIONS = ("defect_edge_radius_m", "housing_mode_Hz", "housing_mode_damping_ratio")
 #: The records' SNR [dB].
 SNR_DB = 30.0
 #: Cases whose record has a speed_rpm column (the tachometer): the speed the LPM ran at, 1500 rpm where the rig
@@ -261,8 +280,9 @@ def main() -> None:
     ap.add_argument("--nearest", action="store_true",
                     help="add to each rounded-edge row of --out the nearest sharp width (noiseless LPM forces; no "
                          "diagnosis)")
-    ap.add_argument("--group", choices=["edges"], default=None,
-                    help="edges: the rounded-edge and fine-step cases only (with their own table, .edges.md)")
+    ap.add_argument("--group", choices=["edges", "housing_mode"], default=None,
+                    help="edges: the rounded-edge and fine-step cases only (with their own table, .edges.md); "
+                         "housing_mode: the records seen through a housing mode")
     ap.add_argument("--duration", type=float, default=1.0, help="record length [s]")
     ap.add_argument("--seed", type=int, default=26)
     ap.add_argument("--record-out", type=Path, default=None, help="folder to write each case's record to (CSV)")
@@ -291,7 +311,8 @@ def main() -> None:
         return
     done = {(r["case"], r["sample_rate_Hz"]) for r in rows}
     for rate in args.rate or [2550.0, 25600.0]:
-        for name in args.case or (list(EDGE_CASES) if args.group == "edges" else list(CASES)):
+        group = {"edges": EDGE_CASES, "housing_mode": HOUSING_MODE_CASES}.get(args.group, CASES)
+        for name in args.case or list(group):
             if (name, rate) in done:
                 continue
             c = copy.deepcopy(config)

@@ -83,8 +83,8 @@ def rung_wanted(d, config: dict) -> dict:
     evidence = fault_evidence(d)
     if not faults and not evidence:
         return {"tried": False, "accepted": False,
-                "why": "the quasi-static verdict is unexplained, but no defect is selected and no fault's lines are "
-                "left: the structure is not the shaft's ring on a fault"}
+                "why": "the quasi-static verdict is unexplained, but no defect is selected and no fault's lines with "
+                "energy above the floor are left: the structure is not the shaft's ring on a fault"}
     why = (f"the quasi-static model selects {', '.join(faults)} and leaves structure" if faults else
            f"the residual shows the {evidence[0]['type'].replace('_', ' ')}'s lines and no defect is selected")
     return {"tried": True, "accepted": False, "why": why, "evidence": evidence}
