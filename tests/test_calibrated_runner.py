@@ -67,3 +67,25 @@ def test_a_width_sweep_borrows_the_healthy_seeds_and_finds_the_smallest_width(ru
     assert narrow["calibrated_detection_probability"] < 0.5
     assert wide["smallest_detected_width_m"] == narrow["smallest_detected_width_m"] == pytest.approx(0.9e-3)
     assert (tmp_path / "report_roc.png").exists() and (tmp_path / "report_healthy_statistic.png").exists()
+
+
+def test_a_reference_of_another_fault_type_or_rig_is_refused(runner, tmp_path):
+    """A seed record holds its case's true family's margin: an inner-race case judged against an outer-race case's
+    healthy seeds would compare two families' statistics, and another speed is another rig; both stop with one line
+    naming the pair, before any seed runs or any report is written. A width alone passes."""
+    base = ["--configfile", str(REPO / "config" / "config.yaml"), "--case", "rest:base_motion__level=0.0"]
+    out, report = tmp_path / "seeds.jsonl", tmp_path / "report.json"
+    out.write_text("".join(json.dumps(r) + "\n" for r in _rows("rest", False, np.zeros(5))))
+    for case, message in [("ir:base_motion__level=0.0,bearing__defects__0__type=inner_race", "fault types differ"),
+                          ("fast:base_motion__level=0.0,bearing__shaft_speed_rpm=2000.0", "differ outside bearing.defects"),
+                          ("moved:base_motion__level=1.0", "base_motion")]:
+        label = case.split(":")[0]
+        for mode in ([], ["--report", str(report)]):
+            with pytest.raises(SystemExit, match=f"--healthy-of {label}=rest: .*{message}"):
+                runner.main([*base, "--case", case, "--healthy-of", f"{label}=rest", "--out", str(out), *mode])
+    assert not report.exists()
+    configs = {label: runner.case_config(runner.config_loader.load(str(REPO / "config" / "config.yaml")), o,
+                                         source=label)
+               for label, o in map(runner.parse_case, ["rest:base_motion__level=0.0",
+                                                       "w02:base_motion__level=0.0,bearing__defects__0__width_m=0.2e-3"])}
+    runner.check_borrowed(configs, {"w02": "rest"})  # the width sweep's pair: no exit

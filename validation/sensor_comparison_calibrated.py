@@ -14,7 +14,9 @@ figures.
 A width sweep judges its faulty seeds against one healthy threshold: ``--healthy-of CASE=REF`` runs only the
 faulty seeds of ``CASE`` and takes its healthy seeds from ``REF`` (a case whose config differs from ``CASE``'s
 only in the defect, so its healthy realisations are the same rigs: the healthy bearing has no defect and each
-realisation is seeded by ``seed`` and its replicate alone). The CPU seconds of each seed go to a file of their
+realisation is seeded by ``seed`` and its replicate alone); the runner stops on a pair that differs in anything
+but the defect's geometry (another fault type has another true family, whose healthy statistic the reference did
+not record). The CPU seconds of each seed go to a file of their
 own (``<out>.cpu.jsonl``), not to the results.
 
     python validation/sensor_comparison_calibrated.py --configfile config/config.yaml \\
@@ -90,6 +92,24 @@ def healthy_sources(pairs: list[str], labels: list[str]) -> dict:
     return out
 
 
+def check_borrowed(configs: dict, borrowed: dict) -> None:
+    """Each ``--healthy-of CASE=REF`` pair must differ only in its defect's geometry: a seed record holds the
+    margin of its case's true fault family, so a reference of another fault type (or speed, base motion, floor...)
+    would judge one family's statistic against another's healthy distribution."""
+    for case, ref in borrowed.items():
+        a, b = configs[case], configs[ref]
+        type_a, type_b = a["bearing"]["defects"][0]["type"], b["bearing"]["defects"][0]["type"]
+        if type_a != type_b:
+            raise SystemExit(f"--healthy-of {case}={ref}: the fault types differ ({type_a}, {type_b}); a case of "
+                             f"another fault type needs its own healthy seeds (leave it out of --healthy-of)")
+        rest_a, rest_b = ({**c, "bearing": {k: v for k, v in c["bearing"].items() if k != "defects"}}
+                          for c in (a, b))
+        if rest_a != rest_b:
+            keys = sorted(k for k in rest_a.keys() | rest_b.keys() if rest_a.get(k) != rest_b.get(k))
+            raise SystemExit(f"--healthy-of {case}={ref}: the cases differ outside bearing.defects (in "
+                             f"{', '.join(keys)}); the reference must be the same rig without the narrower defect")
+
+
 def done_seeds(path: Path) -> set:
     if not path.exists():
         return set()
@@ -98,15 +118,17 @@ def done_seeds(path: Path) -> set:
 
 def run(args) -> None:
     base = config_loader.load(*args.configfile)
+    cases = list(map(parse_case, args.case))
+    borrowed = healthy_sources(args.healthy_of, [label for label, _ in cases])
+    configs = {label: case_config(base, overrides, source=f"case {label}") for label, overrides in cases}
+    check_borrowed(configs, borrowed)
     resistance = read_json(args.resistance)
     out, cpu = Path(args.out), Path(args.out + ".cpu.jsonl")
     out.parent.mkdir(parents=True, exist_ok=True)
     done = done_seeds(out)
     rigs, plans, built = {}, {}, {}
-    cases = list(map(parse_case, args.case))
-    borrowed = healthy_sources(args.healthy_of, [label for label, _ in cases])
     for label, overrides in cases:
-        cfg = case_config(base, overrides, source=f"case {label}")
+        cfg = configs[label]
         circuit = signal_outputs.sensor_circuit(cfg, resistance, args.resistance)
         harmonic = read_harmonic(args.harmonic) if cfg["signals"]["sensor_fem_correction"] else None
         t = time.process_time()
@@ -144,8 +166,10 @@ def report(args) -> None:
     cases, tables = [], []
     parsed = list(map(parse_case, args.case))
     borrowed = healthy_sources(args.healthy_of, [label for label, _ in parsed])
+    configs = {label: case_config(base, overrides, source=f"case {label}") for label, overrides in parsed}
+    check_borrowed(configs, borrowed)
     for label, overrides in parsed:
-        cfg = case_config(base, overrides, source=f"case {label}")
+        cfg = configs[label]
         c, b = cfg["sensor_comparison"], cfg["bearing"]
         own = [r for r in rows if r["case"] == label and (r["faulty"] or label not in borrowed)]
         lent = [r for r in rows if r["case"] == borrowed[label] and not r["faulty"]] if label in borrowed else []
