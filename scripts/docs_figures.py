@@ -30,6 +30,11 @@ The sensor-design study's figure (the design and studies guides) comes from the 
     snakemake --cores 2 study_sensor_design
     python scripts/docs_figures.py --only studies
 
+The runs guide's Fig. 10 of its example variant (the paper's case at 1500 rpm)::
+
+    snakemake --cores 2 results/speed1500/figures/fig10.png --configfile docs/_data/speed1500.yaml
+    python scripts/docs_figures.py --only runs
+
 A refresh of the paper's figures keeps these records as they are (the build checks them all alike).
 """
 

@@ -140,6 +140,12 @@ def _wrap(angle_rad: np.ndarray) -> np.ndarray:
     return np.mod(np.asarray(angle_rad) + np.pi, 2 * np.pi) - np.pi
 
 
+def max_edge_radius_m(width_m: float, depth_m: float) -> float:
+    """The largest fillet that rounds both edges of a gap ``width_m`` wide and ``depth_m`` deep: half the width (the
+    fillets meet), and the depth (a fillet reaches the bottom) [m]."""
+    return min(0.5 * width_m, depth_m)
+
+
 @dataclass(frozen=True)
 class Defect:
     """A local defect: a groove across a raceway or a flat on a roller, with sharp or rounded edges.
@@ -174,9 +180,9 @@ class Defect:
     def __post_init__(self):
         if self.kind not in DEFECT_TYPES:
             raise ValueError(f"defect type must be one of {', '.join(DEFECT_TYPES)}, got {self.kind!r}")
-        if not 0.0 <= self.edge_radius_m <= min(0.5 * self.width_m, self.depth_m):
+        if not 0.0 <= self.edge_radius_m <= max_edge_radius_m(self.width_m, self.depth_m):
             raise ValueError(f"defect edge radius must be within [0, min(width/2, depth)] = "
-                             f"[0, {min(0.5 * self.width_m, self.depth_m):.4g}] m, got {self.edge_radius_m!r}")
+                             f"[0, {max_edge_radius_m(self.width_m, self.depth_m):.4g}] m, got {self.edge_radius_m!r}")
 
     def max_drop_m(self, relative_radius_m: float) -> float:
         """Deepest a roller sinks at the defect's centre: min(depth, R - sqrt(R^2 - (w/2)^2)) [m].
@@ -217,7 +223,7 @@ def defects_from_config(bearing: dict) -> tuple[Defect, ...]:
     out = []
     for i, d in enumerate(bearing.get("defects", [])):
         rho = d.get("edge_radius_m", 0.0)
-        if rho > min(0.5 * d["width_m"], d["depth_m"]):
+        if rho > max_edge_radius_m(d["width_m"], d["depth_m"]):
             raise ConfigError(
                 f"key 'bearing.defects[{i}].edge_radius_m': a fillet of {rho:g} m does not fit a defect "
                 f"{d['width_m']:g} m wide and {d['depth_m']:g} m deep; use at most half the width and at most the "

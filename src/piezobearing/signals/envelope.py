@@ -100,7 +100,7 @@ def band_gain(frequency_Hz: np.ndarray, sample_rate_Hz: float, band_Hz: tuple[fl
     squared magnitude has a closed form in the warped frequency W = tan(pi f / fs), with W1, W2 the warped
     edges: 1 / (1 + ((W^2 - W1 W2) / ((W2 - W1) W))^(2 order)) for the band-pass, 1 / (1 + (W1 / W)^(2 order))
     for the high-pass (0 at f = 0). It is evaluated so, not through the filter's sections
-    (``sosfreqz``): the values are the same to about 1e-14 of the peak gain (tests/test_signals_envelope.py
+    (``sosfreqz``): the values are the same to about 1e-14 of the peak gain (tests/test_signals.py
     compares both), and the detection needs no ``scipy.signal``, whose import costs about a second.
     """
     nyq = sample_rate_Hz / 2
