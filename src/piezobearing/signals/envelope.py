@@ -24,6 +24,11 @@ element bearing diagnostics - a tutorial", MSSP 25 (2011) 485-520):
 The paper's kurtogram (:func:`kurtogram`) filters the whole record's spectrum for each band of a
 half-overlapping filter bank; :func:`fast_kurtogram` takes each band of the tree from the record's one FFT
 and transforms back at the band's own rate, so a level costs about one FFT of the record.
+
+The transforms are scipy.fft's: numpy.fft runs the same pocketfft code (the values are the same to the last
+bit) but plans every call afresh, and a record's length is seldom a fast one (a 10 s CWRU record has
+121,168 = 16 x 7573 samples, a prime factor that takes Bluestein's algorithm, whose set-up then costs as much
+as the transform); scipy.fft keeps the plans of the lengths it has seen.
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.fft
 
 #: Envelope-spectrum windows and the variance inflation of a mean of their bins' powers,
 #: 1 + 2 sum_k |rho_k|^2 (Hann: adjacent bins rho = -2/3, next 1/6).
@@ -83,10 +89,10 @@ def prewhiten(x: np.ndarray) -> np.ndarray:
     mean square is (N - 1)/N for a record with no zero bin.
     """
     x = np.asarray(x, dtype=float)
-    spectrum = np.fft.rfft(x - x.mean())
+    spectrum = scipy.fft.rfft(x - x.mean())
     magnitude = np.abs(spectrum)
     unit = np.divide(spectrum, magnitude, out=np.zeros_like(spectrum), where=magnitude > 0)
-    return np.fft.irfft(unit, x.size)
+    return scipy.fft.irfft(unit, x.size)
 
 
 # --------------------------------------------------------------------------- band-pass and envelope
@@ -124,18 +130,18 @@ def analytic_band_signal(
 ) -> np.ndarray:
     """Analytic signal z of x band-passed by :func:`band_gain` (periodic extension of the record).
 
-    ``spectrum`` may pass ``numpy.fft.rfft(x)`` to save the transform when many
+    ``spectrum`` may pass ``scipy.fft.rfft(x)`` to save the transform when many
     bands are tried on one record.
     """
     x = np.asarray(x, dtype=float)
     n = x.size
-    X = np.fft.rfft(x) if spectrum is None else spectrum
+    X = scipy.fft.rfft(x) if spectrum is None else spectrum
     f = np.fft.rfftfreq(n, dt_s)
     Y = X * band_gain(f, 1.0 / dt_s, band_Hz, order)
     Z = np.zeros(n, dtype=complex)
     Z[: Y.size] = Y
     Z[1 : (n + 1) // 2] *= 2.0  # positive frequencies doubled; DC and (even n) Nyquist kept once
-    return np.fft.ifft(Z)
+    return scipy.fft.ifft(Z)
 
 
 def envelope(x: np.ndarray, dt_s: float, band_Hz: tuple[float, float], order: int = 4) -> np.ndarray:
@@ -185,6 +191,7 @@ def envelope_spectrum(
     order: int = 4,
     window: str = "rectangular",
     squared: bool = False,
+    spectrum: np.ndarray | None = None,
 ) -> EnvelopeSpectrum:
     """Band-pass, Hilbert envelope e = |z| (``squared``: e = |z|^2), amplitude spectrum
     2 |DFT(w (e - mean e))| / sum(w) of the whole record given.
@@ -205,17 +212,19 @@ def envelope_spectrum(
         search windows of another family, where the rectangular window's 1/k does).
     squared : bool
         The squared envelope spectrum (SES) instead of the envelope's.
+    spectrum : ndarray, optional
+        ``scipy.fft.rfft(x)``, to save the transform when several bands are read on one record.
     """
     if window not in WINDOWS:
         raise ValueError(f"envelope spectrum window '{window}' unknown; use one of {', '.join(WINDOWS)}")
-    z = analytic_band_signal(x, dt_s, band_Hz, order)
+    z = analytic_band_signal(x, dt_s, band_Hz, order, spectrum)
     e = (z.real**2 + z.imag**2) if squared else np.abs(z)
     n = e.size
     if window == "rectangular":
-        amp = 2.0 * np.abs(np.fft.rfft(e - e.mean())) / n
+        amp = 2.0 * np.abs(scipy.fft.rfft(e - e.mean())) / n
     else:
         w = np.hanning(n + 1)[:n]  # periodic Hann
-        amp = 2.0 * np.abs(np.fft.rfft(w * (e - e.mean()))) / w.sum()
+        amp = 2.0 * np.abs(scipy.fft.rfft(w * (e - e.mean()))) / w.sum()
     if n % 2 == 0:
         amp[-1] /= 2.0  # the Nyquist bin is not mirrored
     return EnvelopeSpectrum(np.fft.rfftfreq(n, dt_s), amp, (float(band_Hz[0]), float(band_Hz[1])), n)
@@ -229,7 +238,7 @@ def amplitude_spectrum(x: np.ndarray, dt_s: float) -> EnvelopeSpectrum:
     """
     x = np.asarray(x, dtype=float)
     n = x.size
-    amp = 2.0 * np.abs(np.fft.rfft(x - x.mean())) / n
+    amp = 2.0 * np.abs(scipy.fft.rfft(x - x.mean())) / n
     return EnvelopeSpectrum(np.fft.rfftfreq(n, dt_s), amp, (0.0, 0.5 / dt_s), n)
 
 
@@ -297,7 +306,7 @@ class Kurtogram:
 
 def kurtogram(x: np.ndarray, dt_s: float, min_bandwidth_Hz: float, order: int = 4) -> Kurtogram:
     """Spectral kurtosis over the filter bank of :func:`kurtogram_bands` (each band filtered at full length)."""
-    X = np.fft.rfft(np.asarray(x, dtype=float))
+    X = scipy.fft.rfft(np.asarray(x, dtype=float))
     bands = kurtogram_bands(1.0 / dt_s, min_bandwidth_Hz)
     sk = [spectral_kurtosis(analytic_band_signal(x, dt_s, b, order, spectrum=X)) for b in bands]
     lo, hi = np.array(bands).T
@@ -367,7 +376,7 @@ def fast_kurtogram(x: np.ndarray, dt_s: float, min_bandwidth_Hz: float, min_low_
     if min_bandwidth_Hz >= nyq:
         raise ValueError(f"fast kurtogram: narrowest band {min_bandwidth_Hz:g} Hz is not below Nyquist {nyq:g} Hz")
     max_level = float(np.log2(nyq / min_bandwidth_Hz))
-    spectrum = np.fft.rfft(x - x.mean())
+    spectrum = scipy.fft.rfft(x - x.mean())
     df = fs / n
     rows = []
     for level, lo, hi in tree_bands(fs, max_level):
@@ -377,7 +386,7 @@ def fast_kurtogram(x: np.ndarray, dt_s: float, min_bandwidth_Hz: float, min_low_
         a = max(a, 1)
         if b - a < 8:
             continue
-        z = np.fft.ifft(spectrum[a:b])
+        z = scipy.fft.ifft(spectrum[a:b])
         p = z.real**2 + z.imag**2
         mean = float(np.mean(p))
         rows.append((level, lo, hi, float(np.mean(p * p) / mean**2 - 2.0) if mean > 0 else 0.0))

@@ -42,6 +42,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.fft
 from scipy.ndimage import median_filter
 
 #: Fault types with their lines; ``none`` is the healthy class of the classifier.
@@ -234,11 +235,30 @@ def peak_over_median(power: np.ndarray, half_width_bins: int) -> np.ndarray:
     return np.divide(power * np.log(2.0), floor, out=np.zeros_like(power, dtype=float), where=floor > 0)
 
 
+def harmonic_ratio(x: np.ndarray, dt_s: float) -> np.ndarray:
+    """The record's Hann-windowed power spectrum over its local median (:func:`peak_over_median`, +-2 Hz) [-]:
+    where :func:`refine_shaft_rate` reads a rate's harmonics (bins of 1 / (N dt)).
+
+    Parameters
+    ----------
+    x : ndarray
+        The record (raw, not pre-whitened).
+    dt_s : float
+        Its sampling step [s].
+    """
+    x = np.asarray(x, dtype=float)
+    n = x.size
+    df = 1.0 / (n * dt_s)
+    window = np.hanning(n + 1)[:n]
+    power = np.abs(scipy.fft.rfft(window * (x - x.mean()))) ** 2
+    return peak_over_median(power, max(8, int(round(2.0 / df))))
+
+
 def refine_shaft_rate(x: np.ndarray, dt_s: float, nominal_Hz: float, tolerance: float, n_harmonics: int = 10,
-                      min_harmonics: int = 3, level: float = 30.0) -> ShaftRate:
+                      min_harmonics: int = 3, level: float = 30.0, ratio: np.ndarray | None = None) -> ShaftRate:
     """The shaft rate from the harmonics k f_r (k = 1..``n_harmonics``) of the record's spectrum.
 
-    The Hann-windowed power spectrum over its local median (:func:`peak_over_median`, +-2 Hz) is read at
+    The Hann-windowed power spectrum over its local median (:func:`harmonic_ratio`) is read at
     k f for every candidate f within +-``tolerance`` of the nominal rate (steps of a tenth of a bin over the
     highest harmonic); f scores the number of harmonics whose ratio passes ``level`` (noise alone passes
     30 with probability e^-30 per bin), ties broken by the sum of their log ratios. Where fewer than
@@ -255,13 +275,12 @@ def refine_shaft_rate(x: np.ndarray, dt_s: float, nominal_Hz: float, tolerance: 
         The shaft rate given (rig file, tachometer, --rpm) [Hz].
     tolerance : float
         Its relative uncertainty [-].
+    ratio : ndarray, optional
+        ``harmonic_ratio(x, dt_s)``, to save the transform when several rates are sought in one record.
     """
-    x = np.asarray(x, dtype=float)
-    n = x.size
+    n = np.asarray(x).size
     df = 1.0 / (n * dt_s)
-    window = np.hanning(n + 1)[:n]
-    power = np.abs(np.fft.rfft(window * (x - x.mean()))) ** 2
-    ratio = peak_over_median(power, max(8, int(round(2.0 / df))))
+    ratio = harmonic_ratio(x, dt_s) if ratio is None else ratio
     top = min(n_harmonics, int((0.5 / dt_s) / (nominal_Hz * (1 + tolerance))) - 1)
     if top < min_harmonics or tolerance <= 0:
         return ShaftRate(float(nominal_Hz), float(nominal_Hz), False, (), float(tolerance))

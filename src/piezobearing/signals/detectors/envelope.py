@@ -48,7 +48,15 @@ from scipy.fft import irfft, next_fast_len, rfft
 from scipy.special import gammaincinv, roots_legendre
 
 from ..envelope import EnvelopeSpectrum, Kurtogram, envelope_spectrum, fast_kurtogram, prewhiten
-from ..fault_bands import FaultLine, ShaftRate, fault_lines, peak_over_median, refine_shaft_rate, window_bins
+from ..fault_bands import (
+    FaultLine,
+    ShaftRate,
+    fault_lines,
+    harmonic_ratio,
+    peak_over_median,
+    refine_shaft_rate,
+    window_bins,
+)
 from . import null_calibration
 from .result import FAULT_TYPES, Detection, FamilyEvidence, LineEvidence, margin_dB
 
@@ -351,10 +359,13 @@ def harmonic_mask(frequency_Hz: np.ndarray, rate: ShaftRate, guard_bins: int) ->
     return np.abs(f - k * rate.shaft_Hz) <= k * rate.shaft_Hz * rate.tolerance + (guard_bins + 0.5) * df
 
 
-def electrical_rate(x: np.ndarray, dt_s: float, candidates_Hz: tuple[float, ...]) -> ShaftRate | None:
+def electrical_rate(x: np.ndarray, dt_s: float, candidates_Hz: tuple[float, ...],
+                    ratio: np.ndarray | None = None) -> ShaftRate | None:
     """The supply frequency among ``candidates_Hz`` whose harmonics show most in the record's spectrum
-    (at least :data:`MIN_MAINS_HARMONICS` of the first ten, within +-0.5 %), or None."""
-    found = [refine_shaft_rate(x, dt_s, f, 0.005, n_harmonics=10, min_harmonics=MIN_MAINS_HARMONICS)
+    (at least :data:`MIN_MAINS_HARMONICS` of the first ten, within +-0.5 %), or None. ``ratio``: the record's
+    :func:`..fault_bands.harmonic_ratio`, where the caller has it."""
+    ratio = harmonic_ratio(x, dt_s) if ratio is None else ratio
+    found = [refine_shaft_rate(x, dt_s, f, 0.005, n_harmonics=10, min_harmonics=MIN_MAINS_HARMONICS, ratio=ratio)
              for f in candidates_Hz]
     found = [r for r in found if r.refined]
     return max(found, key=lambda r: len(r.harmonics)) if found else None
@@ -494,8 +505,10 @@ def measure(samples: np.ndarray, sample_rate_Hz: float, kinematics: dict, settin
     x = np.asarray(samples, dtype=float)
     dt = 1.0 / float(sample_rate_Hz)
     nominal = float(kinematics["shaft_Hz"])
+    # the shaft's and the supply's harmonics are read in one spectrum of the record
+    ratio = harmonic_ratio(x, dt) if settings.refine_speed or settings.mains_Hz else None
     if settings.refine_speed:
-        shaft = refine_shaft_rate(x, dt, nominal, settings.speed_tolerance)
+        shaft = refine_shaft_rate(x, dt, nominal, settings.speed_tolerance, ratio=ratio)
     else:
         shaft = ShaftRate(nominal, nominal, False, (), settings.speed_tolerance)
     kin = scaled_kinematics(kinematics, shaft.shaft_Hz)
@@ -504,10 +517,11 @@ def measure(samples: np.ndarray, sample_rate_Hz: float, kinematics: dict, settin
     top = max(ln.high_Hz for fam in lines.values() for ln in fam)
     w = prewhiten(x) if settings.prewhiten else x - x.mean()
     bands, kurtogram = candidate_bands(w, dt, top, settings)
-    mains = electrical_rate(x, dt, settings.mains_Hz) if settings.mains_Hz else None
+    mains = electrical_rate(x, dt, settings.mains_Hz, ratio) if settings.mains_Hz else None
     excluded_rates = [shaft] + ([mains] if mains is not None else [])
-    measured = tuple(band_ratios(envelope_spectrum(w, dt, band, window="hann", squared=True), lines, excluded_rates,
-                                 settings) for band in bands)
+    spectrum = rfft(w)  # every band's envelope from the one transform
+    measured = tuple(band_ratios(envelope_spectrum(w, dt, band, window="hann", squared=True, spectrum=spectrum),
+                                 lines, excluded_rates, settings) for band in bands)
     return Reading(shaft, mains, measured, kurtogram, lines, top, x.size * dt)
 
 
