@@ -50,7 +50,6 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 from .config import ConfigError, default_config_dir, find_checkout, load, read_yaml
@@ -411,8 +410,6 @@ def _diagnose_bearing(args) -> int:
 
 
 def _detect(args) -> int:
-    from tqdm import tqdm
-
     from .bearing.kinematics import BearingError
     from .io import MeasurementError
     from .io.vibration import read_record_contents
@@ -449,6 +446,8 @@ def _detect(args) -> int:
                "shaft_Hz": args.shaft_hz, "tachometer": args.tachometer, "pulses_per_rev": args.pulses_per_rev,
                "speed_channel": args.speed_channel}
     if batch:
+        from tqdm import tqdm  # a batch's progress bar: one record's detection goes without it
+
         try:
             files = record_files(args.record, args.glob)
             check_names(files)
@@ -482,10 +481,26 @@ def _detect(args) -> int:
 
 
 def _version() -> str:
+    # importlib.metadata costs 0.03-0.04 s of CPU to import and its look-up scans the installed distributions:
+    # read where --version is asked for, not by every command
+    from importlib.metadata import PackageNotFoundError, version
+
     try:
         return version("piezobearing")
     except PackageNotFoundError:
         return "unknown (not installed)"
+
+
+class _VersionAction(argparse.Action):
+    """argparse's ``version`` action with the version read when the option is given (:func:`_version`)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS,
+                 help="show program's version number and exit"):
+        super().__init__(option_strings=option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f"{parser.prog} {_version()}")
+        parser.exit()
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -494,7 +509,7 @@ def _parser() -> argparse.ArgumentParser:
         description=DESCRIPTION,
         epilog="Exit status: 0 done, 1 user error (one line with the fix), 2 usage error, 3 internal error (a bug).",
     )
-    p.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
+    p.add_argument("--version", action=_VersionAction)
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     d = sub.add_parser(
         "diagnose",

@@ -17,7 +17,6 @@ import functools
 import math
 from pathlib import Path
 
-import jsonschema
 import yaml
 
 #: The default config (config.yaml) and its schema (schema.yaml), the package's own data.
@@ -106,6 +105,10 @@ _SCHEMA_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 @functools.lru_cache(maxsize=4)
 def _validator(schema_path: str):
     """The schema's validator, built once per schema file (studies validate one config per case)."""
+    # jsonschema costs 0.07 s of CPU to import: it loads where a config is validated, and a command that
+    # validates none (``piezobearing detect``, ``--help``) goes without it
+    import jsonschema
+
     return jsonschema.Draft202012Validator(yaml.load(Path(schema_path).read_text(), Loader=_SCHEMA_LOADER))
 
 

@@ -4,6 +4,10 @@
 (no check of the values: :mod:`piezobearing.io.records` does that). Every problem a user can make with a file
 raises :class:`MeasurementError` with one line that names the file, the row (as the line number in the file)
 or channel, and the fix. Nothing here writes next to the input.
+
+Each format's reader loads its library when a file of that format is read (pandas for CSV and for the
+table :func:`read_table` returns, 0.2-0.25 s of CPU to import; pyuff, npTDMS and h5py for theirs): a
+detection on a MATLAB v5 record loads none of them.
 """
 
 from __future__ import annotations
@@ -12,16 +16,16 @@ import codecs
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
-import pandas as pd
-import pyuff
-from nptdms import TdmsFile
 from scipy.io import wavfile
 
 from .matlab import mat_contents
 from .record_formats import RECORD_FORMATS
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 
 class MeasurementError(ValueError):
@@ -93,6 +97,8 @@ def _read_numeric(path: Path, wanted: tuple[str, ...]) -> pd.DataFrame | None:
     where reading every cell as a string first needs several times the file
     size. Anything unusual returns None and the per-cell checks find it.
     """
+    import pandas as pd  # the CSV reader (module docstring)
+
     try:
         df = pd.read_csv(
             path,
@@ -209,6 +215,8 @@ def read_table(
 def _read_csv_table(path: Path, columns, optional, unit_hint: str, channels: dict, key: str) -> RawTable:
     """The record columns of a CSV file, found by their header names: ``channels[column]`` where the config
     names one (``<key>.channels``), else the column's own name; returned under the record's column names."""
+    import pandas as pd  # the CSV reader (module docstring)
+
     hint = _decimal_comma_hint(path)
     if hint:
         raise MeasurementError(f"{path}: {hint}")
@@ -266,6 +274,8 @@ class _Channel:
 
 def _pick_channels(path: Path, found: dict, columns, optional, channels: dict, key: str) -> RawTable:
     """Assign the file's channels to the record columns (by the config's names, else by column name)."""
+    import pandas as pd  # the table read_table returns (module docstring)
+
     data_names = [n for n in found if not n.startswith("__")]
     cols: dict[str, np.ndarray] = {}
     time = found.get("__time__")
@@ -340,6 +350,8 @@ def _mat_channels(path: Path, channels: dict, wav_full_scale_V, key: str) -> dic
 
 def _uff_channels(path: Path, channels: dict, wav_full_scale_V, key: str) -> dict:
     """Datasets 58 of a universal file, each by its ID line 1 and by its position among them."""
+    import pyuff  # this format's reader (module docstring)
+
     sets = pyuff.UFF(str(path)).read_sets()
     sets = [s for s in ([sets] if isinstance(sets, dict) else sets) if s.get("type") == 58]
     if not sets:
@@ -356,6 +368,8 @@ def _uff_channels(path: Path, channels: dict, wav_full_scale_V, key: str) -> dic
 
 def _tdms_channels(path: Path, channels: dict, wav_full_scale_V, key: str) -> dict:
     """TDMS channels as ``group/channel`` and, where unique, ``channel``; time from ``wf_increment``."""
+    from nptdms import TdmsFile  # this format's reader (module docstring)
+
     out: dict[str, _Channel] = {}
     count: dict[str, int] = {}
     f = TdmsFile.read(path)

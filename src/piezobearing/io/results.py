@@ -1,5 +1,9 @@
 """Result files of the workflow's stages: strict JSON, NPZ arrays, CSV tables and time series, and the
-kinematics and harmonic-response tables the signal stages read."""
+kinematics and harmonic-response tables the signal stages read.
+
+pandas (0.2-0.25 s of CPU to import) loads where a CSV is read: a job or command that writes only JSON, as
+``piezobearing detect`` does, goes without it.
+"""
 
 from __future__ import annotations
 
@@ -7,9 +11,12 @@ import io
 import json
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 
 class ResultFileError(ValueError):
@@ -81,6 +88,8 @@ def as_read(df: pd.DataFrame, float_format: str | None = CSV_FORMAT) -> pd.DataF
     """The table as the next stage reads it back from the file :func:`write_csv` makes of it (formatted and
     parsed in memory, no file): what a study hands from one rule's function to the next, so that its values
     are the workflow's to the bit."""
+    import pandas as pd  # a CSV read (module docstring)
+
     buf = io.StringIO()
     df.to_csv(buf, index=False, float_format=float_format)
     buf.seek(0)
@@ -105,6 +114,8 @@ def read_series(path: str | Path, column: str) -> tuple[np.ndarray, np.ndarray, 
 
     Returns time [s], the column's values and the step dt = (t_end - t_0)/(n - 1) [s].
     """
+    import pandas as pd  # a CSV read (module docstring)
+
     path = Path(path)
     if not path.exists():
         raise SignalFileError(f"{path}: file not found; run the stage that writes it")
@@ -150,6 +161,8 @@ def kinematics_of(k: dict, source) -> dict:
 
 def read_harmonic(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     """Frequencies [Hz] and |V/F| [V/N] of the sensor FEM's harmonic response (harmonic.csv)."""
+    import pandas as pd  # a CSV read (module docstring)
+
     df = pd.read_csv(path)
     for c in ("frequency_Hz", "voltage_per_force_V_per_N"):
         if c not in df.columns:

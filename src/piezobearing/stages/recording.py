@@ -29,6 +29,9 @@ A record with a tachometer (``tachometer``, ``--tachometer``) or a speed channel
 ``--speed-channel``, or a channel named ``speed_rpm``) is order-tracked before the envelope analysis
 (:func:`piezobearing.signals.order.detect_tracked`): resampled at uniform shaft angles, so that a fault's lines
 stay sharp while the speed changes; its frequencies are then orders (cycles per shaft revolution).
+
+A batch (:func:`detect_records`) writes its table with pandas, which loads there (0.2-0.25 s of CPU to
+import): one record's detection goes without it.
 """
 
 from __future__ import annotations
@@ -39,20 +42,23 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 import yaml
 
 from ..bearing.kinematics import BearingError, Kinematics, RollingBearing
 from ..io import MeasurementError, write_json
 from ..io.archive import rig_beside
 from ..io.record_formats import RECORD_FORMATS
-from ..io.vibration import VibrationRecord, pick_channel, read_vibration_record
+from ..io.vibration import VibrationRecord, numeric_samples, pick_channel, read_vibration_record
 from ..plotting import save
 from ..plotting.detection import detection_figure, trend_figure
 from ..signals.detectors import UNKNOWN, Detection
 from ..signals.detectors import envelope as envelope_detector
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 #: The keys of a rig file.
 RIG_KEYS = ("bearing", "shaft_speed_rpm", "shaft_speed_Hz", "sample_rate_Hz", "channel", "tachometer",
@@ -389,7 +395,7 @@ def tracking_angle(rec: VibrationRecord, tachometer: str | None, pulses: int | N
     if name == rec.channel:
         raise RigError(f"{rec.source}: the {kind} {name} is the channel analysed; name the vibration channel with "
                        f"--channel and the {kind} with {option}")
-    v = pd.to_numeric(pd.Series(np.asarray(contents.channels[name]).ravel()), errors="coerce").to_numpy(dtype=float)
+    v = numeric_samples(contents.channels[name])
     where = f"{rec.source}: {kind} {name}"
     if v.size != rec.samples.size:
         raise RigError(f"{where} holds {v.size} samples, the channel analysed {rec.samples.size}; give a {kind} "
@@ -563,6 +569,8 @@ def time_from_name(name: str, pattern: str) -> datetime:
 
 def record_time(rec: VibrationRecord, field: str) -> float | datetime:
     """The record's time held in a field: a number as it is (e.g. hours run), a text as a date and time."""
+    import pandas as pd  # a batch's (module docstring)
+
     contents = rec.contents
     if contents is not None and field in contents.texts:
         try:
@@ -647,6 +655,8 @@ def write_batch(rows: list[dict], out: str | Path, time_field: str | None = None
                 time_pattern: str | None = None) -> pd.DataFrame:
     """The batch's table ``out/detections.csv`` and trend ``out/trend.png`` of its rows (:func:`detect_one`),
     in the records' time where given, else their order by name."""
+    import pandas as pd  # a batch's table (module docstring)
+
     out = Path(out)
     table = pd.DataFrame(rows, columns=list(BATCH_COLUMNS)).sort_values("order", kind="stable")
     if time_field or time_pattern:
