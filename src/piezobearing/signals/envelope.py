@@ -25,10 +25,11 @@ The paper's kurtogram (:func:`kurtogram`) filters the whole record's spectrum fo
 half-overlapping filter bank; :func:`fast_kurtogram` takes each band of the tree from the record's one FFT
 and transforms back at the band's own rate, so a level costs about one FFT of the record.
 
-The transforms are scipy.fft's: numpy.fft runs the same pocketfft code (the values are the same to the last
-bit) but plans every call afresh, and a record's length is seldom a fast one (a 10 s CWRU record has
-121,168 = 16 x 7573 samples, a prime factor that takes Bluestein's algorithm, whose set-up then costs as much
-as the transform); scipy.fft keeps the plans of the lengths it has seen.
+The transforms are scipy.fft's: numpy.fft runs the same pocketfft algorithm (with the pinned numpy and scipy
+the values agree to the last bit, odd, even and prime lengths alike) but plans every call afresh, and a
+record's length is seldom a fast one (a 10 s CWRU record has 121,168 = 16 x 7573 samples, a prime factor that
+takes Bluestein's algorithm, whose set-up then costs as much as the transform); scipy.fft keeps the plans of
+the lengths it has seen.
 """
 
 from __future__ import annotations
