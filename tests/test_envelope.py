@@ -1,11 +1,14 @@
-"""Envelope methods: pre-whitening, (squared) envelope spectra, the fast kurtogram, against closed forms."""
+"""Envelope methods: pre-whitening, (squared) envelope spectra, the fast kurtogram, against closed forms; the shaft's and the
+supply's rates from their harmonics."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+import scipy.fft
 
-from piezobearing.signals import envelope
+from piezobearing.signals import envelope, fault_bands
+from piezobearing.signals.detectors import envelope as envelope_detector
 
 FS = 12_000.0
 
@@ -82,3 +85,38 @@ def test_fast_kurtogram_leaves_out_bands_below_the_lowest_edge():
     assert kg.low_Hz.min() >= 400.0
     with pytest.raises(ValueError, match="not below Nyquist"):
         envelope.fast_kurtogram(x, 1 / FS, min_bandwidth_Hz=7000.0)
+
+
+def test_an_envelope_spectrum_from_the_record_s_transform_given_is_the_one_computed():
+    x, dt = _am_record(0.3, 50.0, 3000.0, seconds=1.37)  # 16,440 samples: two bands read on one transform
+    spectrum = scipy.fft.rfft(x)
+    for band in ((2500.0, 3500.0), (1000.0, 5000.0)):
+        own = envelope.envelope_spectrum(x, dt, band, window="hann", squared=True)
+        given = envelope.envelope_spectrum(x, dt, band, window="hann", squared=True, spectrum=spectrum)
+        np.testing.assert_allclose(given.amplitude_V, own.amplitude_V, rtol=1e-12, atol=0.0)
+
+
+def _harmonics(f_Hz: float, n: int, seconds: float = 10.0, noise: float = 0.05) -> tuple[np.ndarray, float]:
+    """n harmonics k f of unit amplitude in white noise, 12 kHz."""
+    t = np.arange(int(FS * seconds)) / FS
+    x = sum(np.cos(2 * np.pi * k * f_Hz * t + 0.3 * k) for k in range(1, n + 1))
+    return x + noise * np.random.default_rng(2).standard_normal(t.size), 1.0 / FS
+
+
+def test_the_shaft_rate_is_refined_from_its_harmonics_alike_with_the_ratio_spectrum_given_or_not():
+    """A shaft at 29.35 Hz given as 29.0 Hz +- 2 %: refined to within a bin over its highest harmonic (0.1 Hz / 10),
+    the same from the record's harmonic-ratio spectrum passed in; a supply at 50 Hz found in the same spectrum."""
+    x, dt = _harmonics(29.35, 10)
+    shaft = fault_bands.refine_shaft_rate(x, dt, 29.0, 0.02)
+    assert shaft.refined and shaft.harmonics == tuple(range(1, 11))
+    assert shaft.shaft_Hz == pytest.approx(29.35, abs=0.1 / 10)
+    ratio = fault_bands.harmonic_ratio(x, dt)
+    given = fault_bands.refine_shaft_rate(x, dt, 29.0, 0.02, ratio=ratio)
+    assert given.harmonics == shaft.harmonics and given.refined
+    assert given.shaft_Hz == pytest.approx(shaft.shaft_Hz, rel=1e-12)
+    assert given.tolerance == pytest.approx(shaft.tolerance, rel=1e-12)
+    mains, _ = _harmonics(50.0, 8)
+    found = envelope_detector.electrical_rate(mains, dt, (50.0, 60.0))
+    assert found is not None and found.shaft_Hz == pytest.approx(50.0, abs=0.01)
+    given = envelope_detector.electrical_rate(mains, dt, (50.0, 60.0), fault_bands.harmonic_ratio(mains, dt))
+    assert given is not None and given.shaft_Hz == pytest.approx(found.shaft_Hz, rel=1e-12)
