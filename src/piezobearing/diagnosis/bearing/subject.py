@@ -27,7 +27,7 @@ from ...numerics.threads import single_blas_thread
 from ...sensor.calibration import SensorCircuit
 from ...sensor.response import sensor_model
 from ...signals.detection import noise_std_for_snr
-from ..effect import Catalogue
+from ..effect import Catalogue, EffectError
 from ..engine import diagnose
 from ..record import Segments
 from ..settings import DiagnosticsSettings
@@ -52,7 +52,8 @@ def rig_from_config(config: dict, influence: InfluenceLine, time_s: np.ndarray, 
     """The chain's fixed part from the config (bearing, sensor, signals.sensor_fem_correction, bearing_diagnosis)
     and an influence line; ``harmonic``: the sensor FEM's (frequency [Hz], |V/F| [V/N]) of this configuration
     (the workflow's), else the paper sensor's (:func:`piezobearing.sensor.response.sensor_model`). The dynamic
-    rung's step: ``bearing_diagnosis.dynamic_steps_per_period``."""
+    rung's step: ``bearing_diagnosis.dynamic_steps_per_period``; a housing mode the rig file gives:
+    :func:`housing_mode_of`."""
     b, bd = config["bearing"], config["bearing_diagnosis"]
     t = np.asarray(time_s, dtype=float)
     circuit = SensorCircuit.from_config(config["sensor"], bd["resistance_ohm"])
@@ -69,7 +70,15 @@ def rig_from_config(config: dict, influence: InfluenceLine, time_s: np.ndarray, 
         None if tach_Hz is None else np.asarray(tach_Hz, dtype=float),
         ShaftDynamics.from_config(b),
         int(bd.get("dynamic_steps_per_period", STEPS_PER_PERIOD)),
+        housing_mode_of(bd),
     )
+
+
+def housing_mode_of(bd: dict) -> tuple[float, float] | None:
+    """The housing mode the rig file gives (``bearing_diagnosis.housing_mode_Hz``, ``housing_mode_damping_ratio``):
+    (frequency [Hz], damping ratio [-]), or None."""
+    f = bd.get("housing_mode_Hz")
+    return None if f is None else (float(f), float(bd.get("housing_mode_damping_ratio", 0.02)))
 
 
 def rig_record(rec: BearingRecord, config: dict, influence: InfluenceLine, harmonic=None) -> RigRecord:
@@ -147,7 +156,11 @@ class BearingSubject:
     figures = ("overlay", "per_passage", "synchronous_average", "envelope", "spectrum", "ranking", "ladder")
 
     def check_config(self, config: dict) -> None:
-        CATALOGUE.resolve(config["bearing_diagnosis"]["effects"], "bearing_diagnosis.effects")
+        effects = config["bearing_diagnosis"]["effects"]
+        CATALOGUE.resolve(effects, "bearing_diagnosis.effects")
+        if "housing_mode" in effects and "shaft_dynamics" not in effects:
+            raise EffectError("bearing_diagnosis.effects: housing_mode rides on the dynamic rung's fine grid; "
+                              "add shaft_dynamics before it")
         hidden_values(config["bearing"]["hidden_effects"], None)
 
     def read(self, path: str, config: dict) -> BearingRecord:
@@ -196,7 +209,8 @@ class BearingSubject:
         its angle's spans the circle) is taken out of the catalogue and the engine runs again without it
         (``fault.unidentified`` names it). Where the quasi-static verdict is ``unexplained`` with a fault's
         lines or a defect selected, the dynamic rung is tried (:func:`dynamic_rung`; ``dynamic_rung`` of the
-        dict says what it gave).
+        dict says what it gave); where it is accepted and the record is still ``unexplained``, the housing mode's
+        rung above it (:func:`housing_rung_wanted`; ``dynamic_rung.housing_mode``).
         """
         settings = DiagnosticsSettings.from_config(config.get("diagnostics"))
         rec, rate = model_rate(obs[0], config["bearing_diagnosis"]["max_model_rate_Hz"])
@@ -229,6 +243,17 @@ class BearingSubject:
                     dropped += more
                     note(f"dynamic rung: {time.process_time() - c0:.1f} s CPU "
                          f"({'accepted' if rung['accepted'] else 'not accepted'})")
+                    if housing_rung_wanted(d, rung):
+                        c0 = time.process_time()
+                        d, rung["housing_mode"] = dynamic_rung(
+                            d, replace(problem, floor=d.problem.floor), settings, progress, HOUSING_RUNG,
+                            int(config["bearing_diagnosis"].get("dynamic_final_steps_per_period",
+                                                                FINAL_STEPS_PER_PERIOD)),
+                            ("housing_mode",), ("dynamic", "housing mode"))
+                        d, problem, more = without_unidentified(d, problem, settings, progress)
+                        dropped += more
+                        note(f"housing mode rung: {time.process_time() - c0:.1f} s CPU "
+                             f"({'accepted' if rung['housing_mode']['accepted'] else 'not accepted'})")
         answer = self.answer(d)
         answer["fault"]["unidentified"] = dropped
         return d, {**d.to_dict(answer), "model_rate": rate, "dynamic_rung": rung}
@@ -236,6 +261,18 @@ class BearingSubject:
 
 #: The running-bearing subject.
 SUBJECT = BearingSubject()
+
+#: The housing mode's rung: its entry's start (:func:`housing_rung_wanted`).
+HOUSING_RUNG = {"tried": True, "accepted": False, "evidence": [],
+                "why": "the dynamic rung was accepted and the record is still unexplained"}
+
+
+def housing_rung_wanted(d, rung: dict) -> bool:
+    """Whether the housing mode's rung is tried on the dynamic rung's diagnosis ``d``: the rung was accepted without
+    ``housing_mode`` (the rig file gives no mode) and the verdict is still ``unexplained``. A housing's mode below the
+    record's Nyquist frequency leaves a ring with the shaft's dynamics on; the rung scans for it
+    (:func:`~.effects.housing_mode.scan_mode`) and keeps it where it passes the selection rule."""
+    return bool(rung.get("accepted")) and d.verdict == "unexplained" and "housing_mode" not in d.selected
 
 
 def catalogue_for(tachometer: bool) -> Catalogue:
