@@ -3,7 +3,8 @@ rung's fine grid.
 
 - the chain with the mode follows the LPM's records seen through the same mode (a different integrator, step and
   discretisation of the mode), where the chain without it is 40-90 % off;
-- the start scan's voltages are the chain's, mode by mode, and the scan finds a hidden mode's frequency;
+- the start scan's voltages are the chain's, mode by mode, and the scan finds a hidden mode's frequency; the rung is
+  tried only where the scan's best mode takes off more chi2 than the selection rule asks of it;
 - the frequency is fitted below the record's Nyquist frequency and held at the rig file's above it;
 - ``housing_mode`` without ``shaft_dynamics`` in the rig file is a one-line error;
 - hide and find: a groove under the sensor seen through a 1.1 kHz mode in a 2550 Hz LPM record is named, sized
@@ -20,8 +21,9 @@ import pytest
 from piezobearing.diagnosis.bearing import chain, lpm_records
 from piezobearing.diagnosis.bearing.effects import CATALOGUE
 from piezobearing.diagnosis.bearing.effects.housing_mode import scan_mode
-from piezobearing.diagnosis.bearing.subject import SUBJECT, rig_from_config
+from piezobearing.diagnosis.bearing.subject import SUBJECT, housing_scan, rig_from_config
 from piezobearing.diagnosis.effect import EffectError
+from piezobearing.diagnosis.settings import DiagnosticsSettings
 from piezobearing.stages.bearing_diagnosis import influence_from_config
 
 GROOVE = {"outer_defect_width_m": 0.9e-3, "outer_defect_angle_rad": 0.0}
@@ -86,6 +88,31 @@ def test_the_scan_finds_a_hidden_modes_frequency(setup):
     rec = SimpleNamespace(rig=rig, sample_rate_Hz=2550.0)
     start = scan_mode(SimpleNamespace(record=rec, values=v, voltage_V=noisy))
     assert start["housing_mode_Hz"] == pytest.approx(1100.0, rel=0.01), start
+
+
+def test_the_rung_is_tried_only_where_the_scans_start_passes_the_rule(setup):
+    """:func:`housing_scan` on a model that holds the record but for the noise: the scan's best mode takes off less
+    chi2 than the selection rule asks of its two parameters, the rung is not tried; on a record seen through a
+    1.1 kHz mode the model without it leaves, it is tried, from a start within 1 % of the mode."""
+    c, influence = setup
+    t = np.arange(int(0.5 * 2550.0)) / 2550.0
+    rig = rig_from_config(c, influence, t)
+    v = _values(c, GROOVE)
+    model = chain.voltage(rig, v)
+    sigma = 0.03 * np.std(model)
+    noise = sigma * np.random.default_rng(5).standard_normal(t.size)
+    rec = SimpleNamespace(rig=rig, sample_rate_Hz=2550.0)
+
+    def diagnosis(voltage):
+        return SimpleNamespace(record=rec, voltage_V=voltage, final=SimpleNamespace(model_V=model, values=v),
+                               floor=SimpleNamespace(voltage_noise_V=sigma))
+
+    settings = DiagnosticsSettings()
+    quiet = housing_scan(diagnosis(model + noise), settings)
+    assert not quiet["tried"] and quiet["scan"]["chi2_drop"] < quiet["scan"]["needed"], quiet
+    ringing = housing_scan(diagnosis(chain.voltage(rig, {**v, **MODE_1100}) + noise), settings)
+    assert ringing["tried"], ringing
+    assert ringing["scan"]["start"]["housing_mode_Hz"] == pytest.approx(1100.0, rel=0.01)
 
 
 def test_the_frequency_is_fitted_below_nyquist_and_held_above(setup):

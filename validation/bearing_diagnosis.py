@@ -176,6 +176,8 @@ def run_case(config: dict, influence, name: str, sample_rate_Hz: float, duration
         "damping": {"found": final["params"].get("bearing_damping_N_s_per_m"),
                     "ci95": final["ci95"].get("bearing_damping_N_s_per_m"),
                     "rig": config["bearing"]["bearing_damping_N_s_per_m"]},
+        "housing_mode": {k: {"found": final["params"].get(k), "ci95": final["ci95"].get(k), "hidden": hidden.get(k)}
+                         for k in ("housing_mode_Hz", "housing_mode_damping_ratio")},
         "cpu_s": cpu,
         "fault_sidebands": d["fault"].get("sidebands"),
         "model_rate": d["model_rate"],
@@ -255,11 +257,17 @@ def edge_table(rows: list[dict]) -> str:
 
 
 def ladder(r: dict) -> str:
-    """Baseline / quasi-static final / with the dynamics / floor NRMSE [%] (the dynamic rung's ladder where tried)."""
-    lad = (r.get("dynamic_rung") or {}).get("ladder")
+    """Baseline / quasi-static final / with the dynamics / floor NRMSE [%] (the dynamic rung's ladder where tried),
+    with the housing mode's rung where tried: ... / with the dynamics / with the housing mode / floor."""
+    rung = r.get("dynamic_rung") or {}
+    lad = rung.get("ladder")
     if not lad:
         return f"{100 * r['nrmse']:.2f} / floor {100 * r['noise_floor_nrmse']:.2f}"
-    return " / ".join(f"{100 * x['nrmse']:.2f}" for x in lad)
+    hm = (rung.get("housing_mode") or {}).get("ladder")
+    if hm:
+        lad = [*lad[:3], {"nrmse": hm[2]["nrmse"], "model": "housing"}, hm[3]]
+    return " / ".join(f"{100 * x['nrmse']:.2f}" + (" (+ housing mode)" if x["model"] == "housing" else "")
+                      for x in lad)
 
 
 def table(rows: list[dict]) -> str:

@@ -117,10 +117,12 @@ def housing_rung(h: dict | None) -> list[str]:
     unexplained."""
     if not h:
         return []
+    if not h["tried"]:
+        return ["## A housing mode (the rung above the shaft's dynamics)", "", f"Not tried: {h['why']}.", ""]
     verdict = "accepted" if h["accepted"] else "not accepted"
     out = [
         "## A housing mode (the rung above the shaft's dynamics)", "",
-        f"Tried because {h['why']}: the dynamic model refitted with `housing_mode`; {verdict} by the selection rule "
+        f"Tried: {h['why']}. The dynamic model refitted with `housing_mode`; {verdict} by the selection rule "
         f"(BIC drop {h['delta_bic']:.4g}, {h['strength']}; {100 * h['excess_explained']:.0f} % of the dynamic "
         "model's misfit above the floor explained).",
         "",

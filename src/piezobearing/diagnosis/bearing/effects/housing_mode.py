@@ -38,15 +38,20 @@ from .base import Effect
 DAMPING_BOUNDS = (1e-3, 0.5)
 #: Damping ratio the fit starts from where the rig file gives none [-] (the middle of the 0.5-5 % of bolted housings).
 DAMPING_START = 0.02
-#: The start scan of a mode the rig file does not give: frequencies from this share of the sampling rate to the
-#: Nyquist frequency [-] (a mode lower than 0.08 f_s, 204 Hz at 2550 Hz, would be a housing far softer than the
-#: rollers' contacts), in steps of :data:`SCAN_STEP_RATIO` of the frequency, at the damping ratios of
-#: :data:`SCAN_DAMPING`.
+#: The start scan of a mode the rig file does not give, coarse then fine: frequencies from this share of the
+#: sampling rate to the Nyquist frequency [-] (a mode lower than 0.08 f_s, 204 Hz at 2550 Hz, would be a housing
+#: far softer than the rollers' contacts) in relative steps of :data:`COARSE_STEP_RATIO` at the damping ratios of
+#: :data:`COARSE_DAMPING`; then around the best, steps of :data:`FINE_STEP_RATIO` at :data:`FINE_DAMPING`.
 SCAN_FROM_RATIO = 0.08
-#: Frequency step of the scan, relative [-]: a third of the half-power width 2 zeta f at the lightest damping scanned.
-SCAN_STEP_RATIO = 0.004
-#: Damping ratios of the scan [-].
-SCAN_DAMPING = (0.006, 0.02, 0.06, 0.2)
+#: The coarse scan's relative frequency step [-]: half the half-power width 2 zeta f at its lightest damping.
+COARSE_STEP_RATIO = 0.02
+#: The coarse scan's damping ratios [-].
+COARSE_DAMPING = (0.02, 0.06, 0.2)
+#: The fine scan's relative frequency step [-] (six either side of the coarse best): a third of the half-power width
+#: at 0.6 %, its lightest damping.
+FINE_STEP_RATIO = 0.004
+#: The fine scan's damping ratios [-].
+FINE_DAMPING = (0.006, 0.01, 0.02, 0.04, 0.08)
 
 
 def frequency_identifiable(record, mode_Hz: float) -> bool:
@@ -80,11 +85,7 @@ class HousingModeEffect(Effect):
         ]
 
     def starts(self, ctx):
-        """The best of a scan (:func:`scan_mode`): the rig file's frequency at damping ratios around its own, or,
-        where the rig file gives none, frequencies from :data:`SCAN_FROM_RATIO` of the sampling rate to the Nyquist
-        frequency at :data:`SCAN_DAMPING`. Each candidate passes one integration of the dynamic chain through its
-        mode (:func:`~piezobearing.diagnosis.bearing.chain.mode_voltages`): a scan of hundreds costs about as much
-        as one evaluation of the chain per ten candidates."""
+        """The best of a scan (:func:`best_mode`)."""
         return [scan_mode(ctx)]
 
     def summary(self, values):
@@ -93,31 +94,47 @@ class HousingModeEffect(Effect):
 
 
 def scan_mode(ctx) -> dict:
-    """The mode (frequency, damping ratio) of a grid that leaves the least misfit on the current fit's values (the
-    residual's mean taken out: the DC level is the fit's)."""
+    """The mode (frequency, damping ratio) of a grid that leaves the least misfit on the current fit's values
+    (:func:`best_mode`)."""
+    return best_mode(ctx)[0]
+
+
+def best_mode(ctx) -> tuple[dict, float]:
+    """The mode (frequency, damping ratio) of a grid that leaves the least misfit on the current fit's values, and
+    that misfit: the residual's sum of squares, its mean taken out (the DC level is the fit's) [V^2].
+
+    The grid: the rig file's frequency (and, below the Nyquist frequency, ten steps of :data:`FINE_STEP_RATIO`
+    either side) at 0.3-2.5 times its damping ratio; where the rig file gives none, a coarse scan from
+    :data:`SCAN_FROM_RATIO` of the sampling rate to the Nyquist frequency, refined around its best. Each candidate
+    passes one integration of the dynamic chain through its mode
+    (:func:`~piezobearing.diagnosis.bearing.chain.mode_voltages`; 340 candidates of a 2 s record at 2550 Hz cost
+    about ten evaluations of the chain)."""
     rec = ctx.record
-    rig = rec.rig
-    f0, z0 = rig.housing_mode or (0.0, DAMPING_START)
+    nyquist = 0.5 * rec.sample_rate_Hz
+    f0, z0 = rec.rig.housing_mode or (0.0, DAMPING_START)
     if f0 > 0:
         freqs = np.array([f0])
-        damping = np.clip(z0 * np.array([0.3, 0.6, 1.0, 1.6, 2.5]), *DAMPING_BOUNDS)
         if frequency_identifiable(rec, f0):
-            freqs = f0 * (1 + SCAN_STEP_RATIO * np.arange(-10, 11))
-            freqs = freqs[freqs < 0.5 * rec.sample_rate_Hz]
-    else:
-        fs = rec.sample_rate_Hz
-        freqs = SCAN_FROM_RATIO * fs * (1 + SCAN_STEP_RATIO) ** np.arange(
-            int(np.log(0.5 / SCAN_FROM_RATIO) / np.log1p(SCAN_STEP_RATIO)))
-        damping = np.array(SCAN_DAMPING)
+            freqs = f0 * (1 + FINE_STEP_RATIO * np.arange(-10, 11))
+            freqs = freqs[freqs < nyquist]
+        return _best(ctx, freqs, np.clip(z0 * np.array([0.3, 0.6, 1.0, 1.6, 2.5]), *DAMPING_BOUNDS))
+    lo = SCAN_FROM_RATIO * rec.sample_rate_Hz
+    coarse = lo * (1 + COARSE_STEP_RATIO) ** np.arange(int(np.log(nyquist / lo) / np.log1p(COARSE_STEP_RATIO)))
+    f = _best(ctx, coarse, np.array(COARSE_DAMPING))[0]["housing_mode_Hz"]
+    fine = f * (1 + FINE_STEP_RATIO) ** np.arange(-6, 7)
+    return _best(ctx, fine[(fine >= lo) & (fine < nyquist)], np.array(FINE_DAMPING))
+
+
+def _best(ctx, freqs: np.ndarray, damping: np.ndarray) -> tuple[dict, float]:
     modes = [(float(f), float(z)) for f in freqs for z in damping]
     values = {k: v for k, v in ctx.values.items() if not k.startswith("housing_mode_")}
     best, at = np.inf, modes[0]
-    for m, v in zip(modes, chain.mode_voltages(rig, values, modes), strict=True):
+    for m, v in zip(modes, chain.mode_voltages(ctx.record.rig, values, modes), strict=True):
         r = ctx.voltage_V - v
         e = float(np.sum((r - r.mean()) ** 2))
         if e < best:
             best, at = e, m
-    return {"housing_mode_Hz": at[0], "housing_mode_damping_ratio": at[1]}
+    return {"housing_mode_Hz": at[0], "housing_mode_damping_ratio": at[1]}, best
 
 
 EFFECT = HousingModeEffect()
