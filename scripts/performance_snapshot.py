@@ -373,9 +373,10 @@ ROWS = [
     Row("tune_cwru", "the call settings' grid on the 46 CWRU records and the grouped cross-validation",
         "command_tune_cwru.json", "`python benchmarks/bench_command.py tune_cwru -- python scripts/tune_cwru.py "
         "../shared/data/cwru_fan_end --out results/validation`", _command_row),
-    Row("startup", "start-up of `piezobearing detect` and of the workflow's jobs, against the revision before the "
-        "lighter imports (`--old`)", "startup.json",
-        "`python benchmarks/bench_startup.py --old e5a7f23 --data ../shared/data/cwru_fan_end --runs 5`", _startup),
+    Row("startup", "start-up of `piezobearing detect` (a 10 s, 12 kHz record: reading, detection, detection.json, "
+        "report.md and detection.png) and of the workflow's jobs, against the revision before the detect "
+        "command's lighter imports and transforms (`--old`)", "startup.json",
+        "`python benchmarks/bench_startup.py --old 729f980 --data ../shared/data/cwru_fan_end --runs 5`", _startup),
     Row("detect_record", "envelope detector (`piezobearing detect`) on a 12 kHz record", "detect_record.json",
         "`python benchmarks/bench_detect_record.py`", _detect_record),
     Row("baseline", "baseline detector, 1 s record, CPU on one BLAS thread", "detector.json",
