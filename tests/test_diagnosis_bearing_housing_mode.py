@@ -12,9 +12,9 @@ from piezobearing.diagnosis.bearing.lpm_records import (
     MAX_STEP_S,
     lpm_record,
     lpm_sensor_force,
-    through_housing_mode,
 )
 from piezobearing.diagnosis.bearing.subject import SUBJECT
+from piezobearing.housing.one_mode import through_mode
 from piezobearing.stages.bearing_diagnosis import influence_from_config
 
 #: A mode inside a 2550 Hz record's band (Nyquist 1275 Hz), as a housing's lowest mode at 2 % damping.
@@ -33,7 +33,7 @@ def steady_gain(mode_Hz: float, zeta: float, f_Hz: float, step_s: float) -> comp
     half, after the start's transient has decayed over more than 20 time constants)."""
     tau = 1.0 / (zeta * 2 * np.pi * mode_Hz)
     t = np.arange(int(np.ceil(50 * tau / step_s))) * step_s
-    y = through_housing_mode(np.sin(2 * np.pi * f_Hz * t), step_s, mode_Hz, zeta)
+    y = through_mode(np.sin(2 * np.pi * f_Hz * t), step_s, mode_Hz, zeta)
     keep = t > t[-1] / 2
     a = np.column_stack([np.sin(2 * np.pi * f_Hz * t[keep]), np.cos(2 * np.pi * f_Hz * t[keep])])
     s, c = np.linalg.lstsq(a, y[keep], rcond=None)[0]
@@ -54,7 +54,7 @@ def test_one_mode_is_the_single_degree_of_freedom_response(mode_Hz, zeta, tol):
 
 def test_a_constant_force_passes_unchanged():
     """Static gain 1 and the start at static equilibrium: no transient from the first sample."""
-    y = through_housing_mode(np.full(5000, 500.0), MAX_STEP_S, 1100.0, 0.02)
+    y = through_mode(np.full(5000, 500.0), MAX_STEP_S, 1100.0, 0.02)
     np.testing.assert_allclose(y, 500.0, rtol=1e-5)
 
 

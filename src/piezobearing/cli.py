@@ -360,11 +360,12 @@ def _diagnose_bearing(args) -> int:
     rig = read_yaml(args.config) if args.config is not None else {}
     rig_speed = "shaft_speed_rpm" in ((rig or {}).get("bearing") or {})
 
-    cost: list[str] = []
+    cost: dict[str, str] = {}
 
     def progress(msg: str) -> None:
-        if msg.startswith("dynamic rung:") and "CPU" in msg:
-            cost.append(msg)
+        for rung in ("dynamic rung", "housing mode rung"):
+            if msg.startswith(f"{rung}:") and "CPU" in msg:
+                cost[rung] = msg
         if not args.quiet:
             print(f"  fit: {msg}", file=sys.stderr, flush=True)
 
@@ -391,9 +392,10 @@ def _diagnose_bearing(args) -> int:
         f"(floor {100 * final['noise_floor_nrmse']:.2f}%)"
     )
     rung = d.get("dynamic_rung") or {}
-    if rung.get("tried"):
-        print(f"{cost[-1] if cost else 'dynamic rung'}: " + " -> ".join(
-            f"{row['model']} {100 * row['nrmse']:.2f}%" for row in rung["ladder"]))
+    for name, r in (("dynamic rung", rung), ("housing mode rung", rung.get("housing_mode") or {})):
+        if r.get("tried"):
+            print(f"{cost.get(name, name)}: " + " -> ".join(
+                f"{row['model']} {100 * row['nrmse']:.2f}%" for row in r["ladder"]))
     print(f"fault: {f['type']}" + (" (named from its lines)" if f.get("source") == "lines" else "")
           + "".join(f"; {k} = {v:.6g} [{f['ci95'][k][0]:.6g}, {f['ci95'][k][1]:.6g}]" for k, v in f["params"].items() if f["ci95"].get(k)))
     if f.get("source") == "lines":

@@ -26,6 +26,7 @@ Moving defects are solved on a fine grid (sub-samples) and averaged.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -44,6 +45,7 @@ from ...bearing.surrogate import (
     roller_groove_drop,
     rolling_element_drop,
 )
+from ...housing.one_mode import through_mode
 from ...sensor.response import SensorModel
 from ..record import UniformClock
 
@@ -87,6 +89,11 @@ class Rig(UniformClock):
     steps_per_period : int
         The dynamic rung's integration steps per period of the shaft's mode
         (:func:`~piezobearing.bearing.shaft_dynamics.steps_per_sample`; ``bearing_diagnosis.dynamic_steps_per_period``).
+    housing_mode : (float, float) or None
+        A housing mode between the rollers and the sensor the rig's user knows (``bearing_diagnosis.housing_mode_Hz``,
+        ``housing_mode_damping_ratio``): its frequency [Hz] and damping ratio [-], the values the ``housing_mode``
+        effect starts from (and holds the frequency at, where it lies above the record's Nyquist frequency); None:
+        not known.
     """
 
     geometry: BearingGeometry
@@ -100,6 +107,7 @@ class Rig(UniformClock):
     tach_Hz: np.ndarray | None = None
     dynamics: ShaftDynamics | None = None
     steps_per_period: int = STEPS_PER_PERIOD
+    housing_mode: tuple[float, float] | None = None
     surrogate: Surrogate = field(default=None, repr=False)
     cache: dict = field(default_factory=dict, repr=False, compare=False)
     #: The dynamic rung's last kinematic grid (:func:`kinematic_grid`).
@@ -151,6 +159,20 @@ def _speed(rig: Rig, values: dict, t_ext: np.ndarray) -> np.ndarray | float:
 
 def sensor_force(rig: Rig, values: dict) -> tuple[np.ndarray, np.ndarray]:
     """Sampled sensor force on the record's clock with its pre-roll, and that clock [N, s]."""
+    f, t_ext, dyn = forces(rig, values)
+    if dyn is not None:  # the dynamic rung: the 4-DOF dynamics after the pre-roll, through any housing mode
+        first, s, fine = dyn
+        if values.get("housing_mode_Hz", 0.0) > 0:
+            fine = through_mode(fine, rig.dt_s / s, float(values["housing_mode_Hz"]),
+                                float(values["housing_mode_damping_ratio"]))
+        f = np.concatenate([f[:first], fine.reshape(-1, s).mean(axis=1)])
+    return f, t_ext
+
+
+def forces(rig: Rig, values: dict) -> tuple[np.ndarray, np.ndarray, tuple[int, int, np.ndarray] | None]:
+    """The quasi-static sensor force on the record's clock with its pre-roll [N], that clock [s], and, with the
+    dynamic rung (a ``shaft_mass_kg`` in the values), the dynamic force on its fine grid before any housing mode:
+    (first sample, steps per sample S, force (n S,)) of :func:`shaft_dynamics_force`; else None."""
     g = rig.geometry
     dt = rig.dt_s
     t_ext = rig.time_s[0] + dt * np.arange(-rig.n_pre, rig.n)
@@ -173,10 +195,22 @@ def sensor_force(rig: Rig, values: dict) -> tuple[np.ndarray, np.ndarray]:
     f = rig.surrogate.box_average(edges, op, outer, key, offsets)
     if w_i > 0 or w_r > 0:
         f = f + moving_defect_change(rig, values, edges, op, outer, key, offsets)
-    if values.get("shaft_mass_kg", 0.0) > 0:  # the dynamic rung: the 4-DOF dynamics after the pre-roll
-        first, fd = shaft_dynamics_force(rig, values, edges, op, outer, offsets)
-        f = np.concatenate([f[:first], fd])
-    return f, t_ext
+    dyn = None
+    if values.get("shaft_mass_kg", 0.0) > 0:
+        dyn = shaft_dynamics_force(rig, values, edges, op, outer, offsets)
+    return f, t_ext, dyn
+
+
+def mode_voltages(rig: Rig, values: dict, modes: list[tuple[float, float]]) -> Iterator[np.ndarray]:
+    """The recorded voltage the chain predicts [V] through each housing mode (frequency [Hz], damping ratio [-]) of
+    ``modes``, with the dynamic rung's values (a ``shaft_mass_kg``): the 4-DOF dynamics integrated once, on a grid
+    fine enough for the highest of the modes, and passed through each (the ``housing_mode`` effect's start scan)."""
+    top = max(m for m, _ in modes)
+    f, _, (first, s, fine) = forces(rig, {**values, "housing_mode_Hz": top})
+    share = values.get("load_share_ratio", 1.0)
+    for mode_Hz, zeta in modes:
+        fm = np.concatenate([f[:first], through_mode(fine, rig.dt_s / s, mode_Hz, zeta).reshape(-1, s).mean(axis=1)])
+        yield share * rig.gain_factor * rig.sensor.voltage(fm, rig.dt_s)[rig.n_pre :] + values.get("dc_offset_V", 0.0)
 
 
 def moving_defect_change(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, key, offsets) -> np.ndarray:
@@ -257,20 +291,25 @@ def shaft_mode_Hz(rig: Rig, dyn: ShaftDynamics, op: Operating | None = None) -> 
                       rig.geometry.n_rollers)
 
 
-def shaft_dynamics_force(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, offsets) -> tuple[int, np.ndarray]:
-    """The sensor force of the dynamic rung averaged over the sample windows from ``first`` on: (first, force) [N].
+def shaft_dynamics_force(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer,
+                         offsets) -> tuple[int, int, np.ndarray]:
+    """The sensor force of the dynamic rung on its fine grid from sample ``first`` on, S steps per sample:
+    (first, S, force (n S,)) [N]; :func:`sensor_force` averages it over the sample windows.
 
     On the grid of :func:`fine_grid` the roller angles and every drop (an outer-race groove, a moving defect, the
     rollers' offsets) enter the 4-DOF dynamics (:func:`~piezobearing.bearing.shaft_dynamics.sensor_force`), which
     start at rest :data:`DYNAMICS_SETTLE_S` (or ten decay times) before the record's first sample; the samples
-    before ``first`` keep the quasi-static force (the circuit's pre-roll).
+    before ``first`` keep the quasi-static force (the circuit's pre-roll). With a ``housing_mode_Hz`` in the values
+    (the ``housing_mode`` effect) :func:`sensor_force` passes this force through that mode on the grid, before the
+    average (:func:`~piezobearing.housing.one_mode.through_mode`, damping ratio ``housing_mode_damping_ratio``; from
+    static equilibrium at ``first``, as the shaft).
     """
     dyn = dynamics_of(rig, values)
     first, s, psi, drop, normals = fine_grid(rig, values, edges, op, outer, offsets, dyn)
     g = kinematic_grid(rig, edges[first:], s)[3]
     f = dyn_sensor_force(psi, drop, op.radial_load_N, op.radial_clearance_m, rig.geometry.roller_length_m,
                          rig.influence, dyn, rig.dt_s / s, normals, g)
-    return first, f.reshape(-1, s).mean(axis=1)
+    return first, s, f
 
 
 def kinematic_grid(rig: Rig, e: np.ndarray, s: int) -> tuple[np.ndarray, np.ndarray, tuple, np.ndarray]:
@@ -308,7 +347,7 @@ def fine_grid(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, o
 
     Each sample window from ``first`` on (its cage phase from ``edges``) is cut into S equal steps
     (:func:`~piezobearing.bearing.shaft_dynamics.steps_per_sample` at the shaft's mode, at least the moving
-    defects' :meth:`Rig.substeps`); ``first`` lies :data:`DYNAMICS_SETTLE_S`, or ten decay times of the shaft's
+    defects' :meth:`Rig.substeps` and as many per period of a ``housing_mode_Hz`` as of the shaft's mode); ``first`` lies :data:`DYNAMICS_SETTLE_S`, or ten decay times of the shaft's
     mode where that is longer, before the record's first sample (within the circuit's pre-roll). An outer-race
     groove narrower than a roller pitch holds one roller at a time: its drop is computed for the roller nearest
     to it only (the same numbers as for every roller).
@@ -316,7 +355,8 @@ def fine_grid(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, o
     f_mode, zeta = shaft_mode_Hz(rig, dyn, op)
     dt = rig.dt_s
     moving = values.get("inner_defect_width_m", 0.0) > 0 or values.get("roller_defect_width_m", 0.0) > 0
-    s = max(steps_per_sample(f_mode, dt, rig.steps_per_period), rig.substeps() if moving else 1)
+    s = max(steps_per_sample(f_mode, dt, rig.steps_per_period), rig.substeps() if moving else 1,
+            steps_per_sample(values.get("housing_mode_Hz", 0.0), dt, rig.steps_per_period))
     settle = max(DYNAMICS_SETTLE_S, 10.0 / max(zeta * 2 * np.pi * f_mode, 1e-12))
     n_ext = edges.size - 1
     first = max(0, n_ext - rig.n - int(np.ceil(settle / dt)))

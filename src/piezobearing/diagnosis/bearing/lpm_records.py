@@ -21,6 +21,7 @@ import numpy as np
 
 from ...bearing.lpm import Defect, LPMParameters, resample_loads, simulate_lpm
 from ...bearing.surrogate import InfluenceLine
+from ...housing.one_mode import through_mode
 from ...io import BearingRecord
 from ...signals.detection import noise_std_for_snr
 from .chain import PRE_ROLL_TAU
@@ -78,28 +79,6 @@ def lpm_parameters(config: dict, hidden: dict, start_phase_rad: float, seed: int
     )
 
 
-def through_housing_mode(force_N: np.ndarray, step_s: float, mode_Hz: float, damping_ratio: float) -> np.ndarray:
-    """``force_N`` on a uniform grid of ``step_s`` through one housing mode: the single-degree-of-freedom response
-    x'' + 2 zeta w x' + w^2 x = w^2 F (w = 2 pi ``mode_Hz``), static gain 1, peak gain 1 / (2 zeta) at the mode, from
-    static equilibrium at the first sample [N].
-
-    A one-mode idealisation of the housing between the rollers and the sensor (the whole sensor force through the
-    mode; the housing's FEM gives each mode its own share): a record condition that puts a resonance inside the
-    DAQ's band, which the diagnosis's quasi-static chain does not hold. Discretised with the force linear between
-    the grid's points (first-order hold: the mode's poles exact); at the records' step (:data:`MAX_STEP_S`) the
-    complex gain is within 0.2 % of the continuous one up to twice a 1.1 kHz mode, within 1.2 % for a 2.7 kHz mode
-    (``tests/test_diagnosis_bearing_housing_mode.py``).
-    """
-    # scipy.signal (about 0.3 s of import) only for records that hold a housing mode
-    from scipy.signal import cont2discrete, lfilter, lfilter_zi
-
-    w = 2.0 * np.pi * mode_Hz
-    num, den, _ = cont2discrete(([w * w], [1.0, 2.0 * damping_ratio * w, w * w]), step_s, method="foh")
-    b, a = np.ravel(num), np.ravel(den)
-    y, _ = lfilter(b, a, force_N, zi=lfilter_zi(b, a) * force_N[0])
-    return y
-
-
 def lpm_sensor_force(config: dict, influence: InfluenceLine, hidden: dict, time_s: np.ndarray,
                      max_step_s: float = MAX_STEP_S) -> np.ndarray:
     """The LPM's sensor force [N] averaged over each sample window of the uniform clock ``time_s`` [s].
@@ -108,7 +87,7 @@ def lpm_sensor_force(config: dict, influence: InfluenceLine, hidden: dict, time_
     from static equilibrium :data:`SETTLE_S` before the first window, steps at most ``max_step_s``; each
     roller's load times the influence line at its angle, summed, is box-averaged over the windows, times
     ``load_share_ratio``. With a ``housing_mode_Hz`` in ``hidden`` the summed force passes through that housing
-    mode first (:func:`through_housing_mode`, damping ratio ``housing_mode_damping_ratio``, default 0.02).
+    mode first (:func:`piezobearing.housing.one_mode.through_mode`, damping ratio ``housing_mode_damping_ratio``, default 0.02).
     """
     t = np.asarray(time_s, dtype=float)
     dt = float(t[1] - t[0])
@@ -118,7 +97,7 @@ def lpm_sensor_force(config: dict, influence: InfluenceLine, hidden: dict, time_
     res = simulate_lpm(p, t_start, int(np.ceil((t[-1] + dt - t_start) / h)), h)
     fine = np.sum(res.load_N * influence(res.psi_rad), axis=1)
     if hidden.get("housing_mode_Hz", 0.0) > 0:
-        fine = through_housing_mode(fine, h, hidden["housing_mode_Hz"], hidden.get("housing_mode_damping_ratio", 0.02))
+        fine = through_mode(fine, h, hidden["housing_mode_Hz"], hidden.get("housing_mode_damping_ratio", 0.02))
     return resample_loads(res.time_s, fine[:, None], t, dt, "average")[:, 0] * hidden.get("load_share_ratio", 1.0)
 
 

@@ -106,7 +106,33 @@ def dynamic_rung(d: dict) -> list[str]:
         "|---|---|",
     ]
     out += [f"| {row['model']} | {s.pct(row['nrmse'])} |" for row in r["ladder"]]
-    return out + ["", f"Quasi-static answer: {r['quasi_static']['fault']}.", ""]
+    out += ["", f"Quasi-static answer: {r['quasi_static']['fault']}.", ""]
+    if r.get("left_out"):
+        out += [f"Left out with the dynamics on (not supported by the record): {', '.join(r['left_out'])}.", ""]
+    return out + housing_rung(r.get("housing_mode"))
+
+
+def housing_rung(h: dict | None) -> list[str]:
+    """The housing mode's rung (``dynamic_rung.housing_mode``), tried where the dynamic rung left the record
+    unexplained."""
+    if not h:
+        return []
+    if not h["tried"]:
+        return ["## A housing mode (the rung above the shaft's dynamics)", "", f"Not tried: {h['why']}.", ""]
+    verdict = "accepted" if h["accepted"] else "not accepted"
+    out = [
+        "## A housing mode (the rung above the shaft's dynamics)", "",
+        f"Tried: {h['why']}. The dynamic model refitted with `housing_mode`; {verdict} by the selection rule "
+        f"(BIC drop {h['delta_bic']:.4g}, {h['strength']}; {100 * h['excess_explained']:.0f} % of the dynamic "
+        "model's misfit above the floor explained).",
+        "",
+        "| model | NRMSE |",
+        "|---|---|",
+    ]
+    out += [f"| {row['model']} | {s.pct(row['nrmse'])} |" for row in h["ladder"]]
+    if h.get("left_out"):
+        out += ["", f"Left out with the housing mode on (not supported by the record): {', '.join(h['left_out'])}."]
+    return out + [""]
 
 
 def sensor_model(d: dict) -> list[str]:

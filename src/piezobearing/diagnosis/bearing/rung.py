@@ -18,7 +18,7 @@ from ..fit import fit_model
 from ..selection import Candidate, step_entry, strength
 from ..subject import Problem
 from .answer import EFFECT_OF_TYPE, fault_answer, fault_evidence
-from .effects import CATALOGUE, FAULT_TYPES
+from .effects import CATALOGUE, FAULT_TYPES, RUNGS
 from .floor import REMEASURE_BELOW, noise_floor
 from .model import BearingModel
 
@@ -73,14 +73,21 @@ def rung_wanted(d, config: dict) -> dict:
     """Whether the dynamic rung is tried on an ``unexplained`` quasi-static diagnosis, and why (the start of the
     ``dynamic_rung`` entry): with ``bearing_diagnosis.dynamic_rung: auto``, where a defect is selected or the
     residual shows a fault's lines (:func:`fault_evidence`): the shaft's ring after each dip and the deeper
-    modulation of a moving defect are what the quasi-static chain leaves there. Other structure (a healthy
-    bearing's bumps off by a housing's dynamics) is not the shaft's, and an evaluation of the dynamic chain costs
-    12-50 times the quasi-static one (benchmarks/bench_shaft_dynamics.py), so it is not tried there."""
+    modulation of a moving defect are what the quasi-static chain leaves there; and where the rig file gives a
+    housing mode (``bearing_diagnosis.housing_mode_Hz``: the rung then holds it, :func:`rung_effects`). Other
+    structure (a healthy bearing's bumps off by a housing's dynamics the rig file does not give) is not the shaft's,
+    and an evaluation of the dynamic chain costs 12-50 times the quasi-static one
+    (benchmarks/bench_shaft_dynamics.py), so it is not tried there."""
     mode = config["bearing_diagnosis"].get("dynamic_rung", "auto")
     if mode == "off":
         return {"tried": False, "accepted": False, "why": "bearing_diagnosis.dynamic_rung is off"}
     faults = [n for n in d.selected if n in FAULT_TYPES]
     evidence = fault_evidence(d)
+    given = d.problem.record.rig.housing_mode
+    if not faults and not evidence and given is not None:
+        return {"tried": True, "accepted": False, "evidence": [],
+                "why": (f"the rig file gives a housing mode ({given[0]:.5g} Hz): its ring after every roller passage "
+                        "is structure the quasi-static chain leaves on any bearing")}
     if not faults and not evidence:
         return {"tried": False, "accepted": False,
                 "why": "the quasi-static verdict is unexplained, but no defect is selected and no fault's lines with "
@@ -100,8 +107,14 @@ def at_steps(problem: Problem, steps: int | None) -> Problem | None:
     return replace(problem, record=replace(rec, rig=rig))
 
 
+def rung_effects(problem: Problem) -> tuple[str, ...]:
+    """The effects the dynamic rung adds: ``shaft_dynamics``, and ``housing_mode`` where the rig file gives the mode."""
+    return ("shaft_dynamics", "housing_mode") if problem.record.rig.housing_mode is not None else ("shaft_dynamics",)
+
+
 def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None = None,
-                 final_steps: int | None = None):
+                 final_steps: int | None = None, rungs: tuple[str, ...] | None = None,
+                 steps: tuple[str, str] = ("quasi-static", "dynamic")):
     """The engine once more with the shaft's dynamics (``shaft_dynamics``), judged against the quasi-static diagnosis.
 
     Configured: the quasi-static selection in its order (their fits start the rung where the quasi-static search
@@ -125,22 +138,32 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     search's step leaves a bias in a groove's width of the order of its interval) and its honest intervals are
     computed there (:func:`~piezobearing.diagnosis.engine.refit`); the defects are judged identified on those.
     Where it does not pass, its defects are judged on the Jacobian's intervals (the entry's ``unidentified``).
+
+    ``rungs``: the effects the rung adds (:func:`rung_effects` by default); with ``housing_mode`` among them the
+    quasi-static search's first defect is held to the selection rule too (a housing's ring after each roller
+    passage is a short dip that a narrow groove under the sensor mimics). The subject runs this once more with
+    ``rungs=("housing_mode",)`` on an accepted rung's diagnosis that is still ``unexplained``; ``steps`` then name
+    the models before and after in the entry's ladder.
     """
     rung = dict(rung or rung_wanted(d, {"bearing_diagnosis": {"dynamic_rung": "auto"}}))
+    rungs = rungs or rung_effects(problem)
     faults = [n for n in d.selected if n in FAULT_TYPES]
     pair = [] if faults else [EFFECT_OF_TYPE[ev["type"]] for ev in rung.get("evidence", [])[:1]]
     pair = [n for n in pair if n in problem.catalogue]
     names = [*d.selected, *pair]
     add = [CATALOGUE[n] for n in names if CATALOGUE[n] not in problem.configured]
-    rp = replace(problem, configured=(*problem.configured, *add, CATALOGUE["shaft_dynamics"]),
+    new = [CATALOGUE[n] for n in rungs if CATALOGUE[n] not in (*problem.configured, *add)]
+    rp = replace(problem, configured=(*problem.configured, *add, *new),
                  catalogue=Catalogue("bearing"), profile_evaluations=RUNG_PROFILE_EVALUATIONS)
     note = progress or (lambda _m: None)
-    note("dynamic rung: + " + " + ".join([*pair, "shaft_dynamics"]))
+    label = " + ".join([*pair, *rungs])
+    note(f"{steps[1]} rung: + {label}")
     dr = diagnose(rp, settings, progress, d.baseline, intervals=False)
     # the quasi-static selection's other effects, each held to the selection rule with the dynamics on
-    weak = stand_ins(dr, [n for n in names if n not in faults[:1]], settings)
+    exempt = [] if "housing_mode" in rungs else faults[:1]
+    weak = stand_ins(dr, [n for n in names if n not in exempt and n not in rungs and n not in RUNGS], settings)
     if weak:
-        note(f"dynamic rung: without {', '.join(weak)} (not supported with the dynamics)")
+        note(f"{steps[1]} rung: without {', '.join(weak)} (not supported with {' and '.join(rungs)})")
         rp = replace(rp, configured=tuple(e for e in rp.configured if e.name not in weak))
         dr = diagnose(rp, settings, progress, d.baseline, intervals=False)
     rung["left_out"] = weak
@@ -153,25 +176,28 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     bad = unidentified_defects(dr)
     ok = passes and not bad
     rung["steps_per_period"] = {"search": rp.record.rig.steps_per_period, "final": dr.record.rig.steps_per_period}
-    rung.update(
-        accepted=bool(ok),
-        unidentified=bad,
-        delta_bic=delta_bic,
-        strength=strength(delta_bic),
-        excess_explained=share,
-        quasi_static={"selected": list(d.selected), "verdict": d.verdict, "nrmse": d.final.nrmse,
-                      "fault": fault_answer(d)["statement"]},
-        dynamic={"selected": list(dr.selected), "configured": [e.name for e in rp.configured],
-                 "verdict": dr.verdict, "nrmse": dr.final.nrmse},
-        ladder=[
-            {"model": "baseline", "nrmse": d.baseline.nrmse},
-            {"model": "quasi-static: " + d.final.model.label, "nrmse": d.final.nrmse},
-            {"model": "dynamic: " + dr.final.model.label, "nrmse": dr.final.nrmse},
-            {"model": "noise floor", "nrmse": dr.final.floor_nrmse},
-        ],
-    )
-    rung["pair"] = pair
-    return (merged(d, dr, share, pair) if ok else d), rung
+    rung.update(accepted=bool(ok), unidentified=bad, effects=list(rungs), delta_bic=delta_bic,
+                strength=strength(delta_bic), excess_explained=share, **ladder_entry(d, dr, rp, steps), pair=pair)
+    return (merged(d, dr, share, pair, rungs) if ok else d), rung
+
+
+def ladder_entry(d, dr, rp: Problem, steps: tuple[str, str]) -> dict:
+    """The rung entry's models: ``before`` (``d``'s) and ``after`` (the rung's ``dr``, of ``rp``), their ladder
+    (baseline, before, after, floor NRMSE) named by ``steps``; the first rung's also as ``quasi_static`` and
+    ``dynamic``."""
+    before = {"selected": list(d.selected), "verdict": d.verdict, "nrmse": d.final.nrmse,
+              "fault": fault_answer(d)["statement"]}
+    after = {"selected": list(dr.selected), "configured": [e.name for e in rp.configured],
+             "verdict": dr.verdict, "nrmse": dr.final.nrmse}
+    out = {"before": before, "after": after, "ladder": [
+        {"model": "baseline", "nrmse": d.baseline.nrmse},
+        {"model": f"{steps[0]}: " + d.final.model.label, "nrmse": d.final.nrmse},
+        {"model": f"{steps[1]}: " + dr.final.model.label, "nrmse": dr.final.nrmse},
+        {"model": "noise floor", "nrmse": dr.final.floor_nrmse},
+    ]}
+    if steps == ("quasi-static", "dynamic"):
+        out.update(quasi_static=before, dynamic=after)
+    return out
 
 
 def final_model(dr, rp: Problem, problem: Problem, settings, progress, final_steps: int | None):
@@ -218,7 +244,7 @@ def stand_ins(dr, names: list[str], settings) -> list[str]:
     return out
 
 
-def merged(d, dr, share: float, pair: list[str]):
+def merged(d, dr, share: float, pair: list[str], rungs: tuple[str, ...] = ("shaft_dynamics",)):
     """The rung's diagnosis ``dr`` read as steps after the quasi-static one ``d``: the quasi-static ladder, then
     ``shaft_dynamics`` added (its fit with the quasi-static selection, its evidence over the quasi-static final
     model), then the rung's own search; ``selected`` the quasi-static selection, ``shaft_dynamics`` and the rung's
@@ -226,10 +252,10 @@ def merged(d, dr, share: float, pair: list[str]):
     rung_fit = dr.configured
     present = {e.name for e in dr.final.model.effects}
     pair = [n for n in pair if n in present]
-    c = Candidate(CATALOGUE["shaft_dynamics"], rung_fit, float(d.final.bic - rung_fit.bic), share)
-    dr.steps = [*d.steps, step_entry(rung_fit, " + ".join([*pair, "shaft_dynamics"]), c), *dr.steps[1:]]
+    c = Candidate(CATALOGUE[rungs[-1]], rung_fit, float(d.final.bic - rung_fit.bic), share)
+    dr.steps = [*d.steps, step_entry(rung_fit, " + ".join([*pair, *rungs]), c), *dr.steps[1:]]
     dr.fits = [*d.fits, rung_fit, *dr.fits[1:]]
-    dr.selected = list(dict.fromkeys(n for n in [*d.selected, *pair, "shaft_dynamics", *dr.selected] if n in present))
+    dr.selected = list(dict.fromkeys(n for n in [*d.selected, *pair, *rungs, *dr.selected] if n in present))
     dr.configured = d.configured
     dr.tests = {**dr.tests, "configured": d.tests["configured"]}
     dr.ranking = d.ranking

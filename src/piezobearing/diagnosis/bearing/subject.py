@@ -27,7 +27,7 @@ from ...numerics.threads import single_blas_thread
 from ...sensor.calibration import SensorCircuit
 from ...sensor.response import sensor_model
 from ...signals.detection import noise_std_for_snr
-from ..effect import Catalogue
+from ..effect import Catalogue, EffectError, StartContext
 from ..engine import diagnose
 from ..record import Segments
 from ..settings import DiagnosticsSettings
@@ -35,6 +35,7 @@ from ..subject import Problem
 from . import chain, report
 from .answer import fault_answer
 from .effects import CATALOGUE, RUNGS
+from .effects.housing_mode import best_mode
 from .effects.shaft_speed import roller_pass_line_Hz
 from .floor import REMEASURE_BELOW, floor_prepass, noise_floor
 from .model import BearingModel, RigRecord
@@ -52,7 +53,8 @@ def rig_from_config(config: dict, influence: InfluenceLine, time_s: np.ndarray, 
     """The chain's fixed part from the config (bearing, sensor, signals.sensor_fem_correction, bearing_diagnosis)
     and an influence line; ``harmonic``: the sensor FEM's (frequency [Hz], |V/F| [V/N]) of this configuration
     (the workflow's), else the paper sensor's (:func:`piezobearing.sensor.response.sensor_model`). The dynamic
-    rung's step: ``bearing_diagnosis.dynamic_steps_per_period``."""
+    rung's step: ``bearing_diagnosis.dynamic_steps_per_period``; a housing mode the rig file gives:
+    :func:`housing_mode_of`."""
     b, bd = config["bearing"], config["bearing_diagnosis"]
     t = np.asarray(time_s, dtype=float)
     circuit = SensorCircuit.from_config(config["sensor"], bd["resistance_ohm"])
@@ -69,7 +71,15 @@ def rig_from_config(config: dict, influence: InfluenceLine, time_s: np.ndarray, 
         None if tach_Hz is None else np.asarray(tach_Hz, dtype=float),
         ShaftDynamics.from_config(b),
         int(bd.get("dynamic_steps_per_period", STEPS_PER_PERIOD)),
+        housing_mode_of(bd),
     )
+
+
+def housing_mode_of(bd: dict) -> tuple[float, float] | None:
+    """The housing mode the rig file gives (``bearing_diagnosis.housing_mode_Hz``, ``housing_mode_damping_ratio``):
+    (frequency [Hz], damping ratio [-]), or None."""
+    f = bd.get("housing_mode_Hz")
+    return None if f is None else (float(f), float(bd.get("housing_mode_damping_ratio", 0.02)))
 
 
 def rig_record(rec: BearingRecord, config: dict, influence: InfluenceLine, harmonic=None) -> RigRecord:
@@ -147,7 +157,11 @@ class BearingSubject:
     figures = ("overlay", "per_passage", "synchronous_average", "envelope", "spectrum", "ranking", "ladder")
 
     def check_config(self, config: dict) -> None:
-        CATALOGUE.resolve(config["bearing_diagnosis"]["effects"], "bearing_diagnosis.effects")
+        effects = config["bearing_diagnosis"]["effects"]
+        CATALOGUE.resolve(effects, "bearing_diagnosis.effects")
+        if "housing_mode" in effects and "shaft_dynamics" not in effects:
+            raise EffectError("bearing_diagnosis.effects: housing_mode rides on the dynamic rung's fine grid; "
+                              "add shaft_dynamics before it")
         hidden_values(config["bearing"]["hidden_effects"], None)
 
     def read(self, path: str, config: dict) -> BearingRecord:
@@ -196,7 +210,8 @@ class BearingSubject:
         its angle's spans the circle) is taken out of the catalogue and the engine runs again without it
         (``fault.unidentified`` names it). Where the quasi-static verdict is ``unexplained`` with a fault's
         lines or a defect selected, the dynamic rung is tried (:func:`dynamic_rung`; ``dynamic_rung`` of the
-        dict says what it gave).
+        dict says what it gave); where it is accepted and the record is still ``unexplained``, the housing mode's
+        rung above it (:func:`housing_rung_wanted`; ``dynamic_rung.housing_mode``).
         """
         settings = DiagnosticsSettings.from_config(config.get("diagnostics"))
         rec, rate = model_rate(obs[0], config["bearing_diagnosis"]["max_model_rate_Hz"])
@@ -229,6 +244,20 @@ class BearingSubject:
                     dropped += more
                     note(f"dynamic rung: {time.process_time() - c0:.1f} s CPU "
                          f"({'accepted' if rung['accepted'] else 'not accepted'})")
+                    if housing_rung_wanted(d, rung):
+                        c0 = time.process_time()
+                        entry = housing_scan(d, settings)
+                        rung["housing_mode"] = entry
+                        if entry["tried"]:
+                            d, rung["housing_mode"] = dynamic_rung(
+                                d, replace(problem, floor=d.problem.floor), settings, progress, entry,
+                                int(config["bearing_diagnosis"].get("dynamic_final_steps_per_period",
+                                                                    FINAL_STEPS_PER_PERIOD)),
+                                ("housing_mode",), ("dynamic", "housing mode"))
+                            d, problem, more = without_unidentified(d, problem, settings, progress)
+                            dropped += more
+                        note(f"housing mode rung: {time.process_time() - c0:.1f} s CPU "
+                             f"({'accepted' if rung['housing_mode']['accepted'] else 'not accepted'})")
         answer = self.answer(d)
         answer["fault"]["unidentified"] = dropped
         return d, {**d.to_dict(answer), "model_rate": rate, "dynamic_rung": rung}
@@ -236,6 +265,39 @@ class BearingSubject:
 
 #: The running-bearing subject.
 SUBJECT = BearingSubject()
+
+def housing_rung_wanted(d, rung: dict) -> bool:
+    """Whether the housing mode's rung is tried on the dynamic rung's diagnosis ``d``: the rung was accepted without
+    ``housing_mode`` (the rig file gives no mode) and the verdict is still ``unexplained``. A housing's mode below the
+    record's Nyquist frequency leaves a ring with the shaft's dynamics on; the rung scans for it
+    (:func:`~.effects.housing_mode.scan_mode`) and keeps it where it passes the selection rule."""
+    return bool(rung.get("accepted")) and d.verdict == "unexplained" and "housing_mode" not in d.selected
+
+
+def housing_scan(d, settings) -> dict:
+    """The housing mode's rung entry before its fit: the scan's best mode on ``d``'s final model
+    (:func:`~.effects.housing_mode.best_mode`) and the chi2 it takes off (the residual's sum of squares over the
+    floor's variance, both means taken out), against what the selection rule asks of the mode's parameters,
+    ``min_delta_bic`` + k ln n. The rung is tried (``tried``) only where the scan's start already takes off more: a
+    start that does not is not worth a fit of the dynamic chain (10-30 s of CPU on a 2 s record)."""
+    e = CATALOGUE["housing_mode"]
+    ctx = StartContext(d.record, d.voltage_V, d.final.model_V, d.final.values)
+    start, best = best_mode(ctx)
+    r = np.asarray(d.voltage_V, dtype=float) - d.final.model_V
+    var = d.floor.voltage_noise_V**2
+    drop = float((np.sum((r - r.mean()) ** 2) - best) / var)
+    k = sum(p.vary for p in e.params(d.record))
+    needed = float(settings.min_delta_bic + k * np.log(r.size))
+    scan = {"start": start, "chi2_drop": drop, "needed": needed}
+    mode = f"{start['housing_mode_Hz']:.5g} Hz at {100 * start['housing_mode_damping_ratio']:.3g} %"
+    said = f"the scan's best mode ({mode}) changes chi2 by {-drop:+.4g}, where the selection rule asks of its {k} " \
+           f"parameters a drop over {needed:.4g}"
+    if drop > needed:
+        return {"tried": True, "accepted": False, "evidence": [], "scan": scan,
+                "why": f"the dynamic rung was accepted and the record is still unexplained; {said}"}
+    return {"tried": False, "accepted": False, "scan": scan,
+            "why": f"the dynamic rung was accepted and the record is still unexplained, but {said}: no housing mode "
+                   "in the band"}
 
 
 def catalogue_for(tachometer: bool) -> Catalogue:

@@ -14,13 +14,16 @@ identifier              what it models
 ``roller_scatter``      the rollers' diameters differ by micrometres
 ``mains_pickup``        50/60 Hz interference and its odd harmonics
 ``shaft_dynamics``      the shaft's mass on its rollers (the dynamic rung)
+``housing_mode``        a housing mode between rollers and sensor (the rung above)
 ======================  ==========================================================
 
 ``shaft_dynamics`` is a rung of the model, not a candidate of the quasi-static search
 (:data:`RUNGS`): an evaluation with it costs 12-50 times one without (0.08-0.24 s against 3-9 ms for a 2 s record
 at 2550 Hz, benchmarks/bench_shaft_dynamics.py), and alone on a healthy bearing it changes
 the record by less than the noise. The subject adds it where the quasi-static model leaves a fault's lines or
-rings (:mod:`..rung`), or from the rig file (``bearing_diagnosis.effects``).
+rings (:mod:`..rung`), or from the rig file (``bearing_diagnosis.effects``). ``housing_mode`` rides on it (a mode on
+the dynamic rung's fine grid): the subject tries it where the dynamic rung is accepted and still leaves the record
+``unexplained``, and with the shaft's dynamics where the rig file gives the mode (``bearing_diagnosis.housing_mode_Hz``).
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from ...effect import Catalogue
 from . import (
     cage_slip,
     clearance,
+    housing_mode,
     inner_race_defect,
     load_share,
     mains_pickup,
@@ -54,6 +58,7 @@ for _m in (
     roller_scatter,
     mains_pickup,
     shaft_dynamics,
+    housing_mode,
 ):
     CATALOGUE.register(_m.EFFECT)
 
@@ -66,6 +71,6 @@ FAULT_TYPES = {
 
 #: Rungs of the model: effects the quasi-static search does not rank; the subject adds them (:data:`CATALOGUE`
 #: holds them, so a rig file may switch them on).
-RUNGS = ("shaft_dynamics",)
+RUNGS = ("shaft_dynamics", "housing_mode")
 
 __all__ = ["CATALOGUE", "FAULT_TYPES", "RUNGS", "Effect"]
