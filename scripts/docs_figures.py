@@ -35,6 +35,16 @@ The runs guide's Fig. 10 of its example variant (the paper's case at 1500 rpm)::
     snakemake --cores 2 results/speed1500/figures/fig10.png --configfile docs/_data/speed1500.yaml
     python scripts/docs_figures.py --only runs
 
+The sensor comparison's calibrated test on the paper configuration (the validation page): the healthy
+statistic's distribution and the ROC curves that ``validation/sensor_comparison_calibrated.py --report`` draws from
+its seed file (the commands are on docs/validation/sensor_comparison.md, beside the table of the same cases). A
+validation script's output is no Snakemake target, so there is no dry run to check; the build checks its code hash
+(the script and every package module it imports, the rig's included) and the config digest of rule
+``sensor_comparison``, whose config values the script reads case by case. After a change to that code the seeds
+are redrawn into a new seed file (the runner skips the seeds its file holds), then the report, then::
+
+    python scripts/docs_figures.py --only validation
+
 A refresh of the paper's figures keeps these records as they are (the build checks them all alike).
 """
 
@@ -81,8 +91,10 @@ FIGURES = [
 ]
 
 
-#: figures of other runs, by group: the run's config file, its Snakemake target, and per figure its file name on
-#: the site, the rule that writes it, that rule's script, a title, and its path in the run's results folder
+#: figures of other runs, by group: the run's config file, its Snakemake target (None: a validation script's
+#: figure, no workflow output), and per figure its file name on the site, the rule that writes it (a validation
+#: script's: the rule whose config values it reads), that rule's script, a title, and its path in the run's
+#: results folder
 RUN_FIGURES = {
     "detect": ("docs/_data/detect_archive.yaml", "detect_archive", [
         ("detect_fe44.png", "detect_record", "workflow/scripts/detect_record.py",
@@ -95,6 +107,13 @@ RUN_FIGURES = {
     "runs": ("docs/_data/speed1500.yaml", "results/speed1500/figures/fig10.png", [
         ("runs_speed1500_fig10.png", "fig10", "notebooks/fig10_envelope.ipynb",
          "Fig. 10 of the run speed1500: the paper's case at 1500 rpm", "figures/fig10.png"),
+    ]),
+    "validation": ("config/config.yaml", None, [
+        ("calibrated_paper_smooth_healthy_statistic.png", "sensor_comparison", "validation/sensor_comparison_calibrated.py",
+         "The healthy rig's statistic per sensor, at rest and under base motion, with and without roughness",
+         "validation/calibrated_paper_smooth_healthy_statistic.png"),
+        ("calibrated_paper_smooth_roc.png", "sensor_comparison", "validation/sensor_comparison_calibrated.py",
+         "The ROC curves of those cases (both sensors in each panel)", "validation/calibrated_paper_smooth_roc.png"),
     ]),
     "running_bearing": ("docs/_data/running_bearing_guide.yaml", "running_bearing_guide", [
         ("running_bearing_ladder_qs.png", "running_bearing_guide", "workflow/scripts/running_bearing_guide.py",
@@ -148,8 +167,9 @@ def run_figures(group: str) -> dict:
     for name, rule, entry, title, path in figures:
         src = results / path
         if not src.exists():
-            raise SystemExit(f"{src} does not exist: run the workflow first "
-                             f"(snakemake --cores 2 {target} --configfile {configfile})")
+            first = (f"snakemake --cores 2 {target} --configfile {configfile}" if target is not None else
+                     f"{entry} and its --report, as docs/validation/sensor_comparison.md gives them")
+            raise SystemExit(f"{src} does not exist: run it first ({first})")
         out[name] = {"rule": rule, "entry": entry, "title": title, "source": str(src.relative_to(ROOT)),
                      "code_hash": code_hash(str(ROOT / entry)), "config_digest": reads_digest(cfg, rule),
                      "sha256": sha256(src), "scorecard": [], "configfiles": [configfile],
@@ -184,7 +204,7 @@ def main(argv: list[str] | None = None) -> int:
             raise SystemExit(f"{OUT / 'provenance.json'} does not exist: copy the paper's figures first")
         configfile, target, _ = RUN_FIGURES[a.only]
         copied = run_figures(a.only)
-        if not a.no_dry_run:
+        if not a.no_dry_run and target is not None:
             run_is_current([configfile], [target])
         record = {**previous, "figures": {**previous["figures"], **copied}}
     else:

@@ -7,6 +7,8 @@ import re
 import sys
 from pathlib import Path
 
+from piezobearing.workflow.registry import READS
+
 REPO = Path(__file__).resolve().parents[1]
 FIGURES = REPO / "docs" / "_static" / "figures"
 
@@ -64,3 +66,19 @@ def test_a_figure_of_another_run_is_checked_against_its_own_config():
     assert set(ext.stale_figures(without)) - before == {
         f"{name}: made with other config values than rule {record['figures'][name]['rule']} now reads"
     }
+
+
+def test_every_figure_of_another_run_names_its_script_and_a_validation_figure_a_rule_that_declares_its_config():
+    """Each figure of another run names an existing config file and script; a validation script's figure (no
+    Snakemake target) names the rule whose declared config values the script reads, so that its config digest
+    digests them (a rule without declared values would digest nothing and never go stale)."""
+    spec = importlib.util.spec_from_file_location("docs_figures", REPO / "scripts" / "docs_figures.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert module.RUN_FIGURES["validation"][1] is None
+    for group, (configfile, target, figures) in module.RUN_FIGURES.items():
+        assert (REPO / configfile).is_file(), group
+        for name, rule, entry, _title, _path in figures:
+            assert (REPO / entry).is_file(), (group, name, entry)
+            if target is None:
+                assert READS.get(rule), (group, name, rule)

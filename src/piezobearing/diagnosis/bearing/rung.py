@@ -83,10 +83,10 @@ def rung_wanted(d, config: dict) -> dict:
         return {"tried": False, "accepted": False, "why": "bearing_diagnosis.dynamic_rung is off"}
     faults = [n for n in d.selected if n in FAULT_TYPES]
     evidence = fault_evidence(d)
-    mode = d.problem.record.rig.housing_mode
-    if not faults and not evidence and mode is not None:
+    given = d.problem.record.rig.housing_mode
+    if not faults and not evidence and given is not None:
         return {"tried": True, "accepted": False, "evidence": [],
-                "why": (f"the rig file gives a housing mode ({mode[0]:.5g} Hz): its ring after every roller passage "
+                "why": (f"the rig file gives a housing mode ({given[0]:.5g} Hz): its ring after every roller passage "
                         "is structure the quasi-static chain leaves on any bearing")}
     if not faults and not evidence:
         return {"tried": False, "accepted": False,
@@ -163,7 +163,7 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     exempt = [] if "housing_mode" in rungs else faults[:1]
     weak = stand_ins(dr, [n for n in names if n not in exempt and n not in rungs and n not in RUNGS], settings)
     if weak:
-        note(f"dynamic rung: without {', '.join(weak)} (not supported with the dynamics)")
+        note(f"{steps[1]} rung: without {', '.join(weak)} (not supported with {' and '.join(rungs)})")
         rp = replace(rp, configured=tuple(e for e in rp.configured if e.name not in weak))
         dr = diagnose(rp, settings, progress, d.baseline, intervals=False)
     rung["left_out"] = weak

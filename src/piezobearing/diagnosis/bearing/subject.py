@@ -290,14 +290,14 @@ def housing_scan(d, settings) -> dict:
     needed = float(settings.min_delta_bic + k * np.log(r.size))
     scan = {"start": start, "chi2_drop": drop, "needed": needed}
     mode = f"{start['housing_mode_Hz']:.5g} Hz at {100 * start['housing_mode_damping_ratio']:.3g} %"
+    said = f"the scan's best mode ({mode}) changes chi2 by {-drop:+.4g}, where the selection rule asks of its {k} " \
+           f"parameters a drop over {needed:.4g}"
     if drop > needed:
         return {"tried": True, "accepted": False, "evidence": [], "scan": scan,
-                "why": (f"the dynamic rung was accepted and the record is still unexplained; the scan's best mode "
-                        f"({mode}) takes {drop:.4g} off chi2, over the {needed:.4g} the selection rule asks")}
+                "why": f"the dynamic rung was accepted and the record is still unexplained; {said}"}
     return {"tried": False, "accepted": False, "scan": scan,
-            "why": (f"the dynamic rung was accepted and the record is still unexplained, but the scan's best mode "
-                    f"({mode}) takes {drop:.4g} off chi2, under the {needed:.4g} the selection rule asks of its "
-                    f"{k} parameters: no housing mode in the band")}
+            "why": f"the dynamic rung was accepted and the record is still unexplained, but {said}: no housing mode "
+                   "in the band"}
 
 
 def catalogue_for(tachometer: bool) -> Catalogue:
