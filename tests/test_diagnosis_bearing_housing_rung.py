@@ -136,9 +136,12 @@ def test_the_frequency_is_fitted_below_nyquist_and_held_above(setup):
 def test_housing_mode_without_the_shafts_dynamics_is_a_one_line_error(setup):
     c = copy.deepcopy(setup[0])
     c["bearing_diagnosis"]["effects"] = ["housing_mode"]
-    with pytest.raises(EffectError, match="add shaft_dynamics before it") as e:
+    with pytest.raises(EffectError, match="housing_mode acts through shaft_dynamics; add shaft_dynamics before it") as e:
         SUBJECT.check_config(c)
     assert "\n" not in str(e.value)
+    c["bearing_diagnosis"]["effects"] = ["housing_mode", "shaft_dynamics"]
+    with pytest.raises(EffectError, match="add shaft_dynamics before it"):
+        SUBJECT.check_config(c)
     c["bearing_diagnosis"]["effects"] = ["shaft_dynamics", "housing_mode"]
     SUBJECT.check_config(c)
 

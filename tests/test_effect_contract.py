@@ -118,8 +118,13 @@ def test_every_bearing_effect_has_a_plausible_example_that_changes_the_record(na
         assert params[k].lower <= v <= params[k].upper, (k, v)
         assert any(k.endswith(u.suffix) for u in UNITS), k
     assert any(v != params[k].value for k, v in e.example.items())
-    model = rig_record.baseline.with_effect(e)
-    neutral = {**rig_record.baseline_start, **model.defaults(record)}
+    model = rig_record.baseline
+    ride = {}
+    for r in e.rides_on:  # the effects it acts through, at their own examples, on both sides
+        model = model.with_effect(_bearing_effects()[r])
+        ride.update(_bearing_effects()[r].example)
+    model = model.with_effect(e)
+    neutral = {**rig_record.baseline_start, **model.defaults(record), **ride}
     v0 = model.simulate(neutral, record)
     v1 = model.simulate({**neutral, **e.example}, record)
     assert np.sqrt(np.mean((v1 - v0) ** 2)) > 1e-3 * np.sqrt(np.mean(v0**2))

@@ -158,10 +158,11 @@ class BearingSubject:
 
     def check_config(self, config: dict) -> None:
         effects = config["bearing_diagnosis"]["effects"]
-        CATALOGUE.resolve(effects, "bearing_diagnosis.effects")
-        if "housing_mode" in effects and "shaft_dynamics" not in effects:
-            raise EffectError("bearing_diagnosis.effects: housing_mode rides on the dynamic rung's fine grid; "
-                              "add shaft_dynamics before it")
+        for i, e in enumerate(CATALOGUE.resolve(effects, "bearing_diagnosis.effects")):
+            missing = [r for r in e.rides_on if r not in effects[:i]]
+            if missing:
+                raise EffectError(f"bearing_diagnosis.effects: {e.name} acts through {', '.join(missing)}; "
+                                  f"add {', '.join(missing)} before it")
         hidden_values(config["bearing"]["hidden_effects"], None)
 
     def read(self, path: str, config: dict) -> BearingRecord:

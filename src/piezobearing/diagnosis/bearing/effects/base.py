@@ -19,11 +19,14 @@ from ..representations import fitted_kinematics
 
 
 class Effect(EngineEffect):
-    """Base class of a running-bearing effect (hooks: :meth:`additive`; :attr:`holds`)."""
+    """Base class of a running-bearing effect (hooks: :meth:`additive`; :attr:`holds`, :attr:`rides_on`)."""
 
     #: Nuisance parameters the effect takes over: held at their nominal value while it is in the model
     #: (a free nuisance parameter that the effect's own parameter only multiplies would make the two one).
     holds: tuple[str, ...] = ()
+    #: Effects this one acts through, which must be in the model before it (a housing mode filters the dynamic
+    #: rung's force on its grid: ``shaft_dynamics``); a rig file that configures it without them is refused.
+    rides_on: tuple[str, ...] = ()
 
     def additive(self, values: dict, record) -> np.ndarray | None:
         """A voltage added to the record, independent of the bearing [V]."""

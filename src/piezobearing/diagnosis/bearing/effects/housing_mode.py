@@ -63,6 +63,7 @@ def frequency_identifiable(record, mode_Hz: float) -> bool:
 class HousingModeEffect(Effect):
     name = "housing_mode"
     title = "a housing mode between rollers and sensor"
+    rides_on = ("shaft_dynamics",)
     example = {"housing_mode_Hz": 1100.0, "housing_mode_damping_ratio": 0.02}
     example_reason = (
         "a housing's lowest mode at 1.1 kHz, inside a 2550 Hz record's band, damped at 2 % (a light pedestal or a "
