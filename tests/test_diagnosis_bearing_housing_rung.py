@@ -20,8 +20,9 @@ import pytest
 
 from piezobearing.diagnosis.bearing import chain, lpm_records
 from piezobearing.diagnosis.bearing.effects import CATALOGUE
-from piezobearing.diagnosis.bearing.effects.housing_mode import scan_mode
-from piezobearing.diagnosis.bearing.subject import SUBJECT, housing_scan, rig_from_config
+from piezobearing.diagnosis.bearing.effects.housing_mode import best_mode
+from piezobearing.diagnosis.bearing.rung import housing_scan
+from piezobearing.diagnosis.bearing.subject import SUBJECT, rig_from_config
 from piezobearing.diagnosis.effect import EffectError
 from piezobearing.diagnosis.settings import DiagnosticsSettings
 from piezobearing.stages.bearing_diagnosis import influence_from_config
@@ -86,7 +87,7 @@ def test_the_scan_finds_a_hidden_modes_frequency(setup):
     clean = chain.voltage(rig, {**v, **MODE_1100})
     noisy = clean + 0.03 * np.std(clean) * np.random.default_rng(3).standard_normal(t.size)
     rec = SimpleNamespace(rig=rig, sample_rate_Hz=2550.0)
-    start = scan_mode(SimpleNamespace(record=rec, values=v, voltage_V=noisy))
+    start = best_mode(SimpleNamespace(record=rec, values=v, voltage_V=noisy, model_V=chain.voltage(rig, v)))[0]
     assert start["housing_mode_Hz"] == pytest.approx(1100.0, rel=0.01), start
 
 

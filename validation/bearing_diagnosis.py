@@ -111,8 +111,9 @@ CASES.update(EDGE_CASES)
 #: A housing mode inside the DAQ's band (record conditions ``housing_mode_Hz``, ``housing_mode_damping_ratio``:
 #: :func:`~piezobearing.housing.one_mode.through_mode` on the LPM's force): 1.1 kHz at 2 % inside a 2550 Hz record's
 #: band; the paper housing's first mode (2731 Hz at 1.16 %, results/bearing/housing_modes_healthy.json) inside a
-#: 25.6 kHz record's. The cases ending ``_given`` give the diagnosis the mode in the rig file
-#: (``bearing_diagnosis.housing_mode_Hz``, ``housing_mode_damping_ratio``: :data:`GIVEN_MODE`), the others do not.
+#: 25.6 kHz record's. The cases ending ``_given`` give the diagnosis the record's mode in the rig file
+#: (``bearing_diagnosis.housing_mode_Hz``, ``housing_mode_damping_ratio``: for the paper housing, what its FEM gives,
+#: results/bearing/housing_modes_healthy.json), the others do not.
 HOUSING_MODE_CASES = {
     f"housing_mode_{name}_{kind}{given}": ({**hidden, "housing_mode_Hz": f, "housing_mode_damping_ratio": zeta}, effects)
     for name, f, zeta, givens in (("1100Hz", 1100.0, 0.02, ("",)), ("2731Hz", 2731.0, 0.0116, ("", "_given")))
@@ -123,9 +124,6 @@ HOUSING_MODE_CASES = {
     )
     for given in givens
 }
-#: The housing mode a ``_given`` case's rig file gives: the paper housing's first mode from its FEM, at the damping
-#: ratio the FEM's Rayleigh damping gives it (results/bearing/housing_modes_healthy.json).
-GIVEN_MODE = {"housing_mode_Hz": 2731.0, "housing_mode_damping_ratio": 0.0116}
 CASES.update(HOUSING_MODE_CASES)
 #: Record conditions that are not catalogue parameters and are not fitted (kept out of a row's values).
 CONDITIONS = ("defect_edge_radius_m", "housing_mode_Hz", "housing_mode_damping_ratio")
@@ -146,7 +144,8 @@ def run_case(config: dict, influence, name: str, sample_rate_Hz: float, duration
         record_dir.mkdir(parents=True, exist_ok=True)
         write_bearing_record(rec, record_dir / f"{name}_{sample_rate_Hz:.0f}Hz.csv")
     if name.endswith("_given"):
-        config = {**config, "bearing_diagnosis": {**config["bearing_diagnosis"], **GIVEN_MODE}}
+        given = {k: hidden[k] for k in ("housing_mode_Hz", "housing_mode_damping_ratio")}
+        config = {**config, "bearing_diagnosis": {**config["bearing_diagnosis"], **given}}
     c0 = time.process_time()
     d = SUBJECT.diagnose((rec, influence), config)[1]
     cpu = time.process_time() - c0

@@ -161,12 +161,21 @@ def sensor_force(rig: Rig, values: dict) -> tuple[np.ndarray, np.ndarray]:
     """Sampled sensor force on the record's clock with its pre-roll, and that clock [N, s]."""
     f, t_ext, dyn = forces(rig, values)
     if dyn is not None:  # the dynamic rung: the 4-DOF dynamics after the pre-roll, through any housing mode
-        first, s, fine = dyn
+        mode = None
         if values.get("housing_mode_Hz", 0.0) > 0:
-            fine = through_mode(fine, rig.dt_s / s, float(values["housing_mode_Hz"]),
-                                float(values["housing_mode_damping_ratio"]))
-        f = np.concatenate([f[:first], fine.reshape(-1, s).mean(axis=1)])
+            mode = (float(values["housing_mode_Hz"]), float(values["housing_mode_damping_ratio"]))
+        f = sampled(rig, f, dyn, mode)
     return f, t_ext
+
+
+def sampled(rig: Rig, f: np.ndarray, dyn: tuple[int, int, np.ndarray], mode: tuple[float, float] | None) -> np.ndarray:
+    """The sampled sensor force [N]: the quasi-static force ``f`` before the dynamic rung's first sample, then its
+    fine force (``dyn`` of :func:`forces`) through the housing ``mode`` (frequency [Hz], damping ratio [-]; None:
+    none), averaged over each sample window."""
+    first, s, fine = dyn
+    if mode is not None:
+        fine = through_mode(fine, rig.dt_s / s, *mode)
+    return np.concatenate([f[:first], fine.reshape(-1, s).mean(axis=1)])
 
 
 def forces(rig: Rig, values: dict) -> tuple[np.ndarray, np.ndarray, tuple[int, int, np.ndarray] | None]:
@@ -204,13 +213,13 @@ def forces(rig: Rig, values: dict) -> tuple[np.ndarray, np.ndarray, tuple[int, i
 def mode_voltages(rig: Rig, values: dict, modes: list[tuple[float, float]]) -> Iterator[np.ndarray]:
     """The recorded voltage the chain predicts [V] through each housing mode (frequency [Hz], damping ratio [-]) of
     ``modes``, with the dynamic rung's values (a ``shaft_mass_kg``): the 4-DOF dynamics integrated once, on a grid
-    fine enough for the highest of the modes, and passed through each (the ``housing_mode`` effect's start scan)."""
+    fine enough for the highest of the modes, and passed through each (the ``housing_mode`` effect's start scan):
+    :func:`voltage` without its additive interference."""
     top = max(m for m, _ in modes)
-    f, _, (first, s, fine) = forces(rig, {**values, "housing_mode_Hz": top})
-    share = values.get("load_share_ratio", 1.0)
-    for mode_Hz, zeta in modes:
-        fm = np.concatenate([f[:first], through_mode(fine, rig.dt_s / s, mode_Hz, zeta).reshape(-1, s).mean(axis=1)])
-        yield share * rig.gain_factor * rig.sensor.voltage(fm, rig.dt_s)[rig.n_pre :] + values.get("dc_offset_V", 0.0)
+    f, _, dyn = forces(rig, {**values, "housing_mode_Hz": top})
+    for mode in modes:
+        yield values.get("load_share_ratio", 1.0) * circuit_voltage(rig, sampled(rig, f, dyn, mode)) \
+            + values.get("dc_offset_V", 0.0)
 
 
 def moving_defect_change(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, key, offsets) -> np.ndarray:
@@ -415,13 +424,17 @@ def unit_voltage(rig: Rig, values: dict) -> np.ndarray:
     hit = rig.cache.get(key)
     if hit is not None:
         return hit
-    f, _ = sensor_force(rig, values)
-    v = rig.gain_factor * rig.sensor.voltage(f, rig.dt_s)[rig.n_pre :]
+    v = circuit_voltage(rig, sensor_force(rig, values)[0])
     v.flags.writeable = False
     rig.cache[key] = v
     while len(rig.cache) > int(np.clip(CACHE_BYTES / (8 * v.size), 2, CACHE_SIZE)):
         rig.cache.pop(next(iter(rig.cache)))
     return v
+
+
+def circuit_voltage(rig: Rig, force_N: np.ndarray) -> np.ndarray:
+    """The circuit's voltage for a sampled sensor force with its pre-roll, on the record's clock [V]."""
+    return rig.gain_factor * rig.sensor.voltage(force_N, rig.dt_s)[rig.n_pre :]
 
 
 def voltage(rig: Rig, values: dict, additive: np.ndarray | None = None) -> np.ndarray:

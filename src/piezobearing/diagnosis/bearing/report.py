@@ -102,10 +102,8 @@ def dynamic_rung(d: dict) -> list[str]:
         "explained). The diagnosis above is the "
         + ("dynamic model's." if r["accepted"] else "quasi-static model's."),
         "",
-        "| model | NRMSE |",
-        "|---|---|",
+        *ladder_table(r["ladder"]),
     ]
-    out += [f"| {row['model']} | {s.pct(row['nrmse'])} |" for row in r["ladder"]]
     out += ["", f"Quasi-static answer: {r['quasi_static']['fault']}.", ""]
     if r.get("left_out"):
         out += [f"Left out with the dynamics on (not supported by the record): {', '.join(r['left_out'])}.", ""]
@@ -126,13 +124,16 @@ def housing_rung(h: dict | None) -> list[str]:
         f"(BIC drop {h['delta_bic']:.4g}, {h['strength']}; {100 * h['excess_explained']:.0f} % of the dynamic "
         "model's misfit above the floor explained).",
         "",
-        "| model | NRMSE |",
-        "|---|---|",
+        *ladder_table(h["ladder"]),
     ]
-    out += [f"| {row['model']} | {s.pct(row['nrmse'])} |" for row in h["ladder"]]
     if h.get("left_out"):
         out += ["", f"Left out with the housing mode on (not supported by the record): {', '.join(h['left_out'])}."]
     return out + [""]
+
+
+def ladder_table(ladder: list[dict]) -> list[str]:
+    """A rung's ladder (model, NRMSE) as a table's lines."""
+    return ["| model | NRMSE |", "|---|---|", *(f"| {row['model']} | {s.pct(row['nrmse'])} |" for row in ladder)]
 
 
 def sensor_model(d: dict) -> list[str]:

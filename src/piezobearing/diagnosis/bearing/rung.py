@@ -3,7 +3,9 @@
 Where the quasi-static diagnosis ends ``unexplained`` with a defect selected or a fault's lines left
 (:func:`rung_wanted`), :func:`dynamic_rung` runs the engine once more with ``shaft_dynamics`` and keeps it where it
 passes the selection rule; :func:`without_unidentified` runs the engine again without a selected defect whose width
-interval holds zero or whose angle interval spans the circle (:func:`unidentified_defects`).
+interval holds zero or whose angle interval spans the circle (:func:`unidentified_defects`). Above an accepted dynamic
+rung that leaves the record ``unexplained``, the housing mode's rung (:func:`housing_rung_wanted`,
+:func:`housing_scan`) runs :func:`dynamic_rung` once more with ``housing_mode``.
 """
 
 from __future__ import annotations
@@ -12,13 +14,14 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..effect import Catalogue
+from ..effect import Catalogue, StartContext
 from ..engine import diagnose, refit
 from ..fit import fit_model
 from ..selection import Candidate, step_entry, strength
 from ..subject import Problem
 from .answer import EFFECT_OF_TYPE, fault_answer, fault_evidence
 from .effects import CATALOGUE, FAULT_TYPES, RUNGS
+from .effects.housing_mode import best_mode
 from .floor import REMEASURE_BELOW, noise_floor
 from .model import BearingModel
 
@@ -139,9 +142,9 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     computed there (:func:`~piezobearing.diagnosis.engine.refit`); the defects are judged identified on those.
     Where it does not pass, its defects are judged on the Jacobian's intervals (the entry's ``unidentified``).
 
-    ``rungs``: the effects the rung adds (:func:`rung_effects` by default); with ``housing_mode`` among them the
-    quasi-static search's first defect is held to the selection rule too (a housing's ring after each roller
-    passage is a short dip that a narrow groove under the sensor mimics). The subject runs this once more with
+    ``rungs``: the effects the rung adds (:func:`rung_effects` by default); with one that mimics a defect among
+    them (``mimics_defects``: ``housing_mode``, whose ring after each roller passage is a short dip a narrow groove
+    under the sensor mimics) the quasi-static search's first defect is held to the selection rule too. The subject runs this once more with
     ``rungs=("housing_mode",)`` on an accepted rung's diagnosis that is still ``unexplained``; ``steps`` then name
     the models before and after in the entry's ladder.
     """
@@ -160,7 +163,7 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     note(f"{steps[1]} rung: + {label}")
     dr = diagnose(rp, settings, progress, d.baseline, intervals=False)
     # the quasi-static selection's other effects, each held to the selection rule with the dynamics on
-    exempt = [] if "housing_mode" in rungs else faults[:1]
+    exempt = [] if any(CATALOGUE[n].mimics_defects for n in rungs) else faults[:1]
     weak = stand_ins(dr, [n for n in names if n not in exempt and n not in rungs and n not in RUNGS], settings)
     if weak:
         note(f"{steps[1]} rung: without {', '.join(weak)} (not supported with {' and '.join(rungs)})")
@@ -267,3 +270,37 @@ def merged(d, dr, share: float, pair: list[str], rungs: tuple[str, ...] = ("shaf
 #: cost 1.5-2 CPU minutes on a 2 s record at 2550 Hz, 0.15-0.2 s each; intervals beyond it keep the Jacobian's,
 #: flagged in ``ci_method``).
 RUNG_PROFILE_EVALUATIONS = 120
+
+
+def housing_rung_wanted(d, rung: dict) -> bool:
+    """Whether the housing mode's rung is tried on the dynamic rung's diagnosis ``d``: the rung was accepted without
+    ``housing_mode`` (the rig file gives no mode) and the verdict is still ``unexplained``. A housing's mode below the
+    record's Nyquist frequency leaves a ring with the shaft's dynamics on; the rung scans for it
+    (:func:`~.effects.housing_mode.best_mode`) and keeps it where it passes the selection rule."""
+    return bool(rung.get("accepted")) and d.verdict == "unexplained" and "housing_mode" not in d.selected
+
+
+def housing_scan(d, settings) -> dict:
+    """The housing mode's rung entry before its fit: the scan's best mode on ``d``'s final model
+    (:func:`~.effects.housing_mode.best_mode`) and the chi2 it takes off (the residual's sum of squares over the
+    floor's variance, both means taken out), against what the selection rule asks of the mode's parameters,
+    ``min_delta_bic`` + k ln n. The rung is tried (``tried``) only where the scan's start already takes off more: a
+    start that does not is not worth a fit of the dynamic chain (10-30 s of CPU on a 2 s record)."""
+    e = CATALOGUE["housing_mode"]
+    ctx = StartContext(d.record, d.voltage_V, d.final.model_V, d.final.values)
+    start, best = best_mode(ctx)
+    r = np.asarray(d.voltage_V, dtype=float) - d.final.model_V
+    var = d.floor.voltage_noise_V**2
+    drop = float((np.sum((r - r.mean()) ** 2) - best) / var)
+    k = sum(p.vary for p in e.params(d.record))
+    needed = float(settings.min_delta_bic + k * np.log(r.size))
+    scan = {"start": start, "chi2_drop": drop, "needed": needed}
+    mode = f"{start['housing_mode_Hz']:.5g} Hz at {100 * start['housing_mode_damping_ratio']:.3g} %"
+    said = f"the scan's best mode ({mode}) changes chi2 by {-drop:+.4g}, where the selection rule asks of its {k} " \
+           f"parameters a drop over {needed:.4g}"
+    if drop > needed:
+        return {"tried": True, "accepted": False, "evidence": [], "scan": scan,
+                "why": f"the dynamic rung was accepted and the record is still unexplained; {said}"}
+    return {"tried": False, "accepted": False, "scan": scan,
+            "why": f"the dynamic rung was accepted and the record is still unexplained, but {said}: no housing mode "
+                   "in the band"}

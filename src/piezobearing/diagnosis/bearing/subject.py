@@ -27,7 +27,7 @@ from ...numerics.threads import single_blas_thread
 from ...sensor.calibration import SensorCircuit
 from ...sensor.response import sensor_model
 from ...signals.detection import noise_std_for_snr
-from ..effect import Catalogue, EffectError, StartContext
+from ..effect import Catalogue, EffectError
 from ..engine import diagnose
 from ..record import Segments
 from ..settings import DiagnosticsSettings
@@ -35,12 +35,11 @@ from ..subject import Problem
 from . import chain, report
 from .answer import fault_answer
 from .effects import CATALOGUE, RUNGS
-from .effects.housing_mode import best_mode
 from .effects.shaft_speed import roller_pass_line_Hz
 from .floor import REMEASURE_BELOW, floor_prepass, noise_floor
 from .model import BearingModel, RigRecord
 from .representations import REPRESENTATIONS, passages
-from .rung import dynamic_rung, rung_wanted, without_unidentified
+from .rung import dynamic_rung, housing_rung_wanted, housing_scan, rung_wanted, without_unidentified
 
 #: Phases of the baseline's start scan over one roller pitch.
 PHASE_SCAN = 24
@@ -79,7 +78,7 @@ def housing_mode_of(bd: dict) -> tuple[float, float] | None:
     """The housing mode the rig file gives (``bearing_diagnosis.housing_mode_Hz``, ``housing_mode_damping_ratio``):
     (frequency [Hz], damping ratio [-]), or None."""
     f = bd.get("housing_mode_Hz")
-    return None if f is None else (float(f), float(bd.get("housing_mode_damping_ratio", 0.02)))
+    return None if f is None else (float(f), float(bd["housing_mode_damping_ratio"]))
 
 
 def rig_record(rec: BearingRecord, config: dict, influence: InfluenceLine, harmonic=None) -> RigRecord:
@@ -237,10 +236,11 @@ class BearingSubject:
                 rung = rung_wanted(d, config)
                 if time.process_time() - c0 > 0.5:  # the lines rule held the record against its best healthy model
                     note(f"best healthy model of the lines rule: {time.process_time() - c0:.1f} s CPU")
+                final_steps = int(config["bearing_diagnosis"].get("dynamic_final_steps_per_period",
+                                                                  FINAL_STEPS_PER_PERIOD))
                 if rung["tried"]:
                     c0 = time.process_time()
-                    d, rung = dynamic_rung(d, problem, settings, progress, rung, int(config["bearing_diagnosis"].get(
-                        "dynamic_final_steps_per_period", FINAL_STEPS_PER_PERIOD)))
+                    d, rung = dynamic_rung(d, problem, settings, progress, rung, final_steps)
                     d, problem, more = without_unidentified(d, problem, settings, progress)
                     dropped += more
                     note(f"dynamic rung: {time.process_time() - c0:.1f} s CPU "
@@ -251,9 +251,7 @@ class BearingSubject:
                         rung["housing_mode"] = entry
                         if entry["tried"]:
                             d, rung["housing_mode"] = dynamic_rung(
-                                d, replace(problem, floor=d.problem.floor), settings, progress, entry,
-                                int(config["bearing_diagnosis"].get("dynamic_final_steps_per_period",
-                                                                    FINAL_STEPS_PER_PERIOD)),
+                                d, replace(problem, floor=d.problem.floor), settings, progress, entry, final_steps,
                                 ("housing_mode",), ("dynamic", "housing mode"))
                             d, problem, more = without_unidentified(d, problem, settings, progress)
                             dropped += more
@@ -266,39 +264,6 @@ class BearingSubject:
 
 #: The running-bearing subject.
 SUBJECT = BearingSubject()
-
-def housing_rung_wanted(d, rung: dict) -> bool:
-    """Whether the housing mode's rung is tried on the dynamic rung's diagnosis ``d``: the rung was accepted without
-    ``housing_mode`` (the rig file gives no mode) and the verdict is still ``unexplained``. A housing's mode below the
-    record's Nyquist frequency leaves a ring with the shaft's dynamics on; the rung scans for it
-    (:func:`~.effects.housing_mode.scan_mode`) and keeps it where it passes the selection rule."""
-    return bool(rung.get("accepted")) and d.verdict == "unexplained" and "housing_mode" not in d.selected
-
-
-def housing_scan(d, settings) -> dict:
-    """The housing mode's rung entry before its fit: the scan's best mode on ``d``'s final model
-    (:func:`~.effects.housing_mode.best_mode`) and the chi2 it takes off (the residual's sum of squares over the
-    floor's variance, both means taken out), against what the selection rule asks of the mode's parameters,
-    ``min_delta_bic`` + k ln n. The rung is tried (``tried``) only where the scan's start already takes off more: a
-    start that does not is not worth a fit of the dynamic chain (10-30 s of CPU on a 2 s record)."""
-    e = CATALOGUE["housing_mode"]
-    ctx = StartContext(d.record, d.voltage_V, d.final.model_V, d.final.values)
-    start, best = best_mode(ctx)
-    r = np.asarray(d.voltage_V, dtype=float) - d.final.model_V
-    var = d.floor.voltage_noise_V**2
-    drop = float((np.sum((r - r.mean()) ** 2) - best) / var)
-    k = sum(p.vary for p in e.params(d.record))
-    needed = float(settings.min_delta_bic + k * np.log(r.size))
-    scan = {"start": start, "chi2_drop": drop, "needed": needed}
-    mode = f"{start['housing_mode_Hz']:.5g} Hz at {100 * start['housing_mode_damping_ratio']:.3g} %"
-    said = f"the scan's best mode ({mode}) changes chi2 by {-drop:+.4g}, where the selection rule asks of its {k} " \
-           f"parameters a drop over {needed:.4g}"
-    if drop > needed:
-        return {"tried": True, "accepted": False, "evidence": [], "scan": scan,
-                "why": f"the dynamic rung was accepted and the record is still unexplained; {said}"}
-    return {"tried": False, "accepted": False, "scan": scan,
-            "why": f"the dynamic rung was accepted and the record is still unexplained, but {said}: no housing mode "
-                   "in the band"}
 
 
 def catalogue_for(tachometer: bool) -> Catalogue:

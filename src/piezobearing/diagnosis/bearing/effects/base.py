@@ -19,7 +19,7 @@ from ..representations import fitted_kinematics
 
 
 class Effect(EngineEffect):
-    """Base class of a running-bearing effect (hooks: :meth:`additive`; :attr:`holds`, :attr:`rides_on`)."""
+    """Base class of a running-bearing effect (hooks: :meth:`additive`; :attr:`holds`, :attr:`rides_on`, :attr:`mimics_defects`)."""
 
     #: Nuisance parameters the effect takes over: held at their nominal value while it is in the model
     #: (a free nuisance parameter that the effect's own parameter only multiplies would make the two one).
@@ -27,6 +27,10 @@ class Effect(EngineEffect):
     #: Effects this one acts through, which must be in the model before it (a housing mode filters the dynamic
     #: rung's force on its grid: ``shaft_dynamics``); a rig file that configures it without them is refused.
     rides_on: tuple[str, ...] = ()
+    #: Whether its signature can be taken for a defect's (a housing's ring after each roller passage is a short dip
+    #: a narrow groove mimics): a rung that adds it holds the quasi-static search's first defect to the selection
+    #: rule too (:func:`~..rung.dynamic_rung`).
+    mimics_defects: bool = False
 
     def additive(self, values: dict, record) -> np.ndarray | None:
         """A voltage added to the record, independent of the bearing [V]."""

@@ -64,6 +64,7 @@ class HousingModeEffect(Effect):
     name = "housing_mode"
     title = "a housing mode between rollers and sensor"
     rides_on = ("shaft_dynamics",)
+    mimics_defects = True
     example = {"housing_mode_Hz": 1100.0, "housing_mode_damping_ratio": 0.02}
     example_reason = (
         "a housing's lowest mode at 1.1 kHz, inside a 2550 Hz record's band, damped at 2 % (a light pedestal or a "
@@ -87,17 +88,11 @@ class HousingModeEffect(Effect):
 
     def starts(self, ctx):
         """The best of a scan (:func:`best_mode`)."""
-        return [scan_mode(ctx)]
+        return [best_mode(ctx)[0]]
 
     def summary(self, values):
         return (f"housing mode {values['housing_mode_Hz']:.5g} Hz at {100 * values['housing_mode_damping_ratio']:.3g} % "
                 "damping")
-
-
-def scan_mode(ctx) -> dict:
-    """The mode (frequency, damping ratio) of a grid that leaves the least misfit on the current fit's values
-    (:func:`best_mode`)."""
-    return best_mode(ctx)[0]
 
 
 def best_mode(ctx) -> tuple[dict, float]:
@@ -129,9 +124,11 @@ def best_mode(ctx) -> tuple[dict, float]:
 def _best(ctx, freqs: np.ndarray, damping: np.ndarray) -> tuple[dict, float]:
     modes = [(float(f), float(z)) for f in freqs for z in damping]
     values = {k: v for k, v in ctx.values.items() if not k.startswith("housing_mode_")}
+    # what the current model adds to the chain's voltage (an interference's), kept beside each mode
+    other = ctx.model_V - chain.voltage(ctx.record.rig, values)
     best, at = np.inf, modes[0]
     for m, v in zip(modes, chain.mode_voltages(ctx.record.rig, values, modes), strict=True):
-        r = ctx.voltage_V - v
+        r = ctx.voltage_V - other - v
         e = float(np.sum((r - r.mean()) ** 2))
         if e < best:
             best, at = e, m
