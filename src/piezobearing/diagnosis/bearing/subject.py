@@ -39,6 +39,7 @@ from .effects.shaft_speed import roller_pass_line_Hz
 from .floor import REMEASURE_BELOW, floor_prepass, noise_floor
 from .model import BearingModel, RigRecord
 from .representations import REPRESENTATIONS, passages
+from .joint import joint_rung, joint_wanted
 from .rung import dynamic_rung, housing_rung_wanted, housing_scan, rung_wanted, without_unidentified
 
 #: Phases of the baseline's start scan over one roller pitch.
@@ -257,6 +258,13 @@ class BearingSubject:
                             dropped += more
                         note(f"housing mode rung: {time.process_time() - c0:.1f} s CPU "
                              f"({'accepted' if rung['housing_mode']['accepted'] else 'not accepted'})")
+                if joint_wanted(d, config):
+                    c0 = time.process_time()
+                    note("joint search: the operating point and each defect type with the shaft's dynamics")
+                    d, rung["joint"] = joint_rung(d, problem, settings, progress, final_steps)
+                    rung["joint"]["cpu_s"] = time.process_time() - c0
+                    note(f"joint search: {rung['joint']['cpu_s']:.1f} s CPU "
+                         f"({'diagnosis replaced' if rung['joint']['replaced'] else 'diagnosis kept'})")
         answer = self.answer(d)
         answer["fault"]["unidentified"] = dropped
         return d, {**d.to_dict(answer), "model_rate": rate, "dynamic_rung": rung}
