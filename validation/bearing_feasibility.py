@@ -103,6 +103,24 @@ def visibility(rig: dict, influence, hidden: dict, rec, index: int) -> dict:
     return out
 
 
+def joint_row(j: dict | None) -> dict | None:
+    """The joint dynamic search's entry (``dynamic_rung.joint``) in short: whether it replaced the diagnosis and why,
+    the dynamic healthy model against the final one, each type's BIC drop, share and whether it passes and is
+    identified, the floor before and after, its CPU."""
+    if not j:
+        return None
+    judged = j.get("with_roller_scatter") or j
+    return {"replaced": j.get("replaced"), "why": j.get("why"), "best": j.get("best"),
+            "healthy_over_final": j.get("healthy_over_final"), "cpu_s": j.get("cpu_s"),
+            "floor_V": [judged["floor"]["before_V"], judged["floor"]["after_V"]],
+            "healthy_nrmse": judged["healthy"]["nrmse"],
+            "types": {n: {k: t[k] for k in ("delta_bic", "excess_explained", "passes_rule", "identified", "nrmse")}
+                      for n, t in j["types"].items()},
+            "with_roller_scatter": None if j.get("with_roller_scatter") is None else {
+                n: {k: t[k] for k in ("delta_bic", "excess_explained", "passes_rule", "identified", "nrmse")}
+                for n, t in j["with_roller_scatter"]["types"].items()}}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--draws", type=int, default=40)
@@ -160,14 +178,16 @@ def main() -> None:
                        steps=[[st.get("added"), st.get("excess_explained")] for st in d["steps"][1:]],
                        dropped_steps=[[st.get("added"), st.get("excess_explained")] for st in d["dropped_steps"]],
                        lines=[[ev["type"], [[h["line"], h["excess_dB"]] for h in ev["lines"]]] for ev in d["fault"]["evidence"]],
-                       dynamic_rung={"tried": rung.get("tried"), "accepted": rung.get("accepted")})
+                       dynamic_rung={"tried": rung.get("tried"), "accepted": rung.get("accepted")},
+                       fault_params=d["fault"]["params"], fault_ci95=d["fault"]["ci95"], joint=joint_row(rung.get("joint")))
         except Exception as e:  # noqa: BLE001 - what this script counts
             row.update(verdict=None, error=f"{type(e).__name__}: {e}")
         rows.append(row)
         crashes = sum(r["verdict"] is None for r in rows)
         out.write_text(json.dumps({"command": "python validation/bearing_feasibility.py", "draws": len(rows),
                                    "crashes": crashes, "rows": rows}, indent=1))
-        print(f"draw {i}: {row.get('verdict')} {row.get('selected', row.get('error'))}", flush=True)
+        print(f"draw {i}: {row.get('verdict')} {row.get('fault_type')} ({row.get('fault_source')}) "
+              f"{row.get('selected', row.get('error'))}, {row.get('cpu_s', 0):.0f} s", flush=True)
 
 
 if __name__ == "__main__":

@@ -93,7 +93,7 @@ def dynamic_rung(d: dict) -> list[str]:
         return []
     out = ["## The shaft's dynamics (the dynamic rung)", ""]
     if not r["tried"]:
-        return out + [f"Not tried: {r['why']}.", ""]
+        return out + [f"Not tried: {r['why']}.", ""] + joint_search(r.get("joint"))
     verdict = "accepted" if r["accepted"] else "not accepted"
     out += [
         f"Tried because {r['why']}: the quasi-static selection{' and ' + ', '.join(r['pair']) if r.get('pair') else ''} "
@@ -107,7 +107,34 @@ def dynamic_rung(d: dict) -> list[str]:
     out += ["", f"Quasi-static answer: {r['quasi_static']['fault']}.", ""]
     if r.get("left_out"):
         out += [f"Left out with the dynamics on (not supported by the record): {', '.join(r['left_out'])}.", ""]
-    return out + housing_rung(r.get("housing_mode"))
+    return out + housing_rung(r.get("housing_mode")) + joint_search(r.get("joint"))
+
+
+def joint_search(j: dict | None) -> list[str]:
+    """The joint dynamic search (``dynamic_rung.joint``): the dynamic healthy model and each defect type fitted with
+    the operating point, the floor measured again, and whether a type replaced the answer."""
+    if not j:
+        return []
+    judged = j.get("with_roller_scatter") or j
+    fl = judged["floor"]
+    hof = j.get("healthy_over_final") or {}
+    out = [
+        "### The joint search: the operating point and each defect type with the dynamics on", "",
+        f"The dynamic healthy model ({judged['healthy']['model']}) leaves NRMSE {100 * judged['healthy']['nrmse']:.3g} %"
+        + (f" (BIC drop {hof['delta_bic']:.4g} over the final model before the search)" if hof else "")
+        + f"; the floor measured again on the best dynamic residual ({fl['measured_on']}): {fl['after_V']:.4g} V "
+          f"against {fl['before_V']:.4g} V before. {'A type replaced the answer' if j.get('replaced') else 'The answer is kept'}: "
+          f"{j.get('why', '')}.", "",
+        "| type | NRMSE | BIC drop over the dynamic healthy model | share of its misfit | passes the rule | identified |",
+        "|---|---|---|---|---|---|",
+    ]
+    rows = [(n, j["types"][n]) for n in j["ranked"]]
+    if j.get("with_roller_scatter"):
+        rows += [(f"{n} (with roller_scatter)", t) for n, t in j["with_roller_scatter"]["types"].items()]
+    for n, t in rows:
+        out.append(f"| {n} | {100 * t['nrmse']:.3g} % | {t['delta_bic']:.4g} | {100 * t['excess_explained']:.0f} % | "
+                   f"{'yes' if t['passes_rule'] else 'no'} | {'yes' if t['identified'] else 'no'} |")
+    return out + [""]
 
 
 def housing_rung(h: dict | None) -> list[str]:
