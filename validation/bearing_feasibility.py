@@ -6,8 +6,9 @@ slip 0-3 %, speed -3..+3 %, roller scatter 0-2 um, a groove 0.1-1.2 mm at any an
 two draws of three), makes the record with the dynamic LPM (0.5 s at 2550 Hz, 30 dB) and diagnoses it (the
 first ranking: ``diagnostics.max_steps`` 1; ``--max-steps 4`` the config's full ladder). Writes each draw's
 conditions, verdict and selection, the steps kept and those cut (each with the share of the misfit it explained),
-the families the lines rule reads, the fault's type and source, whether the dynamic rung was tried and accepted,
-and the diagnosis's CPU time, or its error, and the count of crashes.
+the families the lines rule reads, the fault's type, source, values and intervals, whether the dynamic rung was
+tried and accepted, the joint dynamic search's entry in short (:func:`joint_row`), and the diagnosis's CPU time,
+or its error, and the count of crashes.
 
     python validation/bearing_feasibility.py --draws 40 --out results/validation/bearing_feasibility.json \
         [--influence results/bearing/influence_line_healthy.csv]
@@ -103,15 +104,16 @@ def visibility(rig: dict, influence, hidden: dict, rec, index: int) -> dict:
     return out
 
 
-def joint_row(j: dict | None) -> dict | None:
+def joint_row(j: dict | None, said: list[str]) -> dict | None:
     """The joint dynamic search's entry (``dynamic_rung.joint``) in short: whether it replaced the diagnosis and why,
     the dynamic healthy model against the final one, each type's BIC drop, share and whether it passes and is
-    identified, the floor before and after, its CPU."""
+    identified, the floor before and after, its CPU (the console's line among ``said``)."""
     if not j:
         return None
     judged = j.get("with_roller_scatter") or j
+    cpu = [float(m.split()[2]) for m in said if m.startswith("joint search: ") and m.split()[3:5] == ["s", "CPU"]]
     return {"replaced": j.get("replaced"), "why": j.get("why"), "best": j.get("best"),
-            "healthy_over_final": j.get("healthy_over_final"), "cpu_s": j.get("cpu_s"),
+            "healthy_over_final": j.get("healthy_over_final"), "cpu_s": cpu[-1] if cpu else None,
             "floor_V": [judged["floor"]["before_V"], judged["floor"]["after_V"]],
             "healthy_nrmse": judged["healthy"]["nrmse"],
             "types": {n: {k: t[k] for k in ("delta_bic", "excess_explained", "passes_rule", "identified", "nrmse")}
@@ -129,6 +131,8 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=26)
     ap.add_argument("--max-steps", type=int, default=1,
                     help="diagnostics.max_steps (1: the first ranking; the config's 4: the full ladder)")
+    ap.add_argument("--joint", choices=["auto", "off"], default="auto",
+                    help="bearing_diagnosis.joint_search (off: the diagnosis without the joint dynamic search)")
     ap.add_argument("--first", type=int, default=0, help="the first draw (draw i is the same record in any run)")
     ap.add_argument("--visibility", action="store_true",
                     help="measure whether each record shows its defect and which model holds it, instead of the diagnosis")
@@ -137,6 +141,7 @@ def main() -> None:
     args = ap.parse_args()
     config = cfg.load()
     config["diagnostics"]["max_steps"] = args.max_steps
+    config["bearing_diagnosis"]["joint_search"] = args.joint
     influence = read_influence(args.influence) if args.influence else influence_from_config(config)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -171,7 +176,8 @@ def main() -> None:
                       f"engine floor {vis['engine_floor_over_sigma']:.2f} sigma", flush=True)
                 continue
             c0 = time.process_time()
-            d = SUBJECT.diagnose((rec, influence), rig)[1]
+            said: list[str] = []
+            d = SUBJECT.diagnose((rec, influence), rig, progress=said.append)[1]
             rung = d.get("dynamic_rung") or {}
             row.update(verdict=d["verdict"], selected=d["selected"], fault_type=d["fault"]["type"],
                        fault_source=d["fault"].get("source"), cpu_s=time.process_time() - c0,
@@ -179,7 +185,7 @@ def main() -> None:
                        dropped_steps=[[st.get("added"), st.get("excess_explained")] for st in d["dropped_steps"]],
                        lines=[[ev["type"], [[h["line"], h["excess_dB"]] for h in ev["lines"]]] for ev in d["fault"]["evidence"]],
                        dynamic_rung={"tried": rung.get("tried"), "accepted": rung.get("accepted")},
-                       fault_params=d["fault"]["params"], fault_ci95=d["fault"]["ci95"], joint=joint_row(rung.get("joint")))
+                       fault_params=d["fault"]["params"], fault_ci95=d["fault"]["ci95"], joint=joint_row(rung.get("joint"), said))
         except Exception as e:  # noqa: BLE001 - what this script counts
             row.update(verdict=None, error=f"{type(e).__name__}: {e}")
         rows.append(row)

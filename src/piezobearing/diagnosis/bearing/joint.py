@@ -439,9 +439,12 @@ def joint_rung(d, problem, settings, progress=None, final_steps: int | None = No
 
 def joint_wanted(d, config: dict) -> bool:
     """Whether the joint search is tried on ``d`` (the quasi-static diagnosis, after the dynamic rung where it ran):
-    with ``bearing_diagnosis.dynamic_rung: auto`` (the search is part of the dynamic rung) where ``d`` is still
+    with ``bearing_diagnosis.dynamic_rung`` and ``joint_search`` both ``auto`` (the search is part of the dynamic
+    rung; ``joint_search: off`` leaves it out alone) where ``d`` is still
     ``unexplained``, whatever it selects (the rung carries one defect type: the quasi-static search's or the lines
     rule's). Whether the shaft's dynamics take the structure ``d`` leaves is then judged by :func:`joint_rung` (the
     dynamic healthy model against ``d``'s final model), and a type replaces ``d``'s answer only where its BIC is
     lower than ``d``'s final model's."""
-    return config["bearing_diagnosis"].get("dynamic_rung", "auto") != "off" and d.verdict == "unexplained"
+    bd = config["bearing_diagnosis"]
+    return bd.get("dynamic_rung", "auto") != "off" and bd.get("joint_search", "auto") != "off" \
+        and d.verdict == "unexplained"

@@ -9,7 +9,7 @@ passages as segments, and the representations (:mod:`.representations`);
 it hides effects in a synthetic record and states the user's answer, the
 ``fault`` entry of ``diagnosis.json`` (:mod:`.answer`). The noise floor and its
 pre-pass are in :mod:`.floor`; the dynamic rung and the defects a record cannot
-pin down in :mod:`.rung`.
+pin down in :mod:`.rung`; the joint dynamic search in :mod:`.joint`.
 """
 
 from __future__ import annotations
@@ -37,9 +37,9 @@ from .answer import fault_answer
 from .effects import CATALOGUE, RUNGS
 from .effects.shaft_speed import roller_pass_line_Hz
 from .floor import REMEASURE_BELOW, floor_prepass, noise_floor
+from .joint import joint_rung, joint_wanted
 from .model import BearingModel, RigRecord
 from .representations import REPRESENTATIONS, passages
-from .joint import joint_rung, joint_wanted
 from .rung import dynamic_rung, housing_rung_wanted, housing_scan, rung_wanted, without_unidentified
 
 #: Phases of the baseline's start scan over one roller pitch.
@@ -212,7 +212,9 @@ class BearingSubject:
         (``fault.unidentified`` names it). Where the quasi-static verdict is ``unexplained`` with a fault's
         lines or a defect selected, the dynamic rung is tried (:func:`dynamic_rung`; ``dynamic_rung`` of the
         dict says what it gave); where it is accepted and the record is still ``unexplained``, the housing mode's
-        rung above it (:func:`housing_rung_wanted`; ``dynamic_rung.housing_mode``).
+        rung above it (:func:`housing_rung_wanted`; ``dynamic_rung.housing_mode``). Where the record is still
+        ``unexplained`` after them, the joint dynamic search (:func:`~.joint.joint_wanted`, :func:`~.joint.joint_rung`:
+        the operating point and each defect type fitted together with the shaft's dynamics; ``dynamic_rung.joint``).
         """
         settings = DiagnosticsSettings.from_config(config.get("diagnostics"))
         rec, rate = model_rate(obs[0], config["bearing_diagnosis"]["max_model_rate_Hz"])
@@ -262,8 +264,7 @@ class BearingSubject:
                     c0 = time.process_time()
                     note("joint search: the operating point and each defect type with the shaft's dynamics")
                     d, rung["joint"] = joint_rung(d, problem, settings, progress, final_steps)
-                    rung["joint"]["cpu_s"] = time.process_time() - c0
-                    note(f"joint search: {rung['joint']['cpu_s']:.1f} s CPU "
+                    note(f"joint search: {time.process_time() - c0:.1f} s CPU "
                          f"({'diagnosis replaced' if rung['joint']['replaced'] else 'diagnosis kept'})")
         answer = self.answer(d)
         answer["fault"]["unidentified"] = dropped
