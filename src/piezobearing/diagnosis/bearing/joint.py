@@ -264,6 +264,25 @@ def joint_search(d, settings, progress=None) -> tuple[dict, dict]:
         fits[name] = f
     types = [n for n in fits if n in FAULT_TYPES]
     judged = judge(healthy, {n: fits[n] for n in types}, floor, rec, settings)
+    confirm = with_scatter(judged, model, healthy, fits, rec, v, floor, settings, note)
+    best = (confirm or judged)["ranked"][0] if (confirm or judged)["ranked"] else None
+    final = confirm or judged
+    ok = bool(best and final["types"][best]["passes_rule"] and final["types"][best]["identified"])
+    fits["floor"] = final.pop("floor_fit")
+    judged.pop("floor_fit", None)
+    entry = {
+        **judged, "best": best, "accepted": ok, "with_roller_scatter": confirm,
+        "grid_points": len(grid), "screen_points": len(points), "evaluations_screened": evaluations,
+        "starts_screened": screened,
+    }
+    return fits, entry
+
+
+def with_scatter(judged: dict, model: BearingModel, healthy: ModelFit, fits: dict, rec, v, floor, settings,
+                 note) -> dict | None:
+    """Every type of ``judged`` with a BIC drop above the rule's, and the healthy model, refitted with the rollers'
+    scatter (``fits`` updated), judged again (:func:`judge`); None where no type is a contender or the model has the
+    scatter already."""
     contenders = [n for n in judged["ranked"] if judged["types"][n]["delta_bic"] > settings.min_delta_bic]
     confirm = None
     if contenders and "roller_scatter" not in model.names:
@@ -291,17 +310,7 @@ def joint_search(d, settings, progress=None) -> tuple[dict, dict]:
                 pass
             confirm = judge(hs, typed, floor, rec, settings)
             fits.update(typed, healthy=hs)
-    best = (confirm or judged)["ranked"][0] if (confirm or judged)["ranked"] else None
-    final = confirm or judged
-    ok = bool(best and final["types"][best]["passes_rule"] and final["types"][best]["identified"])
-    fits["floor"] = final.pop("floor_fit")
-    judged.pop("floor_fit", None)
-    entry = {
-        **judged, "best": best, "accepted": ok, "with_roller_scatter": confirm,
-        "grid_points": len(grid), "screen_points": len(points), "evaluations_screened": evaluations,
-        "starts_screened": screened,
-    }
-    return fits, entry
+    return confirm
 
 
 def _with(f: ModelFit, effect, rec, v, floor, settings) -> ModelFit | None:
