@@ -455,5 +455,5 @@ def joint_wanted(d, config: dict) -> bool:
     dynamic healthy model against ``d``'s final model), and a type replaces ``d``'s answer only where its BIC is
     lower than ``d``'s final model's."""
     bd = config["bearing_diagnosis"]
-    return bd.get("dynamic_rung", "auto") != "off" and bd.get("joint_search", "auto") != "off" \
+    return bd.get("dynamic_rung", "auto") != "off" and bd.get("joint_search", "off") != "off" \
         and d.verdict == "unexplained"

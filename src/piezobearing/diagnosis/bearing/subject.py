@@ -213,7 +213,7 @@ class BearingSubject:
         lines or a defect selected, the dynamic rung is tried (:func:`dynamic_rung`; ``dynamic_rung`` of the
         dict says what it gave); where it is accepted and the record is still ``unexplained``, the housing mode's
         rung above it (:func:`housing_rung_wanted`; ``dynamic_rung.housing_mode``). Where the record is still
-        ``unexplained`` after them, the joint dynamic search (:func:`~.joint.joint_wanted`, :func:`~.joint.joint_rung`:
+        ``unexplained`` after them and ``joint_search`` is ``auto``, the joint dynamic search (:func:`~.joint.joint_wanted`, :func:`~.joint.joint_rung`:
         the operating point and each defect type fitted together with the shaft's dynamics; ``dynamic_rung.joint``).
         """
         settings = DiagnosticsSettings.from_config(config.get("diagnostics"))
