@@ -39,6 +39,7 @@ from ..selection import Candidate, accepted, step_entry, strength
 from .answer import HEALTHY_GRID, HEALTHY_STARTS
 from .effects import CATALOGUE, FAULT_TYPES
 from .effects.outer_race_defect import TRIAL_WIDTH_M
+from .effects.shaft_dynamics import LaggedMatch
 from .floor import noise_floor
 from .model import BearingModel
 from .representations import fitted_kinematics
@@ -120,9 +121,6 @@ def screen(effect, model: BearingModel, base: dict, points: list[dict], rec, v: 
 
 #: The grooves :func:`place` places, with their angle's key.
 PLACED = {"outer_race_defect": "outer_defect_angle_rad", "inner_race_defect": "inner_defect_angle_rad"}
-#: Time shifts :func:`place` resolves: this many per sample (as
-#: :data:`~.effects.shaft_dynamics.UPSAMPLE`: the shaft's ring spans about one sample at 2550 Hz).
-UPSAMPLE = 16
 #: Starts :func:`place` returns per operating point.
 PLACE_KEEP = 3
 
@@ -135,7 +133,7 @@ def place(name: str, model: BearingModel, values: dict, healthy_V: np.ndarray, r
     event per meeting of the groove and a roller, its dip and the shaft's ring. A groove dth further on meets the
     rollers dth / omega later (omega: the cage's angular speed for the stationary outer race, the shaft's less the
     cage's, negated, for the inner race turning with the shaft): the residual ``v - healthy_V`` is cross-correlated
-    with each a_k's events at lags within half a roller pitch, resolved to 1/:data:`UPSAMPLE` of a sample (the misfit
+    with each a_k's events at lags within half a roller pitch, resolved to 1/:data:`~.effects.shaft_dynamics.UPSAMPLE` of a sample (:class:`~.effects.shaft_dynamics.LaggedMatch`; the misfit
     of an inner groove rises from 1.0 to 3.3 times its least 0.05 rad off its angle: a fold of the residual over the
     roller-to-groove angle does not place it finely enough). Each a_k's best lag with a positive amplitude gives an
     angle and a width (the dip grows about as the width squared); the :data:`PLACE_KEEP` that explain most of the
@@ -147,13 +145,7 @@ def place(name: str, model: BearingModel, values: dict, healthy_V: np.ndarray, r
     kin = fitted_kinematics(values, rec)
     omega_c = 2 * np.pi * kin["frequencies"]["ftf_Hz"]
     omega = omega_c if name == "outer_race_defect" else -(2 * np.pi * kin["shaft_Hz"] - omega_c)
-    r = v - healthy_V
-    r = r - r.mean()
-    n = r.size
-    big = n * UPSAMPLE
-    spec_r = np.fft.rfft(r)
-    lag_s = np.fft.fftfreq(big, 1.0 / big) * rec.dt_s / UPSAMPLE
-    near = np.abs(lag_s * omega) <= 0.5 * pitch
+    match = LaggedMatch(v - healthy_V, rec.dt_s, omega, pitch)
     scored = []
     for k in range(rig.geometry.n_rollers):
         ak = float(np.angle(np.exp(1j * k * pitch)))
@@ -163,17 +155,12 @@ def place(name: str, model: BearingModel, values: dict, healthy_V: np.ndarray, r
             dv = model.simulate({**values, key: ak, wkey: TRIAL_WIDTH_M}, rec) - healthy_V
         except InfeasibleError:
             continue
-        dv = dv - dv.mean()
-        energy = float(dv @ dv)
-        if energy <= 0:
+        best = match(dv)
+        if best is None:
             continue
-        prod = np.zeros(big // 2 + 1, dtype=complex)
-        prod[: n // 2 + 1] = spec_r * np.conj(np.fft.rfft(dv))
-        corr = np.fft.irfft(prod, big) * UPSAMPLE
-        j = np.flatnonzero(near)[int(np.argmax(corr[near]))]
-        amp = float(corr[j]) / energy
+        lag, amp, energy = best
         if amp > 0:
-            angle = float(np.angle(np.exp(1j * (ak + lag_s[j] * omega))))
+            angle = float(np.angle(np.exp(1j * (ak + lag * omega))))
             scored.append((amp * amp * energy, {key: angle, wkey: float(np.clip(TRIAL_WIDTH_M * np.sqrt(amp),
                                                                                   0.05e-3, 2.9e-3))}))
     scored.sort(key=lambda x: -x[0])

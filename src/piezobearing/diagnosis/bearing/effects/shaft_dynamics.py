@@ -108,6 +108,33 @@ SAME_PLACE_RAD = 0.05
 UPSAMPLE = 16
 
 
+class LaggedMatch:
+    """The best lag of an event's voltage against a residual: their circular cross-correlation, resolved to
+    1/:data:`UPSAMPLE` of a sample (zero-padded spectra), at the lags a groove within half a roller pitch of its start
+    gives (``|lag omega| <= pitch / 2``; ``omega`` the groove's angular speed relative to the rollers [rad/s])."""
+
+    def __init__(self, residual: np.ndarray, dt_s: float, omega: float, pitch: float):
+        r = residual - residual.mean()
+        self.n = r.size
+        self.big = self.n * UPSAMPLE
+        self.spec_r = np.fft.rfft(r)
+        self.lag_s = np.fft.fftfreq(self.big, 1.0 / self.big) * dt_s / UPSAMPLE  # the lag of each upsampled bin [s]
+        self.near = np.abs(self.lag_s * omega) <= 0.5 * pitch
+
+    def __call__(self, dv: np.ndarray) -> tuple[float, float, float] | None:
+        """(lag [s], the event's least-squares amplitude there, the event's energy) at the largest correlation
+        among the near lags; None where the event ``dv`` (its mean taken out) has no energy."""
+        dv = dv - dv.mean()
+        energy = float(dv @ dv)
+        if energy <= 0:
+            return None
+        prod = np.zeros(self.big // 2 + 1, dtype=complex)
+        prod[: self.n // 2 + 1] = self.spec_r * np.conj(np.fft.rfft(dv))
+        corr = np.fft.irfft(prod, self.big) * UPSAMPLE  # sum_t r(t) dv(t - lag) (circular), sampled at 1/UPSAMPLE
+        j = np.flatnonzero(self.near)[int(np.argmax(corr[self.near]))]
+        return float(self.lag_s[j]), float(corr[j]) / energy, energy
+
+
 def place_groove(ctx, own: dict, keep: int = 1) -> list[dict]:
     """Starts of an outer-race groove for the dynamic chain, found by cross-correlation: ``keep`` dicts.
 
@@ -129,31 +156,20 @@ def place_groove(ctx, own: dict, keep: int = 1) -> list[dict]:
     a0 = float(values["outer_defect_angle_rad"])
     w = max(float(values["outer_defect_width_m"]), TRIAL_WIDTH_M)
     healthy = chain.voltage(rig, {**values, "outer_defect_width_m": 0.0})
-    r = ctx.voltage_V - healthy
-    r = r - r.mean()
-    n = r.size
-    big = n * UPSAMPLE
-    spec_r = np.fft.rfft(r)
     omega = 2 * np.pi * fitted_kinematics(values, ctx.record)["frequencies"]["ftf_Hz"]
-    lag_s = np.fft.fftfreq(big, 1.0 / big) * ctx.record.dt_s / UPSAMPLE  # the lag of each upsampled bin [s]
-    near = np.abs(lag_s * omega) <= 0.5 * pitch
+    match = LaggedMatch(ctx.voltage_V - healthy, ctx.record.dt_s, omega, pitch)
     scored = []
     for k in range(-6, 7):
         ak = a0 + k * pitch
         if abs(ak) > np.radians(100.0):
             continue
         dv = chain.voltage(rig, {**values, "outer_defect_angle_rad": ak, "outer_defect_width_m": w}) - healthy
-        dv = dv - dv.mean()
-        energy = float(dv @ dv)
-        if energy <= 0:
+        best = match(dv)
+        if best is None:
             continue
-        prod = np.zeros(big // 2 + 1, dtype=complex)
-        prod[: n // 2 + 1] = spec_r * np.conj(np.fft.rfft(dv))
-        corr = np.fft.irfft(prod, big) * UPSAMPLE  # sum_t r(t) dv(t - lag) (circular), sampled at 1/UPSAMPLE
-        j = np.flatnonzero(near)[int(np.argmax(corr[near]))]
-        amp = float(corr[j]) / energy
+        lag, amp, energy = best
         if amp > 0:
-            scored.append((amp * amp * energy, {**own, "outer_defect_angle_rad": float(ak + lag_s[j] * omega),
+            scored.append((amp * amp * energy, {**own, "outer_defect_angle_rad": float(ak + lag * omega),
                                                 "outer_defect_width_m": float(np.clip(w * np.sqrt(amp), 0.05e-3, 2.9e-3))}))
     scored.sort(key=lambda x: -x[0])
     moved = [t for _, t in scored if abs(t["outer_defect_angle_rad"] - a0) > SAME_PLACE_RAD][:2]
