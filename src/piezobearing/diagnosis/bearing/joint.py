@@ -19,7 +19,7 @@ fits instead, with ``shaft_dynamics`` on:
    a quasi-static residual by 1.8-6.6 sigma on the feasibility draws' inner grooves);
 4. the types ranked by their BIC on that floor; the best accepted where it passes the engine's selection rule over
    the dynamic healthy model (:func:`~piezobearing.diagnosis.selection.accepted`) and is identified (its width's
-   95 % interval excludes zero, its angle's does not span the circle, :func:`.rung.identified`).
+   95 % interval excludes zero, its angle's does not span the circle, :func:`.rung.unidentified_reason`).
 
 The floor is white (``NoiseFloor.input_noise`` 0 for a voltage record): a fit's values do not depend on its level,
 and a chi2 on the floor measured again is the fit's chi2 times the ratio of the variances.
@@ -43,7 +43,7 @@ from .effects.shaft_dynamics import LaggedMatch
 from .floor import noise_floor
 from .model import BearingModel
 from .representations import fitted_kinematics
-from .rung import RUNG_PROFILE_EVALUATIONS, unidentified_defects
+from .rung import RUNG_PROFILE_EVALUATIONS, unidentified_defects, unidentified_reason
 
 #: The grid points (of :data:`~.answer.HEALTHY_GRID`'s 30, best first by the dynamic healthy chain's misfit) each
 #: defect's starts are scanned at, besides the dynamic healthy fit's own point. A cost choice: each point costs
@@ -336,7 +336,7 @@ def judge(healthy: ModelFit, typed: dict, floor, rec, settings) -> dict:
         out[n] = {
             "nrmse": f.nrmse, "chi2": chi2, "bic": float(bic), "delta_bic": float(h_bic - bic),
             "strength": strength(float(h_bic - bic)), "excess_explained": share, "passes_rule": accepted(c, settings),
-            "identified": identified(n, ci),
+            "identified": unidentified_reason(n, ci) is None,
             "values": {k: f.values[k] for k in f.values if "defect" in k or k in OPERATING_VALUES},
             "ci95": {wkey: ci.get(wkey), akey: ci.get(akey)},
         }
@@ -353,19 +353,6 @@ def judge(healthy: ModelFit, typed: dict, floor, rec, settings) -> dict:
 #: The operating point's values the ``joint`` entry reports beside a defect's.
 OPERATING_VALUES = ("radial_clearance_m", "radial_load_N", "load_share_ratio", "speed_deviation_ratio",
                     "cage_slip_ratio", "shaft_mass_kg", "bearing_damping_N_s_per_m")
-
-
-def identified(name: str, ci: dict) -> bool:
-    """Whether a defect's Jacobian intervals place it: its width's 95 % interval excludes zero and (but for a
-    roller's pit, whose spin angle is any) its angle's does not span the circle (as :func:`.rung.unidentified_defects`
-    judges a selected defect)."""
-    _, wkey, akey = FAULT_TYPES[name]
-    w, a = ci.get(wkey), ci.get(akey)
-    if w is None or w[0] is None or not np.all(np.isfinite(w)) or w[0] <= 0.0:
-        return False
-    if name == "rolling_element_defect":
-        return True
-    return bool(a is not None and a[0] is not None and np.all(np.isfinite(a)) and a[1] - a[0] < 2 * np.pi)
 
 
 def joint_rung(d, problem, settings, progress=None, final_steps: int | None = None):
@@ -392,7 +379,8 @@ def joint_rung(d, problem, settings, progress=None, final_steps: int | None = No
     h_bic = h_chi2 + h.n_free * np.log(h.result.n_data)
     drop = d_chi2 - h_chi2
     share = float(np.clip(drop / max(d_chi2 - (d.final.result.n_data - d.final.n_free), drop, 1e-12), 0.0, 1.0))
-    passes = bool(d_bic - h_bic > settings.min_delta_bic and share >= settings.min_share)
+    hc = Candidate(CATALOGUE["shaft_dynamics"], h, float(d_bic - h_bic), share)
+    passes = accepted(hc, settings)
     entry["healthy_over_final"] = {"delta_bic": float(d_bic - h_bic), "excess_explained": share, "passes_rule": passes,
                                    "final_bic": float(d_bic)}
     best = entry["best"]
@@ -413,7 +401,6 @@ def joint_rung(d, problem, settings, progress=None, final_steps: int | None = No
     rp = replace(problem, floor=fl, profile_evaluations=RUNG_PROFILE_EVALUATIONS)
     added = [n for n in f.model.names if n not in d.final.model.names]
     c = Candidate(CATALOGUE[best], f, float(judged["types"][best]["delta_bic"]), judged["types"][best]["excess_explained"])
-    hc = Candidate(CATALOGUE["shaft_dynamics"], h, float(d_bic - h_bic), share)
     dj = replace(d, problem=rp, final=f, fits=[*d.fits, h, f],
                  steps=[*d.steps, step_entry(h, " + ".join(n for n in h.model.names if n not in d.final.model.names), hc),
                         step_entry(f, best, c)],

@@ -38,17 +38,24 @@ def unidentified_defects(d) -> list[dict]:
     for name in d.selected:
         if name not in FAULT_TYPES:
             continue
-        _, wkey, pkey = FAULT_TYPES[name]
-        w, a = ci.get(wkey), ci.get(pkey)
-        reason = None
-        if w is None or w[0] is None or not np.all(np.isfinite(w)) or w[0] <= 0.0:
-            reason = f"the interval of {wkey} holds zero"
-        elif name != "rolling_element_defect" and (a is None or a[0] is None or not np.all(np.isfinite(a))
-                                                   or a[1] - a[0] >= FULL_TURN_RAD):
-            reason = f"the interval of {pkey} spans the circle"
+        reason = unidentified_reason(name, ci)
         if reason:
-            out.append({"effect": name, "ci95": {wkey: w, pkey: a}, "reason": reason})
+            _, wkey, pkey = FAULT_TYPES[name]
+            out.append({"effect": name, "ci95": {wkey: ci.get(wkey), pkey: ci.get(pkey)}, "reason": reason})
     return out
+
+
+def unidentified_reason(name: str, ci: dict) -> str | None:
+    """Why the 95 % intervals ``ci`` do not place the defect ``name`` (a key of ``FAULT_TYPES``): its width's holds
+    zero (or is missing), or its angle's spans the circle (a roller's pit: any spin); None where they place it."""
+    _, wkey, pkey = FAULT_TYPES[name]
+    w, a = ci.get(wkey), ci.get(pkey)
+    if w is None or w[0] is None or not np.all(np.isfinite(w)) or w[0] <= 0.0:
+        return f"the interval of {wkey} holds zero"
+    if name != "rolling_element_defect" and (a is None or a[0] is None or not np.all(np.isfinite(a))
+                                             or a[1] - a[0] >= FULL_TURN_RAD):
+        return f"the interval of {pkey} spans the circle"
+    return None
 
 
 def without_unidentified(d, problem: Problem, settings, progress=None, rounds: int = 2):
