@@ -120,7 +120,7 @@ def joint_search(j: dict | None) -> list[str]:
     hof = j.get("healthy_over_final") or {}
     out = [
         "### The joint search: the operating point and each defect type with the dynamics on", "",
-        f"The dynamic healthy model ({judged['healthy']['model']}) leaves NRMSE {100 * judged['healthy']['nrmse']:.3g} %"
+        f"The dynamic healthy model ({judged['healthy']['model']}) leaves NRMSE {s.pct(judged['healthy']['nrmse'])}"
         + (f" (BIC drop {hof['delta_bic']:.4g} over the final model before the search)" if hof else "")
         + f"; the floor measured again on the best dynamic residual ({fl['measured_on']}): {fl['after_V']:.4g} V "
           f"against {fl['before_V']:.4g} V before. {'A type replaced the answer' if j.get('replaced') else 'The answer is kept'}: "
@@ -132,7 +132,7 @@ def joint_search(j: dict | None) -> list[str]:
     if j.get("with_roller_scatter"):
         rows += [(f"{n} (with roller_scatter)", t) for n, t in j["with_roller_scatter"]["types"].items()]
     for n, t in rows:
-        out.append(f"| {n} | {100 * t['nrmse']:.3g} % | {t['delta_bic']:.4g} | {100 * t['excess_explained']:.0f} % | "
+        out.append(f"| {n} | {s.pct(t['nrmse'])} | {t['delta_bic']:.4g} | {100 * t['excess_explained']:.0f} % | "
                    f"{'yes' if t['passes_rule'] else 'no'} | {'yes' if t['identified'] else 'no'} |")
     return out + [""]
 
