@@ -69,7 +69,7 @@ def seconds_range(low: float, high: float) -> str:
 
 
 def ratio(x: float) -> str:
-    return f"{x:.2g}x" if x < 10 else f"{x:.0f}x"
+    return f"{x:.3g}x" if x < 10 else f"{x:.0f}x"
 
 
 def megabytes(x: float) -> str:
@@ -311,16 +311,23 @@ def _comparison_kernels(d: dict) -> tuple[str, str, list[dict]]:
 
 
 def _startup(d: dict) -> tuple[str, str, list[dict]]:
-    """Start-up against a previous revision: ``piezobearing detect`` on one record, and the package imports of
-    every workflow script (what each job of its rule pays before its work), CPU seconds."""
+    """Start-up against a previous revision: ``piezobearing detect`` on one record, the package imports of
+    every workflow script (what each job of its rule pays before its work) and a dry run of the CI config,
+    CPU seconds."""
     det = d["commands"]["piezobearing detect (10 s at 12 kHz)"]
     jobs = d["job_imports_cpu_s"]
     text = (f"`piezobearing detect` on {d['record']}.mat: {seconds(det['new']['cpu_s'])} CPU against "
             f"{seconds(det['old']['cpu_s'])} ({ratio(det['ratio_cpu'])}); the package imports of the "
             f"{len(d['job_imports'])} workflow scripts, summed: {seconds(jobs['new'])} CPU against "
             f"{seconds(jobs['old'])} ({ratio(jobs['old'] / jobs['new'])})")
-    return text, "–", [q("detect, CPU", det["new"]["cpu_s"], "s"), q("detect, CPU before", det["old"]["cpu_s"], "s"),
-                       q("job imports, CPU", jobs["new"], "s"), q("job imports, CPU before", jobs["old"], "s")]
+    quantities = [q("detect, CPU", det["new"]["cpu_s"], "s"), q("detect, CPU before", det["old"]["cpu_s"], "s"),
+                  q("job imports, CPU", jobs["new"], "s"), q("job imports, CPU before", jobs["old"], "s")]
+    dry = d["commands"].get("snakemake -n (CI config, nothing built)")
+    if dry is not None:
+        text += (f"; `snakemake -n --configfile config/ci.yaml`, nothing built: {seconds(dry['new']['cpu_s'])} CPU "
+                 f"against {seconds(dry['old']['cpu_s'])} ({ratio(dry['ratio_cpu'])})")
+        quantities += [q("dry run, CPU", dry["new"]["cpu_s"], "s"), q("dry run, CPU before", dry["old"]["cpu_s"], "s")]
+    return text, "–", quantities
 
 
 ROWS = [
@@ -374,9 +381,10 @@ ROWS = [
         "command_tune_cwru.json", "`python benchmarks/bench_command.py tune_cwru -- python scripts/tune_cwru.py "
         "../shared/data/cwru_fan_end --out results/validation`", _command_row),
     Row("startup", "start-up of `piezobearing detect` (a 10 s, 12 kHz record: reading, detection, detection.json, "
-        "report.md and detection.png) and of the workflow's jobs, against the revision before the detect "
-        "command's lighter imports and transforms (`--old`)", "startup.json",
-        "`python benchmarks/bench_startup.py --old 729f980 --data ../shared/data/cwru_fan_end --runs 5`", _startup),
+        "report.md and detection.png), of the workflow's jobs and of a dry run, against the revision before the "
+        "scorecard's jobs dropped the sensor FEM and the config files were read with libyaml (`--old`)",
+        "startup.json",
+        "`python benchmarks/bench_startup.py --old 7303243 --data ../shared/data/cwru_fan_end --runs 7`", _startup),
     Row("detect_record", "envelope detector (`piezobearing detect`) on a 12 kHz record", "detect_record.json",
         "`python benchmarks/bench_detect_record.py`", _detect_record),
     Row("baseline", "baseline detector, 1 s record, CPU on one BLAS thread", "detector.json",
