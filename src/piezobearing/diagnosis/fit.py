@@ -86,7 +86,7 @@ class ModelFit:
         empty = np.zeros(0)
         return replace(
             self,
-            result=replace(self.result, residual=empty),
+            result=replace(self.result, residual=empty, jacobian=None),
             model_V=empty,
             residual_V=empty,
             whitened=empty,
