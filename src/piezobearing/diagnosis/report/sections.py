@@ -490,7 +490,25 @@ def intervals(iv: dict) -> list[str]:
                 f"{rise} x D | {i['method']} |"
             )
         out.append("")
-    return out
+    return out + correlation_factors(iv)
+
+
+def correlation_factors(iv: dict) -> list[str]:
+    """The factors the intervals were widened by for the residual's autocorrelation (``correlation_factor`` of
+    each interval; none: nothing said)."""
+    f = {k: i["correlation_factor"] for k, i in iv.items() if i.get("correlation_factor") is not None}
+    if not f:
+        return []
+    top = max(f, key=f.get)
+    wide = sorted((k for k in f if f[k] > 1.0), key=lambda k: -f[k])
+    listed = ", ".join(f"`{k}` {f[k]:.3g}" for k in wide[:6]) or "none above 1"
+    return [
+        f"Each interval is widened for the residual's autocorrelation: its variance times the factor of the "
+        f"parameter's HAC (Newey-West) variance over the Gauss-Newton one, read from the whitened residual where "
+        f"the parameter's Jacobian column lives (1: a white residual there; the half-width grows by its square "
+        f"root). Largest: `{top}` {f[top]:.3g}; above 1: {listed}.",
+        "",
+    ]
 
 
 def method(d: dict, fit_line: str, tests_line_: str) -> list[str]:
