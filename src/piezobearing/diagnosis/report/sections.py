@@ -468,6 +468,7 @@ def intervals(iv: dict) -> list[str]:
     """How each 95% interval of the final fit was found: the Jacobian's (checked) or the profile likelihood's."""
     if not iv:
         return []
+    factors = correlation_factors(iv)
     prof = {k: i for k, i in iv.items() if i["method"] != "jacobian (checked)"}
     out = [
         f"95% intervals of the final fit: {len(iv) - len(prof)} of {len(iv)} from the Jacobian, checked (chi2 "
@@ -490,7 +491,7 @@ def intervals(iv: dict) -> list[str]:
                 f"{rise} x D | {i['method']} |"
             )
         out.append("")
-    return out + correlation_factors(iv)
+    return out + factors
 
 
 def correlation_factors(iv: dict) -> list[str]:
