@@ -1,14 +1,18 @@
 """Start-up of the package and of ``piezobearing detect``: a previous revision beside this checkout.
 
-Three commands, each in a fresh process, the two sides alternating (old, new, old, new, ...) so that both see
-the same machine: ``import piezobearing``, ``piezobearing detect --help``, and ``piezobearing detect`` on a 10 s,
-12 kHz CWRU record (reading the .mat file, detecting, writing detection.json, report.md and detection.png). Per
+Four commands, each in a fresh process, the two sides alternating (old, new, old, new, ...) so that both see
+the same machine: ``import piezobearing``, ``piezobearing detect --help``, ``piezobearing detect`` on a 10 s,
+12 kHz CWRU record (reading the .mat file, detecting, writing detection.json, report.md and detection.png), and
+``snakemake -n --configfile config/ci.yaml`` in each side's own tree with nothing built (the start every dry run,
+every workflow test and every run of the workflow pays: Snakemake's import, the Snakefile, the config's reading
+and validation, the rules' code hashes, the DAG). Per
 command and side: the median wall and CPU (user + system of the child) seconds over the runs, and their ratio
 old / new; the heavy dependencies each side's ``import piezobearing`` loads (from ``sys.modules``); and each
 workflow script's package imports (the start-up every job of its rule pays), in CPU seconds, and their sum.
 
 The old side is ``--old REF`` (a git revision, exported to a temporary folder) run with this environment's
-Python and its ``src`` first on ``PYTHONPATH``. On a loaded machine the wall seconds grow and the CPU seconds
+Python and its ``src`` first on ``PYTHONPATH``; the new side is this checkout (the dry run: its committed
+``HEAD``, exported beside the old). On a loaded machine the wall seconds grow and the CPU seconds
 much less: quote the CPU and the ratio.
 
     python benchmarks/bench_startup.py --old REV [--data ../shared/data/cwru_fan_end] [--runs 7]
@@ -41,14 +45,18 @@ HEAVY = ("numpy", "scipy", "pandas", "matplotlib", "sfepy", "numba", "h5py", "py
 RECORD = "fe05"
 
 
-def timed(argv: list[str], env: dict) -> tuple[float, float]:
-    """Wall and CPU (user + system) seconds of ``argv`` in a child process."""
+def timed(argv: list[str], env: dict, cwd: Path | None = None) -> tuple[float, float]:
+    """Wall and CPU (user + system) seconds of ``argv`` in a child process (in folder ``cwd``)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    subprocess.run(argv, env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    subprocess.run(argv, env=env, cwd=cwd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+#: The dry run's label: run in each side's own exported tree (the other commands run here).
+DRY_RUN = "snakemake -n (CI config, nothing built)"
 
 
 def commands(data: Path | None, out: Path) -> dict[str, list[str]]:
@@ -62,6 +70,7 @@ def commands(data: Path | None, out: Path) -> dict[str, list[str]]:
         out_cmds["piezobearing detect (10 s at 12 kHz)"] = [
             *cli, "detect", str(data / f"{RECORD}.mat"), "--config", str(data / f"{RECORD}.yaml"), "--out", str(out),
         ]
+    out_cmds[DRY_RUN] = [str(Path(py).parent / "snakemake"), "-n", "--configfile", "config/ci.yaml"]
     return out_cmds
 
 
@@ -109,13 +118,17 @@ def main() -> None:
         tmp = Path(tmp)
         old_src = export_revision(args.old, tmp / "old") / "src"
         sides = {name: {**os.environ, "PYTHONPATH": str(src)} for name, src in (("old", old_src), ("new", ROOT / "src"))}
+        trees = {"old": tmp / "old", "new": export_revision("HEAD", tmp / "new")}
         rows = {}
         for label, argv in commands(data, tmp / "detect").items():
             runs: dict[str, list[tuple[float, float]]] = {"old": [], "new": []}
             for i in range(args.runs + 1):
                 for side, env in sides.items():
                     shutil.rmtree(tmp / "detect", ignore_errors=True)
-                    t = timed(argv, env)
+                    if label == DRY_RUN:  # the tree's own package, Snakefile and config
+                        t = timed(argv, {**env, "PYTHONPATH": str(trees[side] / "src")}, trees[side])
+                    else:
+                        t = timed(argv, env)
                     if i:  # the first round warms the caches (bytecode, numba, the file)
                         runs[side].append(t)
             med = {side: {"wall_s": statistics.median(w for w, _ in r), "cpu_s": statistics.median(c for _, c in r)}

@@ -17,6 +17,7 @@ import pandas as pd
 from ..config import paper
 from . import fem
 from .calibration import SensorCircuit, frequency_response
+from .errors import SensorFemError
 from .materials import (
     adhesive_from_config,
     alumina_from_config,
@@ -34,10 +35,6 @@ PAPER_FIRST_RESONANCE_HZ = paper.value("first_resonance_Hz")
 PAPER_BAND_LOW_HZ = paper.value("linear_from_Hz")
 PAPER_BAND_HIGH_HZ = paper.value("band_high_Hz")
 PAPER_REFERENCE_SENSITIVITY_V_PER_N = paper.value("reference_sensitivity_V_per_N")
-
-
-class SensorFemError(ValueError):
-    """A bad input file or config value of the sensor FEM stages."""
 
 
 # --------------------------------------------------------------------------- parameters

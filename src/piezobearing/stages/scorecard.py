@@ -11,7 +11,7 @@ from ..scorecard import bearing as bearing_rows
 from ..scorecard import calibration as calibration_rows
 from ..scorecard import sensor_fem as sensor_fem_rows
 from ..scorecard import signals as signals_rows
-from ..sensor.analysis import SensorFemError
+from ..sensor.errors import SensorFemError
 from .calibration import nominal_circuit
 
 __all__ = ["assemble", "scorecard_bearing", "scorecard_calibration", "scorecard_sensor_fem", "scorecard_signals"]
@@ -45,7 +45,6 @@ def scorecard_calibration(
 
 def scorecard_sensor_fem(modal_json: str, band_json: str, convergence_csv: str, out_csv: str) -> None:
     """Write results/scorecard/sensor_fem.csv (:mod:`piezobearing.scorecard.sensor_fem`)."""
-    # here: the sensor FEM (scipy.sparse) is 0.3 s of every scorecard job's start
     modal = read_json(modal_json, ["first_resonance_short_Hz", "modes", "placement_check"], error=SensorFemError)
     band = read_json(band_json, ["band_high_Hz", "band_low_Hz"], error=SensorFemError)
     write_part(sensor_fem_rows.rows(modal, band, pd.read_csv(convergence_csv)), out_csv)
