@@ -157,7 +157,9 @@ def run_case(config: dict, influence, name: str, sample_rate_Hz: float, duration
         val = final["params"].get(k)
         ci = final["ci95"].get(k)
         inside = None if ci is None or ci[0] is None else bool(ci[0] <= v <= ci[1])
-        found[k] = {"hidden": v, "found": val, "ci95": ci, "inside": inside}
+        iv = d["identifiability"].get("intervals", {}).get(k, {})
+        found[k] = {"hidden": v, "found": val, "ci95": ci, "inside": inside, "ci_method": iv.get("method"),
+                    "ci95_jacobian": iv.get("jacobian_ci"), "correlation_factor": iv.get("correlation_factor")}
     return {
         "case": name,
         "sample_rate_Hz": sample_rate_Hz,

@@ -27,9 +27,10 @@ from typing import Callable
 
 import numpy as np
 
+from ..fitting.correlation import correlation_factors
 from ..fitting.profile import honest_intervals
 from .describe import describe
-from .fit import ModelFit, fit_model, likelihood_residual
+from .fit import ModelFit, fd_to_time, fit_model, likelihood_residual
 from .identifiability import correlated_pairs, equivalences, identifiability
 from .noise import NoiseFloor
 from .record import Record, Segments
@@ -158,7 +159,7 @@ def diagnose(
     }
     if intervals:
         note("intervals of the final model")
-        honest = final_intervals(final, record, v, floor, settings, p.profile_evaluations)
+        honest = final_intervals(final, record, v, floor, settings, p.profile_evaluations, p.interval_correlation)
     else:
         honest = {}
     found = _final_findings(tests["final"], judgements, p)
@@ -222,7 +223,7 @@ def refit(d: Diagnosis, problem: Problem | None = None, progress: Callable[[str]
     tests = {**d.tests, "final": _tests_of(final, p, st) if final is not d.final else d.tests["final"]}
     judgements = {r.key: {**d.judgements[r.key], "final": r.judge(final, p, st)} for r in p.representations}
     note("intervals of the final model")
-    honest = final_intervals(final, record, v, floor, st, p.profile_evaluations)
+    honest = final_intervals(final, record, v, floor, st, p.profile_evaluations, p.interval_correlation)
     found = _final_findings(tests["final"], judgements, p)
     corr = final.result.correlation
     idf = {**d.identifiability, "correlation": corr, "correlated_pairs": correlated_pairs(corr),
@@ -252,28 +253,44 @@ def how_firm(sel, final: ModelFit, cut: bool, p: Problem, intervals: dict) -> di
 
 
 def final_intervals(final: ModelFit, record: Record, v: np.ndarray, floor: NoiseFloor, settings,
-                    max_evaluations: int | None = None) -> dict:
+                    max_evaluations: int | None = None, correlation: bool = False) -> dict:
     """Honest 95% intervals of the final model's parameters (:func:`~piezobearing.fitting.profile.honest_intervals`).
 
     The Jacobian interval of each free parameter is checked along its
     quadratic profile line and profiled where it fails; the final fit's
     ``ci95`` then holds the honest interval and ``ci95_jacobian`` the Jacobian's. ``max_evaluations``: the
-    budget of model evaluations (None: :data:`PROFILE_EVALUATIONS`).
+    budget of model evaluations (None: :data:`PROFILE_EVALUATIONS`). ``correlation``: each interval widened for
+    the residual's autocorrelation (:func:`correlation_factors`, the subject's
+    :attr:`~piezobearing.diagnosis.subject.Problem.interval_correlation`).
     """
     res = final.result
+    params = final.model.params(record, res.values)
     out = honest_intervals(
         likelihood_residual(final.model, record, v, floor, final.scale),
-        final.model.params(record, res.values),
+        params,
         res,
         max_profiles=PROFILES,
         max_nfev=settings.max_nfev,
         ftol=settings.ftol,
         max_evaluations=PROFILE_EVALUATIONS if max_evaluations is None else max_evaluations,
+        inflation=interval_factors(res, params) if correlation else None,
     )
     final.model.release()
     res.ci95_jacobian = dict(res.ci95)
     res.ci95 = {**res.ci95, **{k: i.ci for k, i in out.items()}}
     return out
+
+
+def interval_factors(res, params) -> dict[str, float]:
+    """Each free parameter's factor on its variance for the residual's autocorrelation
+    (:func:`~piezobearing.fitting.correlation.correlation_factors`), read from the fit's residual and Jacobian in
+    the likelihood's weighted DFT bins mapped back to time (:func:`~piezobearing.diagnosis.fit.fd_to_time`: the
+    residual whitened by the floor, in which a correct model leaves white noise); {} without a Jacobian."""
+    free = [q.name for q in params if q.vary]
+    if res.jacobian is None or res.jacobian.shape[1] != len(free):
+        return {}
+    f = correlation_factors(fd_to_time(res.jacobian), fd_to_time(res.residual), res.n_data)
+    return {n: float(x) for n, x in zip(free, f, strict=True)}
 
 
 # =========================================================================== arrays for figures

@@ -58,6 +58,24 @@ def fd_weighted(residual_V: np.ndarray, s: np.ndarray) -> np.ndarray:
     return np.concatenate([r.real, r[1:-1].imag if n % 2 == 0 else r[1:].imag])
 
 
+def fd_to_time(weighted: np.ndarray) -> np.ndarray:
+    """The time series of :func:`fd_weighted`'s numbers (each column of a 2-D array): the inverse of its packing
+    without the weights, an orthogonal map (sums of squares and products kept). Of the likelihood's residual it is
+    the residual whitened by the floor (:func:`whiten`), of a Jacobian column that column in time."""
+    e = np.asarray(weighted, dtype=float)
+    n = e.shape[0]
+    half = n // 2 + 1
+    re, im = e[:half], e[half:]
+    w = np.full(half, np.sqrt(2.0 / n))
+    w[0] = np.sqrt(1.0 / n)
+    if n % 2 == 0:
+        w[-1] = np.sqrt(1.0 / n)
+    spec = re.astype(complex)
+    spec[1 : 1 + im.shape[0]] += 1j * im
+    spec /= w.reshape((-1,) + (1,) * (e.ndim - 1))
+    return sfft.irfft(spec, n, axis=0)
+
+
 def whiten(residual_V: np.ndarray, s: np.ndarray) -> np.ndarray:
     """The residual filtered by 1/sqrt(S) (zero-phase, circular): unit-variance white noise for a correct model."""
     return sfft.irfft(sfft.rfft(residual_V) / np.sqrt(s), residual_V.size)
@@ -86,7 +104,7 @@ class ModelFit:
         empty = np.zeros(0)
         return replace(
             self,
-            result=replace(self.result, residual=empty),
+            result=replace(self.result, residual=empty, jacobian=None),
             model_V=empty,
             residual_V=empty,
             whitened=empty,

@@ -128,6 +128,11 @@ class Problem:
         Most forward-model evaluations the final model's interval checks and profiles may spend (None: the
         engine's :data:`~piezobearing.diagnosis.engine.PROFILE_EVALUATIONS`); a subject lowers it for a model
         whose evaluation is costly (intervals beyond it keep the Jacobian's, flagged).
+    interval_correlation : bool
+        Whether the final model's intervals are widened for the residual's autocorrelation
+        (:func:`~piezobearing.fitting.correlation.correlation_factors`; each interval then reports its
+        ``correlation_factor``): a subject whose residual keeps model error in time sets it; False: the
+        Gauss-Newton and profile intervals of white residuals.
     """
 
     record: Record
@@ -142,6 +147,7 @@ class Problem:
     representations: Sequence[Representation] = ()
     zoom_segments: int = 1
     profile_evaluations: int | None = None
+    interval_correlation: bool = False
 
 
 @runtime_checkable

@@ -48,6 +48,9 @@ class FitResult:
     log_det: float = 0.0
     #: The Gauss-Newton intervals when ``ci95`` was replaced by honest ones (:mod:`~piezobearing.fitting.profile`).
     ci95_jacobian: dict[str, list[float]] | None = None
+    #: d residual / d free parameter at the solution, in the fit's internal coordinates (n x k; None without a
+    #: free parameter): the correlation correction of the intervals reads it (:mod:`~piezobearing.fitting.correlation`).
+    jacobian: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def aic(self) -> float:
@@ -142,7 +145,8 @@ def fit(
             q.name: float(cov[i, j] / (sd[i] * sd[j])) if sd[i] > 0 and sd[j] > 0 else float("nan")
             for j, q in enumerate(free)
         }
-    return FitResult(values, stderr, ci95, corr, r, n, k, float(r @ r), bool(sol.success), str(sol.message))
+    return FitResult(values, stderr, ci95, corr, r, n, k, float(r @ r), bool(sol.success), str(sol.message),
+                     jacobian=sol.jac)
 
 
 def _fun_and_jacobian(residual_fn, free: list[Param], unpack, lo: np.ndarray, hi: np.ndarray):

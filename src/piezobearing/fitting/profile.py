@@ -25,6 +25,16 @@ where the interval reaches a bound, :func:`profile_interval` finds the ends
 by refitting (a few refits per end). Both functions work on any residual
 function and parameter list of :func:`~piezobearing.fitting.least_squares.fit`:
 the engine uses them on the final model of a diagnosis (every subject).
+
+A residual that is not white (model error with structure in time, coloured
+noise) holds fewer independent samples than its length, and both intervals
+above are then too narrow. Given a factor f_i on each parameter's variance
+(``inflation``: :func:`~piezobearing.fitting.correlation.correlation_factors`,
+the residual's autocorrelation read where the parameter's Jacobian column
+lives), the Jacobian interval's half-width is taken sqrt(f_i) times wider and
+the threshold D_i = f_i D, in the check and in the profile alike (Royall &
+Tsou's robust adjusted profile likelihood): for a quadratic cost the two stay
+equal, as without it.
 """
 
 from __future__ import annotations
@@ -63,6 +73,9 @@ class ProfileInterval:
         Whether the lower / upper end is the parameter's bound (the data do not close the interval there).
     refits : int
         Number of refits spent.
+    factor : float or None
+        The factor on the variance for the residual's autocorrelation the interval was widened by
+        (:mod:`~piezobearing.fitting.correlation`; its half-width by its square root) [-]; None: not corrected.
     """
 
     name: str
@@ -73,9 +86,10 @@ class ProfileInterval:
     rise: list[float] = field(default_factory=list)
     at_bound: list[bool] = field(default_factory=lambda: [False, False])
     refits: int = 0
+    factor: float | None = None
 
     def report(self) -> dict:
-        return {
+        out = {
             "value": self.value,
             "ci": self.ci,
             "jacobian_ci": self.jacobian_ci,
@@ -84,12 +98,15 @@ class ProfileInterval:
             "at_bound": self.at_bound,
             "refits": self.refits,
         }
+        if self.factor is not None:
+            out["correlation_factor"] = self.factor
+        return out
 
 
 class _Profile:
     """The cost of a fitted problem as a function of one parameter (internal coordinate u)."""
 
-    def __init__(self, residual_fn, params, result, name, level, max_nfev, ftol):
+    def __init__(self, residual_fn, params, result, name, level, max_nfev, ftol, inflation=1.0):
         self.fn, self.result, self.max_nfev, self.ftol = residual_fn, result, max_nfev, ftol
         self.free = [p for p in params if p.vary]
         self.fixed = [p for p in params if not p.vary]
@@ -97,7 +114,7 @@ class _Profile:
         self.p = self.free[self.i]
         dof = max(result.n_data - result.n_free, 1)
         tq = float(stdtrit(dof, 0.5 + level / 2))  # scipy.stats.t.ppf, bit for bit, without scipy.stats' import
-        self.delta = result.chi2 / dof * tq**2
+        self.delta = result.chi2 / dof * tq**2 * inflation
         self.u0 = self.p.to_internal(result.values[name])
         self.lo = self.p.to_internal(self.p.lower) if np.isfinite(self.p.lower) else -np.inf
         self.hi = self.p.to_internal(self.p.upper) if np.isfinite(self.p.upper) else np.inf
@@ -182,11 +199,16 @@ class _Profile:
         return float(c), False
 
 
-def _wald(result: FitResult, p: Param) -> tuple[float, float, float]:
-    """u*, half-width (internal) of the Jacobian interval and its physical ends."""
+def _wald(result: FitResult, p: Param, inflation: float = 1.0) -> tuple[float, float, tuple, tuple]:
+    """u*, half-width (internal) of the Jacobian interval widened by sqrt(``inflation``), its physical ends, and
+    the Gauss-Newton interval's (the fit's ``ci95``)."""
     u0 = p.to_internal(result.values[p.name])
     lo, hi = result.ci95[p.name]
-    return u0, 0.5 * (p.to_internal(hi) - p.to_internal(lo)), (lo, hi)
+    w = 0.5 * (p.to_internal(hi) - p.to_internal(lo))
+    if inflation == 1.0:
+        return u0, w, (lo, hi), (lo, hi)
+    w = w * float(np.sqrt(inflation))
+    return u0, w, (p.to_physical(u0 - w), p.to_physical(u0 + w)), (lo, hi)
 
 
 def profile_interval(
@@ -197,6 +219,7 @@ def profile_interval(
     level: float = 0.95,
     max_nfev: int | None = None,
     ftol: float = 1e-8,
+    inflation: float | None = None,
 ) -> ProfileInterval:
     """The profile-likelihood interval of ``name`` (see the module docstring).
 
@@ -204,10 +227,13 @@ def profile_interval(
     (:func:`~piezobearing.fitting.least_squares.fit`); ``result`` must hold
     the Jacobian intervals at 95% (``result.ci95``), which set the first
     trial ends. An end that reaches the parameter's bound before chi2 has
-    risen by D is reported as the bound (``at_bound``).
+    risen by D is reported as the bound (``at_bound``). ``inflation``: the
+    factor on the parameter's variance for a residual that is not white (the
+    threshold is f D; None: 1, not reported).
     """
-    pr = _Profile(residual_fn, params, result, name, level, max_nfev, ftol)
-    u0, w, jac = _wald(result, pr.p)
+    f = 1.0 if inflation is None else float(inflation)
+    pr = _Profile(residual_fn, params, result, name, level, max_nfev, ftol, f)
+    u0, w, _, jac = _wald(result, pr.p, f)
     w = w if np.isfinite(w) and w > 0 else max(abs(u0) * 1e-3, 1e-6)
     w *= float(stdtrit(10**6, 0.5 + level / 2) / stdtrit(10**6, 0.975))
     lo, lo_b = pr.end(-1, max(u0 - w, pr.lo), None)
@@ -222,6 +248,7 @@ def profile_interval(
         [],
         [lo_b, hi_b],
         pr.refits,
+        inflation,
     )
 
 
@@ -257,6 +284,7 @@ def honest_intervals(
     max_nfev: int | None = None,
     ftol: float = 1e-8,
     max_evaluations: int | None = None,
+    inflation: dict[str, float] | None = None,
 ) -> dict[str, ProfileInterval]:
     """95% intervals of ``names`` (default: every free parameter), profiled where the Jacobian's are not honest.
 
@@ -271,6 +299,13 @@ def honest_intervals(
     Jacobian's interval, ``method`` ``"jacobian (not honest; profile over
     budget)"``), so the cost stays bounded for a model of many parameters
     whose every evaluation runs a long forward model.
+
+    ``inflation``: a factor on each parameter's variance for a residual that
+    is not white (:func:`~piezobearing.fitting.correlation.correlation_factors`;
+    see the module docstring): the checked interval is the Jacobian's widened
+    by its square root, the check and the profile use the threshold times
+    the factor, and each interval reports it (``correlation_factor``); a
+    parameter it does not name keeps 1. None: no correction, nothing reported.
     """
     budget = _Budget(residual_fn, max_evaluations)
     residual_fn = budget
@@ -284,10 +319,12 @@ def honest_intervals(
     suspect = []
     for n in names:
         i, p = index[n], free[index[n]]
-        u0, w, jac = _wald(result, p)
+        f = None if inflation is None else float(inflation.get(n, 1.0))
+        u0, w, ends, jac = _wald(result, p, 1.0 if f is None else f)
         ok = np.isfinite(w) and w > 0 and cov[i, i] > 0
-        rise = _rise_along_line(residual_fn, result, free, i, cov, delta, w) if ok else [float("nan")] * 2
-        out[n] = ProfileInterval(n, result.values[n], list(jac), list(jac), "jacobian (checked)", rise)
+        d_i = delta if f is None else delta * f
+        rise = _rise_along_line(residual_fn, result, free, i, cov, d_i, w) if ok else [float("nan")] * 2
+        out[n] = ProfileInterval(n, result.values[n], list(ends), list(jac), "jacobian (checked)", rise, factor=f)
         bad = [abs(r - 1.0) if np.isfinite(r) else np.inf for r in rise]
         if max(bad) > tolerance:
             suspect.append((max(bad), n))
@@ -296,7 +333,8 @@ def honest_intervals(
             out[n].method = "jacobian (not honest; not profiled)"
             continue
         try:
-            prof = profile_interval(residual_fn, params, result, n, max_nfev=max_nfev, ftol=ftol)
+            prof = profile_interval(residual_fn, params, result, n, max_nfev=max_nfev, ftol=ftol,
+                                    inflation=out[n].factor)
         except BudgetSpent:
             out[n].method = "jacobian (not honest; profile over budget)"
             continue

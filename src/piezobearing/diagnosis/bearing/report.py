@@ -211,20 +211,27 @@ def separability(d: dict) -> list[str]:
             line += f" Final fit: r(`{a}`, `{b}`) = {c['correlation']:+.3f}."
         out.append(line)
     out += ["", "### How each interval of the answer was found", ""]
-    out += ["| quantity | shown in | value | 95% interval | found by |", "|---|---|---|---|---|"]
+    ivs = d.get("identifiability", {}).get("intervals", {})
+    factors = any("correlation_factor" in i for i in ivs.values())
+    out += ["| quantity | shown in | value | 95% interval | found by |" + (" correlation factor |" if factors else ""),
+            "|---|---|---|---|---|" + ("---|" if factors else "")]
     values = {**f["params"], **f["operating_conditions"]}
     cis = {**f["ci95"], **f["operating_conditions_ci95"]}
     for k, how in f.get("ci_method", {}).items():
-        iv = d.get("identifiability", {}).get("intervals", {}).get(k, {})
+        iv = ivs.get(k, {})
         bound = " (reaches the bound: the record does not close it there)" if any(iv.get("at_bound", ())) else ""
         val, interval = s.value_and_ci(k, values[k], cis.get(k))
-        out.append(f"| `{k}` | {s.shown_in(k)} | {val} | {interval}{bound} | {how} |")
+        fac = (f" {iv['correlation_factor']:.3g} |" if "correlation_factor" in iv else " - |") if factors else ""
+        out.append(f"| `{k}` | {s.shown_in(k)} | {val} | {interval}{bound} | {how} |{fac}")
     out += [
         "",
         "Jacobian (checked): the Gauss-Newton interval, whose ends raise chi2 by the threshold within 25% "
         "along the profile line; profile: the others refitted at each trial value (the cost is not quadratic "
         "there); not honest (not profiled / profile over budget): the Jacobian's, kept because the engine's "
-        "profile budget was spent, read it as a rough width.",
+        "profile budget was spent, read it as a rough width."
+        + (" Correlation factor: the interval's variance was multiplied by it for the residual's autocorrelation "
+           "where the parameter's Jacobian column lives (HAC; `bearing_diagnosis.interval_correlation`), its "
+           "half-width by its square root; 1: a white residual there." if factors else ""),
         "",
     ]
     return out

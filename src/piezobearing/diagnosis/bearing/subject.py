@@ -180,6 +180,7 @@ class BearingSubject:
             rr, v, BearingModel(), start, starts, configured, catalogue_for(rec.speed_rpm is not None),
             noise_floor(v, rr.dt_s, rec.clipped), segments(rr, {**start, **starts[0]}), REPRESENTATIONS,
             zoom_segments=ZOOM_PASSAGES,
+            interval_correlation=config["bearing_diagnosis"].get("interval_correlation", "auto") != "off",
         )
 
     def synthesise(self, config: dict, seed: int, hidden_effects: list[dict], influence: InfluenceLine,

@@ -468,6 +468,7 @@ def intervals(iv: dict) -> list[str]:
     """How each 95% interval of the final fit was found: the Jacobian's (checked) or the profile likelihood's."""
     if not iv:
         return []
+    factors = correlation_factors(iv)
     prof = {k: i for k, i in iv.items() if i["method"] != "jacobian (checked)"}
     out = [
         f"95% intervals of the final fit: {len(iv) - len(prof)} of {len(iv)} from the Jacobian, checked (chi2 "
@@ -490,7 +491,25 @@ def intervals(iv: dict) -> list[str]:
                 f"{rise} x D | {i['method']} |"
             )
         out.append("")
-    return out
+    return out + factors
+
+
+def correlation_factors(iv: dict) -> list[str]:
+    """The factors the intervals were widened by for the residual's autocorrelation (``correlation_factor`` of
+    each interval; none: nothing said)."""
+    f = {k: i["correlation_factor"] for k, i in iv.items() if i.get("correlation_factor") is not None}
+    if not f:
+        return []
+    top = max(f, key=f.get)
+    wide = sorted((k for k in f if f[k] > 1.0), key=lambda k: -f[k])
+    listed = ", ".join(f"`{k}` {f[k]:.3g}" for k in wide[:6]) or "none above 1"
+    return [
+        f"Each interval is widened for the residual's autocorrelation: its variance times the factor of the "
+        f"parameter's HAC (Newey-West) variance over the Gauss-Newton one, read from the whitened residual where "
+        f"the parameter's Jacobian column lives (1: a white residual there; the half-width grows by its square "
+        f"root). Largest: `{top}` {f[top]:.3g}; above 1: {listed}.",
+        "",
+    ]
 
 
 def method(d: dict, fit_line: str, tests_line_: str) -> list[str]:
