@@ -133,6 +133,8 @@ def main() -> None:
                     help="diagnostics.max_steps (1: the first ranking; the config's 4: the full ladder)")
     ap.add_argument("--joint", choices=["auto", "off"], default="auto",
                     help="bearing_diagnosis.joint_search (off: the diagnosis without the joint dynamic search)")
+    ap.add_argument("--interval-correlation", choices=["auto", "off"], default="auto",
+                    help="bearing_diagnosis.interval_correlation (off: the intervals of white residuals)")
     ap.add_argument("--first", type=int, default=0, help="the first draw (draw i is the same record in any run)")
     ap.add_argument("--visibility", action="store_true",
                     help="measure whether each record shows its defect and which model holds it, instead of the diagnosis")
@@ -142,6 +144,7 @@ def main() -> None:
     config = cfg.load()
     config["diagnostics"]["max_steps"] = args.max_steps
     config["bearing_diagnosis"]["joint_search"] = args.joint
+    config["bearing_diagnosis"]["interval_correlation"] = args.interval_correlation
     influence = read_influence(args.influence) if args.influence else influence_from_config(config)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
