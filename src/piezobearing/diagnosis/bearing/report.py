@@ -229,9 +229,8 @@ def separability(d: dict) -> list[str]:
         "along the profile line; profile: the others refitted at each trial value (the cost is not quadratic "
         "there); not honest (not profiled / profile over budget): the Jacobian's, kept because the engine's "
         "profile budget was spent, read it as a rough width."
-        + (" Correlation factor: the interval's variance was multiplied by it for the residual's autocorrelation "
-           "where the parameter's Jacobian column lives (HAC; `bearing_diagnosis.interval_correlation`), its "
-           "half-width by its square root; 1: a white residual there." if factors else ""),
+        + (" Correlation factor: the widening for the residual's autocorrelation, as in the engine's intervals "
+           "above." if factors else ""),
         "",
     ]
     return out
