@@ -41,7 +41,7 @@ SNAPSHOT = ROOT / "docs" / "_data" / "performance.json"
 
 
 def seconds(x: float) -> str:
-    """A duration as people read it: 0.9 ms, 67 ms, 8.6 s, 229 s, 4 min 10 s."""
+    """A duration as people read it: 0.9 ms, 67 ms, 8.6 s, 229 s, 4 min 10 s, 2 h 51 min."""
     if x < 1e-3:
         return f"{x * 1e6:.2g} µs"
     if x < 1.0:
@@ -50,7 +50,9 @@ def seconds(x: float) -> str:
         return f"{_sig(x)} s"
     if x < 600.0:
         return f"{x:.0f} s"
-    return f"{int(x // 60)} min {x % 60:.0f} s"
+    if x < 3600.0:
+        return f"{int(x // 60)} min {x % 60:.0f} s"
+    return f"{int(x // 3600)} h {(x % 3600) / 60:.0f} min"
 
 
 def _sig(x: float) -> str:
@@ -101,6 +103,17 @@ def _command_row(d: dict) -> tuple[str, str, list[dict]]:
     text = f"{seconds(d['wall_s'])} wall, {seconds(d['cpu_s'])} CPU"
     qs = [q("wall", d["wall_s"], "s"), q("CPU", d["cpu_s"], "s"), q("largest process", d["peak_rss_MB"], "MB")]
     return text, f"{megabytes(d['peak_rss_MB'])} largest process", qs
+
+
+def _studies(d: dict) -> tuple[str, str, list[dict]]:
+    """Each study's cases (the jobs of rule ``study_case``, start-up included) from ``bench_studies.py``."""
+    parts, qs = [], []
+    for name, s in d["studies"].items():
+        parts.append(f"{name}: {s['cases']} cases, {seconds(s['cases_cpu_s'])} CPU "
+                     f"(median case {seconds(s['case_cpu_median_s'])}, largest {seconds(s['case_cpu_max_s'])})")
+        qs += [q(f"{name}, cases CPU", s["cases_cpu_s"], "s"), q(f"{name}, median case CPU", s["case_cpu_median_s"], "s")]
+    name, largest = max(d["studies"].items(), key=lambda kv: kv[1]["peak_rss_MB"])
+    return "; ".join(parts), f"{megabytes(largest['peak_rss_MB'])} largest job ({name})", qs
 
 
 def _install_row(d: dict) -> tuple[str, str, list[dict]]:
@@ -338,6 +351,8 @@ ROWS = [
     Row("study_all", "every parameter study on the paper config, `study_all`, after the paper",
         "command_study_all.json", "`python benchmarks/bench_command.py study_all -- snakemake --cores 2 study_all`",
         _command_row),
+    Row("studies", "each parameter study on the paper config: its cases' jobs (rule `study_case`) in a `study_all` run",
+        "studies.json", "`python benchmarks/bench_studies.py` (after the `study_all` row's command)", _studies),
     Row("study_sensor_design", "the sensor_design study on the paper config (its 25 designs), after the paper",
         "command_study_sensor_design.json",
         "`python benchmarks/bench_command.py study_sensor_design -- snakemake --cores 2 study_sensor_design`",
