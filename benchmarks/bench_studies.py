@@ -13,8 +13,8 @@ Usage, from the repository root, after the run::
     python benchmarks/bench_command.py study_all -- snakemake --cores 2 study_all
     python benchmarks/bench_studies.py
 
-Writes ``results/benchmarks/studies.json``. A study whose case files are missing or fewer than its table's rows
-stops the script with the study and the count (the run did not finish).
+Writes ``results/benchmarks/studies.json``. A study with a case of its table that has no benchmark file stops the
+script with the study and the count (the run did not finish); files of cases no longer in the table are not read.
 """
 
 from __future__ import annotations
@@ -25,6 +25,8 @@ import json
 import statistics
 import sys
 from pathlib import Path
+
+from snakemake.utils import Paramspace
 
 from piezobearing import config as config_loader
 from piezobearing.config.cases import check_studies
@@ -44,10 +46,15 @@ def study_costs(results: Path, cfg: dict) -> dict:
     rules = results / "benchmarks" / "rules"
     out = {}
     for name, table in check_studies(cfg).items():
-        cases = [job for tsv in sorted((rules / f"study_case_{name}").glob("*.tsv")) for job in read_jobs(tsv)]
-        if len(cases) < len(table):
-            raise SystemExit(f"study {name}: {len(cases)} of its {len(table)} cases have a benchmark file in "
+        # the table's cases as the workflow names them (workflow/rules/studies.smk): files of cases no longer in
+        # the table are not counted
+        files = [rules / f"study_case_{name}" / f"{case}.tsv"
+                 for case in Paramspace(table, filename_params="*", single_wildcard="case").instance_patterns]
+        missing = [f for f in files if not f.exists()]
+        if missing:
+            raise SystemExit(f"study {name}: {len(missing)} of its {len(files)} cases have no benchmark file in "
                              f"{rules / f'study_case_{name}'}; run `snakemake --cores 2 study_all` to the end first")
+        cases = [job for tsv in files for job in read_jobs(tsv)]
         summary_file = rules / f"study_summary_{name}.tsv"
         summary = read_jobs(summary_file) if summary_file.exists() else []
         cpu = [c["cpu_s"] for c in cases]
