@@ -60,16 +60,16 @@ STUDY_INPUTS = {
         "housing": f"{RESULTS}/studies/sensor_design/housing.json",
     },
 }
-# Measured per case (benchmarks/bench_rules.py, results/benchmarks/rules_config.json): calibration
-# 2 s and 0.2 GB, fault_detection 30-35 s (75 s on a loaded machine) and 0.2 GB peak.
 # Each study's largest case on the paper config, peak RSS: `python benchmarks/bench_studies.py` after a
-# `study_all` run (the performance page's `studies` row; fault_detection 1.29 GB, daq_noise 2.92 GB,
-# defect_position 1.19 GB, fault_type_speed 1.15 GB); each bound about 1.4x or more above it.
+# `study_all` run (the performance page's `studies` row; calibration_circuit 0.26 GB, fault_detection 1.29 GB,
+# daq_noise 2.92 GB, defect_position 1.19 GB, fault_type_speed 1.15 GB, sensor_design 0.48 GB); each bound
+# about 1.4x or more above it.
 STUDY_MEM_MB = {
     "calibration_circuit": 500,
     "fault_detection": 2000,
-    **{name: 2000 for name in DETECTOR_STUDIES},
     "daq_noise": 4000,
+    "defect_position": 2000,
+    "fault_type_speed": 2000,
     "sensor_design": 1500,
     # measured per case: benchmarks/bench_sensor_comparison.py (results/benchmarks/sensor_comparison.json)
     "sensor_comparison": 3000,
