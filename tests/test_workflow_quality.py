@@ -36,6 +36,18 @@ def test_slurm_profile_dry_run():
     assert "study_case" in out.stdout
 
 
+def test_a_plain_run_reads_the_default_profile_and_starts_the_longest_chains_first():
+    """`snakemake` from the checkout reads profiles/default (Snakemake looks for it beside the Snakefile): the
+    jobs the two longest chains need are scheduled first, and nothing else is (a folder Snakemake does not look
+    in would leave every job at the default priority)."""
+    out = snakemake("-n", "--forceall", "--configfile", "config/ci.yaml")
+    assert out.returncode == 0, out.stderr[-3000:]
+    assert "workflow specific profile profiles/default" in out.stderr + out.stdout
+    first = set(re.findall(r"^(?:local)?rule (\w+):\n(?:    .*\n)*?    priority: highest$", out.stdout, re.M))
+    assert {"fault_classification", "fault_type_voltage", "sensor_comparison", "sensor_comparison_figure"} <= first
+    assert not {"scorecard", "fig05", "diagnose"} & first
+
+
 def _jobs(dry_run_stdout: str) -> set[str]:
     table = dry_run_stdout.split("Job stats:")[-1]
     return {m.group(1) for m in re.finditer(r"^(\w+)\s+\d+$", table, re.M)} - {"total", "job"}
