@@ -53,7 +53,7 @@ from ..io.archive import rig_beside
 from ..io.record_formats import RECORD_FORMATS
 from ..io.vibration import VibrationRecord, numeric_samples, pick_channel, read_vibration_record
 from ..plotting import save
-from ..plotting.detection import detection_figure, trend_figure
+from ..plotting.detection import detection_figure, save_detection, trend_figure
 from ..signals.detectors import UNKNOWN, Detection
 from ..signals.detectors import envelope as envelope_detector
 
@@ -461,7 +461,7 @@ def write_detection(result: RecordingDetection, out: str | Path) -> dict[str, Pa
     paths = {"json": out / "detection.json", "report": out / "report.md", "figure": out / "detection.png"}
     d = result.to_dict()
     write_json(d, paths["json"])
-    save(detection_figure(result.detection.to_dict(), Path(result.record.source).name), paths["figure"])
+    save_detection(detection_figure(result.detection.to_dict(), Path(result.record.source).name), paths["figure"])
     paths["report"].write_text(report_markdown(d, paths["figure"].name), encoding="utf-8")
     return paths
 
