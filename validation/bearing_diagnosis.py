@@ -125,8 +125,28 @@ HOUSING_MODE_CASES = {
     for given in givens
 }
 CASES.update(HOUSING_MODE_CASES)
+#: A rig whose shaft or pedestal is not what its rig file says (the record's LPM with its own ``shaft_mass_kg`` or
+#: ``pedestal_stiffness_N_per_m``, :data:`~piezobearing.diagnosis.bearing.lpm_records.RIG_DYNAMICS`; the rig file keeps
+#: the paper config's 1 kg and 2e9 N/m): twice and half the shaft's mass (its mode at 1.8 and 3.7 kHz, 2.6 kHz in
+#: the rig file) and half the pedestal's stiffness, each under a groove under the sensor, a groove 20 deg from it
+#: (whose sensor force the shaft's ring dominates), an inner-race groove, and a healthy bearing.
+RIG_DYNAMICS_CASES = {
+    f"{rig}_{kind}": ({**hidden, **dyn}, effects)
+    for rig, dyn in (("shaft_2kg", {"shaft_mass_kg": 2.0}), ("shaft_0.5kg", {"shaft_mass_kg": 0.5}),
+                     ("pedestal_1e9", {"pedestal_stiffness_N_per_m": 1.0e9}))
+    for kind, (hidden, effects) in (
+        ("outer_race_defect_0deg", ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.0},
+                                    ["outer_race_defect"])),
+        ("outer_race_defect_20deg", ({"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.35},
+                                     ["outer_race_defect"])),
+        ("inner_race_defect", ({"inner_defect_width_m": 0.6e-3, "inner_defect_angle_rad": 0.7},
+                               ["inner_race_defect"])),
+        ("healthy", ({}, [])),
+    )
+}
+CASES.update(RIG_DYNAMICS_CASES)
 #: Record conditions that are not catalogue parameters and are not fitted (kept out of a row's values).
-CONDITIONS = ("defect_edge_radius_m", "housing_mode_Hz", "housing_mode_damping_ratio")
+CONDITIONS = ("defect_edge_radius_m", "housing_mode_Hz", "housing_mode_damping_ratio", "pedestal_stiffness_N_per_m")
 #: The records' SNR [dB].
 SNR_DB = 30.0
 #: Cases whose record has a speed_rpm column (the tachometer): the speed the LPM ran at, 1500 rpm where the rig
@@ -295,9 +315,10 @@ def main() -> None:
     ap.add_argument("--nearest", action="store_true",
                     help="add to each rounded-edge row of --out the nearest sharp width (noiseless LPM forces; no "
                          "diagnosis)")
-    ap.add_argument("--group", choices=["edges", "housing_mode"], default=None,
+    ap.add_argument("--group", choices=["edges", "housing_mode", "rig_dynamics"], default=None,
                     help="edges: the rounded-edge and fine-step cases only (with their own table, .edges.md); "
-                         "housing_mode: the records seen through a housing mode")
+                         "housing_mode: the records seen through a housing mode; rig_dynamics: records of a shaft "
+                         "or pedestal other than the rig file's")
     ap.add_argument("--duration", type=float, default=1.0, help="record length [s]")
     ap.add_argument("--seed", type=int, default=26)
     ap.add_argument("--record-out", type=Path, default=None, help="folder to write each case's record to (CSV)")
@@ -326,7 +347,8 @@ def main() -> None:
         return
     done = {(r["case"], r["sample_rate_Hz"]) for r in rows}
     for rate in args.rate or [2550.0, 25600.0]:
-        group = {"edges": EDGE_CASES, "housing_mode": HOUSING_MODE_CASES}.get(args.group, CASES)
+        group = {"edges": EDGE_CASES, "housing_mode": HOUSING_MODE_CASES,
+                 "rig_dynamics": RIG_DYNAMICS_CASES}.get(args.group, CASES)
         for name in args.case or list(group):
             if (name, rate) in done:
                 continue

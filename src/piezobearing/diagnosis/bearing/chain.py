@@ -94,6 +94,10 @@ class Rig(UniformClock):
         ``housing_mode_damping_ratio``): its frequency [Hz] and damping ratio [-], the values the ``housing_mode``
         effect starts from (and holds the frequency at, where it lies above the record's Nyquist frequency); None:
         not known.
+    fit_shaft_mass : bool
+        Fit the shaft's mass even where its mode (at ``dynamics``' mass) lies above the record's Nyquist frequency:
+        the dynamic rung's scan of the mass found the record's shaft other than the rig file's
+        (:func:`~piezobearing.diagnosis.bearing.rung.mass_scan`), so the record sees the mode's ring.
     """
 
     geometry: BearingGeometry
@@ -108,6 +112,7 @@ class Rig(UniformClock):
     dynamics: ShaftDynamics | None = None
     steps_per_period: int = STEPS_PER_PERIOD
     housing_mode: tuple[float, float] | None = None
+    fit_shaft_mass: bool = False
     surrogate: Surrogate = field(default=None, repr=False)
     cache: dict = field(default_factory=dict, repr=False, compare=False)
     #: The dynamic rung's last kinematic grid (:func:`kinematic_grid`).

@@ -34,6 +34,9 @@ from .subject import rig_from_config
 MAX_STEP_S = 0.392156e-3 / 36
 #: Depth of a hidden groove [m] (the paper's 1 mm: a roller bridges it, the depth never acts).
 DEPTH_M = 1.0e-3
+#: The LPM's shaft and pedestal parameters a record may hold apart from its rig file's (:func:`lpm_parameters`).
+RIG_DYNAMICS = ("shaft_mass_kg", "bearing_damping_N_s_per_m", "pedestal_mass_kg", "pedestal_stiffness_N_per_m",
+                "pedestal_damping_N_s_per_m")
 #: Extra simulated time before the circuit's pre-roll: the LPM's start from static equilibrium settles [s].
 SETTLE_S = 0.02
 
@@ -48,7 +51,9 @@ def lpm_parameters(config: dict, hidden: dict, start_phase_rad: float, seed: int
     ``defect_edge_radius_m`` (not a catalogue parameter: a record's condition, as the ramp) rounds every
     defect's edges with a fillet of that radius (:func:`~piezobearing.bearing.lpm.chord_drop_m`; the widths
     are then the widths at the surface), where the catalogue's defects have sharp edges. ``housing_mode_Hz`` and
-    ``housing_mode_damping_ratio`` (record conditions too) are read by :func:`lpm_sensor_force`.
+    ``housing_mode_damping_ratio`` (record conditions too) are read by :func:`lpm_sensor_force`. The shaft's and
+    the pedestal's dynamics are the config's (``bearing.shaft_mass_kg`` ...) unless ``hidden`` gives the record's own
+    (:data:`RIG_DYNAMICS`): a rig whose shaft, damping or pedestal differ from what its rig file says.
     """
     b = dict(config["bearing"], roller_diameter_scatter_m=0.0, cage_slip=0.0, slip_jitter=0.0,
              speed_ramp_rpm_per_s=0.0)
@@ -76,6 +81,7 @@ def lpm_parameters(config: dict, hidden: dict, start_phase_rad: float, seed: int
         start_angle_rad=start_phase_rad,
         defects=tuple(defects),
         roller_diameter_deviation_m=dev if any(dev) else (),
+        **{k: float(hidden[k]) for k in RIG_DYNAMICS if k in hidden},
     )
 
 

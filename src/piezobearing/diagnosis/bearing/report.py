@@ -107,7 +107,25 @@ def dynamic_rung(d: dict) -> list[str]:
     out += ["", f"Quasi-static answer: {r['quasi_static']['fault']}.", ""]
     if r.get("left_out"):
         out += [f"Left out with the dynamics on (not supported by the record): {', '.join(r['left_out'])}.", ""]
+    out += shaft_mass(r.get("shaft_mass"))
     return out + housing_rung(r.get("housing_mode")) + joint_search(r.get("joint"))
+
+
+def shaft_mass(m: dict | None) -> list[str]:
+    """The dynamic rung's scan of the shaft's mass (``dynamic_rung.shaft_mass``): held at the rig file's, or found
+    other than it, the rung run again with the mass fitted."""
+    if not m or "rig_kg" not in m:
+        return []
+    if not m["tried"]:
+        return [f"The shaft's mass is the rig file's, {m['rig_kg']:.3g} kg: {m['why'].removeprefix('not fitted: ')}.", ""]
+    out = f"The shaft's mass: {m['why']}; the rung ran again from {m['start_kg']:.3g} kg with the mass fitted"
+    if not m.get("kept"):
+        return [out + f", and that fit was not kept (BIC drop {m.get('delta_bic', float('nan')):.4g}).", ""]
+    ci = m.get("ci95") or [None, None]
+    where = f" [{ci[0]:.4g}, {ci[1]:.4g}]" if ci[0] is not None else ""
+    return [out + f" (BIC drop {m['delta_bic']:.4g}): **{m['fitted_kg']:.4g}{where} kg, not the rig file's "
+            f"{m['rig_kg']:.3g} kg**. Check `bearing.shaft_mass_kg` in the rig file (the shaft's and inner ring's "
+            "mass this bearing carries).", ""]
 
 
 def joint_search(j: dict | None) -> list[str]:

@@ -40,7 +40,14 @@ from .floor import REMEASURE_BELOW, floor_prepass, noise_floor
 from .joint import joint_rung, joint_wanted
 from .model import BearingModel, RigRecord
 from .representations import REPRESENTATIONS, passages
-from .rung import dynamic_rung, housing_rung_wanted, housing_scan, rung_wanted, without_unidentified
+from .rung import (
+    dynamic_rung,
+    housing_rung_wanted,
+    housing_scan,
+    rung_wanted,
+    with_shaft_mass,
+    without_unidentified,
+)
 
 #: Phases of the baseline's start scan over one roller pitch.
 PHASE_SCAN = 24
@@ -245,6 +252,9 @@ class BearingSubject:
                 if rung["tried"]:
                     c0 = time.process_time()
                     d, rung = dynamic_rung(d, problem, settings, progress, rung, final_steps)
+                    if rung["accepted"] and (rung.get("shaft_mass") or {}).get("kept"):
+                        # the rungs above run on the record's shaft, not the rig file's
+                        problem = with_shaft_mass(problem, rung["shaft_mass"]["fitted_kg"])
                     d, problem, more = without_unidentified(d, problem, settings, progress)
                     dropped += more
                     note(f"dynamic rung: {time.process_time() - c0:.1f} s CPU "

@@ -28,7 +28,11 @@ start ``bearing.bearing_damping_N_s_per_m``). The pedestal's ``bearing.pedestal_
 lies far above any DAQ band a record of this sensor is held at. The shaft's mass is fitted only where the shaft's
 mode (at the rig file's mass) lies below the record's Nyquist frequency; above it (the paper's 2550 Hz: Nyquist
 1275 Hz against 2.6 kHz) the record sees the mode only through its aliases and the box average, and the mass is
-held at the rig file's value (in the final fit's values without an interval).
+held at the rig file's value (in the final fit's values without an interval), unless the record shows a shaft
+other than the rig file's: the dynamic rung scans the mass (a quarter to four times the rig file's,
+:func:`~piezobearing.diagnosis.bearing.rung.mass_scan`), and where a mass of the scan takes more off chi2 than the
+selection rule asks of one parameter (a heavier shaft's mode, 1.8 kHz for 2 kg, rings at its alias, 0.7 kHz at
+2550 Hz, and the box average passes a third of it), the rung runs again from that mass with the mass fitted.
 
 Where a user finds the values: the shaft's mass is the shaft's and inner ring's (and anything they carry)
 weighed or from the drawing, the share this bearing carries (half for a shaft between two equal bearings at
@@ -52,11 +56,13 @@ DAMPING_BOUNDS = (10.0, 1e5)
 
 
 def mass_identifiable(record) -> bool:
-    """Whether the record's Nyquist frequency lies above the shaft's mode at the rig file's mass."""
+    """Whether the shaft's mass is fitted: the record's Nyquist frequency lies above the shaft's mode at the rig
+    file's mass, or the dynamic rung's scan of the mass found the record's shaft other than the rig file's
+    (``rig.fit_shaft_mass``, :func:`~piezobearing.diagnosis.bearing.rung.mass_scan`)."""
     rig = record.rig
     if rig.dynamics is None:
         return False
-    return chain.shaft_mode_Hz(rig, rig.dynamics)[0] < 0.5 * record.sample_rate_Hz
+    return rig.fit_shaft_mass or chain.shaft_mode_Hz(rig, rig.dynamics)[0] < 0.5 * record.sample_rate_Hz
 
 
 class ShaftDynamicsEffect(Effect):
