@@ -27,6 +27,10 @@ whose noiseless force is nearest the record's (:func:`nearest_sharp_width`), wit
 (:data:`HOUSING_MODE_CASES`): the effect no rung of the diagnosis holds, where a groove must still be named and a
 healthy bearing must not be.
 
+``--group rig_dynamics`` runs the records of a shaft or pedestal other than the rig file's
+(:data:`RIG_DYNAMICS_CASES`); ``--shaft-mass-scan off`` holds the shaft's mass at the rig file's (the dynamic
+rung's scan of the mass left out).
+
 ``--steps-per-period`` and ``--final-steps-per-period``: the config's ``bearing_diagnosis.dynamic_steps_per_period``
 (the dynamic rung's integration steps per period of the shaft's mode in its search) and
 ``dynamic_final_steps_per_period`` (in the selected dynamic model's final refit and intervals), to see what the
@@ -322,13 +326,16 @@ def main() -> None:
     ap.add_argument("--duration", type=float, default=1.0, help="record length [s]")
     ap.add_argument("--seed", type=int, default=26)
     ap.add_argument("--record-out", type=Path, default=None, help="folder to write each case's record to (CSV)")
+    ap.add_argument("--shaft-mass-scan", choices=["auto", "off"], default=None,
+                    help="bearing_diagnosis.shaft_mass_scan (default: the config's, auto)")
     ap.add_argument("--steps-per-period", type=int, default=None,
                     help="bearing_diagnosis.dynamic_steps_per_period (default: the config's)")
     ap.add_argument("--final-steps-per-period", type=int, default=None,
                     help="bearing_diagnosis.dynamic_final_steps_per_period (default: the config's)")
     args = ap.parse_args()
     config = cfg.load(*([args.config] if args.config else []))
-    for key, value in (("dynamic_steps_per_period", args.steps_per_period),
+    for key, value in (("shaft_mass_scan", args.shaft_mass_scan),
+                       ("dynamic_steps_per_period", args.steps_per_period),
                        ("dynamic_final_steps_per_period", args.final_steps_per_period)):
         if value:
             config["bearing_diagnosis"][key] = value

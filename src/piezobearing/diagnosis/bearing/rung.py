@@ -125,7 +125,7 @@ def rung_effects(problem: Problem) -> tuple[str, ...]:
 
 def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None = None,
                  final_steps: int | None = None, rungs: tuple[str, ...] | None = None,
-                 steps: tuple[str, str] = ("quasi-static", "dynamic")):
+                 steps: tuple[str, str] = ("quasi-static", "dynamic"), scan_mass: bool = True):
     """The engine once more with the shaft's dynamics (``shaft_dynamics``), judged against the quasi-static diagnosis.
 
     Configured: the quasi-static selection in its order (their fits start the rung where the quasi-static search
@@ -150,6 +150,11 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     computed there (:func:`~piezobearing.diagnosis.engine.refit`); the defects are judged identified on those.
     Where it does not pass, its defects are judged on the Jacobian's intervals (the entry's ``unidentified``).
 
+    With ``scan_mass`` (``bearing_diagnosis.shaft_mass_scan: auto``) the rung's first fit is followed by a scan of
+    the shaft's mass (:func:`mass_scan`, the entry's ``shaft_mass``); where it finds the record's shaft other than
+    the rig file's, the search runs again from the scan's mass with the mass fitted (:func:`with_shaft_mass`), kept
+    where its BIC is lower by ``min_delta_bic``.
+
     ``rungs``: the effects the rung adds (:func:`rung_effects` by default); with one that mimics a defect among
     them (``mimics_defects``: ``housing_mode``, whose ring after each roller passage is a short dip a narrow groove
     under the sensor mimics) the quasi-static search's first defect is held to the selection rule too. The subject runs this once more with
@@ -170,7 +175,7 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     label = " + ".join([*pair, *rungs])
     note(f"{steps[1]} rung: + {label}")
     dr = diagnose(rp, settings, progress, d.baseline, intervals=False)
-    if "shaft_dynamics" in rungs and not rp.record.rig.fit_shaft_mass:
+    if scan_mass and "shaft_dynamics" in rungs and not rp.record.rig.fit_shaft_mass:
         rung["shaft_mass"] = mass_scan(dr, settings)
         if rung["shaft_mass"]["tried"]:
             m = rung["shaft_mass"]["start_kg"]
