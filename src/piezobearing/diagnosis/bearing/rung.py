@@ -23,6 +23,7 @@ from . import chain
 from .answer import EFFECT_OF_TYPE, fault_answer, fault_evidence
 from .effects import CATALOGUE, FAULT_TYPES, RUNGS
 from .effects.housing_mode import best_mode
+from .effects.shaft_dynamics import DAMPING_BOUNDS, place_groove
 from .floor import REMEASURE_BELOW, noise_floor
 from .model import BearingModel
 
@@ -182,8 +183,11 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
             note(f"{steps[1]} rung: again from the scan's shaft mass, {m:.3g} kg, the mass fitted")
             mp = with_shaft_mass(rp, m)
             dm = diagnose(mp, settings, progress, d.baseline, intervals=False)
-            rung["shaft_mass"]["delta_bic"] = float(dr.final.bic - dm.final.bic)
-            rung["shaft_mass"]["kept"] = bool(dr.final.bic - dm.final.bic > settings.min_delta_bic)
+            fitted = float(dm.final.values["shaft_mass_kg"])
+            rung["shaft_mass"].update(delta_bic=float(dr.final.bic - dm.final.bic), search_kg=fitted,
+                                      identified=mass_identified(dm, fitted))
+            rung["shaft_mass"]["kept"] = bool(dr.final.bic - dm.final.bic > settings.min_delta_bic
+                                              and rung["shaft_mass"]["identified"])
             if rung["shaft_mass"]["kept"]:
                 rp, dr = mp, dm
     # the quasi-static selection's other effects, each held to the selection rule with the dynamics on
@@ -211,55 +215,91 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     return (merged(d, dr, share, pair, rungs) if ok else d), rung
 
 
-#: The dynamic rung's scan of the shaft's mass, coarse then fine: the rig file's mass times 2^(k/8) for
-#: |k| <= 16 (a quarter to four times it, steps of 9 %), then 2^(j/64) for |j| <= 8 around the best (steps of 1.1 %,
-#: half a per cent in the mode's frequency: a ring of 2-3 periods at 1.8 kHz keeps its phase within 0.2 rad).
+#: The dynamic rung's scan of the shaft's mass, coarse then fine: the rig file's mass times 2^(k/8) for |k| <= 16
+#: (a quarter to four times it, steps of 9 %, 4.4 % in the mode's frequency: a ring of a few periods keeps its phase
+#: within a radian), then 2^(j/64) for |j| <= 4 around the best (steps of 1.1 %); the fit with the mass free takes it
+#: from there.
 MASS_SCAN_COARSE = 2.0 ** (np.arange(-16, 17) / 8)
-MASS_SCAN_FINE = 2.0 ** (np.arange(-8, 9) / 64)
+MASS_SCAN_FINE = 2.0 ** (np.arange(-4, 5) / 64)
 
 
 def mass_scan(d, settings) -> dict:
     """The dynamic rung's scan of the shaft's mass on ``d``'s final model (the rung's search at the rig file's mass,
     held where its mode lies above the record's Nyquist frequency): the chain's voltage at each mass of
     :data:`MASS_SCAN_COARSE`, then :data:`MASS_SCAN_FINE` around the best, every other value as fitted, and the
-    chi2 the best mass takes off (the residual's sum of squares over the floor's variance, means taken out) against
+    chi2 the best mass takes off the fitted model's (the residual's sum of squares over the floor's variance, means
+    taken out; every mass at the rig file's damping, which a fit at the wrong mass raises to damp a ring it cannot
+    match) against
     what the selection rule asks of one parameter, ``min_delta_bic`` + ln n. A shaft heavier or lighter than the rig
     file's rings at another frequency, whose alias a box-averaging DAQ passes (for 2 kg on the paper's rig at
     2550 Hz: 1.8 kHz, at 0.7 kHz a third as strong): ``tried`` where the scan takes off more than the rule asks,
-    and the rung then runs again from that mass with the mass fitted (:func:`with_shaft_mass`). An evaluation of the
-    dynamic chain per mass: about 50 (a second or two on a 1 s record at 2550 Hz)."""
+    and the rung then runs again from that mass with the mass fitted (:func:`with_shaft_mass`).
+
+    With an outer-race groove in the model, each coarse mass also places the groove anew
+    (:func:`~.effects.shaft_dynamics.place_groove`): a groove 20-26 deg from the sensor, whose sensor force its ring
+    dominates, is placed a roller pitch away by a fit at the wrong mass, and the scan at that place would not see the
+    right mass. An evaluation of the dynamic chain per mass, about ten with a groove to place: 40-400 in all (a few
+    seconds on a 1 s record at 2550 Hz)."""
     rig, values = d.record.rig, dict(d.final.values)
     if rig.dynamics is None or values.get("shaft_mass_kg", 0.0) <= 0:
         return {"tried": False, "kept": False, "why": "not scanned: the model holds no shaft dynamics"}
     m0 = float(values["shaft_mass_kg"])
     other = d.final.model_V - chain.voltage(rig, values)  # what the model adds to the chain's (an interference's)
     v = np.asarray(d.voltage_V, dtype=float) - other
+    groove = values.get("outer_defect_width_m", 0.0) > 0
 
-    def misfit(ratios: np.ndarray) -> np.ndarray:
-        out = []
-        for m in m0 * ratios:
-            r = v - chain.voltage(rig, {**values, "shaft_mass_kg": float(m)})
-            out.append(float(np.sum((r - r.mean()) ** 2)))
-        return np.array(out)
+    def misfit(vals: dict) -> float:
+        r = v - chain.voltage(rig, vals)
+        return float(np.sum((r - r.mean()) ** 2))
 
-    coarse = misfit(MASS_SCAN_COARSE)
-    ratios = MASS_SCAN_COARSE[int(np.argmin(coarse))] * MASS_SCAN_FINE
-    fine = misfit(ratios)
-    best = float(m0 * ratios[int(np.argmin(fine))])
-    here = coarse[MASS_SCAN_COARSE.size // 2]
-    var = d.floor.voltage_noise_V**2
-    drop = float((here - min(fine.min(), coarse.min())) / var)
+    # the rig file's damping at every mass: a fit at the wrong mass damps the ring it cannot match
+    c0 = float(np.clip(rig.dynamics.bearing_damping_N_s_per_m, *DAMPING_BOUNDS))
+
+    def at(m: float, place: bool, start: dict = values) -> tuple[float, dict]:
+        """The least misfit at mass ``m`` (the rig file's damping): the values ``start``, or the groove placed anew."""
+        vals = {**start, "shaft_mass_kg": float(m), "bearing_damping_N_s_per_m": c0}
+        best = (misfit(vals), vals)
+        if place:
+            ctx = StartContext(d.record, v, d.final.model_V, vals)
+            for t in place_groove(ctx, {"shaft_mass_kg": float(m), "bearing_damping_N_s_per_m": c0}):
+                e = misfit({**vals, **t})
+                if e < best[0]:
+                    best = (e, {**vals, **t})
+        return best
+
+    coarse = [at(m, groove) for m in m0 * MASS_SCAN_COARSE]
+    k = int(np.argmin([e for e, _ in coarse]))
+    base = coarse[k][1]
+    fine = [at(m, False, base) if r != 1.0 else coarse[k] for m, r in
+            zip(base["shaft_mass_kg"] * MASS_SCAN_FINE, MASS_SCAN_FINE, strict=True)]
+    j = int(np.argmin([e for e, _ in fine]))
+    best, start = fine[j][0], fine[j][1]
+    here = misfit(values)
+    drop = float((here - best) / d.floor.voltage_noise_V**2)
     needed = float(settings.min_delta_bic + np.log(v.size))
-    said = (f"the scan's best shaft mass, {best:.3g} kg against the rig file's {m0:.3g} kg, takes {drop:.4g} off "
-            f"chi2, where the selection rule asks of one parameter more than {needed:.4g}")
+    m = float(start["shaft_mass_kg"])
+    placed = groove and abs(start["outer_defect_angle_rad"] - values["outer_defect_angle_rad"]) > 0
+    said = (f"the scan's best shaft mass, {m:.3g} kg against the rig file's {m0:.3g} kg"
+            + (f" (the groove placed anew at {start['outer_defect_angle_rad']:.3f} rad)" if placed else "")
+            + f", takes {drop:.4g} off chi2, where the selection rule asks of one parameter more than {needed:.4g}")
     tried = bool(drop > needed)
-    return {"tried": tried, "kept": False, "rig_kg": m0, "start_kg": best, "chi2_drop": drop, "needed": needed,
+    return {"tried": tried, "kept": False, "rig_kg": m0, "start_kg": m, "chi2_drop": drop, "needed": needed,
+            "start": {k: float(x) for k, x in start.items() if k.startswith("outer_defect_")},
             "why": said if tried else f"not fitted: {said}"}
+
+
+def mass_identified(d, mass_kg: float) -> bool:
+    """Whether ``d``'s fit pins the shaft's mass down: its 95 % interval is finite, above zero and narrower than the
+    mass itself (a fit that drives the mass to zero has dropped the dynamics, not found a shaft)."""
+    ci = d.final.result.ci95.get("shaft_mass_kg")
+    return bool(ci is not None and ci[0] is not None and np.all(np.isfinite(ci)) and ci[0] > 0
+                and ci[1] - ci[0] < mass_kg)
 
 
 def with_shaft_mass(problem: Problem, mass_kg: float) -> Problem:
     """``problem`` on a rig whose shaft's mass is ``mass_kg`` (the start of ``shaft_mass_kg``), fitted wherever its
-    mode lies (``Rig.fit_shaft_mass``); a rig of its own (its caches hold the other mass's forces)."""
+    mode lies (``Rig.fit_shaft_mass``); a rig of its own (its caches hold the other mass's forces). The rung's search
+    on it places an outer-race groove anew at that mass (``shaft_dynamics``' starts)."""
     rec = problem.record
     rig = replace(rec.rig, dynamics=replace(rec.rig.dynamics, shaft_mass_kg=float(mass_kg)), fit_shaft_mass=True,
                   cache={}, grid={})
