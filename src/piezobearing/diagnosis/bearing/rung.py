@@ -228,8 +228,8 @@ def mass_scan(d, settings) -> dict:
     held where its mode lies above the record's Nyquist frequency): the chain's voltage at each mass of
     :data:`MASS_SCAN_COARSE`, then :data:`MASS_SCAN_FINE` around the best, every other value as fitted, and the
     chi2 the best mass takes off the fitted model's (the residual's sum of squares over the floor's variance, means
-    taken out; every mass at the rig file's damping, which a fit at the wrong mass raises to damp a ring it cannot
-    match) against
+    taken out; every mass at the fitted damping and at the rig file's, which a fit at the wrong mass may have
+    raised to damp a ring it cannot match) against
     what the selection rule asks of one parameter, ``min_delta_bic`` + ln n. A shaft heavier or lighter than the rig
     file's rings at another frequency, whose alias a box-averaging DAQ passes (for 2 kg on the paper's rig at
     2550 Hz: 1.8 kHz, at 0.7 kHz a third as strong): ``tried`` where the scan takes off more than the rule asks,
@@ -238,7 +238,7 @@ def mass_scan(d, settings) -> dict:
     With an outer-race groove in the model, each coarse mass also places the groove anew
     (:func:`~.effects.shaft_dynamics.place_groove`): a groove 20-26 deg from the sensor, whose sensor force its ring
     dominates, is placed a roller pitch away by a fit at the wrong mass, and the scan at that place would not see the
-    right mass. An evaluation of the dynamic chain per mass, about ten with a groove to place: 40-400 in all (a few
+    right mass. Two evaluations of the dynamic chain per mass, about a dozen with a groove to place: 75-430 in all (a few
     seconds on a 1 s record at 2550 Hz)."""
     rig, values = d.record.rig, dict(d.final.values)
     if rig.dynamics is None or values.get("shaft_mass_kg", 0.0) <= 0:
@@ -255,22 +255,23 @@ def mass_scan(d, settings) -> dict:
     # the rig file's damping at every mass: a fit at the wrong mass damps the ring it cannot match
     c0 = float(np.clip(rig.dynamics.bearing_damping_N_s_per_m, *DAMPING_BOUNDS))
 
-    def at(m: float, place: bool, start: dict = values) -> tuple[float, dict]:
-        """The least misfit at mass ``m`` (the rig file's damping): the values ``start``, or the groove placed anew."""
-        vals = {**start, "shaft_mass_kg": float(m), "bearing_damping_N_s_per_m": c0}
+    def at(m: float, place: bool, start: dict = values, damping: float = c0) -> tuple[float, dict]:
+        """The least misfit at mass ``m`` and ``damping``: the values ``start``, or the groove placed anew."""
+        vals = {**start, "shaft_mass_kg": float(m), "bearing_damping_N_s_per_m": damping}
         best = (misfit(vals), vals)
         if place:
             ctx = StartContext(d.record, v, d.final.model_V, vals)
-            for t in place_groove(ctx, {"shaft_mass_kg": float(m), "bearing_damping_N_s_per_m": c0}):
+            for t in place_groove(ctx, {"shaft_mass_kg": float(m), "bearing_damping_N_s_per_m": damping}):
                 e = misfit({**vals, **t})
                 if e < best[0]:
                     best = (e, {**vals, **t})
         return best
 
-    coarse = [at(m, groove) for m in m0 * MASS_SCAN_COARSE]
+    fitted = float(values["bearing_damping_N_s_per_m"])
+    coarse = [min(at(m, groove), at(m, False, values, fitted), key=lambda x: x[0]) for m in m0 * MASS_SCAN_COARSE]
     k = int(np.argmin([e for e, _ in coarse]))
     base = coarse[k][1]
-    fine = [at(m, False, base) if r != 1.0 else coarse[k] for m, r in
+    fine = [at(m, False, base, base["bearing_damping_N_s_per_m"]) if r != 1.0 else coarse[k] for m, r in
             zip(base["shaft_mass_kg"] * MASS_SCAN_FINE, MASS_SCAN_FINE, strict=True)]
     j = int(np.argmin([e for e, _ in fine]))
     best, start = fine[j][0], fine[j][1]
