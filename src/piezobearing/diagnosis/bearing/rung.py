@@ -153,8 +153,11 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
 
     With ``scan_mass`` (``bearing_diagnosis.shaft_mass_scan: auto``) the rung's first fit is followed by a scan of
     the shaft's mass (:func:`mass_scan`, the entry's ``shaft_mass``); where it finds the record's shaft other than
-    the rig file's, the search runs again from the scan's mass with the mass fitted (:func:`with_shaft_mass`), kept
-    where its BIC is lower by ``min_delta_bic``.
+    the rig file's, and takes more off chi2 than the housing mode's scan (:func:`~.effects.housing_mode.best_mode`:
+    a mode in the band rings after every event as a shaft of another mass does; where the mode's scan takes more,
+    the ring is left to the housing mode's rung), the search runs again from the scan's mass with the mass fitted
+    (:func:`with_shaft_mass`), kept where its BIC is lower by ``min_delta_bic`` and the mass's interval pins it
+    down (:func:`mass_identified`).
 
     ``rungs``: the effects the rung adds (:func:`rung_effects` by default); with one that mimics a defect among
     them (``mimics_defects``: ``housing_mode``, whose ring after each roller passage is a short dip a narrow groove
@@ -178,6 +181,17 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     dr = diagnose(rp, settings, progress, d.baseline, intervals=False)
     if scan_mass and "shaft_dynamics" in rungs and not rp.record.rig.fit_shaft_mass:
         rung["shaft_mass"] = mass_scan(dr, settings)
+        if rung["shaft_mass"]["tried"] and "housing_mode" not in rungs:
+            # a housing mode in the band rings after every event as a shaft of another mass does (its mode folded
+            # to the same frequency): the mass only where it takes more off than the housing mode's scan
+            mode, left = best_mode(StartContext(dr.record, dr.voltage_V, dr.final.model_V, dr.final.values))
+            r = np.asarray(dr.voltage_V, dtype=float) - dr.final.model_V
+            mode_drop = float((np.sum((r - r.mean()) ** 2) - left) / dr.floor.voltage_noise_V**2)
+            rung["shaft_mass"]["housing_mode_chi2_drop"] = mode_drop
+            if mode_drop > rung["shaft_mass"]["chi2_drop"]:
+                rung["shaft_mass"].update(
+                    tried=False, why=f"not fitted: {rung['shaft_mass']['why']}; the housing mode's scan takes more "
+                    f"({mode_drop:.4g}, {mode['housing_mode_Hz']:.5g} Hz): the ring is left to the housing mode's rung")
         if rung["shaft_mass"]["tried"]:
             m = rung["shaft_mass"]["start_kg"]
             note(f"{steps[1]} rung: again from the scan's shaft mass, {m:.3g} kg, the mass fitted")
