@@ -283,7 +283,7 @@ def test_a_shaft_twice_the_rig_files_is_found_by_the_scan_of_its_mass(setup):
     d = SUBJECT.diagnose((rec, influence), copy.deepcopy(c))[1]
     r = d["dynamic_rung"]
     m = r["shaft_mass"]
-    assert r["accepted"] and m["tried"] and m["kept"] and m["chi2_drop"] > m["needed"], m
+    assert r["accepted"] and m["tried"] and m["kept"] and m["identified"] and m["chi2_drop"] > m["needed"], m
     assert 1.8 < m["start_kg"] < 2.2, m
     f = d["final"]
     lo, hi = f["ci95"]["shaft_mass_kg"]

@@ -123,6 +123,10 @@ def shaft_mass(m: dict | None) -> list[str]:
         return [out + f", and that fit was not kept (BIC drop {m.get('delta_bic', float('nan')):.4g}).", ""]
     ci = m.get("ci95") or [None, None]
     where = f" [{ci[0]:.4g}, {ci[1]:.4g}]" if ci[0] is not None else ""
+    if not m.get("identified", True):
+        return [out + f" (BIC drop {m['delta_bic']:.4g}), but the final fit does not pin the mass down "
+                f"({m['fitted_kg']:.4g}{where} kg): the record does not tell the shaft's mass; weigh it and give "
+                "`bearing.shaft_mass_kg` in the rig file.", ""]
     return [out + f" (BIC drop {m['delta_bic']:.4g}): **{m['fitted_kg']:.4g}{where} kg, not the rig file's "
             f"{m['rig_kg']:.3g} kg**. Check `bearing.shaft_mass_kg` in the rig file (the shaft's and inner ring's "
             "mass this bearing carries).", ""]

@@ -223,8 +223,10 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     bad = unidentified_defects(dr)
     ok = passes and not bad
     if (rung.get("shaft_mass") or {}).get("kept"):
-        rung["shaft_mass"].update(fitted_kg=float(dr.final.values["shaft_mass_kg"]),
-                                  ci95=dr.final.result.ci95.get("shaft_mass_kg"))
+        # judged again on the final refit's interval: a mass it does not pin down is not the record's shaft
+        fitted = float(dr.final.values["shaft_mass_kg"])
+        rung["shaft_mass"].update(fitted_kg=fitted, ci95=dr.final.result.ci95.get("shaft_mass_kg"),
+                                  identified=mass_identified(dr, fitted))
     rung["steps_per_period"] = {"search": rp.record.rig.steps_per_period, "final": dr.record.rig.steps_per_period}
     rung.update(accepted=bool(ok), unidentified=bad, effects=list(rungs), delta_bic=delta_bic,
                 strength=strength(delta_bic), excess_explained=share, **ladder_entry(d, dr, rp, steps), pair=pair)

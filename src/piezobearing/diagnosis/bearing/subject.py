@@ -255,7 +255,8 @@ class BearingSubject:
                     c0 = time.process_time()
                     d, rung = dynamic_rung(d, problem, settings, progress, rung, final_steps,
                                            scan_mass=config["bearing_diagnosis"].get("shaft_mass_scan", "auto") != "off")
-                    if rung["accepted"] and (rung.get("shaft_mass") or {}).get("kept"):
+                    if rung["accepted"] and (rung.get("shaft_mass") or {}).get("kept") \
+                            and rung["shaft_mass"]["identified"]:
                         # the rungs above run on the record's shaft, not the rig file's
                         problem = with_shaft_mass(problem, rung["shaft_mass"]["fitted_kg"])
                     d, problem, more = without_unidentified(d, problem, settings, progress)
