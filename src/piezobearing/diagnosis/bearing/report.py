@@ -107,13 +107,13 @@ def dynamic_rung(d: dict) -> list[str]:
     out += ["", f"Quasi-static answer: {r['quasi_static']['fault']}.", ""]
     if r.get("left_out"):
         out += [f"Left out with the dynamics on (not supported by the record): {', '.join(r['left_out'])}.", ""]
-    out += shaft_mass(r.get("shaft_mass"))
+    out += shaft_mass(r.get("shaft_mass"), r["accepted"])
     return out + housing_rung(r.get("housing_mode")) + joint_search(r.get("joint"))
 
 
-def shaft_mass(m: dict | None) -> list[str]:
+def shaft_mass(m: dict | None, accepted: bool = True) -> list[str]:
     """The dynamic rung's scan of the shaft's mass (``dynamic_rung.shaft_mass``): held at the rig file's, or found
-    other than it, the rung run again with the mass fitted."""
+    other than it, the rung run again with the mass fitted (``accepted``: whether the rung was)."""
     if not m or "rig_kg" not in m:
         return []
     if not m["tried"]:
@@ -123,6 +123,9 @@ def shaft_mass(m: dict | None) -> list[str]:
         return [out + f", and that fit was not kept (BIC drop {m.get('delta_bic', float('nan')):.4g}).", ""]
     ci = m.get("ci95") or [None, None]
     where = f" [{ci[0]:.4g}, {ci[1]:.4g}]" if ci[0] is not None else ""
+    if not accepted:
+        return [out + f" ({m.get('fitted_kg', m.get('search_kg', m['start_kg'])):.4g} kg), and the rung was not "
+                "accepted with it either: the record's misfit is not the shaft's mass.", ""]
     if not m.get("identified", True):
         return [out + f" (BIC drop {m['delta_bic']:.4g}), but the final fit does not pin the mass down "
                 f"({m['fitted_kg']:.4g}{where} kg): the record does not tell the shaft's mass; weigh it and give "
