@@ -59,7 +59,7 @@ SKIP = {"calibration.measurement", "synthesis.hidden_effects"}
 OTHER = {"type": "inner_race", "band_rule": "kurtogram", "method": "direct", "sensor_electrical": "short", "resample": "sample",
          "c66_rule": "paper", "material": "pzt5h", "model": "absolute", "window": "rectangular",
          "classification_types": "rolling_element", "statistic": "envelope", "position": "side",
-         "dynamic_rung": "off", "joint_search": "auto",
+         "dynamic_rung": "off", "joint_search": "auto", "shaft_mass_scan": "off",
          "interval_correlation": "off"}
 
 

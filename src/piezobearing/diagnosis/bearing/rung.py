@@ -151,13 +151,8 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     computed there (:func:`~piezobearing.diagnosis.engine.refit`); the defects are judged identified on those.
     Where it does not pass, its defects are judged on the Jacobian's intervals (the entry's ``unidentified``).
 
-    With ``scan_mass`` (``bearing_diagnosis.shaft_mass_scan: auto``) the rung's first fit is followed by a scan of
-    the shaft's mass (:func:`mass_scan`, the entry's ``shaft_mass``); where it finds the record's shaft other than
-    the rig file's, and takes more off chi2 than the housing mode's scan (:func:`~.effects.housing_mode.best_mode`:
-    a mode in the band rings after every event as a shaft of another mass does; where the mode's scan takes more,
-    the ring is left to the housing mode's rung), the search runs again from the scan's mass with the mass fitted
-    (:func:`with_shaft_mass`), kept where its BIC is lower by ``min_delta_bic`` and the mass's interval pins it
-    down (:func:`mass_identified`).
+    With ``scan_mass`` (``bearing_diagnosis.shaft_mass_scan: auto``) the rung's first fit is judged against a shaft
+    of another mass (:func:`mass_rung`, the entry's ``shaft_mass``).
 
     ``rungs``: the effects the rung adds (:func:`rung_effects` by default); with one that mimics a defect among
     them (``mimics_defects``: ``housing_mode``, whose ring after each roller passage is a short dip a narrow groove
@@ -180,32 +175,7 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     note(f"{steps[1]} rung: + {label}")
     dr = diagnose(rp, settings, progress, d.baseline, intervals=False)
     if scan_mass and "shaft_dynamics" in rungs and not rp.record.rig.fit_shaft_mass:
-        rung["shaft_mass"] = mass_scan(dr, settings)
-        if rung["shaft_mass"]["tried"] and "housing_mode" not in rungs:
-            # a housing mode in the band rings after every event as a shaft of another mass does (its mode folded
-            # to the same frequency): the mass only where it takes more off than the housing mode's scan
-            # (both scans on the same window of the record)
-            wr, n = window(dr.record, MASS_SCAN_S)
-            mode, left = best_mode(StartContext(wr, dr.voltage_V[:n], dr.final.model_V[:n], dr.final.values))
-            r = np.asarray(dr.voltage_V[:n], dtype=float) - dr.final.model_V[:n]
-            mode_drop = float((np.sum((r - r.mean()) ** 2) - left) / dr.floor.voltage_noise_V**2)
-            rung["shaft_mass"]["housing_mode_chi2_drop"] = mode_drop
-            if mode_drop > rung["shaft_mass"]["chi2_drop"]:
-                rung["shaft_mass"].update(
-                    tried=False, why=f"not fitted: {rung['shaft_mass']['why']}; the housing mode's scan takes more "
-                    f"({mode_drop:.4g}, {mode['housing_mode_Hz']:.5g} Hz): the ring is left to the housing mode's rung")
-        if rung["shaft_mass"]["tried"]:
-            m = rung["shaft_mass"]["start_kg"]
-            note(f"{steps[1]} rung: again from the scan's shaft mass, {m:.3g} kg, the mass fitted")
-            mp = with_shaft_mass(rp, m)
-            dm = diagnose(mp, settings, progress, d.baseline, intervals=False)
-            fitted = float(dm.final.values["shaft_mass_kg"])
-            rung["shaft_mass"].update(delta_bic=float(dr.final.bic - dm.final.bic), search_kg=fitted,
-                                      identified=mass_identified(dm, fitted))
-            rung["shaft_mass"]["kept"] = bool(dr.final.bic - dm.final.bic > settings.min_delta_bic
-                                              and rung["shaft_mass"]["identified"])
-            if rung["shaft_mass"]["kept"]:
-                rp, dr = mp, dm
+        rung["shaft_mass"], dr, rp = mass_rung(d, dr, rp, settings, progress, rungs, steps)
     # the quasi-static selection's other effects, each held to the selection rule with the dynamics on
     exempt = [] if any(CATALOGUE[n].mimics_defects for n in rungs) else faults[:1]
     weak = stand_ins(dr, [n for n in names if n not in exempt and n not in rungs and n not in RUNGS], settings)
@@ -344,6 +314,45 @@ def with_shaft_mass(problem: Problem, mass_kg: float) -> Problem:
     rig = replace(rec.rig, dynamics=replace(rec.rig.dynamics, shaft_mass_kg=float(mass_kg)), fit_shaft_mass=True,
                   cache={}, grid={})
     return replace(problem, record=replace(rec, rig=rig))
+
+
+def on_record_shaft(problem: Problem, rung: dict) -> Problem:
+    """``problem`` on the shaft the accepted dynamic rung found (``rung["shaft_mass"]`` kept and identified:
+    :func:`with_shaft_mass`), so that the rungs above it (the housing mode's, the joint search) run on the record's
+    shaft, not the rig file's; else ``problem``."""
+    mass = rung.get("shaft_mass") or {}
+    if rung.get("accepted") and mass.get("kept") and mass.get("identified"):
+        return with_shaft_mass(problem, mass["fitted_kg"])
+    return problem
+
+
+def mass_rung(d, dr, rp: Problem, settings, progress, rungs: tuple[str, ...], steps: tuple[str, str]):
+    """The rung's search ``dr`` (of ``rp``, at the rig file's mass) judged against a shaft of another mass: the scan
+    (:func:`mass_scan`); where it is tried and takes more off chi2 than the housing mode's scan on the same window
+    (a mode in the band rings after every event as a shaft of another mass does; ``rungs`` without
+    ``housing_mode``), the search again from the scan's mass with the mass fitted (:func:`with_shaft_mass`), kept
+    where its BIC is lower by ``min_delta_bic`` and its mass identified (:func:`mass_identified`). Returns (the
+    ``shaft_mass`` entry, the search kept, its problem)."""
+    entry = mass_scan(dr, settings)
+    if entry["tried"] and "housing_mode" not in rungs:
+        wr, n = window(dr.record, MASS_SCAN_S)  # both scans on the same window of the record
+        mode, left = best_mode(StartContext(wr, dr.voltage_V[:n], dr.final.model_V[:n], dr.final.values))
+        r = np.asarray(dr.voltage_V[:n], dtype=float) - dr.final.model_V[:n]
+        mode_drop = float((np.sum((r - r.mean()) ** 2) - left) / dr.floor.voltage_noise_V**2)
+        entry["housing_mode_chi2_drop"] = mode_drop
+        if mode_drop > entry["chi2_drop"]:
+            entry.update(tried=False, why=f"not fitted: {entry['why']}; the housing mode's scan takes more "
+                         f"({mode_drop:.4g}, {mode['housing_mode_Hz']:.5g} Hz): the ring is left to the housing mode's rung")
+    if not entry["tried"]:
+        return entry, dr, rp
+    (progress or (lambda _m: None))(f"{steps[1]} rung: again from the scan's shaft mass, {entry['start_kg']:.3g} kg, "
+                                    "the mass fitted")
+    mp = with_shaft_mass(rp, entry["start_kg"])
+    dm = diagnose(mp, settings, progress, d.baseline, intervals=False)
+    fitted = float(dm.final.values["shaft_mass_kg"])
+    entry.update(delta_bic=float(dr.final.bic - dm.final.bic), search_kg=fitted, identified=mass_identified(dm, fitted))
+    entry["kept"] = bool(entry["delta_bic"] > settings.min_delta_bic and entry["identified"])
+    return (entry, dm, mp) if entry["kept"] else (entry, dr, rp)
 
 
 def ladder_entry(d, dr, rp: Problem, steps: tuple[str, str]) -> dict:

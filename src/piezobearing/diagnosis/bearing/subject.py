@@ -44,8 +44,8 @@ from .rung import (
     dynamic_rung,
     housing_rung_wanted,
     housing_scan,
+    on_record_shaft,
     rung_wanted,
-    with_shaft_mass,
     without_unidentified,
 )
 
@@ -219,9 +219,7 @@ class BearingSubject:
         its angle's spans the circle) is taken out of the catalogue and the engine runs again without it
         (``fault.unidentified`` names it). Where the quasi-static verdict is ``unexplained`` with a fault's
         lines or a defect selected, the dynamic rung is tried (:func:`dynamic_rung`; ``dynamic_rung`` of the
-        dict says what it gave; with ``shaft_mass_scan: auto`` it scans the shaft's mass and, where the record's
-        shaft is not the rig file's, fits it: ``dynamic_rung.shaft_mass``, and the rungs above run on the record's
-        shaft); where it is accepted and the record is still ``unexplained``, the housing mode's
+        dict says what it gave); where it is accepted and the record is still ``unexplained``, the housing mode's
         rung above it (:func:`housing_rung_wanted`; ``dynamic_rung.housing_mode``). Where the record is still
         ``unexplained`` after them and ``joint_search`` is ``auto``, the joint dynamic search (:func:`~.joint.joint_wanted`, :func:`~.joint.joint_rung`:
         the operating point and each defect type fitted together with the shaft's dynamics; ``dynamic_rung.joint``).
@@ -255,10 +253,7 @@ class BearingSubject:
                     c0 = time.process_time()
                     d, rung = dynamic_rung(d, problem, settings, progress, rung, final_steps,
                                            scan_mass=config["bearing_diagnosis"].get("shaft_mass_scan", "auto") != "off")
-                    if rung["accepted"] and (rung.get("shaft_mass") or {}).get("kept") \
-                            and rung["shaft_mass"]["identified"]:
-                        # the rungs above run on the record's shaft, not the rig file's
-                        problem = with_shaft_mass(problem, rung["shaft_mass"]["fitted_kg"])
+                    problem = on_record_shaft(problem, rung)
                     d, problem, more = without_unidentified(d, problem, settings, progress)
                     dropped += more
                     note(f"dynamic rung: {time.process_time() - c0:.1f} s CPU "
