@@ -453,3 +453,14 @@ def voltage(rig: Rig, values: dict, additive: np.ndarray | None = None) -> np.nd
     if additive is not None:
         v = v + additive
     return v
+
+
+def centred_ss(r: np.ndarray) -> float:
+    """A residual's sum of squares, its mean taken out (the DC level is the fit's) [V^2]."""
+    r = np.asarray(r, dtype=float)
+    return float(np.sum((r - r.mean()) ** 2))
+
+
+def misfit(rig: Rig, voltage_V: np.ndarray, values: dict) -> float:
+    """The chain's misfit on ``voltage_V`` at ``values``: the residual's :func:`centred_ss` [V^2]."""
+    return centred_ss(voltage_V - voltage(rig, values))

@@ -112,11 +112,27 @@ def rung_wanted(d, config: dict) -> dict:
 def at_steps(problem: Problem, steps: int | None) -> Problem | None:
     """``problem`` with its rig's dynamic rung at ``steps`` per period of the shaft's mode (a rig of its own: its
     caches hold the other step's forces); None where that is the rig's step already (or ``steps`` is None)."""
-    rec = problem.record
-    if steps is None or int(steps) == rec.rig.steps_per_period:
+    if steps is None or int(steps) == problem.record.rig.steps_per_period:
         return None
-    rig = replace(rec.rig, steps_per_period=int(steps), cache={}, grid={})
-    return replace(problem, record=replace(rec, rig=rig))
+    return on_rig(problem, steps_per_period=int(steps))
+
+
+def own_rig(rig, **changes):
+    """``rig`` with ``changes``, a rig of its own: its caches (forces, grids) start empty, since they hold the old
+    rig's."""
+    return replace(rig, cache={}, grid={}, **changes)
+
+
+def on_rig(problem: Problem, **changes) -> Problem:
+    """``problem`` on a rig of its own with ``changes`` (:func:`own_rig`)."""
+    rec = problem.record
+    return replace(problem, record=replace(rec, rig=own_rig(rec.rig, **changes)))
+
+
+def chi2_drop(d, here: float, best: float) -> float:
+    """The chi2 a scan's best takes off ``d``'s fit: the misfit ``here`` less the scan's ``best`` (sums of squares,
+    means taken out: :func:`~.chain.centred_ss`) over the floor's variance."""
+    return float((here - best) / d.floor.voltage_noise_V**2)
 
 
 def rung_effects(problem: Problem) -> tuple[str, ...]:
@@ -242,21 +258,17 @@ def mass_scan(d, settings) -> dict:
     v = (np.asarray(d.voltage_V, dtype=float) - other)[:n]
     groove = values.get("outer_defect_width_m", 0.0) > 0
 
-    def misfit(vals: dict) -> float:
-        r = v - chain.voltage(rig, vals)
-        return float(np.sum((r - r.mean()) ** 2))
-
     # the rig file's damping at every mass: a fit at the wrong mass damps the ring it cannot match
     c0 = float(np.clip(rig.dynamics.bearing_damping_N_s_per_m, *DAMPING_BOUNDS))
 
     def at(m: float, place: bool, start: dict = values, damping: float = c0) -> tuple[float, dict]:
         """The least misfit at mass ``m`` and ``damping``: the values ``start``, or the groove placed anew."""
         vals = {**start, "shaft_mass_kg": float(m), "bearing_damping_N_s_per_m": damping}
-        best = (misfit(vals), vals)
+        best = (chain.misfit(rig, v, vals), vals)
         if place:
             ctx = StartContext(record, v, d.final.model_V[:n], vals)
             for t in place_groove(ctx, {"shaft_mass_kg": float(m), "bearing_damping_N_s_per_m": damping}):
-                e = misfit({**vals, **t})
+                e = chain.misfit(rig, v, {**vals, **t})
                 if e < best[0]:
                     best = (e, {**vals, **t})
         return best
@@ -269,8 +281,7 @@ def mass_scan(d, settings) -> dict:
             zip(base["shaft_mass_kg"] * MASS_SCAN_FINE, MASS_SCAN_FINE, strict=True)]
     j = int(np.argmin([e for e, _ in fine]))
     best, start = fine[j][0], fine[j][1]
-    here = misfit(values)
-    drop = float((here - best) / d.floor.voltage_noise_V**2)
+    drop = chi2_drop(d, chain.misfit(rig, v, values), best)
     needed = float(settings.min_delta_bic + np.log(v.size))
     m = float(start["shaft_mass_kg"])
     placed = groove and abs(start["outer_defect_angle_rad"] - values["outer_defect_angle_rad"]) > 0
@@ -291,8 +302,7 @@ def window(record, seconds: float):
     if n == record.n:
         return record, n
     rig = record.rig
-    sub = replace(rig, time_s=rig.time_s[:n], tach_Hz=None if rig.tach_Hz is None else rig.tach_Hz[:n], cache={},
-                  grid={})
+    sub = own_rig(rig, time_s=rig.time_s[:n], tach_Hz=None if rig.tach_Hz is None else rig.tach_Hz[:n])
     return replace(record, time_s=record.time_s[:n], rig=sub, _cache={},
                    input=None if record.input is None else record.input[:n],
                    filled=None if record.filled is None else record.filled[:n]), n
@@ -310,10 +320,8 @@ def with_shaft_mass(problem: Problem, mass_kg: float) -> Problem:
     """``problem`` on a rig whose shaft's mass is ``mass_kg`` (the start of ``shaft_mass_kg``), fitted wherever its
     mode lies (``Rig.fit_shaft_mass``); a rig of its own (its caches hold the other mass's forces). The rung's search
     on it places an outer-race groove anew at that mass (``shaft_dynamics``' starts)."""
-    rec = problem.record
-    rig = replace(rec.rig, dynamics=replace(rec.rig.dynamics, shaft_mass_kg=float(mass_kg)), fit_shaft_mass=True,
-                  cache={}, grid={})
-    return replace(problem, record=replace(rec, rig=rig))
+    dynamics = replace(problem.record.rig.dynamics, shaft_mass_kg=float(mass_kg))
+    return on_rig(problem, dynamics=dynamics, fit_shaft_mass=True)
 
 
 def on_record_shaft(problem: Problem, rung: dict) -> Problem:
@@ -338,7 +346,7 @@ def mass_rung(d, dr, rp: Problem, settings, progress, rungs: tuple[str, ...], st
         wr, n = window(dr.record, MASS_SCAN_S)  # both scans on the same window of the record
         mode, left = best_mode(StartContext(wr, dr.voltage_V[:n], dr.final.model_V[:n], dr.final.values))
         r = np.asarray(dr.voltage_V[:n], dtype=float) - dr.final.model_V[:n]
-        mode_drop = float((np.sum((r - r.mean()) ** 2) - left) / dr.floor.voltage_noise_V**2)
+        mode_drop = chi2_drop(dr, chain.centred_ss(r), left)
         entry["housing_mode_chi2_drop"] = mode_drop
         if mode_drop > entry["chi2_drop"]:
             entry.update(tried=False, why=f"not fitted: {entry['why']}; the housing mode's scan takes more "
@@ -461,8 +469,7 @@ def housing_scan(d, settings) -> dict:
     ctx = StartContext(d.record, d.voltage_V, d.final.model_V, d.final.values)
     start, best = best_mode(ctx)
     r = np.asarray(d.voltage_V, dtype=float) - d.final.model_V
-    var = d.floor.voltage_noise_V**2
-    drop = float((np.sum((r - r.mean()) ** 2) - best) / var)
+    drop = chi2_drop(d, chain.centred_ss(r), best)
     k = sum(p.vary for p in e.params(d.record))
     needed = float(settings.min_delta_bic + k * np.log(r.size))
     scan = {"start": start, "chi2_drop": drop, "needed": needed}

@@ -128,8 +128,7 @@ def _best(ctx, freqs: np.ndarray, damping: np.ndarray) -> tuple[dict, float]:
     other = ctx.model_V - chain.voltage(ctx.record.rig, values)
     best, at = np.inf, modes[0]
     for m, v in zip(modes, chain.mode_voltages(ctx.record.rig, values, modes), strict=True):
-        r = ctx.voltage_V - other - v
-        e = float(np.sum((r - r.mean()) ** 2))
+        e = chain.centred_ss(ctx.voltage_V - other - v)
         if e < best:
             best, at = e, m
     return {"housing_mode_Hz": at[0], "housing_mode_damping_ratio": at[1]}, best

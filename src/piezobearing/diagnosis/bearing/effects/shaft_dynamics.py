@@ -179,13 +179,8 @@ def place_groove(ctx, own: dict, keep: int = 1) -> list[dict]:
                                                 "outer_defect_width_m": float(np.clip(w * np.sqrt(amp), 0.05e-3, 2.9e-3))}))
     scored.sort(key=lambda x: -x[0])
     moved = [t for _, t in scored if abs(t["outer_defect_angle_rad"] - a0) > SAME_PLACE_RAD][:2]
-
-    def misfit(vals: dict) -> float:
-        r = ctx.voltage_V - chain.voltage(rig, vals)
-        return float(np.sum((r - r.mean()) ** 2))
-
-    here = misfit(values)
-    return [t for t in moved if misfit({**values, **t}) < here][:keep]
+    here = chain.misfit(rig, ctx.voltage_V, values)
+    return [t for t in moved if chain.misfit(rig, ctx.voltage_V, {**values, **t}) < here][:keep]
 
 
 EFFECT = ShaftDynamicsEffect()
