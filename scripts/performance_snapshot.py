@@ -346,10 +346,6 @@ def _startup(d: dict) -> tuple[str, str, list[dict]]:
 ROWS = [
     Row("paper", "the whole paper workflow in a fresh clone (all figures, the scorecard, both diagnoses)",
         "command_paper.json", "`python benchmarks/bench_command.py paper -- snakemake --cores 2`", _command_row),
-    Row("paper_unprioritised", "the whole paper in a fresh clone without the workflow profile (no job first: "
-        "Snakemake's own order)", "command_paper_unprioritised.json",
-        "`python benchmarks/bench_command.py paper_unprioritised -- snakemake --cores 2 --workflow-profile none`",
-        _command_row),
     Row("ci", "the CI workflow, `config/ci.yaml` (every rule on the reduced case)", "command_ci.json",
         "`python benchmarks/bench_command.py ci -- snakemake --cores 1 --configfile config/ci.yaml`", _command_row),
     Row("study_all", "every parameter study on the paper config, `study_all`, after the paper",

@@ -3,6 +3,7 @@
 import json
 import re
 import subprocess
+from collections import Counter
 from pathlib import Path
 
 import pytest
@@ -36,16 +37,32 @@ def test_slurm_profile_dry_run():
     assert "study_case" in out.stdout
 
 
-def test_a_plain_run_reads_the_default_profile_and_starts_the_longest_chains_first():
-    """`snakemake` from the checkout reads profiles/default (Snakemake looks for it beside the Snakefile): the
-    jobs the two longest chains need are scheduled first, and nothing else is (a folder Snakemake does not look
-    in would leave every job at the default priority)."""
+def _prioritised(dry_run_stdout: str, level: str) -> Counter:
+    """The jobs of a dry run at priority ``level`` (``1``, ``highest``), counted per rule."""
+    return Counter(re.findall(rf"^(?:local)?rule (\w+):\n(?:    .*\n)*?    priority: {level}$", dry_run_stdout, re.M))
+
+
+def test_the_longest_chains_start_first_and_are_exactly_the_jobs_they_need():
+    """The rules that say ``priority: LONGEST_CHAINS`` are exactly the jobs the two longest chains need: the jobs
+    Snakemake's own ``--prioritize`` of their last rules picks, counted per rule, and nothing else (a rule added to a
+    chain without it would leave it at the default priority); the plain run reads profiles/default."""
     out = snakemake("-n", "--forceall", "--configfile", "config/ci.yaml")
     assert out.returncode == 0, out.stderr[-3000:]
     assert "workflow specific profile profiles/default" in out.stderr + out.stdout
-    first = set(re.findall(r"^(?:local)?rule (\w+):\n(?:    .*\n)*?    priority: highest$", out.stdout, re.M))
-    assert {"fault_classification", "fault_type_voltage", "sensor_comparison", "sensor_comparison_figure"} <= first
-    assert not {"scorecard", "fig05", "diagnose"} & first
+    first = _prioritised(out.stdout, "1")
+    assert {"fault_classification", "fault_type_voltage", "sensor_comparison", "sensor_comparison_figure"} <= set(first)
+    assert not {"scorecard", "fig05", "diagnose"} & set(first)
+    chains = snakemake("-n", "--forceall", "--configfile", "config/ci.yaml", "--prioritize", "fault_classification",
+                       "sensor_comparison_figure")
+    assert chains.returncode == 0, chains.stderr[-3000:]
+    assert _prioritised(chains.stdout, "highest") == first
+
+
+def test_a_target_builds_only_what_it_needs():
+    """A run asked for one file plans only the jobs that file needs (the profile names no targets of its own)."""
+    out = snakemake("-n", "--forceall", "results/calibration/measurement.csv", "--configfile", "config/ci.yaml")
+    assert out.returncode == 0, out.stderr[-3000:]
+    assert _jobs(out.stdout) == {"synthesize_calibration"}
 
 
 def _jobs(dry_run_stdout: str) -> set[str]:

@@ -29,6 +29,7 @@ rule bearing_lpm:
         f"{RESULTS}/logs/bearing_lpm.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/bearing_lpm.tsv"
+    priority: LONGEST_CHAINS
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -52,6 +53,7 @@ rule housing_mesh:
         f"{RESULTS}/benchmarks/rules/housing_mesh_{{case}}.tsv"
     wildcard_constraints:
         case="healthy|faulty",
+    priority: LONGEST_CHAINS
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -81,6 +83,7 @@ rule housing_transient:
         f"{RESULTS}/benchmarks/rules/housing_transient_{{case}}.tsv"
     wildcard_constraints:
         case="healthy|faulty",
+    priority: LONGEST_CHAINS
     conda:
         "../envs/piezobearing.yaml"
     threads: 1

@@ -19,6 +19,7 @@ rule synthesize_calibration:
         f"{RESULTS}/logs/synthesize_calibration.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/synthesize_calibration.tsv"
+    priority: LONGEST_CHAINS
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -64,6 +65,7 @@ rule fit_resistance:
         f"{RESULTS}/logs/fit_resistance.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/fit_resistance.tsv"
+    priority: LONGEST_CHAINS
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -86,6 +88,7 @@ rule lowfreq_sensitivity:
         f"{RESULTS}/logs/lowfreq_sensitivity.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/lowfreq_sensitivity.tsv"
+    priority: LONGEST_CHAINS
     conda:
         "../envs/piezobearing.yaml"
     threads: 1

@@ -19,6 +19,15 @@ from piezobearing.workflow.registry import (
     user_cache_dir,
 )
 
+# The jobs of the two longest chains start first: the fault classification over noise seeds (its rule the
+# longest job, ~40 s on the paper config) with every job it needs, and the sensor comparison (its housing model,
+# the comparison and its figure, ~35 s). Each rule of the two chains says `priority: LONGEST_CHAINS`; the short jobs
+# then fill the other core around them, and a run does not end with one long job alone on one core
+# (`benchmarks/bench_command.py paper`; the docs' performance page). Rule priorities order only the jobs a run
+# needs (Snakemake's `--prioritize` would add its targets to every run: one file asked for would build both
+# chains). tests/test_workflow_quality.py checks that these rules are exactly the chains' jobs.
+LONGEST_CHAINS = 1
+
 # what a start computes that the next can reuse, keyed by content (registry.user_cache_dir): each package
 # module's imports (the code hashes) and the diagnosis subjects' checks of their settings
 CACHE = user_cache_dir()

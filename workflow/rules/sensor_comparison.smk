@@ -19,6 +19,7 @@ rule sensor_comparison_housing:
     wildcard_constraints:
         mesh="healthy|faulty",
         digest="[0-9a-f]{12}",
+    priority: LONGEST_CHAINS
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -51,6 +52,7 @@ rule sensor_comparison:
         f"{RESULTS}/logs/sensor_comparison.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/sensor_comparison.tsv"
+    priority: LONGEST_CHAINS
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -79,6 +81,7 @@ rule sensor_comparison_figure:
         f"{RESULTS}/logs/sensor_comparison_figure.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/sensor_comparison_figure.tsv"
+    priority: LONGEST_CHAINS
     conda:
         "../envs/piezobearing.yaml"
     threads: 1

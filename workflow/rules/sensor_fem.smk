@@ -29,6 +29,7 @@ rule sensor_mesh:
         f"{RESULTS}/logs/sensor_mesh.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/sensor_mesh.tsv"
+    priority: LONGEST_CHAINS
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -77,6 +78,7 @@ rule sensor_modal:
         f"{RESULTS}/logs/sensor_modal.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/sensor_modal.tsv"
+    priority: LONGEST_CHAINS
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -102,6 +104,7 @@ rule sensor_harmonic:
         f"{RESULTS}/logs/sensor_harmonic.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/sensor_harmonic.tsv"
+    priority: LONGEST_CHAINS
     conda:
         "../envs/piezobearing.yaml"
     threads: 1

@@ -35,6 +35,7 @@ rule sensor_voltage:
         f"{RESULTS}/benchmarks/rules/sensor_voltage_{{case}}.tsv"
     wildcard_constraints:
         case="healthy|faulty",
+    priority: LONGEST_CHAINS
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -303,6 +304,7 @@ rule fault_type_voltage:
         f"{RESULTS}/benchmarks/rules/fault_type_voltage_{{fault_type}}.tsv"
     wildcard_constraints:
         fault_type="outer_race|inner_race|rolling_element",
+    priority: LONGEST_CHAINS
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
@@ -334,6 +336,7 @@ rule fault_classification:
         f"{RESULTS}/logs/fault_classification.log",
     benchmark:
         f"{RESULTS}/benchmarks/rules/fault_classification.tsv"
+    priority: LONGEST_CHAINS
     conda:
         "../envs/piezobearing.yaml"
     threads: 1
