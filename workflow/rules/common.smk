@@ -21,7 +21,7 @@ from piezobearing.workflow.registry import (
 
 # The jobs of the two longest chains start first: the fault classification over noise seeds (its rule the
 # longest job, ~40 s on the paper config) with every job it needs, and the sensor comparison (its housing model,
-# the comparison and its figure, ~35 s). Each rule of the two chains says `priority: LONGEST_CHAINS`; the short jobs
+# the comparison and its figure, ~35 s). The chains' rules say `priority: LONGEST_CHAINS`; the short jobs
 # then fill the other core around them, and a run does not end with one long job alone on one core
 # (`benchmarks/bench_command.py paper`; the docs' performance page). Rule priorities order only the jobs a run
 # needs (Snakemake's `--prioritize` would add its targets to every run: one file asked for would build both
