@@ -172,7 +172,8 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
 
     ``rungs``: the effects the rung adds (:func:`rung_effects` by default); with one that mimics a defect among
     them (``mimics_defects``: ``housing_mode``, whose ring after each roller passage is a short dip a narrow groove
-    under the sensor mimics) the quasi-static search's first defect is held to the selection rule too. The subject runs this once more with
+    under the sensor mimics) the quasi-static search's first defect is held to the selection rule too, as it is where
+    ``rung`` says ``hold_defects`` (:func:`~.joint.defects_against_dynamics`). The subject runs this once more with
     ``rungs=("housing_mode",)`` on an accepted rung's diagnosis that is still ``unexplained``; ``steps`` then name
     the models before and after in the entry's ladder.
     """
@@ -193,7 +194,7 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     if scan_mass and "shaft_dynamics" in rungs and not rp.record.rig.fit_shaft_mass:
         rung["shaft_mass"], dr, rp = mass_rung(d, dr, rp, settings, progress, rungs, steps)
     # the quasi-static selection's other effects, each held to the selection rule with the dynamics on
-    exempt = [] if any(CATALOGUE[n].mimics_defects for n in rungs) else faults[:1]
+    exempt = [] if rung.get("hold_defects") or any(CATALOGUE[n].mimics_defects for n in rungs) else faults[:1]
     weak = stand_ins(dr, [n for n in names if n not in exempt and n not in rungs and n not in RUNGS], settings)
     if weak:
         note(f"{steps[1]} rung: without {', '.join(weak)} (not supported with {' and '.join(rungs)})")

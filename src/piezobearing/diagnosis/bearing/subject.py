@@ -37,7 +37,7 @@ from .answer import fault_answer
 from .effects import CATALOGUE, RUNGS
 from .effects.shaft_speed import roller_pass_line_Hz
 from .floor import REMEASURE_BELOW, floor_prepass, noise_floor
-from .joint import joint_rung, joint_wanted
+from .joint import defects_against_dynamics, joint_rung, joint_wanted
 from .model import BearingModel, RigRecord
 from .representations import REPRESENTATIONS, passages
 from .rung import (
@@ -219,7 +219,9 @@ class BearingSubject:
         its angle's spans the circle) is taken out of the catalogue and the engine runs again without it
         (``fault.unidentified`` names it). Where the quasi-static verdict is ``unexplained`` with a fault's
         lines or a defect selected, the dynamic rung is tried (:func:`dynamic_rung`; ``dynamic_rung`` of the
-        dict says what it gave); where it is accepted and the record is still ``unexplained``, the housing mode's
+        dict says what it gave); where it is ``explained`` with a defect that does not stand against a healthy
+        bearing with the shaft's dynamics (:func:`~.joint.defects_against_dynamics`), the rung is tried with the
+        defects held to the rule; where it is accepted and the record is still ``unexplained``, the housing mode's
         rung above it (:func:`housing_rung_wanted`; ``dynamic_rung.housing_mode``). Where the record is still
         ``unexplained`` after them and ``joint_search`` is ``auto``, the joint dynamic search (:func:`~.joint.joint_wanted`, :func:`~.joint.joint_rung`:
         the operating point and each defect type fitted together with the shaft's dynamics; ``dynamic_rung.joint``).
@@ -242,9 +244,17 @@ class BearingSubject:
                 d = diagnose(problem, settings, progress)
             d, problem, dropped = without_unidentified(d, problem, settings, progress)
             rung = {"tried": False, "accepted": False, "why": "the quasi-static verdict is explained"}
-            if d.verdict == "unexplained" and not any(e.name in RUNGS for e in problem.configured):
+            held = any(e.name in RUNGS for e in problem.configured)
+            if d.verdict == "explained" and not held:
                 c0 = time.process_time()
-                rung = rung_wanted(d, config)
+                rung = defects_against_dynamics(d, config)
+                if "against_dynamics" in rung:
+                    note(f"defects against the shaft's dynamics: {time.process_time() - c0:.1f} s CPU "
+                         f"({'they stand' if rung['against_dynamics']['stands'] else 'held to the rule'})")
+            if (d.verdict == "unexplained" or rung["tried"]) and not held:
+                c0 = time.process_time()
+                if d.verdict == "unexplained":
+                    rung = rung_wanted(d, config)
                 if time.process_time() - c0 > 0.5:  # the lines rule held the record against its best healthy model
                     note(f"best healthy model of the lines rule: {time.process_time() - c0:.1f} s CPU")
                 final_steps = int(config["bearing_diagnosis"].get("dynamic_final_steps_per_period",
