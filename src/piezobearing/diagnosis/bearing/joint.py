@@ -98,9 +98,7 @@ def defects_against_dynamics(d, config: dict) -> dict:
         return explained  # a configured defect, or one whose signature is larger than the dynamics leave
     rec, v, qs = d.record, np.asarray(d.voltage_V, dtype=float), d.final
     model = healthy_model(qs)
-    own = CATALOGUE["shaft_dynamics"].starts(StartContext(rec, v, qs.model_V, qs.values))[0]
-    defaults = model.defaults(rec)
-    base = {**defaults, **{k: x for k, x in qs.values.items() if k in defaults}, **own}
+    base, _ = healthy_start_values(model, qs, rec, v)
     f = fit_model(model, rec, v, d.floor, start=base, starts=[{}], max_nfev=d.settings.max_nfev, ftol=d.settings.ftol)
     f.model.release()
     margin, needed = float(f.bic - qs.bic), float(d.settings.min_delta_bic)
@@ -114,6 +112,15 @@ def defects_against_dynamics(d, config: dict) -> dict:
     return {"tried": True, "accepted": False, "evidence": [], "hold_defects": True, "against_dynamics": check,
             "why": f"the quasi-static verdict is explained, but {said}: each defect is held to the rule with the "
                    "shaft's dynamics on"}
+
+
+def healthy_start_values(model: BearingModel, qs: ModelFit, rec, v: np.ndarray) -> tuple[dict, dict]:
+    """The start of the dynamic healthy ``model`` (:func:`healthy_model`) from the quasi-static fit ``qs``: its
+    values where the model has them, the shaft's mass and damping at the rig file's (``shaft_dynamics``' start, not
+    the effect's neutral mass 0); returns (the start, the shaft's values)."""
+    own = CATALOGUE["shaft_dynamics"].starts(StartContext(rec, v, qs.model_V, qs.values))[0]
+    defaults = model.defaults(rec)
+    return {**defaults, **{k: x for k, x in qs.values.items() if k in defaults}, **own}, own
 
 
 def _share_misfit(vc: np.ndarray, m: np.ndarray) -> tuple[float, float]:
@@ -265,8 +272,7 @@ def joint_search(d, settings, progress=None) -> tuple[dict, dict]:
     vc = v - v.mean()
     qs = d.final
     model = healthy_model(qs)
-    own = CATALOGUE["shaft_dynamics"].starts(StartContext(rec, v, qs.model_V, qs.values))[0]
-    base = {**model.defaults(rec), **{k: x for k, x in qs.values.items() if k in model.defaults(rec)}, **own}
+    base, own = healthy_start_values(model, qs, rec, v)
     grid = grid_points(model, base, rec, vc)
     evaluations = len(HEALTHY_GRID[0]) * len(HEALTHY_GRID[1])
     note(f"joint search: dynamic healthy model ({model.label}) from {HEALTHY_STARTS} of {len(grid)} grid points")

@@ -243,20 +243,10 @@ class BearingSubject:
                 problem = replace(problem, floor=fl)
                 d = diagnose(problem, settings, progress)
             d, problem, dropped = without_unidentified(d, problem, settings, progress)
+            held = any(e.name in RUNGS for e in problem.configured)  # the user's model holds a rung already
             rung = {"tried": False, "accepted": False, "why": "the quasi-static verdict is explained"}
-            held = any(e.name in RUNGS for e in problem.configured)
-            if d.verdict == "explained" and not held:
-                c0 = time.process_time()
-                rung = defects_against_dynamics(d, config)
-                if "against_dynamics" in rung:
-                    note(f"defects against the shaft's dynamics: {time.process_time() - c0:.1f} s CPU "
-                         f"({'they stand' if rung['against_dynamics']['stands'] else 'held to the rule'})")
-            if (d.verdict == "unexplained" or rung["tried"]) and not held:
-                c0 = time.process_time()
-                if d.verdict == "unexplained":
-                    rung = rung_wanted(d, config)
-                if time.process_time() - c0 > 0.5:  # the lines rule held the record against its best healthy model
-                    note(f"best healthy model of the lines rule: {time.process_time() - c0:.1f} s CPU")
+            rung = rung if held else rung_start(d, config, note)
+            if not held and (d.verdict == "unexplained" or rung["tried"]):
                 final_steps = int(config["bearing_diagnosis"].get("dynamic_final_steps_per_period",
                                                                   FINAL_STEPS_PER_PERIOD))
                 if rung["tried"]:
@@ -293,6 +283,23 @@ class BearingSubject:
 
 #: The running-bearing subject.
 SUBJECT = BearingSubject()
+
+
+def rung_start(d, config: dict, note) -> dict:
+    """The start of the ``dynamic_rung`` entry on the quasi-static diagnosis ``d``: on an ``explained`` one, whether its
+    defects stand against a healthy bearing with the shaft's dynamics (:func:`~.joint.defects_against_dynamics`); on
+    an ``unexplained`` one, whether the rung is wanted (:func:`rung_wanted`). ``note`` says what either cost."""
+    c0 = time.process_time()
+    if d.verdict == "explained":
+        rung = defects_against_dynamics(d, config)
+        if "against_dynamics" in rung:
+            note(f"defects against the shaft's dynamics: {time.process_time() - c0:.1f} s CPU "
+                 f"({'they stand' if rung['against_dynamics']['stands'] else 'held to the rule'})")
+        return rung
+    rung = rung_wanted(d, config)
+    if time.process_time() - c0 > 0.5:  # the lines rule held the record against its best healthy model
+        note(f"best healthy model of the lines rule: {time.process_time() - c0:.1f} s CPU")
+    return rung
 
 
 def catalogue_for(tachometer: bool) -> Catalogue:
