@@ -86,7 +86,7 @@ def linearised(rig, config, values: dict) -> np.ndarray:
     if values.get("outer_defect_width_m", 0.0) > 0:
         outer = OuterGroove(values["outer_defect_angle_rad"], values["outer_defect_width_m"], rig.geometry)
     rig20 = replace(rig, steps_per_period=20, cache={}, grid={})
-    first, s, psi, drop, _ = chain.fine_grid(rig20, values, phase_edges(phi), op, outer, None, dyn)
+    first, s, psi, drop, _, _ = chain.fine_grid(rig20, values, phase_edges(phi), op, outer, None, dyn)
     f = linearised_shaft.sensor_force(psi, drop, op.radial_load_N, op.radial_clearance_m,
                                       line_contact_stiffness(rig.geometry.roller_length_m), rig.influence, dyn,
                                       rig.dt_s / s)

@@ -319,8 +319,7 @@ def shaft_dynamics_force(rig: Rig, values: dict, edges: np.ndarray, op: Operatin
     static equilibrium at ``first``, as the shaft).
     """
     dyn = dynamics_of(rig, values)
-    first, s, psi, drop, normals = fine_grid(rig, values, edges, op, outer, offsets, dyn)
-    g = kinematic_grid(rig, edges[first:], s)[3]
+    first, s, psi, drop, normals, g = fine_grid(rig, values, edges, op, outer, offsets, dyn)
     f = dyn_sensor_force(psi, drop, op.radial_load_N, op.radial_clearance_m, rig.geometry.roller_length_m,
                          rig.influence, dyn, rig.dt_s / s, normals, g)
     return first, s, f
@@ -355,9 +354,9 @@ def kinematic_grid(rig: Rig, e: np.ndarray, s: int) -> tuple[np.ndarray, np.ndar
 
 
 def fine_grid(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, offsets,
-              dyn: ShaftDynamics) -> tuple[int, int, np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
+              dyn: ShaftDynamics) -> tuple[int, int, np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray], np.ndarray]:
     """The dynamic rung's grid: (first sample, steps per sample S, roller angles (n, Z) [rad], extra gaps (n, Z) [m],
-    the rollers' normals (sin psi, -cos psi)).
+    the rollers' normals (sin psi, -cos psi), the influence line at the roller angles (n, Z)).
 
     Each sample window from ``first`` on (its cage phase from ``edges``) is cut into S equal steps
     (:func:`~piezobearing.bearing.shaft_dynamics.steps_per_sample` at the shaft's mode, at least the moving
@@ -374,7 +373,7 @@ def fine_grid(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, o
     settle = max(DYNAMICS_SETTLE_S, 10.0 / max(zeta * 2 * np.pi * f_mode, 1e-12))
     n_ext = edges.size - 1
     first = max(0, n_ext - rig.n - int(np.ceil(settle / dt)))
-    phi, psi, normals, _ = kinematic_grid(rig, edges[first:], s)
+    phi, psi, normals, g = kinematic_grid(rig, edges[first:], s)
     drop = _moving_drops(rig, values, phi) if moving else np.zeros(psi.shape)
     if isinstance(outer, OuterGroove) and outer.width_m < rig.geometry.outer_raceway_radius_m * rig.pitch_rad:
         j = np.mod(np.rint((outer.angle_rad - phi) / rig.pitch_rad), rig.geometry.n_rollers).astype(int)
@@ -384,7 +383,7 @@ def fine_grid(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, o
         drop = drop + outer(psi)
     if offsets is not None:
         drop = drop + np.asarray(offsets)[None, :]
-    return first, s, psi, drop, normals
+    return first, s, psi, drop, normals, g
 
 
 def _moving_drops(rig: Rig, values: dict, phi: np.ndarray) -> np.ndarray:
