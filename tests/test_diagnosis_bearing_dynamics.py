@@ -30,7 +30,7 @@ from piezobearing.bearing.shaft_dynamics import ShaftDynamics, contact_stiffness
 from piezobearing.diagnosis.bearing import chain, lpm_records
 from piezobearing.diagnosis.bearing.answer import FAULT_TYPES, _peak, lines_threshold_dB
 from piezobearing.diagnosis.bearing.report import shaft_mass as report_shaft_mass
-from piezobearing.diagnosis.bearing.rung import unidentified_defects
+from piezobearing.diagnosis.bearing.rung import MASS_SCAN_COARSE, alias_masses, unidentified_defects
 from piezobearing.diagnosis.bearing.subject import SUBJECT, rig_from_config, synthesise
 from piezobearing.diagnosis.engine import diagnose, refit
 from piezobearing.diagnosis.settings import DiagnosticsSettings
@@ -294,6 +294,8 @@ def test_a_shaft_twice_the_rig_files_is_found_by_the_scan_of_its_mass(setup):
     assert f["nrmse"] < 1.1 * f["noise_floor_nrmse"], (f["nrmse"], f["noise_floor_nrmse"])
     text = "\n".join(report_shaft_mass(m))
     assert "bearing.shaft_mass_kg" in text and "not the rig file's" in text, text
+    # at 2550 Hz the 2 kg shaft's mode (1.8 kHz) is seen through its alias: the report says which mass rings there too
+    assert m["alias"] and m["alias"]["masses_kg"] and "hint to weigh the shaft" in text, (m.get("alias"), text)
 
 
 @pytest.mark.slow
@@ -315,3 +317,29 @@ def test_a_groove_a_softer_pedestal_mimics_on_a_healthy_bearing_is_not_a_fault()
     assert d["fault"]["type"] == "none", d["fault"]["statement"]
     assert not any(n in d["selected"] for n in ("outer_race_defect", "inner_race_defect", "rolling_element_defect"))
     assert "shaft_dynamics" in d["selected"]
+
+
+def test_a_mass_seen_through_its_alias_names_the_masses_that_ring_at_the_same_alias(setup):
+    """At 2550 Hz the rig file's shaft rings above the Nyquist frequency: a mass found there is seen only through
+    its mode's alias. Every other mass named lies in the scan's range and rings at a mode that folds to the same
+    frequency (closed form: |f - f_s round(f / f_s)|); a 3 kg shaft (1.5 kHz) names one near 0.5 kg (3.5 kHz), the
+    pair a fit confused on the validation page. At 25.6 kHz the mode is seen itself: no alias."""
+    c, influence = setup
+    t = np.arange(255) / 2550.0
+    rig = rig_from_config(c, influence, t)
+
+    def folded(m):
+        f = chain.shaft_mode_Hz(rig, chain.dynamics_of(rig, {"shaft_mass_kg": m}))[0]
+        return abs(f - 2550.0 * round(f / 2550.0))
+
+    for mass in (3.0, 2.0, 0.5):
+        a = alias_masses(rig, {}, mass)
+        assert a is not None and a["masses_kg"], a
+        np.testing.assert_allclose(a["alias_Hz"], folded(mass), rtol=1e-9)
+        m0 = rig.dynamics.shaft_mass_kg
+        for m in a["masses_kg"]:
+            assert m0 * MASS_SCAN_COARSE[0] <= m <= m0 * MASS_SCAN_COARSE[-1] and abs(m - mass) > 1e-3
+            np.testing.assert_allclose(folded(m), a["alias_Hz"], rtol=1e-6)
+    assert any(0.4 < m < 0.6 for m in alias_masses(rig, {}, 3.0)["masses_kg"])
+    assert alias_masses(rig_from_config(c, influence, np.arange(2560) / 25600.0), {}, 2.0) is None
+

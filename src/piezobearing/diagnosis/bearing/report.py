@@ -130,9 +130,16 @@ def shaft_mass(m: dict | None, accepted: bool = True) -> list[str]:
         return [out + f" (BIC drop {m['delta_bic']:.4g}), but the final fit does not pin the mass down "
                 f"({m['fitted_kg']:.4g}{where} kg): the record does not tell the shaft's mass; weigh it and give "
                 "`bearing.shaft_mass_kg` in the rig file.", ""]
-    return [out + f" (BIC drop {m['delta_bic']:.4g}): **{m['fitted_kg']:.4g}{where} kg, not the rig file's "
+    out += (f" (BIC drop {m['delta_bic']:.4g}): **{m['fitted_kg']:.4g}{where} kg, not the rig file's "
             f"{m['rig_kg']:.3g} kg**. Check `bearing.shaft_mass_kg` in the rig file (the shaft's and inner ring's "
-            "mass this bearing carries).", ""]
+            "mass this bearing carries).")
+    alias = m.get("alias")
+    if alias:
+        others = " or ".join(f"{x:.3g}" for x in alias["masses_kg"]) or "no other mass of the scan's range"
+        out += (f" At this record's rate its mode ({alias['mode_Hz']:.4g} Hz) is seen only through its alias at "
+                f"{alias['alias_Hz']:.4g} Hz, where a shaft of {others} kg would ring too: the mass found is a hint "
+                "to weigh the shaft, not a measurement.")
+    return [out, ""]
 
 
 def joint_search(j: dict | None) -> list[str]:

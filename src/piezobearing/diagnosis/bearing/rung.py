@@ -13,7 +13,9 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+from scipy.optimize import brentq
 
+from ...bearing.surrogate import Operating
 from ..effect import Catalogue, StartContext
 from ..engine import diagnose, refit
 from ..fit import fit_model
@@ -213,7 +215,8 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
         # judged again on the final refit's interval: a mass it does not pin down is not the record's shaft
         fitted = float(dr.final.values["shaft_mass_kg"])
         rung["shaft_mass"].update(fitted_kg=fitted, ci95=dr.final.result.ci95.get("shaft_mass_kg"),
-                                  identified=mass_identified(dr, fitted))
+                                  identified=mass_identified(dr, fitted),
+                                  alias=alias_masses(dr.record.rig, dr.final.values, fitted))
     rung["steps_per_period"] = {"search": rp.record.rig.steps_per_period, "final": dr.record.rig.steps_per_period}
     rung.update(accepted=bool(ok), unidentified=bad, effects=list(rungs), delta_bic=delta_bic,
                 strength=strength(delta_bic), excess_explained=share, **ladder_entry(d, dr, rp, steps), pair=pair)
@@ -307,6 +310,31 @@ def window(record, seconds: float):
     return replace(record, time_s=record.time_s[:n], rig=sub, _cache={},
                    input=None if record.input is None else record.input[:n],
                    filled=None if record.filled is None else record.filled[:n]), n
+
+
+def alias_masses(rig, values: dict, mass_kg: float) -> dict | None:
+    """Where the shaft's mode at ``mass_kg`` (at the operating point of ``values``) lies above the record's Nyquist
+    frequency, the record sees it only through its alias: the mode, the frequency it folds to, and the other masses
+    of the scan's range (:data:`MASS_SCAN_COARSE` times the rig file's) whose modes fold to the same frequency,
+    {"mode_Hz", "alias_Hz", "masses_kg"}; None where the mode lies below Nyquist. Only the box average's
+    attenuation and the ring's decay tell those masses apart: on the paper's rig at 2550 Hz a shaft of 0.5 kg
+    (3.7 kHz) and one of 3 kg (1.5 kHz) ring at about the same alias."""
+    op = Operating(values.get("radial_load_N", rig.radial_load_N), values.get("radial_clearance_m", rig.radial_clearance_m))
+
+    def mode(m: float) -> float:
+        return chain.shaft_mode_Hz(rig, chain.dynamics_of(rig, {**values, "shaft_mass_kg": m}), op)[0]
+
+    fs = 1.0 / rig.dt_s
+    f = mode(mass_kg)
+    if f < 0.5 * fs:
+        return None
+    fa = abs(f - fs * round(f / fs))
+    lo, hi = rig.dynamics.shaft_mass_kg * MASS_SCAN_COARSE[[0, -1]]
+    f_lo, f_hi = mode(hi), mode(lo)  # the heavier shaft rings lower
+    targets = {k * fs + sign * fa for k in range(int(f_hi // fs) + 2) for sign in (-1, 1)}
+    masses = sorted(float(brentq(lambda m, ft=ft: mode(m) - ft, lo, hi, rtol=1e-10)) for ft in targets
+                    if f_lo < ft < f_hi and abs(ft - f) > 1e-6 * f)
+    return {"mode_Hz": float(f), "alias_Hz": float(fa), "masses_kg": masses}
 
 
 def mass_identified(d, mass_kg: float) -> bool:
