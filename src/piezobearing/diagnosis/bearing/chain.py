@@ -194,7 +194,7 @@ def forces(rig: Rig, values: dict) -> tuple[np.ndarray, np.ndarray, tuple[int, i
     speed = _speed(rig, values, t_ext)
     phi = cage_phase(t_ext, speed, g, 0.0, slip)
     phi = phi - phi[rig.n_pre] + values["start_phase_rad"]
-    op = Operating(values.get("radial_load_N", rig.radial_load_N), values.get("radial_clearance_m", rig.radial_clearance_m))
+    op = operating(rig, values)
     offsets = None
     if "roller_1_offset_m" in values:
         offsets = tuple([0.0] + [values[f"roller_{k}_offset_m"] for k in range(1, g.n_rollers)])
@@ -290,6 +290,11 @@ def moving_defect_change(rig: Rig, values: dict, edges: np.ndarray, op: Operatin
 DYNAMICS_SETTLE_S = 0.02
 
 
+def operating(rig: Rig, values: dict) -> Operating:
+    """The operating point of ``values``: their radial load and clearance, the rig file's where they hold none."""
+    return Operating(values.get("radial_load_N", rig.radial_load_N), values.get("radial_clearance_m", rig.radial_clearance_m))
+
+
 def dynamics_of(rig: Rig, values: dict) -> ShaftDynamics:
     """The rig's shaft and pedestal with the values' ``shaft_mass_kg`` and ``bearing_damping_N_s_per_m``."""
     d = rig.dynamics
@@ -300,7 +305,7 @@ def dynamics_of(rig: Rig, values: dict) -> ShaftDynamics:
 def shaft_mode_Hz(rig: Rig, dyn: ShaftDynamics, op: Operating | None = None) -> tuple[float, float]:
     """The shaft's mode on its rollers along the load [Hz] and its damping ratio [-] at the operating point (the
     rig's nominal one by default): :func:`piezobearing.bearing.shaft_dynamics.shaft_mode`."""
-    op = op or Operating(rig.radial_load_N, rig.radial_clearance_m)
+    op = op or operating(rig, {})
     return shaft_mode(dyn, float(op.radial_load_N), float(op.radial_clearance_m), rig.geometry.roller_length_m,
                       rig.geometry.n_rollers)
 

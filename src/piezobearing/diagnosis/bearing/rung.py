@@ -15,7 +15,6 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import brentq
 
-from ...bearing.surrogate import Operating
 from ..effect import Catalogue, StartContext
 from ..engine import diagnose, refit
 from ..fit import fit_model
@@ -319,7 +318,7 @@ def alias_masses(rig, values: dict, mass_kg: float) -> dict | None:
     {"mode_Hz", "alias_Hz", "masses_kg"}; None where the mode lies below Nyquist. Only the box average's
     attenuation and the ring's decay tell those masses apart: on the paper's rig at 2550 Hz a shaft of 0.5 kg
     (3.7 kHz) and one of 3 kg (1.5 kHz) ring at about the same alias."""
-    op = Operating(values.get("radial_load_N", rig.radial_load_N), values.get("radial_clearance_m", rig.radial_clearance_m))
+    op = chain.operating(rig, values)
 
     def mode(m: float) -> float:
         return chain.shaft_mode_Hz(rig, chain.dynamics_of(rig, {**values, "shaft_mass_kg": m}), op)[0]
