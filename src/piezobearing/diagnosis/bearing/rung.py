@@ -3,7 +3,8 @@
 Where the quasi-static diagnosis ends ``unexplained`` with a defect selected or a fault's lines left
 (:func:`rung_wanted`), :func:`dynamic_rung` runs the engine once more with ``shaft_dynamics`` and keeps it where it
 passes the selection rule; :func:`without_unidentified` runs the engine again without a selected defect whose width
-interval holds zero or whose angle interval spans the circle (:func:`unidentified_defects`). Above an accepted dynamic
+interval holds zero or whose angle interval spans the circle (:func:`unidentified_defects`), and
+:func:`without_defects` without one the record cannot tell from the shaft's dynamics (:func:`indistinct_defects`). Above an accepted dynamic
 rung that leaves the record ``unexplained``, the housing mode's rung (:func:`housing_rung_wanted`,
 :func:`housing_scan`) runs :func:`dynamic_rung` once more with ``housing_mode``.
 """
@@ -70,16 +71,38 @@ def without_unidentified(d, problem: Problem, settings, progress=None, rounds: i
         if not bad:
             break
         dropped += bad
-        names = {b["effect"] for b in bad}
-        cat = Catalogue("bearing")
-        for name, e in problem.catalogue.items():
-            if name not in names:
-                cat.register(e)
-        problem = replace(problem, catalogue=cat,
-                          configured=tuple(e for e in problem.configured if e.name not in names))
-        (progress or (lambda _m: None))(f"not identified, left out: {', '.join(sorted(names))}")
-        d = diagnose(problem, settings, progress)
+        d, problem = without_defects(d, problem, settings, progress, bad)
     return d, problem, dropped
+
+
+def without_defects(d, problem: Problem, settings, progress, bad: list[dict]):
+    """The diagnosis again with the defects of ``bad`` (``{"effect", ...}`` each) out of the catalogue and the
+    configured effects; returns (diagnosis, problem)."""
+    names = {b["effect"] for b in bad}
+    cat = Catalogue("bearing")
+    for name, e in problem.catalogue.items():
+        if name not in names:
+            cat.register(e)
+    problem = replace(problem, catalogue=cat, configured=tuple(e for e in problem.configured if e.name not in names))
+    (progress or (lambda _m: None))(f"not identified, left out: {', '.join(sorted(names))}")
+    return diagnose(problem, settings, progress), problem
+
+
+def indistinct_defects(d, rung: dict) -> list[dict]:
+    """The selected defects the record cannot tell from the shaft's dynamics on a healthy bearing: where a defect did
+    not stand against that model (:func:`~.joint.defects_against_dynamics`: its BIC within the selection rule's margin)
+    and the rung, tried with the defects held to the rule, was not accepted, neither answer passes the rule against
+    the other. Each ``{"effect", "ci95", "reason"}``, as :func:`unidentified_defects`'s; none otherwise."""
+    check = rung.get("against_dynamics")
+    if not check or check["stands"] or rung["accepted"] or not rung.get("hold_defects"):
+        return []
+    ci = d.final.result.ci95
+    reason = (f"the record cannot tell it from the shaft's dynamics on a healthy bearing ({check['model']}: its BIC "
+              f"{check['bic_margin']:+.4g} against the defect's, where the selection rule asks more than "
+              f"{check['needed']:.4g}; with the dynamics on, the defect is not accepted either): weigh the shaft and "
+              "measure the pedestal's stiffness, and give them in the rig file")
+    return [{"effect": n, "ci95": {k: ci.get(k) for k in FAULT_TYPES[n][1:]}, "reason": reason}
+            for n in d.selected if n in FAULT_TYPES]
 
 
 def rung_wanted(d, config: dict) -> dict:

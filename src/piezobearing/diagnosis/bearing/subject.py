@@ -44,8 +44,10 @@ from .rung import (
     dynamic_rung,
     housing_rung_wanted,
     housing_scan,
+    indistinct_defects,
     on_record_shaft,
     rung_wanted,
+    without_defects,
     without_unidentified,
 )
 
@@ -250,26 +252,8 @@ class BearingSubject:
                 final_steps = int(config["bearing_diagnosis"].get("dynamic_final_steps_per_period",
                                                                   FINAL_STEPS_PER_PERIOD))
                 if rung["tried"]:
-                    c0 = time.process_time()
-                    d, rung = dynamic_rung(d, problem, settings, progress, rung, final_steps,
-                                           scan_mass=config["bearing_diagnosis"].get("shaft_mass_scan", "auto") != "off")
-                    problem = on_record_shaft(problem, rung)
-                    d, problem, more = without_unidentified(d, problem, settings, progress)
+                    d, problem, rung, more = run_rungs(d, problem, rung, config, settings, progress, final_steps)
                     dropped += more
-                    note(f"dynamic rung: {time.process_time() - c0:.1f} s CPU "
-                         f"({'accepted' if rung['accepted'] else 'not accepted'})")
-                    if housing_rung_wanted(d, rung):
-                        c0 = time.process_time()
-                        entry = housing_scan(d, settings)
-                        rung["housing_mode"] = entry
-                        if entry["tried"]:
-                            d, rung["housing_mode"] = dynamic_rung(
-                                d, replace(problem, floor=d.problem.floor), settings, progress, entry, final_steps,
-                                ("housing_mode",), ("dynamic", "housing mode"))
-                            d, problem, more = without_unidentified(d, problem, settings, progress)
-                            dropped += more
-                        note(f"housing mode rung: {time.process_time() - c0:.1f} s CPU "
-                             f"({'accepted' if rung['housing_mode']['accepted'] else 'not accepted'})")
                 if joint_wanted(d, config):
                     c0 = time.process_time()
                     note("joint search: the operating point and each defect type with the shaft's dynamics")
@@ -283,6 +267,37 @@ class BearingSubject:
 
 #: The running-bearing subject.
 SUBJECT = BearingSubject()
+
+
+def run_rungs(d, problem: Problem, rung: dict, config: dict, settings, progress, final_steps: int):
+    """The dynamic rung on the quasi-static diagnosis ``d`` (``rung``: :func:`rung_start`'s entry, tried), then the
+    housing mode's rung where :func:`housing_rung_wanted`; a defect either leaves unidentified, or one the record
+    cannot tell from the shaft's dynamics (:func:`indistinct_defects`), is left out and the engine runs again
+    without it. Returns (diagnosis, problem, the ``dynamic_rung`` entry, [the defects left out])."""
+    note = progress or (lambda _msg: None)
+    c0 = time.process_time()
+    d, rung = dynamic_rung(d, problem, settings, progress, rung, final_steps,
+                           scan_mass=config["bearing_diagnosis"].get("shaft_mass_scan", "auto") != "off")
+    problem = on_record_shaft(problem, rung)
+    d, problem, dropped = without_unidentified(d, problem, settings, progress)
+    note(f"dynamic rung: {time.process_time() - c0:.1f} s CPU ({'accepted' if rung['accepted'] else 'not accepted'})")
+    if housing_rung_wanted(d, rung):
+        c0 = time.process_time()
+        entry = housing_scan(d, settings)
+        rung["housing_mode"] = entry
+        if entry["tried"]:
+            d, rung["housing_mode"] = dynamic_rung(
+                d, replace(problem, floor=d.problem.floor), settings, progress, entry, final_steps,
+                ("housing_mode",), ("dynamic", "housing mode"))
+            d, problem, more = without_unidentified(d, problem, settings, progress)
+            dropped += more
+        note(f"housing mode rung: {time.process_time() - c0:.1f} s CPU "
+             f"({'accepted' if rung['housing_mode']['accepted'] else 'not accepted'})")
+    indistinct = indistinct_defects(d, rung)
+    if indistinct:
+        dropped += indistinct
+        d, problem = without_defects(d, problem, settings, progress, indistinct)
+    return d, problem, rung, dropped
 
 
 def rung_start(d, config: dict, note) -> dict:
