@@ -196,6 +196,45 @@ def test_a_defect_the_record_cannot_tell_from_the_shafts_dynamics_is_not_a_fault
     assert indistinct_defects(d, {"tried": True, "accepted": False, "evidence": []}) == []  # the lines rule's rung
 
 
+def test_the_rung_tries_each_family_the_residual_shows_until_one_is_accepted(monkeypatch):
+    """Where no defect is selected, the rung's defect is the family with most lines; where that rung is not
+    accepted, the next family's is tried, and the first accepted is kept with the others listed. Where none is
+    accepted the first is kept; where a defect is selected, one rung. (The rung itself is replaced here by one that
+    accepts a given family: what each rung finds is the validation page's, docs/validation/bearing_diagnosis.md.)"""
+    import piezobearing.diagnosis.bearing.rung as rung_module
+
+    calls = []
+
+    def fake_rung(d, problem, settings, progress, rung, final_steps, scan_mass=True):
+        family = rung["evidence"][0]["type"] if rung.get("evidence") else None
+        calls.append(family)
+        ok = family == accept
+        return (f"diagnosis with {family}" if ok else d), {**rung, "accepted": ok, "delta_bic": 30.0 if ok else 2.0}
+
+    monkeypatch.setattr(rung_module, "dynamic_rung", fake_rung)
+    evidence = [{"type": "rolling_element"}, {"type": "inner_race"}, {"type": "outer_race"}]
+    start = {"tried": True, "accepted": False, "evidence": evidence}
+    healthy = SimpleNamespace(selected=["radial_load"])
+
+    accept = "inner_race"
+    d, entry = rung_module.dynamic_rung_by_type(healthy, None, None, None, start, 48, True)
+    assert calls == ["rolling_element", "inner_race"] and d == "diagnosis with inner_race"
+    assert entry["accepted"] and entry["evidence"] == evidence
+    assert entry["other_types"] == [{"type": "rolling_element", "delta_bic": 2.0, "accepted": False}]
+
+    calls.clear()
+    accept = None
+    d, entry = rung_module.dynamic_rung_by_type(healthy, None, None, None, start, 48, True)
+    assert calls == ["rolling_element", "inner_race", "outer_race"] and d is healthy
+    assert not entry["accepted"] and entry["evidence"] == evidence
+    assert [o["type"] for o in entry["other_types"]] == ["inner_race", "outer_race"]
+
+    calls.clear()
+    d, entry = rung_module.dynamic_rung_by_type(SimpleNamespace(selected=["outer_race_defect"]), None, None, None,
+                                                start, 48, True)
+    assert calls == ["rolling_element"] and "other_types" not in entry
+
+
 def test_lines_threshold_holds_its_false_alarm_rate_on_white_noise():
     """White noise: at least two of a family's K carriers above the threshold in one of three families, with each
     carrier the largest of three Hann-windowed bins, happens at most at the rate the threshold is set for (its closed

@@ -107,6 +107,10 @@ def dynamic_rung(d: dict) -> list[str]:
     out += ["", f"Quasi-static answer: {r['quasi_static']['fault']}.", ""]
     if r.get("left_out"):
         out += [f"Left out with the dynamics on (not supported by the record): {', '.join(r['left_out'])}.", ""]
+    if r.get("other_types"):
+        said = "; ".join(f"the {o['type'].replace('_', ' ')}'s defect, BIC drop {o['delta_bic']:.4g}, "
+                         f"{'accepted' if o['accepted'] else 'not accepted'}" for o in r["other_types"])
+        out += [f"Also tried with the defect of another family the residual shows: {said}.", ""]
     out += shaft_mass(r.get("shaft_mass"), r["accepted"])
     return out + housing_rung(r.get("housing_mode")) + joint_search(r.get("joint"))
 

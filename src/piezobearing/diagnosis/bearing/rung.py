@@ -245,6 +245,37 @@ def dynamic_rung(d, problem: Problem, settings, progress=None, rung: dict | None
     return (merged(d, dr, share, pair, rungs) if ok else d), rung
 
 
+def dynamic_rung_by_type(d, problem: Problem, settings, progress, rung: dict, final_steps: int, scan_mass: bool):
+    """:func:`dynamic_rung` where no defect is selected: with the defect of the fault type whose lines the residual
+    shows most (``rung["evidence"]``, :func:`fault_evidence`'s order) and, where that rung is not accepted, with
+    each next type the residual shows, until one is. Lines a ring of the shaft leaves can outnumber a groove's: a
+    shaft of twice the rig file's mass rings at 1.8 kHz, folded to 0.76 kHz at 2550 Hz, where the 11th and 14th
+    2 x BSF lines stand above the floor beside the inner-race groove's BPFI (docs/validation/bearing_diagnosis.md).
+    The entry of the rung kept (the first accepted, else the first tried) gains ``other_types``: each other type
+    tried, with its BIC drop and whether it was accepted. Where a defect is selected, :func:`dynamic_rung` once."""
+    evidence = rung.get("evidence") or []
+    d1, first = dynamic_rung(d, problem, settings, progress, rung, final_steps, scan_mass=scan_mass)
+    if first["accepted"] or len(evidence) < 2 or any(n in FAULT_TYPES for n in d.selected):
+        return d1, first
+    tried = [first]
+    for k in range(1, len(evidence)):
+        (progress or (lambda _m: None))(f"dynamic rung: not accepted with the {evidence[k - 1]['type']} lines' "
+                                        f"defect; with the {evidence[k]['type']}'s")
+        dk, entry = dynamic_rung(d, problem, settings, progress, {**rung, "evidence": evidence[k:]}, final_steps,
+                                 scan_mass=scan_mass)
+        entry["evidence"] = evidence
+        tried.append(entry)
+        if entry["accepted"]:
+            return dk, _with_others(entry, tried, evidence)
+    return d1, _with_others(first, tried, evidence)
+
+
+def _with_others(kept: dict, tried: list[dict], evidence: list[dict]) -> dict:
+    """``kept`` with ``other_types``: the type, BIC drop and acceptance of every other rung of ``tried``."""
+    return {**kept, "other_types": [{"type": ev["type"], "delta_bic": e["delta_bic"], "accepted": e["accepted"]}
+                                     for ev, e in zip(evidence[:len(tried)], tried, strict=True) if e is not kept]}
+
+
 #: The dynamic rung's scan of the shaft's mass, coarse then fine: the rig file's mass times 2^(k/8) for |k| <= 16
 #: (a quarter to four times it, steps of 9 %, 4.4 % in the mode's frequency: a ring of a few periods keeps its phase
 #: within a radian), then 2^(j/64) for |j| <= 4 around the best (steps of 1.1 %); the fit with the mass free takes it

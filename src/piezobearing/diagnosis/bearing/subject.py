@@ -42,6 +42,7 @@ from .model import BearingModel, RigRecord
 from .representations import REPRESENTATIONS, passages
 from .rung import (
     dynamic_rung,
+    dynamic_rung_by_type,
     housing_rung_wanted,
     housing_scan,
     indistinct_defects,
@@ -276,8 +277,8 @@ def run_rungs(d, problem: Problem, rung: dict, config: dict, settings, progress,
     without it. Returns (diagnosis, problem, the ``dynamic_rung`` entry, [the defects left out])."""
     note = progress or (lambda _msg: None)
     c0 = time.process_time()
-    d, rung = dynamic_rung(d, problem, settings, progress, rung, final_steps,
-                           scan_mass=config["bearing_diagnosis"].get("shaft_mass_scan", "auto") != "off")
+    d, rung = dynamic_rung_by_type(d, problem, settings, progress, rung, final_steps,
+                                   config["bearing_diagnosis"].get("shaft_mass_scan", "auto") != "off")
     problem = on_record_shaft(problem, rung)
     d, problem, dropped = without_unidentified(d, problem, settings, progress)
     note(f"dynamic rung: {time.process_time() - c0:.1f} s CPU ({'accepted' if rung['accepted'] else 'not accepted'})")
