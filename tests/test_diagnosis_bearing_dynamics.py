@@ -391,12 +391,12 @@ def test_a_groove_neither_the_rung_nor_the_dynamics_beat_is_left_out_and_named(m
     rule there; no record of docs/validation/bearing_diagnosis.md reaches this case): the 0.40 mm groove, which does
     not stand against the shaft's dynamics, is then not reported as a fault. It is left out of the search and named
     in ``fault.unidentified`` with the reason, and the diagnosis is the quasi-static one without it."""
-    import piezobearing.diagnosis.bearing.subject as subject
+    import piezobearing.diagnosis.bearing.rung as rung_module
 
     def not_accepted(d, problem, settings, progress, rung, *args, **kwargs):
         return d, {**rung, "accepted": False}
 
-    monkeypatch.setattr(subject, "dynamic_rung", not_accepted)
+    monkeypatch.setattr(rung_module, "dynamic_rung", not_accepted)
     c = config.load()
     influence = influence_from_config(c)
     rec = lpm_records.lpm_record(c, influence, {"pedestal_stiffness_N_per_m": 1.0e9}, 25600.0, 1.0, 30.0, 26)
