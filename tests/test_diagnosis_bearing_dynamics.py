@@ -158,8 +158,10 @@ def test_without_the_rung_the_fault_is_named_from_its_lines(setup):
     assert "shaft_dynamics" in f["statement"]
 
 
-def _diag(selected, ci95):
-    return SimpleNamespace(selected=selected, final=SimpleNamespace(result=SimpleNamespace(ci95=ci95)))
+def _diag(selected, ci95, configured=()):
+    effects = tuple(SimpleNamespace(name=n) for n in (*configured, *selected))
+    return SimpleNamespace(selected=selected, final=SimpleNamespace(result=SimpleNamespace(ci95=ci95),
+                                                                    model=SimpleNamespace(effects=effects)))
 
 
 def test_a_defect_the_record_cannot_pin_down_is_not_identified():
@@ -170,6 +172,10 @@ def test_a_defect_the_record_cannot_pin_down_is_not_identified():
     assert unidentified_defects(_diag(["outer_race_defect"], zero))[0]["reason"].endswith("holds zero")
     circle = {**ok, "outer_defect_angle_rad": [-17.0, 17.0]}
     assert unidentified_defects(_diag(["outer_race_defect"], circle))[0]["reason"].endswith("spans the circle")
+    bound = {**ok, "outer_defect_width_m": [1.9e-3, 3e-3]}  # a stand-in run to the catalogue's widest groove
+    assert "widest defect the catalogue holds" in unidentified_defects(_diag(["outer_race_defect"], bound))[0]["reason"]
+    # a defect the model holds without the search selecting it (the rung's run configures the quasi-static selection)
+    assert unidentified_defects(_diag(["shaft_dynamics"], bound, ["outer_race_defect"]))[0]["effect"] == "outer_race_defect"
     missing = {"inner_defect_width_m": None, "inner_defect_angle_rad": [0.1, 0.2]}
     assert unidentified_defects(_diag(["inner_race_defect"], missing))[0]["effect"] == "inner_race_defect"
 

@@ -19,7 +19,8 @@ fits instead, with ``shaft_dynamics`` on:
    a quasi-static residual by 1.8-6.6 sigma on the feasibility draws' inner grooves);
 4. the types ranked by their BIC on that floor; the best accepted where it passes the engine's selection rule over
    the dynamic healthy model (:func:`~piezobearing.diagnosis.selection.accepted`) and is identified (its width's
-   95 % interval excludes zero, its angle's does not span the circle, :func:`.rung.unidentified_reason`).
+   95 % interval excludes zero and stays under the catalogue's widest defect, its angle's does not span the
+   circle, :func:`.rung.unidentified_reason`).
 
 The floor is white (``NoiseFloor.input_noise`` 0 for a voltage record): a fit's values do not depend on its level,
 and a chi2 on the floor measured again is the fit's chi2 times the ratio of the variances.

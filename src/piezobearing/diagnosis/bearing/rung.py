@@ -3,9 +3,10 @@
 Where the quasi-static diagnosis ends ``unexplained`` with a defect selected or a fault's lines left
 (:func:`rung_wanted`), :func:`dynamic_rung` runs the engine once more with ``shaft_dynamics`` and keeps it where it
 passes the selection rule; :func:`without_unidentified` runs the engine again without a selected defect whose width
-interval holds zero or whose angle interval spans the circle (:func:`unidentified_defects`), and
-:func:`without_defects` without one the record cannot tell from the shaft's dynamics (:func:`indistinct_defects`). Above an accepted dynamic
-rung that leaves the record ``unexplained``, the housing mode's rung (:func:`housing_rung_wanted`,
+interval holds zero or reaches the catalogue's widest defect, or whose angle interval spans the circle
+(:func:`unidentified_defects`), and :func:`without_defects` without one the record cannot tell from the shaft's
+dynamics (:func:`indistinct_defects`). Above an accepted dynamic rung that leaves the record ``unexplained``, the
+housing mode's rung (:func:`housing_rung_wanted`,
 :func:`housing_scan`) runs :func:`dynamic_rung` once more with ``housing_mode``.
 """
 
@@ -24,6 +25,7 @@ from ..subject import Problem
 from . import chain
 from .answer import EFFECT_OF_TYPE, fault_answer, fault_evidence
 from .effects import CATALOGUE, FAULT_TYPES, RUNGS
+from .effects.base import MAX_DEFECT_WIDTH_M
 from .effects.housing_mode import best_mode
 from .effects.shaft_dynamics import DAMPING_BOUNDS, place_groove
 from .floor import REMEASURE_BELOW, noise_floor
@@ -34,12 +36,12 @@ FULL_TURN_RAD = 2 * np.pi
 
 
 def unidentified_defects(d) -> list[dict]:
-    """The selected defects the record cannot pin down: the width's 95 % interval holds zero (or is missing), or
-    the angle's spans the circle; each ``{"effect", "ci95", "reason"}``. Operating conditions keep their
-    one-sided intervals (a clearance bounded from below) and are not judged here."""
+    """The defects of the final model the record cannot pin down (:func:`unidentified_reason`), selected or
+    configured (a rung's run configures the quasi-static selection); each ``{"effect", "ci95", "reason"}``.
+    Operating conditions keep their one-sided intervals (a clearance bounded from below) and are not judged here."""
     ci = d.final.result.ci95
     out = []
-    for name in d.selected:
+    for name in dict.fromkeys([*d.selected, *(e.name for e in d.final.model.effects)]):
         if name not in FAULT_TYPES:
             continue
         reason = unidentified_reason(name, ci)
@@ -51,11 +53,16 @@ def unidentified_defects(d) -> list[dict]:
 
 def unidentified_reason(name: str, ci: dict) -> str | None:
     """Why the 95 % intervals ``ci`` do not place the defect ``name`` (a key of ``FAULT_TYPES``): its width's holds
-    zero (or is missing), or its angle's spans the circle (a roller's pit: any spin); None where they place it."""
+    zero (or is missing) or reaches the widest defect the catalogue holds (:data:`~.effects.base.MAX_DEFECT_WIDTH_M`:
+    the fit runs to its bound, and the record's structure is no defect of the catalogue), or its angle's spans the
+    circle (a roller's pit: any spin); None where they place it."""
     _, wkey, pkey = FAULT_TYPES[name]
     w, a = ci.get(wkey), ci.get(pkey)
     if w is None or w[0] is None or not np.all(np.isfinite(w)) or w[0] <= 0.0:
         return f"the interval of {wkey} holds zero"
+    if w[1] >= MAX_DEFECT_WIDTH_M:
+        return (f"the interval of {wkey} reaches the widest defect the catalogue holds "
+                f"({MAX_DEFECT_WIDTH_M * 1e3:g} mm): the fit runs to its bound")
     if name != "rolling_element_defect" and (a is None or a[0] is None or not np.all(np.isfinite(a))
                                              or a[1] - a[0] >= FULL_TURN_RAD):
         return f"the interval of {pkey} spans the circle"

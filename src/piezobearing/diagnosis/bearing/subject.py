@@ -218,8 +218,8 @@ class BearingSubject:
         floor is measured again on the final model's residual and the engine
         runs once more; ``noise_floor.method`` says which.
 
-        A defect the record cannot pin down (:func:`unidentified_defects`: its width's interval holds zero, or
-        its angle's spans the circle) is taken out of the catalogue and the engine runs again without it
+        A defect the record cannot pin down (:func:`unidentified_defects`: its width's interval holds zero or
+        reaches the catalogue's widest defect, or its angle's spans the circle) is taken out of the catalogue and the engine runs again without it
         (``fault.unidentified`` names it). Where the quasi-static verdict is ``unexplained`` with a fault's
         lines or a defect selected, the dynamic rung is tried (:func:`dynamic_rung`; ``dynamic_rung`` of the
         dict says what it gave); where it is ``explained`` with a defect that does not stand against a healthy

@@ -17,6 +17,10 @@ from ...effect import StartContext
 from .. import chain
 from ..representations import fitted_kinematics
 
+#: The widest defect the catalogue holds [m]: the upper bound of every defect's width (a groove, a pit). A fit
+#: whose width interval reaches it fits no defect of the catalogue (:func:`~..rung.unidentified_reason`).
+MAX_DEFECT_WIDTH_M = 3e-3
+
 
 class Effect(EngineEffect):
     """Base class of a running-bearing effect (hooks: :meth:`additive`; :attr:`holds`, :attr:`rides_on`, :attr:`mimics_defects`)."""

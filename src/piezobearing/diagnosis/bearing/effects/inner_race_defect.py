@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from ....fitting.params import Param
-from .base import Effect, cage_phase_of, fold_peak, scan
+from .base import MAX_DEFECT_WIDTH_M, Effect, cage_phase_of, fold_peak, scan
 from .outer_race_defect import TRIAL_WIDTH_M, _width_start
 
 
@@ -46,7 +46,7 @@ class InnerRaceDefect(Effect):
 
     def params(self, record) -> list[Param]:
         return [
-            Param("inner_defect_width_m", 0.0, 0.0, 3e-3, scale=1e-4, description="groove width along the raceway [m]"),
+            Param("inner_defect_width_m", 0.0, 0.0, MAX_DEFECT_WIDTH_M, scale=1e-4, description="groove width along the raceway [m]"),
             Param("inner_defect_angle_rad", 0.0, -2 * np.pi, 2 * np.pi, scale=0.05,
                   description="groove angle from the sensor at the first sample [rad]"),
         ]

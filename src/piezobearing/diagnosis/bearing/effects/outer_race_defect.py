@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from ....fitting.params import Param
-from .base import Effect, cage_phase_of, fold_peak, scan
+from .base import MAX_DEFECT_WIDTH_M, Effect, cage_phase_of, fold_peak, scan
 
 TRIAL_WIDTH_M = 0.5e-3
 
@@ -50,7 +50,7 @@ class OuterRaceDefect(Effect):
 
     def params(self, record) -> list[Param]:
         return [
-            Param("outer_defect_width_m", 0.0, 0.0, 3e-3, scale=1e-4, description="groove width along the raceway [m]"),
+            Param("outer_defect_width_m", 0.0, 0.0, MAX_DEFECT_WIDTH_M, scale=1e-4, description="groove width along the raceway [m]"),
             Param("outer_defect_angle_rad", 0.0, -np.pi, np.pi, scale=0.05, description="groove centre from the sensor [rad]"),
         ]
 

@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from ....fitting.params import Param
-from .base import Effect, cage_phase_of, fold_peak, scan
+from .base import MAX_DEFECT_WIDTH_M, Effect, cage_phase_of, fold_peak, scan
 from .outer_race_defect import TRIAL_WIDTH_M, _width_start
 
 
@@ -48,7 +48,7 @@ class RollingElementDefect(Effect):
     def params(self, record) -> list[Param]:
         z = record.rig.geometry.n_rollers
         return [
-            Param("roller_defect_width_m", 0.0, 0.0, 3e-3, scale=1e-4, description="pit width around the roller [m]"),
+            Param("roller_defect_width_m", 0.0, 0.0, MAX_DEFECT_WIDTH_M, scale=1e-4, description="pit width around the roller [m]"),
             Param("roller_defect_spin_rad", 0.0, -2 * np.pi, 2 * np.pi, scale=0.05,
                   description="pit's spin angle at the first sample, 0 facing the outer race [rad]"),
             Param("roller_defect_index", 0.0, 0.0, z - 1.0, vary=False,
