@@ -53,6 +53,13 @@ def test_diagnose_bearing_says_which_config_and_model_it_used(monkeypatch, capsy
     assert model.startswith("model: 11-roller bearing (D_r 10 mm, D_p 44 mm) at 1000 rpm and 500 N")
     assert "influence line solved from the config" in model and "R = 50 MOhm" in model
     assert "shaft speed: 1000 rpm from bearing.shaft_speed_rpm of the default config" in lines[2]
+    # a defect the record cannot pin down is said beside the fault, with why
+    reason = "the interval of outer_defect_width_m reaches the widest defect the catalogue holds (3 mm)"
+    answer["fault"]["unidentified"] = [{"effect": "outer_race_defect", "ci95": {}, "reason": reason}]
+    assert cli.main(["diagnose-bearing", "record.csv", "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert f"left out, not identified: outer_race_defect: {reason}" in out
+    assert out.index("fault: none") < out.index("left out, not identified") < out.index("verdict:")
 
 
 def test_the_model_lines_follow_the_config():

@@ -401,6 +401,8 @@ def _diagnose_bearing(args) -> int:
         print(f"  {f['statement']}")
     if f.get("lines_left"):
         print(f"found, with lines left: {f['statement']}")
+    for u in f.get("unidentified") or []:
+        print(f"  left out, not identified: {u['effect']}: {u['reason']}")
     print(f"verdict: {d['verdict']}")
     stuck = (d.get("outside_catalogue") or {}).get("stuck") or {}
     if stuck.get("where"):
