@@ -266,8 +266,8 @@ def dynamic_rung_by_type(d, problem: Problem, settings, progress, rung: dict, fi
         return d1, first
     tried = [first]
     for k in range(1, len(evidence)):
-        (progress or (lambda _m: None))(f"dynamic rung: not accepted with the {evidence[k - 1]['type']} lines' "
-                                        f"defect; with the {evidence[k]['type']}'s")
+        (progress or (lambda _m: None))(f"dynamic rung: not accepted with the {evidence[k - 1]['type']}'s defect; "
+                                        f"again with the {evidence[k]['type']}'s (its lines too are left)")
         dk, entry = dynamic_rung(d, problem, settings, progress, {**rung, "evidence": evidence[k:]}, final_steps,
                                  scan_mass=scan_mass)
         entry["evidence"] = evidence
