@@ -219,8 +219,8 @@ class BearingSubject:
         runs once more; ``noise_floor.method`` says which.
 
         A defect the record cannot pin down (:func:`unidentified_defects`: its width's interval holds zero or
-        reaches the catalogue's widest defect, or its angle's spans the circle) is taken out of the catalogue and the engine runs again without it
-        (``fault.unidentified`` names it). Where the quasi-static verdict is ``unexplained`` with a fault's
+        reaches the catalogue's widest defect, or its angle's spans the circle) is taken out of the catalogue and
+        the engine runs again without it (``fault.unidentified`` names it). Where the quasi-static verdict is ``unexplained`` with a fault's
         lines or a defect selected, the dynamic rung is tried (:func:`dynamic_rung`; ``dynamic_rung`` of the
         dict says what it gave); where it is ``explained`` with a defect that does not stand against a healthy
         bearing with the shaft's dynamics (:func:`~.joint.defects_against_dynamics`), the rung is tried with the
@@ -272,15 +272,16 @@ SUBJECT = BearingSubject()
 
 def run_rungs(d, problem: Problem, rung: dict, config: dict, settings, progress, final_steps: int):
     """The dynamic rung on the quasi-static diagnosis ``d`` (``rung``: :func:`rung_start`'s entry, tried), then the
-    housing mode's rung where :func:`housing_rung_wanted`; a defect either leaves unidentified, or one the record
-    cannot tell from the shaft's dynamics (:func:`indistinct_defects`), is left out and the engine runs again
-    without it. Returns (diagnosis, problem, the ``dynamic_rung`` entry, [the defects left out])."""
+    housing mode's rung where :func:`housing_rung_wanted`. A rung is accepted only with every defect of its model
+    identified (:func:`dynamic_rung`), and otherwise gives back the diagnosis it started from, whose unidentified
+    defects are already out; a defect the record cannot tell from the shaft's dynamics (:func:`indistinct_defects`)
+    is left out here and the engine runs again without it. Returns (diagnosis, problem, the ``dynamic_rung`` entry,
+    [the defects left out])."""
     note = progress or (lambda _msg: None)
     c0 = time.process_time()
     d, rung = dynamic_rung_by_type(d, problem, settings, progress, rung, final_steps,
                                    config["bearing_diagnosis"].get("shaft_mass_scan", "auto") != "off")
     problem = on_record_shaft(problem, rung)
-    d, problem, dropped = without_unidentified(d, problem, settings, progress)
     note(f"dynamic rung: {time.process_time() - c0:.1f} s CPU ({'accepted' if rung['accepted'] else 'not accepted'})")
     if housing_rung_wanted(d, rung):
         c0 = time.process_time()
@@ -290,15 +291,12 @@ def run_rungs(d, problem: Problem, rung: dict, config: dict, settings, progress,
             d, rung["housing_mode"] = dynamic_rung(
                 d, replace(problem, floor=d.problem.floor), settings, progress, entry, final_steps,
                 ("housing_mode",), ("dynamic", "housing mode"))
-            d, problem, more = without_unidentified(d, problem, settings, progress)
-            dropped += more
         note(f"housing mode rung: {time.process_time() - c0:.1f} s CPU "
              f"({'accepted' if rung['housing_mode']['accepted'] else 'not accepted'})")
     indistinct = indistinct_defects(d, rung)
     if indistinct:
-        dropped += indistinct
         d, problem = without_defects(d, problem, settings, progress, indistinct)
-    return d, problem, rung, dropped
+    return d, problem, rung, indistinct
 
 
 def rung_start(d, config: dict, note) -> dict:
