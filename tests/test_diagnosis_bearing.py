@@ -1,6 +1,7 @@
 """The running bearing as the diagnosis engine's second subject: hide each catalogue effect in a
 synthetic running-bearing record and find it first, its value inside the 95% interval; a healthy
-record selects nothing; a loose part striking once per shaft turn stays unexplained, its frequency named.
+record selects nothing; a loose part striking once per shaft turn stays unexplained, its frequency named, and is
+not a fault.
 
 Records of 0.5 s at 2550 Hz (the paper's clock), default geometry, the housing's influence line of the
 CI mesh; the first ranking is what "found first" needs (diagnostics.max_steps = 1).
@@ -144,6 +145,11 @@ def test_loose_part_is_unexplained_with_its_frequency_named(setup):
     assert shaft, [u["where"] for u in d["unexplained"]]
     orders = d["orders"]["final"]["peaks"]
     assert any(abs(p["shaft_order"] - round(p["shaft_order"])) < 0.02 and "shaft" in p["named"] for p in orders)
+    # its ring's comb at the shaft's orders holds 8 x BPFO = 34 x shaft and lines within reach of 7 and 9 x BPFO:
+    # set aside, not a fault's lines
+    assert d["fault"]["type"] == "none", d["fault"]["statement"]
+    aside = {h["line"] for e in d["fault"]["shaft_comb"] for h in e["lines"]}
+    assert "8xBPFO" in aside and "comb of lines at the shaft's orders" in d["fault"]["statement"]
 
 
 def test_unknown_hidden_effect_is_one_line(setup):

@@ -147,6 +147,8 @@ def fault_answer(d) -> dict:
         statement = lines_statement(evidence[0], "shaft_dynamics" in d.final.model.names)
     elif kind == "none" and getattr(d, "_lines_at_floor", None):
         statement = floor_lines_statement(d._lines_at_floor[0], d._best_healthy)
+    elif kind == "none" and getattr(d, "_comb_lines", None):
+        statement = comb_statement(d._comb_lines)
     return {
         "type": kind,
         "source": source,
@@ -161,6 +163,7 @@ def fault_answer(d) -> dict:
         "fitted_conditions": fitted,
         "ci_method": how,
         "healthy_model": healthy_model_entry(d),
+        "shaft_comb": getattr(d, "_comb_lines", []),
         "non_separable": separability(non_separable(rig.tach_Hz is not None), d.ranking, d.final.result.correlation),
     }
 
@@ -186,17 +189,22 @@ def family_lines(kind: str, kin: dict, harmonics: int = 3) -> list[tuple[str, fl
     return out
 
 
-def _line_spectra(d, kind: str, fit=None) -> tuple[list[tuple[str, float]], float, np.ndarray, np.ndarray, float]:
-    """The fault's own lines (:func:`family_lines` at the final fit's speeds), the bin width [Hz], the record's
-    and the final model's Hann-windowed amplitude spectra, and the white floor's power in one such bin [V^2].
-    ``fit``: another fit of the record in the final's place."""
-    fit = d.final if fit is None else fit
+def _fit_kinematics(d, fit) -> tuple[float, dict]:
+    """The shaft's speed [Hz] and the bearing's frequencies (:meth:`Rig.frequencies`) at a fit's speed and slip."""
     values, rig = fit.values, d.record.rig
     shaft = float(values.get("shaft_speed_Hz", rig.shaft_speed_Hz) if rig.tach_Hz is None else np.mean(rig.tach_Hz))
     shaft *= 1.0 + values.get("speed_deviation_ratio", 0.0)
     # a fit may put the slip a hair below zero (its bound allows a cage a little fast); the lines' places are
     # those of no slip then, within a bin
-    lines = family_lines(kind, rig.frequencies(shaft, max(values.get("cage_slip_ratio", 0.0), 0.0)))
+    return shaft, rig.frequencies(shaft, max(values.get("cage_slip_ratio", 0.0), 0.0))
+
+
+def _line_spectra(d, kind: str, fit=None) -> tuple[list[tuple[str, float]], float, np.ndarray, np.ndarray, float]:
+    """The fault's own lines (:func:`family_lines` at the final fit's speeds), the bin width [Hz], the record's
+    and the final model's Hann-windowed amplitude spectra, and the white floor's power in one such bin [V^2].
+    ``fit``: another fit of the record in the final's place."""
+    fit = d.final if fit is None else fit
+    lines = family_lines(kind, _fit_kinematics(d, fit)[1])
     v = np.asarray(d.voltage_V, dtype=float)
     n = v.size
     w = np.hanning(n)
@@ -277,6 +285,15 @@ def floor_lines_statement(ev: dict, healthy) -> str:
             "passage's own harmonics near it; so does a narrowband interference)")
 
 
+def comb_statement(aside: list[dict]) -> str:
+    """One line for fault lines a shaft-synchronous comb takes (:func:`shaft_comb`): no fault, and why."""
+    parts = [f"{h['line']} ({h['frequency_Hz']:.1f} Hz) {h['excess_dB']:.1f} dB" for e in aside for h in e["lines"]]
+    orders = sorted({m for e in aside for m in e["comb_orders"]})
+    return (f"no fault: {', '.join(parts[:4])} above the floor lie on a comb of lines at the shaft's orders "
+            f"({orders[0]}-{orders[-1]} x shaft): a source locked to the shaft (a loose part, a rub, an unbalance) "
+            "puts them there, not a bearing fault")
+
+
 def fault_statement(kind: str, params: dict, ci95: dict, remaining: list[dict], sidebands: list[dict] | None = None) -> str:
     """One line: the fault found with its size and interval, how a moving defect's sidebands differ from the
     model's (:func:`fault_sidebands`), and what of its own lines the model leaves above the floor."""
@@ -318,26 +335,71 @@ def lines_threshold_dB(alpha: float, carriers: int) -> float:
     return float(10 * np.log10(0.5 * np.log(len(FAULT_TYPES) * pairs * PEAK_BINS**2 / alpha)))
 
 
-def _families(d, fit) -> list[dict]:
-    """The fault families whose lines the residual of ``fit`` holds (the rule of :func:`fault_evidence`)."""
+def _families(d, fit, aside: list | None = None) -> list[dict]:
+    """The fault families whose lines the residual of ``fit`` holds (the rule of :func:`fault_evidence`); the lines a
+    shaft-synchronous comb takes (:func:`shaft_comb`) do not count, and go to ``aside`` where given."""
     # the envelope view of the residual of ``fit``, judged with the detector's family-wise threshold
     env = EnvelopeBands().judge(fit, d.problem, d.settings).findings
     bands = {"outer_race": ("BPFO",), "inner_race": ("BPFI",), "rolling_element": ("2xBSF", "BSF")}
     bpfo = [c["frequency_Hz"] for c in carrier_levels(d, "outer_race", fit)]
     df = 1.0 / (d.record.n * d.record.dt_s)
+    shaft, kin = _fit_kinematics(d, fit)
     out = []
     for kind in FAMILIES:
         levels = carrier_levels(d, kind, fit)
         threshold = lines_threshold_dB(d.settings.test_alpha, len(levels))
-        hits = [c for c in levels if c["excess_dB"] >= threshold]
+        comb = shaft_comb(d, fit, threshold, [f for _, f in family_lines(kind, kin, len(levels))])
+        taken = [c for c in levels if c["excess_dB"] >= threshold and _near(c["frequency_Hz"], comb, df)]
+        hits = [c for c in levels if c["excess_dB"] >= threshold and c not in taken]
         envs = [{"band": e["band"], "frequency_Hz": e["frequency_Hz"], "ratio": e["ratio"]} for e in env
                 if (e["band"].split("x")[-1] in bands[kind] or e["band"] in bands[kind])
-                and min(abs(e["frequency_Hz"] - f) for f in bpfo) > 2 * df]
+                and min(abs(e["frequency_Hz"] - f) for f in bpfo) > 2 * df
+                and not (comb.size and _near(e["frequency_Hz"], shaft * np.arange(1, e["frequency_Hz"] // shaft + 2), df))]
+        if aside is not None and taken:
+            aside.append({"type": kind, "lines": taken, "comb_orders": [int(round(f / shaft)) for f in comb]})
         if len(hits) >= 2 or (envs and kind != "outer_race"):
             out.append({"type": kind, "lines": hits, "envelope": envs, "threshold_dB": threshold,
                         "strongest_dB": max([h["excess_dB"] for h in hits], default=0.0)})
     out.sort(key=lambda e: -len(e["lines"]))
     return out
+
+
+#: How near a fault's carrier lies to a line of a shaft-synchronous comb to take that line's level [bins]: the
+#: :data:`PEAK_BINS` read around the carrier and a Hann window's main lobe beyond them (a line 1.5 bins off is 15 dB
+#: down, 2.5 bins off 32 dB).
+COMB_REACH_BINS = 3.0
+
+
+def _near(f_Hz: float, lines_Hz: np.ndarray, df_Hz: float) -> bool:
+    """Whether ``f_Hz`` lies within :data:`COMB_REACH_BINS` bins of one of ``lines_Hz``."""
+    return bool(np.size(lines_Hz)) and float(np.min(np.abs(np.asarray(lines_Hz) - f_Hz))) <= COMB_REACH_BINS * df_Hz
+
+
+def shaft_comb(d, fit, threshold_dB: float, own_Hz: list[float]) -> np.ndarray:
+    """The residual's shaft-synchronous comb [Hz]: each shaft order m f_r below :data:`CARRIER_BAND` f_s whose line
+    stands above ``threshold_dB`` over the white floor (read as :func:`carrier_levels` reads a carrier) with at least
+    two of the orders m-2 .. m+2 standing too; an order within :data:`COMB_REACH_BINS` of one of the fault's own lines
+    ``own_Hz`` does not count as a neighbour (an inner race's sidebands k BPFI -/+ f_r lie a shaft order from its
+    carrier).
+
+    A source locked to the shaft (a loose part struck once a turn, a rub, an unbalance's harmonics) puts lines at the
+    shaft's orders, and a fault's carrier within reach of one of them takes its level: with BPFO = 4.25 f_r, 8 x BPFO
+    is 34 f_r, and 7 x BPFO two bins from 30 f_r in a 0.5 s record. A single line at an order (a fault's carrier that
+    is one) is not a comb; white noise puts three orders of five above the rule's threshold with a probability of
+    order (3 e^-x)^3, x the threshold's power ratio (below 1e-7 at 8.5 dB)."""
+    shaft, _ = _fit_kinematics(d, fit)
+    _, df, _, _, floor = _line_spectra(d, "outer_race", fit)
+    res = np.asarray(fit.residual_V, dtype=float)
+    res_a = np.abs(np.fft.rfft((res - res.mean()) * np.hanning(res.size)))
+    orders = np.arange(1, int(CARRIER_BAND / d.record.dt_s // shaft) + 1)
+    stands = np.array([10 * np.log10(_peak(res_a, m * shaft, df) ** 2 / floor) >= threshold_dB for m in orders])
+    own = np.array([_near(m * shaft, own_Hz, df) for m in orders], dtype=bool)
+    comb = []
+    for i, m in enumerate(orders):
+        near = [j for j in range(i - 2, i + 3) if j != i and 0 <= j < orders.size]
+        if stands[i] and sum(stands[j] and not own[j] for j in near) >= 2:
+            comb.append(m * shaft)
+    return np.asarray(comb)
 
 
 def carrier_levels(d, kind: str, fit=None) -> list[dict]:
@@ -350,10 +412,7 @@ def carrier_levels(d, kind: str, fit=None) -> list[dict]:
     clearance), its higher ones stay."""
     fit = d.final if fit is None else fit
     _, df, _, mod_a, floor = _line_spectra(d, kind, fit)
-    values, rig = fit.values, d.record.rig
-    shaft = float(values.get("shaft_speed_Hz", rig.shaft_speed_Hz) if rig.tach_Hz is None else np.mean(rig.tach_Hz))
-    shaft *= 1.0 + values.get("speed_deviation_ratio", 0.0)
-    kin = rig.frequencies(shaft, max(values.get("cage_slip_ratio", 0.0), 0.0))
+    kin = _fit_kinematics(d, fit)[1]
     base = {"outer_race": kin["bpfo_Hz"], "inner_race": kin["bpfi_Hz"], "rolling_element": 2 * kin["bsf_Hz"]}[kind]
     name = {"outer_race": "BPFO", "inner_race": "BPFI", "rolling_element": "2xBSF"}[kind]
     top = CARRIER_BAND / d.record.dt_s
@@ -485,11 +544,15 @@ def fault_evidence(d) -> list[dict]:
     bins of BPFO in a 1 s record of the paper's bearing). How often the rule names a fault on healthy records far
     from the rig file's operating point, and by how much the missed grooves clear it, is measured by
     ``validation/bearing_fault_lines.py`` (docs/validation/bearing_diagnosis.md). Where the final model's own residual
-    holds no family's lines, the best healthy model is not fitted."""
-    if any(n in FAULT_TYPES for n in d.selected) or not _families(d, d.final):
+    holds no family's lines, the best healthy model is not fitted. A carrier within reach of a line of a comb at the
+    shaft's orders (:func:`shaft_comb`) does not count: ``fault.shaft_comb`` lists those set aside."""
+    aside = []
+    d._comb_lines = aside  # the lines a shaft-synchronous comb takes: said in the statement, not a fault's
+    if any(n in FAULT_TYPES for n in d.selected) or not _families(d, d.final, aside):
         return []  # a defect is selected, or not even the final model leaves a family's lines: nothing to name
     healthy = best_healthy(d)
-    families = _families(d, healthy)
+    aside.clear()
+    families = _families(d, healthy, aside)
     if families and not above_floor(d, healthy):
         d._lines_at_floor = families  # lines without energy above the floor: said in the statement, not a fault
         return []
