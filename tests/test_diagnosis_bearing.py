@@ -150,6 +150,7 @@ def test_loose_part_is_unexplained_with_its_frequency_named(setup):
     assert d["fault"]["type"] == "none", d["fault"]["statement"]
     aside = {h["line"] for e in d["fault"]["shaft_comb"] for h in e["lines"]}
     assert "8xBPFO" in aside and "comb of lines at the shaft's orders" in d["fault"]["statement"]
+    assert "inner-race defect" in d["fault"]["statement"]  # the one bearing fault locked to the shaft
 
 
 def test_unknown_hidden_effect_is_one_line(setup):

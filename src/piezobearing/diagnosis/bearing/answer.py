@@ -289,9 +289,10 @@ def comb_statement(aside: list[dict]) -> str:
     """One line for fault lines a shaft-synchronous comb takes (:func:`shaft_comb`): no fault, and why."""
     parts = [f"{h['line']} ({h['frequency_Hz']:.1f} Hz) {h['excess_dB']:.1f} dB" for e in aside for h in e["lines"]]
     orders = sorted({m for e in aside for m in e["comb_orders"]})
-    return (f"no fault: {', '.join(parts[:4])} above the floor lie on a comb of lines at the shaft's orders "
-            f"({orders[0]}-{orders[-1]} x shaft): a source locked to the shaft (a loose part, a rub, an unbalance) "
-            "puts them there, not a bearing fault")
+    return (f"no fault named: {', '.join(parts[:4])} above the floor lie on a comb of lines at the shaft's orders "
+            f"({orders[0]}-{orders[-1]} x shaft): a source locked to the shaft puts them there, a loose part, a rub, "
+            "an unbalance, or an inner-race defect the rollers meet once a turn in a narrow load zone; a record "
+            "long enough to resolve k BPFI + j f_r from the whole orders tells the inner race apart")
 
 
 def fault_statement(kind: str, params: dict, ci95: dict, remaining: list[dict], sidebands: list[dict] | None = None) -> str:
@@ -377,27 +378,35 @@ def _near(f_Hz: float, lines_Hz: np.ndarray, df_Hz: float) -> bool:
 
 def shaft_comb(d, fit, threshold_dB: float, own_Hz: list[float]) -> np.ndarray:
     """The residual's shaft-synchronous comb [Hz]: each shaft order m f_r below :data:`CARRIER_BAND` f_s whose line
-    stands above ``threshold_dB`` over the white floor (read as :func:`carrier_levels` reads a carrier) with at least
-    two of the orders m-2 .. m+2 standing too; an order within :data:`COMB_REACH_BINS` of one of the fault's own lines
-    ``own_Hz`` does not count as a neighbour (an inner race's sidebands k BPFI -/+ f_r lie a shaft order from its
-    carrier).
+    stands alone above ``threshold_dB`` over the white floor (read as :func:`carrier_levels` reads a carrier; alone:
+    the half orders m -/+ 1/2 beside it do not stand) with at least two of the orders m-2 .. m+2 standing alone too;
+    an order within :data:`COMB_REACH_BINS` of one of the fault's own lines ``own_Hz`` does not count as a neighbour
+    (an inner race's sidebands k BPFI -/+ f_r lie a shaft order from its carrier). A moving defect's forest of
+    lines k BPFI + j f_r (k x 2 BSF + j FTF) holds the half and quarter orders as well as the whole ones: no comb.
 
     A source locked to the shaft (a loose part struck once a turn, a rub, an unbalance's harmonics) puts lines at the
     shaft's orders, and a fault's carrier within reach of one of them takes its level: with BPFO = 4.25 f_r, 8 x BPFO
     is 34 f_r, and 7 x BPFO two bins from 30 f_r in a 0.5 s record. A single line at an order (a fault's carrier that
     is one) is not a comb; white noise puts three orders of five above the rule's threshold with a probability of
-    order (3 e^-x)^3, x the threshold's power ratio (below 1e-7 at 8.5 dB)."""
+    order (3 e^-x)^3, x the threshold's power ratio (below 1e-7 at 8.5 dB). An inner-race defect is locked to the
+    shaft too: where the rollers meet it once a turn (a narrow load zone), its lines k BPFI + j f_r lie within a bin
+    or two of the whole orders in a short record, and its comb is a loose part's (:func:`comb_statement` says so)."""
     shaft, _ = _fit_kinematics(d, fit)
     _, df, _, _, floor = _line_spectra(d, "outer_race", fit)
     res = np.asarray(fit.residual_V, dtype=float)
     res_a = np.abs(np.fft.rfft((res - res.mean()) * np.hanning(res.size)))
     orders = np.arange(1, int(CARRIER_BAND / d.record.dt_s // shaft) + 1)
-    stands = np.array([10 * np.log10(_peak(res_a, m * shaft, df) ** 2 / floor) >= threshold_dB for m in orders])
+
+    def stand(order):
+        return 10 * np.log10(_peak(res_a, order * shaft, df) ** 2 / floor) >= threshold_dB
+
+    stands = np.array([stand(m) for m in orders])
+    alone = stands & np.array([not stand(m - 0.5) and not stand(m + 0.5) for m in orders])
     own = np.array([_near(m * shaft, own_Hz, df) for m in orders], dtype=bool)
     comb = []
     for i, m in enumerate(orders):
         near = [j for j in range(i - 2, i + 3) if j != i and 0 <= j < orders.size]
-        if stands[i] and sum(stands[j] and not own[j] for j in near) >= 2:
+        if alone[i] and sum(alone[j] and not own[j] for j in near) >= 2:
             comb.append(m * shaft)
     return np.asarray(comb)
 
