@@ -22,8 +22,8 @@ def use_style() -> None:
     plt.style.use(STYLE)
 
 
-def save(fig, path: str | Path, **savefig_kwargs) -> None:
-    """Save a figure as PNG, creating the folder (``savefig_kwargs`` to :meth:`~matplotlib.figure.Figure.savefig`)."""
+def save(fig, path: str | Path) -> None:
+    """Save a figure as PNG, creating the folder."""
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, **savefig_kwargs)
+    fig.savefig(path)
     plt.close(fig)

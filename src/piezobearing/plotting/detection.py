@@ -82,11 +82,10 @@ def detection_figure(detection: dict, title: str = ""):
 def save_detection(fig, path) -> None:
     """Save a :func:`detection_figure` as PNG. Its layout (``tight_layout``, the legend inside the axes) already
     fits the canvas, so the style's tight crop (``savefig.bbox: tight``), which draws the whole figure once more
-    to find the crop, is left out, and the PNG is compressed at zlib's level 1 (Pillow's default 6 spends about
-    0.15 s on a figure of 1350 x 1050 pixels, for a file a sixth smaller): ``piezobearing detect`` writes
-    one per record (``python benchmarks/bench_detect_record.py``)."""
+    to find the crop, is left out: the save takes about 0.3 s instead of 0.5 s, a tenth of ``piezobearing
+    detect`` on one record (``python benchmarks/bench_detect_record.py``)."""
     with plt.rc_context({"savefig.bbox": "standard"}):
-        save(fig, path, pil_kwargs={"compress_level": 1})
+        save(fig, path)
 
 
 def trend_figure(table, x_label: str):
