@@ -151,6 +151,8 @@ def test_loose_part_is_unexplained_with_its_frequency_named(setup):
     aside = {h["line"] for e in d["fault"]["shaft_comb"] for h in e["lines"]}
     assert "8xBPFO" in aside and "comb of lines at the shaft's orders" in d["fault"]["statement"]
     assert "inner-race defect" in d["fault"]["statement"]  # the one bearing fault locked to the shaft
+    text = SUBJECT.report({**d, "source": "synthetic"}, {})
+    assert "**No fault named**: 7xBPFO" in text and "comb of lines at the shaft's orders" in text
 
 
 def test_unknown_hidden_effect_is_one_line(setup):

@@ -42,7 +42,9 @@ def fault(d: dict) -> list[str]:
     """The answer: fault type, size and position with intervals, operating conditions, look-alikes."""
     f = d["fault"]
     out = ["## The fault", ""]
-    if f["type"] == "none":
+    if f["type"] == "none" and f.get("shaft_comb"):
+        out.append(f"**No fault named**: {f['statement'].removeprefix('no fault named: ')}.")
+    elif f["type"] == "none":
         out.append("**No fault**: no defect effect was selected (the healthy bearing explains the record).")
     elif f.get("source") == "lines":
         out.append(f"**Fault: {f['type'].replace('_', ' ')}**, named from its lines: no defect of the model "
