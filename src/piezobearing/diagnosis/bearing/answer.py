@@ -215,6 +215,15 @@ def _line_spectra(d, kind: str, fit=None) -> tuple[list[tuple[str, float]], floa
     return lines, 1.0 / (n * d.record.dt_s), rec_a, mod_a, floor
 
 
+def _residual_spectrum(d, fit) -> tuple[np.ndarray, float, float]:
+    """The Hann-windowed amplitude spectrum of ``fit``'s residual, its bin width [Hz] and the white floor's power in
+    one bin [V^2] (as :func:`_line_spectra`'s)."""
+    res = np.asarray(fit.residual_V, dtype=float)
+    w = np.hanning(res.size)
+    floor = d.problem.floor.voltage_noise_V ** 2 * float(np.sum(w**2))
+    return np.abs(np.fft.rfft((res - res.mean()) * w)), 1.0 / (res.size * d.record.dt_s), floor
+
+
 def _peak(a: np.ndarray, f_Hz: float, df_Hz: float) -> float:
     """The largest of a spectrum's three bins around ``f_Hz``."""
     k = int(round(f_Hz / df_Hz))
@@ -350,12 +359,14 @@ def _families(d, fit, aside: list | None = None) -> list[dict]:
         levels = carrier_levels(d, kind, fit)
         threshold = lines_threshold_dB(d.settings.test_alpha, len(levels))
         comb = shaft_comb(d, fit, threshold, [f for _, f in family_lines(kind, kin, len(levels))])
-        taken = [c for c in levels if c["excess_dB"] >= threshold and _near(c["frequency_Hz"], comb, df)]
-        hits = [c for c in levels if c["excess_dB"] >= threshold and c not in taken]
+        above = [c for c in levels if c["excess_dB"] >= threshold]
+        taken = [c for c in above if _near(c["frequency_Hz"], comb, df)]
+        hits = [c for c in above if not _near(c["frequency_Hz"], comb, df)]
+        # with a comb, an envelope line on a shaft order is the comb's too
         envs = [{"band": e["band"], "frequency_Hz": e["frequency_Hz"], "ratio": e["ratio"]} for e in env
                 if (e["band"].split("x")[-1] in bands[kind] or e["band"] in bands[kind])
                 and min(abs(e["frequency_Hz"] - f) for f in bpfo) > 2 * df
-                and not (comb.size and _near(e["frequency_Hz"], shaft * np.arange(1, e["frequency_Hz"] // shaft + 2), df))]
+                and not (comb.size and _near(e["frequency_Hz"], [shaft * max(round(e["frequency_Hz"] / shaft), 1)], df))]
         if aside is not None and taken:
             aside.append({"type": kind, "lines": taken, "comb_orders": [int(round(f / shaft)) for f in comb]})
         if len(hits) >= 2 or (envs and kind != "outer_race"):
@@ -392,9 +403,7 @@ def shaft_comb(d, fit, threshold_dB: float, own_Hz: list[float]) -> np.ndarray:
     shaft too: where the rollers meet it once a turn (a narrow load zone), its lines k BPFI + j f_r lie within a bin
     or two of the whole orders in a short record, and its comb is a loose part's (:func:`comb_statement` says so)."""
     shaft, _ = _fit_kinematics(d, fit)
-    _, df, _, _, floor = _line_spectra(d, "outer_race", fit)
-    res = np.asarray(fit.residual_V, dtype=float)
-    res_a = np.abs(np.fft.rfft((res - res.mean()) * np.hanning(res.size)))
+    res_a, df, floor = _residual_spectrum(d, fit)
     orders = np.arange(1, int(CARRIER_BAND / d.record.dt_s // shaft) + 1)
 
     def stand(order):
@@ -420,15 +429,13 @@ def carrier_levels(d, kind: str, fit=None) -> list[dict]:
     roller passage's) [dB]. A groove's dip is short: where a healthy model takes up its first harmonics (a load, a
     clearance), its higher ones stay."""
     fit = d.final if fit is None else fit
-    _, df, _, mod_a, floor = _line_spectra(d, kind, fit)
+    mod_a = _line_spectra(d, kind, fit)[3]
+    res_a, df, floor = _residual_spectrum(d, fit)
     kin = _fit_kinematics(d, fit)[1]
     base = {"outer_race": kin["bpfo_Hz"], "inner_race": kin["bpfi_Hz"], "rolling_element": 2 * kin["bsf_Hz"]}[kind]
     name = {"outer_race": "BPFO", "inner_race": "BPFI", "rolling_element": "2xBSF"}[kind]
     top = CARRIER_BAND / d.record.dt_s
     carriers = [(name if k == 1 else f"{k}x{name}", k * base) for k in range(1, int(top // base) + 1)]
-    res = np.asarray(fit.residual_V, dtype=float)
-    w = np.hanning(res.size)
-    res_a = np.abs(np.fft.rfft((res - res.mean()) * w))
     out = []
     for label, f in carriers:
         r = _peak(res_a, f, df)

@@ -220,8 +220,8 @@ class BearingSubject:
 
         A defect the record cannot pin down (:func:`unidentified_defects`: its width's interval holds zero or
         reaches the catalogue's widest defect, or its angle's spans the circle) is taken out of the catalogue and
-        the engine runs again without it (``fault.unidentified`` names it). Where the quasi-static verdict is ``unexplained`` with a fault's
-        lines or a defect selected, the dynamic rung is tried (:func:`dynamic_rung`; ``dynamic_rung`` of the
+        the engine runs again without it (``fault.unidentified`` names it). Where the quasi-static verdict is
+        ``unexplained`` with a fault's lines or a defect selected, the dynamic rung is tried (:func:`dynamic_rung`; ``dynamic_rung`` of the
         dict says what it gave); where it is ``explained`` with a defect that does not stand against a healthy
         bearing with the shaft's dynamics (:func:`~.joint.defects_against_dynamics`), the rung is tried with the
         defects held to the rule; where it is accepted and the record is still ``unexplained``, the housing mode's
