@@ -75,3 +75,18 @@ def test_the_bearing_record_states_its_rms_and_noise_floor_in_one_unit():
          "baseline": {"noise_floor_nrmse": 0.0323}}
     text = "\n".join(bearing_report.measurement(d))
     assert "voltage rms 35.88 V" in text and "1.16 V rms" in text and "mV" not in text
+
+
+def test_no_fault_says_why_where_the_statement_gives_a_reason():
+    """Where no fault is named the report gives the statement's reason (a comb at the shaft's orders, lines without
+    energy above the floor); a plain "no fault" says the healthy bearing explains the record only where it does."""
+    comb = bearing_report.no_fault({"statement": "no fault named: 7xBPFO (30.1 Hz) 12.0 dB above the floor lie on a "
+                                                 "comb"}, "unexplained")
+    assert comb == "**No fault named**: 7xBPFO (30.1 Hz) 12.0 dB above the floor lie on a comb."
+    floor = bearing_report.no_fault({"statement": "no fault: 14xBPFO (991.7 Hz) 9.1 dB above the floor stand above "
+                                                  "the floor"}, "unexplained")
+    assert floor.startswith("**No fault**: 14xBPFO (991.7 Hz)")
+    explained = bearing_report.no_fault({"statement": "no fault"}, "explained")
+    assert "the healthy bearing explains the record" in explained
+    left = bearing_report.no_fault({"statement": "no fault"}, "unexplained")
+    assert "explains the record" not in left and "no fault family's lines" in left

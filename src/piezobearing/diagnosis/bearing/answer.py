@@ -11,11 +11,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import chdtri
 
-from ...fitting.least_squares import InfeasibleError
-from ..effect import StartContext
-from ..fit import fit_model
 from ..selection import add_effect, strength
-from .effects import CATALOGUE, FAULT_TYPES
+from .effects import FAULT_TYPES
+from .healthy import dynamic_healthy
 from .representations import EnvelopeBands
 
 #: Which operating conditions the answer reports, and what each cannot be told apart from.
@@ -465,7 +463,7 @@ def best_healthy(d):
     operating point (half the load, three times the clearance) each alone may explain too little: its final residual
     then holds the roller passage's own lines at k x BPFO, which are a healthy bearing's; and at a light load with a
     wide clearance the shaft rings on its few loaded rollers at every passage, which the quasi-static chain does not
-    hold. Computed once per diagnosis (kept on it)."""
+    hold (:func:`~.healthy.dynamic_healthy`). Computed once per diagnosis (kept on it)."""
     cached = getattr(d, "_best_healthy", None)
     if cached is not None:
         return cached
@@ -481,57 +479,11 @@ def best_healthy(d):
         if f.chi2 < current.chi2:
             current = f
     if "shaft_dynamics" not in present and _families(d, current) and above_floor(d, current):
-        f = _dynamic_healthy(d, current)
+        f = dynamic_healthy(d, current)
         if f.chi2 < current.chi2:
             current = f
     d._best_healthy = current
     return current
-
-
-#: The grid the dynamic healthy model starts from (:func:`_dynamic_healthy`): radial clearances [m] and loads as
-#: ratios of the rig file's [-]. Spans the range of a running rig's clearance (0-60 um, and a worn 90 um) and a load
-#: within x/÷ 2 of the file's: where the shaft rests on one or two rollers (a light load in a wide clearance) the
-#: dynamic chain's misfit has local minima a fit from the rig file's values does not leave.
-HEALTHY_GRID = ((0.0, 15e-6, 30e-6, 45e-6, 60e-6, 90e-6), (0.5, 0.7, 1.0, 1.4, 2.0))
-#: How many of the grid's best points the dynamic healthy model is fitted from besides the quasi-static fit's own
-#: values: each fit runs the dynamic chain some 20 times per step (every free parameter's difference, the rollers'
-#: offsets among them). With one, 2 of 7 healthy draws far off were left at 11-12 % NRMSE against a 1 % floor and
-#: named faulty (validation/bearing_fault_lines.py).
-HEALTHY_STARTS = 2
-
-
-def _dynamic_healthy(d, qs):
-    """The quasi-static healthy fit ``qs`` with the shaft's dynamics, the load, the clearance, the load share and the
-    rollers' scatter (those it lacks added), fitted from ``qs``'s values and from the :data:`HEALTHY_STARTS` best
-    points of :data:`HEALTHY_GRID` (each point's misfit of the dynamic chain with the load share at its least-squares
-    value, the speed, slip and offsets at ``qs``'s); the best fit is kept."""
-    present = {e.name for e in qs.model.effects}
-    model = qs.model
-    for name in ("radial_load", "clearance", "load_share", "roller_scatter", "shaft_dynamics"):
-        if name not in present:
-            model = model.with_effect(CATALOGUE[name])
-    rec, v = d.record, np.asarray(d.voltage_V, dtype=float)
-    # the shaft's mass and damping at the rig file's values (its starts), not at the effect's neutral mass 0
-    own = CATALOGUE["shaft_dynamics"].starts(StartContext(rec, v, qs.model_V, qs.values))[0]
-    base = {**model.defaults(rec), **qs.values, **own}
-    vc = v - v.mean()
-    scores = []
-    for c, r in ((c, r) for c in HEALTHY_GRID[0] for r in HEALTHY_GRID[1]):
-        vals = {**base, "radial_clearance_m": c, "radial_load_N": r * rec.rig.radial_load_N, "load_share_ratio": 1.0}
-        try:
-            m = model.simulate(vals, rec)
-        except InfeasibleError:
-            continue
-        mc = m - m.mean()
-        share = float(vc @ mc / max(mc @ mc, 1e-300))
-        scores.append((float(np.sum((vc - share * mc) ** 2)), {"radial_clearance_m": c, "radial_load_N": vals[
-            "radial_load_N"], "load_share_ratio": float(np.clip(share, 0.05, 5.0))}))
-    scores.sort(key=lambda x: x[0])
-    starts = [{}, *(pt for _, pt in scores[:HEALTHY_STARTS])]
-    f = fit_model(model, rec, v, d.floor, start=base, starts=starts, max_nfev=d.settings.max_nfev,
-                  ftol=d.settings.ftol)
-    f.model.release()
-    return f
 
 
 def healthy_model_entry(d) -> dict | None:

@@ -8,12 +8,12 @@ fits instead, with ``shaft_dynamics`` on:
 
 1. the dynamic healthy model: the quasi-static final model without its defects, with the load, the clearance and the
    load share (those it lacks added) and the shaft's dynamics at the rig file's mass and damping, fitted from its own
-   values and from the best points of a (clearance, load) grid (:data:`~.answer.HEALTHY_GRID`, each point's misfit of
+   values and from the best points of a (clearance, load) grid (:data:`~.healthy.HEALTHY_GRID`, each point's misfit of
    the dynamic chain with the load share at its least-squares value);
 2. for each fault type (:data:`~.effects.FAULT_TYPES`): the defect's own starts (its angles one roller pitch apart,
    scanned with a trial width, :meth:`~piezobearing.diagnosis.effect.Effect.starts`) at each of the grid's
    :data:`SCREEN_POINTS` best points and at the healthy fit, each start's misfit of the dynamic chain evaluated (the
-   screen), and the type's model fitted from the :data:`~.answer.HEALTHY_STARTS` best;
+   screen), and the type's model fitted from the :data:`~.healthy.HEALTHY_STARTS` best;
 3. the floor measured again (:func:`~.floor.noise_floor`) on the residual of the best of those fits, where it is
    below the floor the search ran with (the groove's own lines and rings lift the floor measured on the record or on
    a quasi-static residual by 1.8-6.6 sigma on the feasibility draws' inner grooves);
@@ -37,16 +37,16 @@ from ..effect import StartContext
 from ..engine import refit
 from ..fit import ModelFit, fit_model
 from ..selection import Candidate, accepted, step_entry, strength
-from .answer import HEALTHY_GRID, HEALTHY_STARTS
 from .effects import CATALOGUE, FAULT_TYPES
 from .effects.outer_race_defect import TRIAL_WIDTH_M
 from .effects.shaft_dynamics import LaggedMatch
 from .floor import noise_floor
+from .healthy import HEALTHY_GRID, HEALTHY_STARTS, grid_points, share_misfit
 from .model import BearingModel
 from .representations import fitted_kinematics
 from .rung import RUNG_PROFILE_EVALUATIONS, unidentified_defects, unidentified_reason
 
-#: The grid points (of :data:`~.answer.HEALTHY_GRID`'s 30, best first by the dynamic healthy chain's misfit) each
+#: The grid points (of :data:`~.healthy.HEALTHY_GRID`'s 30, best first by the dynamic healthy chain's misfit) each
 #: defect's starts are scanned at, besides the dynamic healthy fit's own point. A cost choice: each point costs
 #: one scan of the defect's Z angles per type (33 evaluations of the dynamic chain for the paper's 11 rollers).
 SCREEN_POINTS = 3
@@ -124,32 +124,6 @@ def healthy_start_values(model: BearingModel, qs: ModelFit, rec, v: np.ndarray) 
     return {**defaults, **{k: x for k, x in qs.values.items() if k in defaults}, **own}, own
 
 
-def _share_misfit(vc: np.ndarray, m: np.ndarray) -> tuple[float, float]:
-    """The misfit of ``m`` to the centred record ``vc`` with its scale (the load share) at its least-squares value,
-    and that share (clipped to the load share's bounds)."""
-    mc = m - m.mean()
-    share = float(np.clip(vc @ mc / max(mc @ mc, 1e-300), 0.05, 5.0))
-    return float(np.sum((vc - share * mc) ** 2)), share
-
-
-def grid_points(model: BearingModel, base: dict, rec, vc: np.ndarray) -> list[tuple[float, dict]]:
-    """Every point of :data:`~.answer.HEALTHY_GRID` (clearance, load ratio of the rig file's) with its misfit of
-    ``model`` at ``base`` (load share at its least-squares value), best first; points without an equilibrium
-    left out."""
-    out = []
-    for c in HEALTHY_GRID[0]:
-        for r in HEALTHY_GRID[1]:
-            pt = {"radial_clearance_m": c, "radial_load_N": r * rec.rig.radial_load_N, "load_share_ratio": 1.0}
-            try:
-                m = model.simulate({**base, **pt}, rec)
-            except InfeasibleError:
-                continue
-            e, share = _share_misfit(vc, m)
-            out.append((e, {**pt, "load_share_ratio": share}))
-    out.sort(key=lambda x: x[0])
-    return out
-
-
 def screen(effect, model: BearingModel, base: dict, points: list[dict], rec, v: np.ndarray) -> list[tuple[float, dict]]:
     """The defect's starts at each operating point of ``points``, each with the misfit of ``model`` (healthy + the
     defect) at it, best first. A groove (outer or inner race) is placed by :func:`place` (its events
@@ -174,7 +148,7 @@ def screen(effect, model: BearingModel, base: dict, points: list[dict], rec, v: 
                 m = model.simulate(trial, rec)
             except InfeasibleError:
                 continue
-            e, share = _share_misfit(vc, m)
+            e, share = share_misfit(vc, m)
             out.append((e, {**pt, **s, "load_share_ratio": vals.get("load_share_ratio", 1.0) * share}))
     out.sort(key=lambda x: x[0])
     return out

@@ -42,10 +42,8 @@ def fault(d: dict) -> list[str]:
     """The answer: fault type, size and position with intervals, operating conditions, look-alikes."""
     f = d["fault"]
     out = ["## The fault", ""]
-    if f["type"] == "none" and f.get("shaft_comb"):
-        out.append(f"**No fault named**: {f['statement'].removeprefix('no fault named: ')}.")
-    elif f["type"] == "none":
-        out.append("**No fault**: no defect effect was selected (the healthy bearing explains the record).")
+    if f["type"] == "none":
+        out.append(no_fault(f, d["verdict"]))
     elif f.get("source") == "lines":
         out.append(f"**Fault: {f['type'].replace('_', ' ')}**, named from its lines: no defect of the model "
                    "reproduces them, so there is no size or position to give.")
@@ -65,6 +63,19 @@ def fault(d: dict) -> list[str]:
         out.append(f"| `{k}` | {s.shown_in(k)} | {val} | {iv} | {fitted} |")
     out += ["", "What this record cannot tell apart, and how each interval was found: section 6.", ""]
     return out
+
+
+def no_fault(f: dict, verdict: str) -> str:
+    """The answer where no fault is named: the statement's reason where it gives one (lines set aside as a comb at
+    the shaft's orders, or as lines without energy above the floor), else that no defect was selected and why
+    that holds."""
+    head, _, why = f["statement"].partition(": ")
+    if why:
+        return f"**{head[0].upper()}{head[1:]}**: {why}."
+    if verdict == "explained":
+        return "**No fault**: no defect effect was selected (the healthy bearing explains the record)."
+    return ("**No fault**: no defect effect was selected, and no fault family's lines stand above the lines "
+            "rule's threshold in what the best healthy model leaves (what the model leaves: the verdict above).")
 
 
 def found_and_left(f: dict) -> list[str]:
