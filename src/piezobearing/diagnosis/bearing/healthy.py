@@ -82,20 +82,25 @@ def screen(model, rec, v: np.ndarray, floor, base: dict, points: list[dict]) -> 
     return out
 
 
-def dynamic_healthy(d, qs):
-    """The quasi-static healthy fit ``qs`` with the shaft's dynamics, the load, the clearance, the load share and the
-    rollers' scatter (those it lacks added), fitted from the :data:`HEALTHY_STARTS` best ends of the screen of
-    ``qs``'s own values and the grid's :data:`HEALTHY_SCREEN` best points (the speed, slip and offsets at ``qs``'s, the
-    shaft's mass and damping at the rig file's); the best fit is kept."""
+def dynamic_model(qs, rec, v: np.ndarray) -> tuple:
+    """The quasi-static healthy fit ``qs``'s model with the shaft's dynamics, the load, the clearance, the load share
+    and the rollers' scatter (those it lacks added), and its start: ``qs``'s values, the shaft's mass and damping at
+    the rig file's (``shaft_dynamics``' start, not the effect's neutral mass 0)."""
     present = {e.name for e in qs.model.effects}
     model = qs.model
     for name in ("radial_load", "clearance", "load_share", "roller_scatter", "shaft_dynamics"):
         if name not in present:
             model = model.with_effect(CATALOGUE[name])
-    rec, v = d.record, np.asarray(d.voltage_V, dtype=float)
-    # the shaft's mass and damping at the rig file's values (its starts), not at the effect's neutral mass 0
     own = CATALOGUE["shaft_dynamics"].starts(StartContext(rec, v, qs.model_V, qs.values))[0]
-    base = {**model.defaults(rec), **qs.values, **own}
+    return model, {**model.defaults(rec), **qs.values, **own}
+
+
+def dynamic_healthy(d, qs):
+    """:func:`dynamic_model` of the quasi-static healthy fit ``qs``, fitted from the :data:`HEALTHY_STARTS` best ends
+    of the screen of ``qs``'s own values and the grid's :data:`HEALTHY_SCREEN` best points (the speed, slip and
+    offsets at ``qs``'s); the best fit is kept."""
+    rec, v = d.record, np.asarray(d.voltage_V, dtype=float)
+    model, base = dynamic_model(qs, rec, v)
     grid = grid_points(model, base, rec, v - v.mean())
     ends = screen(model, rec, v, d.floor, base, [{}, *(pt for _, pt in grid[:HEALTHY_SCREEN])])
     f = fit_model(model, rec, v, d.floor, start=base, starts=[vals for _, vals in ends[:HEALTHY_STARTS]],
