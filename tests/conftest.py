@@ -47,6 +47,23 @@ def ci_config() -> dict:
 
 
 @pytest.fixture(scope="session")
+def ci_influence(ci_config):
+    """The CI config's healthy housing solved once per test process for its influence line: the running-bearing
+    tests' rig (their configs change the record and the search, not the housing)."""
+    from piezobearing.stages.bearing_diagnosis import influence_from_config
+
+    return influence_from_config(ci_config)
+
+
+@pytest.fixture(scope="session")
+def paper_influence(paper_config):
+    """The paper config's influence line, solved once per test process."""
+    from piezobearing.stages.bearing_diagnosis import influence_from_config
+
+    return influence_from_config(paper_config)
+
+
+@pytest.fixture(scope="session")
 def paper_record(paper_config):
     """The default synthetic calibration record (25 s, 1 kHz, 13 presses, R = 50 MOhm)."""
     c = paper_config

@@ -20,15 +20,14 @@ def test_the_default_record_hides_a_fault_and_the_healthy_one_is_a_run_beside_it
 
 
 @pytest.mark.slow
-def test_the_diagnosis_finds_the_default_records_groove(ci_config):
+def test_the_diagnosis_finds_the_default_records_groove(ci_config, ci_influence):
     """The default record (CI mesh, the paper config's 2 s at 2550 Hz and 30 dB): the groove selected alone,
     its width and angle inside their 95% intervals."""
     from piezobearing.diagnosis.bearing.subject import SUBJECT, synthesise
-    from piezobearing.stages.bearing_diagnosis import influence_from_config
 
     c = copy.deepcopy(ci_config)
     c["bearing_diagnosis"]["synthetic_duration_s"] = config.load()["bearing_diagnosis"]["synthetic_duration_s"]
-    influence = influence_from_config(c)
+    influence = ci_influence
     hidden = c["bearing"]["hidden_effects"]
     d = SUBJECT.diagnose((synthesise(c, c["seed"], hidden, influence), influence), c)[1]
     assert d["selected"] == ["outer_race_defect"] and d["verdict"] == "explained"

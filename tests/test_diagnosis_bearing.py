@@ -16,7 +16,6 @@ import pytest
 from piezobearing.diagnosis.bearing.effects import CATALOGUE, RUNGS
 from piezobearing.diagnosis.bearing.subject import SUBJECT, synthesise
 from piezobearing.io import BearingRecord, MeasurementError
-from piezobearing.stages.bearing_diagnosis import influence_from_config
 
 #: Each effect's plausible size, its ``example`` (the one home of the hidden values; its module says why); the
 #: rungs are not ranked by the search (tests/test_diagnosis_bearing_dynamics.py hides them).
@@ -28,11 +27,11 @@ WIDEN = 3.2905 / 1.9600
 
 
 @pytest.fixture(scope="module")
-def setup(ci_config):
+def setup(ci_config, ci_influence):
     c = copy.deepcopy(ci_config)
     c["bearing_diagnosis"].update(synthetic_duration_s=0.5, synthetic_sample_rate_Hz=2550.0)
     c["diagnostics"]["max_steps"] = 1
-    return c, influence_from_config(c)
+    return c, ci_influence
 
 
 def run(c, influence, hidden, snr_dB, seed=11, tach=False, extra=None):

@@ -24,7 +24,6 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from piezobearing import config
 from piezobearing.bearing.geometry import BearingGeometry
 from piezobearing.bearing.shaft_dynamics import ShaftDynamics, contact_stiffness_N_per_m, sensor_force
 from piezobearing.diagnosis.bearing import chain, lpm_records
@@ -39,16 +38,15 @@ from piezobearing.diagnosis.bearing.rung import (
 from piezobearing.diagnosis.bearing.subject import SUBJECT, rig_from_config, synthesise
 from piezobearing.diagnosis.engine import diagnose, refit
 from piezobearing.diagnosis.settings import DiagnosticsSettings
-from piezobearing.stages.bearing_diagnosis import influence_from_config
 
 GROOVE_20DEG = {"outer_defect_width_m": 0.6e-3, "outer_defect_angle_rad": 0.35}
 
 
 @pytest.fixture(scope="module")
-def setup(ci_config):
+def setup(ci_config, ci_influence):
     c = copy.deepcopy(ci_config)
     c["bearing_diagnosis"].update(synthetic_duration_s=0.5, synthetic_sample_rate_Hz=2550.0)
-    return c, influence_from_config(c)
+    return c, ci_influence
 
 
 def test_shaft_rings_at_its_closed_form_frequency_and_decay(ci_config):
@@ -302,14 +300,14 @@ LIGHT_WIDE_HEALTHY = {
 
 
 @pytest.mark.slow
-def test_a_healthy_bearing_on_one_or_two_rollers_is_not_named_faulty_from_its_roller_passage():
+def test_a_healthy_bearing_on_one_or_two_rollers_is_not_named_faulty_from_its_roller_passage(paper_config,
+                                                                                         paper_influence):
     """Hide and find, nothing to find: a light load in a wide clearance (1 s at 25.6 kHz of the LPM, the paper rig).
     The quasi-static best healthy model leaves the shaft's ring at every passage (BPFO-4 x BPFO 15-24 dB above the
     floor); the dynamic healthy model's grid ranks the record's basin sixth, and fitted from the grid's two best points
     it ended in a local minimum (11.6 % NRMSE) and the outer race was named from its lines. The screen of the grid's
     best points finds the basin: the best healthy model is below the floor and no fault is named."""
-    c = config.load()
-    influence = influence_from_config(c)
+    c, influence = copy.deepcopy(paper_config), paper_influence
     rec = lpm_records.lpm_record(c, influence, LIGHT_WIDE_HEALTHY, 25600.0, 1.0, 30.0, 3, tachometer=True)
     d = SUBJECT.diagnose((rec, influence), copy.deepcopy(c))[1]
     f = d["fault"]
@@ -404,15 +402,14 @@ def test_a_shaft_twice_the_rig_files_is_found_by_the_scan_of_its_mass(setup):
 
 
 @pytest.mark.slow
-def test_a_groove_a_softer_pedestal_mimics_on_a_healthy_bearing_is_not_a_fault():
+def test_a_groove_a_softer_pedestal_mimics_on_a_healthy_bearing_is_not_a_fault(paper_config, paper_influence):
     """Hide and find of a rig file's error, nothing to find: a healthy bearing in a 1 s record at 25.6 kHz of the LPM
     whose pedestal is half as stiff as the paper's rig file says (1e9 against 2e9 N/m; the record of
     docs/validation/bearing_diagnosis.md, seed 26). The quasi-static search selects a 0.40 mm groove 23 deg from the
     sensor and ends ``explained``; held against a healthy bearing with the shaft's dynamics, the groove does not
     stand (that model's BIC is lower), the rung is tried with the groove held to the rule, and it is not selected:
     no fault."""
-    c = config.load()
-    influence = influence_from_config(c)
+    c, influence = copy.deepcopy(paper_config), paper_influence
     rec = lpm_records.lpm_record(c, influence, {"pedestal_stiffness_N_per_m": 1.0e9}, 25600.0, 1.0, 30.0, 26)
     d = SUBJECT.diagnose((rec, influence), copy.deepcopy(c))[1]
     r = d["dynamic_rung"]
@@ -425,7 +422,8 @@ def test_a_groove_a_softer_pedestal_mimics_on_a_healthy_bearing_is_not_a_fault()
 
 
 @pytest.mark.slow
-def test_a_groove_neither_the_rung_nor_the_dynamics_beat_is_left_out_and_named(monkeypatch):
+def test_a_groove_neither_the_rung_nor_the_dynamics_beat_is_left_out_and_named(monkeypatch, paper_config,
+                                                                               paper_influence):
     """The record of the test above, with the rung's outcome forced to 'not accepted' (its BIC drop, 59, passes the
     rule there; no record of docs/validation/bearing_diagnosis.md reaches this case): the 0.40 mm groove, which does
     not stand against the shaft's dynamics, is then not reported as a fault. It is left out of the search and named
@@ -436,8 +434,7 @@ def test_a_groove_neither_the_rung_nor_the_dynamics_beat_is_left_out_and_named(m
         return d, {**rung, "accepted": False}
 
     monkeypatch.setattr(rung_module, "dynamic_rung", not_accepted)
-    c = config.load()
-    influence = influence_from_config(c)
+    c, influence = copy.deepcopy(paper_config), paper_influence
     rec = lpm_records.lpm_record(c, influence, {"pedestal_stiffness_N_per_m": 1.0e9}, 25600.0, 1.0, 30.0, 26)
     d = SUBJECT.diagnose((rec, influence), copy.deepcopy(c))[1]
     assert d["dynamic_rung"]["hold_defects"] and not d["dynamic_rung"]["against_dynamics"]["stands"]

@@ -19,7 +19,6 @@ from piezobearing.diagnosis.bearing.lpm_records import draw_conditions, lpm_reco
 from piezobearing.diagnosis.bearing.subject import SUBJECT
 from piezobearing.fitting.least_squares import InfeasibleError, fit
 from piezobearing.fitting.params import Param
-from piezobearing.stages.bearing_diagnosis import influence_from_config
 
 
 @pytest.fixture(scope="module")
@@ -73,10 +72,10 @@ def test_defect_without_depth_gets_the_papers_millimetre(tmp_path):
 
 
 @pytest.fixture(scope="module")
-def ci_setup(ci_config):
+def ci_setup(ci_config, ci_influence):
     c = copy.deepcopy(ci_config)
     c["diagnostics"]["max_steps"] = 1
-    return c, influence_from_config(c)
+    return c, ci_influence
 
 
 @pytest.mark.slow

@@ -15,17 +15,16 @@ from piezobearing.diagnosis.bearing.lpm_records import (
 )
 from piezobearing.diagnosis.bearing.subject import SUBJECT
 from piezobearing.housing.one_mode import through_mode
-from piezobearing.stages.bearing_diagnosis import influence_from_config
 
 #: A mode inside a 2550 Hz record's band (Nyquist 1275 Hz), as a housing's lowest mode at 2 % damping.
 MODE = {"housing_mode_Hz": 1100.0, "housing_mode_damping_ratio": 0.02}
 
 
 @pytest.fixture(scope="module")
-def setup(ci_config):
+def setup(ci_config, ci_influence):
     c = copy.deepcopy(ci_config)
     c["diagnostics"]["max_steps"] = 1
-    return c, influence_from_config(c)
+    return c, ci_influence
 
 
 def steady_gain(mode_Hz: float, zeta: float, f_Hz: float, step_s: float) -> complex:

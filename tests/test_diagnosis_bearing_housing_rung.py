@@ -25,16 +25,15 @@ from piezobearing.diagnosis.bearing.rung import housing_scan
 from piezobearing.diagnosis.bearing.subject import SUBJECT, rig_from_config
 from piezobearing.diagnosis.effect import EffectError
 from piezobearing.diagnosis.settings import DiagnosticsSettings
-from piezobearing.stages.bearing_diagnosis import influence_from_config
 
 GROOVE = {"outer_defect_width_m": 0.9e-3, "outer_defect_angle_rad": 0.0}
 MODE_1100 = {"housing_mode_Hz": 1100.0, "housing_mode_damping_ratio": 0.02}
 
 
 @pytest.fixture(scope="module")
-def setup(ci_config):
+def setup(ci_config, ci_influence):
     c = copy.deepcopy(ci_config)
-    return c, influence_from_config(c)
+    return c, ci_influence
 
 
 def _values(c, hidden):

@@ -20,7 +20,6 @@ from piezobearing.diagnosis.bearing.subject import SUBJECT
 from piezobearing.diagnosis.engine import diagnose
 from piezobearing.diagnosis.settings import DiagnosticsSettings
 from piezobearing.numerics.threads import single_blas_thread
-from piezobearing.stages.bearing_diagnosis import influence_from_config
 
 #: The hide-and-find runs of the whole joint search: 2-4 CPU minutes each (the search costs 29-248 s on a 0.5 s record),
 #: so they run with the docs' expensive commands, not in the default suite.
@@ -29,10 +28,10 @@ EXPENSIVE = pytest.mark.skipif(os.environ.get("PIEZOBEARING_EXPENSIVE") != "1",
 
 
 @pytest.fixture(scope="module")
-def setup(paper_config):
+def setup(paper_config, paper_influence):
     c = copy.deepcopy(paper_config)
     c["diagnostics"]["max_steps"] = 1
-    return c, influence_from_config(c)
+    return c, paper_influence
 
 
 def quasi_static(setup, draw: int, duration_s: float):

@@ -28,7 +28,7 @@ from piezobearing.diagnosis.bearing.lpm_records import (
 from piezobearing.diagnosis.bearing.subject import SUBJECT
 from piezobearing.io import write_bearing_record
 from piezobearing.sensor.calibration import SensorCircuit
-from piezobearing.stages.bearing_diagnosis import influence_from_config, run
+from piezobearing.stages.bearing_diagnosis import run
 from piezobearing.stages.running_bearing_guide import EXAMPLE
 
 #: name -> hidden catalogue values (the catalogue's examples, the groove 0.9 mm over the sensor as the paper's)
@@ -40,10 +40,10 @@ SUBSET = {
 
 
 @pytest.fixture(scope="module")
-def setup(ci_config):
+def setup(ci_config, ci_influence):
     c = copy.deepcopy(ci_config)
     c["diagnostics"]["max_steps"] = 1
-    return c, influence_from_config(c)
+    return c, ci_influence
 
 
 @pytest.mark.slow

@@ -16,17 +16,17 @@ from scipy.io import savemat
 
 from piezobearing.cli import main
 from piezobearing.diagnosis.bearing.subject import synthesise
-from piezobearing.stages.bearing_diagnosis import influence_from_config, shaft_speed_given
+from piezobearing.stages.bearing_diagnosis import shaft_speed_given
 
 RECORD_RPM = 1040.0
 
 
 @pytest.fixture(scope="module")
-def mat_record(ci_config, tmp_path_factory):
+def mat_record(ci_config, ci_influence, tmp_path_factory):
     """(record.mat holding voltage_V, sample_rate_Hz and X105RPM, influence line CSV, the config)."""
     c = copy.deepcopy(ci_config)
     c["bearing_diagnosis"].update(synthetic_duration_s=0.5, synthetic_sample_rate_Hz=2550.0, synthetic_snr_dB=30.0)
-    influence = influence_from_config(c)
+    influence = ci_influence
     rec = synthesise({**c, "bearing": {**c["bearing"], "shaft_speed_rpm": RECORD_RPM}}, 5, [], influence)
     d = tmp_path_factory.mktemp("speed")
     savemat(d / "record.mat", {"voltage_V": rec.voltage_V[:, None], "sample_rate_Hz": 2550.0,

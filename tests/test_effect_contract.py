@@ -85,16 +85,15 @@ def test_effect_hooks_keep_the_contract(key, press_record):
 
 
 @pytest.fixture(scope="module")
-def rig_record(ci_config):
+def rig_record(ci_config, ci_influence):
     """A 0.5 s healthy running-bearing record of the CI rig (its influence line solved once) as the engine sees it."""
     import copy
 
     from piezobearing.diagnosis.bearing.subject import SUBJECT, synthesise
-    from piezobearing.stages.bearing_diagnosis import influence_from_config
 
     c = copy.deepcopy(ci_config)
     c["bearing_diagnosis"].update(synthetic_duration_s=0.5, synthetic_sample_rate_Hz=2550.0)
-    influence = influence_from_config(c)
+    influence = ci_influence
     return SUBJECT.problem((synthesise(c, 11, [], influence), influence), c)
 
 
