@@ -305,8 +305,8 @@ def test_a_healthy_bearing_on_one_or_two_rollers_is_not_named_faulty_from_its_ro
     """Hide and find, nothing to find: a light load in a wide clearance (1 s at 25.6 kHz of the LPM, the paper rig).
     The quasi-static best healthy model leaves the shaft's ring at every passage (BPFO-4 x BPFO 15-24 dB above the
     floor); the dynamic healthy model's grid ranks the record's basin sixth, and fitted from the grid's two best points
-    it ended in a local minimum (11.6 % NRMSE) and the outer race was named from its lines. The screen of the grid's
-    best points finds the basin: the best healthy model is below the floor and no fault is named."""
+    it ended in a local minimum (11.6 % NRMSE) and the outer race was named from its lines. The screen of the points
+    after those finds the basin: the best healthy model is below the floor and no fault is named."""
     c, influence = copy.deepcopy(paper_config), paper_influence
     rec = lpm_records.lpm_record(c, influence, LIGHT_WIDE_HEALTHY, 25600.0, 1.0, 30.0, 3, tachometer=True)
     d = SUBJECT.diagnose((rec, influence), copy.deepcopy(c))[1]

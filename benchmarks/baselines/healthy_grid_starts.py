@@ -1,7 +1,7 @@
-"""The dynamic healthy model fitted from the grid's two best points (and the quasi-static fit's own values) without a
-screen: the method :func:`piezobearing.diagnosis.bearing.healthy.dynamic_healthy` replaced, kept as the baseline of
-``benchmarks/bench_healthy_screen.py``. The grid's points are ranked by their misfit with the rollers' offsets at
-zero and the load share at its least-squares value, and the full fits start from the two best."""
+"""The dynamic healthy model fitted from the quasi-static fit's own values and the grid's two best points, without the
+screen's start: the method before :func:`piezobearing.diagnosis.bearing.healthy.dynamic_healthy` added it, kept as the
+baseline of ``benchmarks/bench_healthy_screen.py``. The grid's points are ranked by their misfit with the rollers'
+offsets at zero and the load share at its least-squares value."""
 
 from __future__ import annotations
 

@@ -10,10 +10,12 @@ k x BPFO, which are a healthy bearing's. The joint dynamic search (:mod:`.joint`
 The dynamic chain's misfit has local minima over (clearance, load): which rollers carry, and when, depends on the
 clearance, the load and each roller's offset. A grid point's misfit with the offsets at zero and the load share at its
 least-squares value ranks the points by the record's amplitude more than by its shape (the share makes up for the
-load), so the grid's best points need not lie in the record's basin. Each of the :data:`HEALTHY_SCREEN` best points
-is therefore fitted for :data:`SCREEN_NFEV` steps first, as is the quasi-static fit's own point (the screen: a few
-Gauss-Newton steps fit the offsets and show the basin), and the full fits start from the :data:`HEALTHY_STARTS` best
-ends of the screen.
+load), so the grid's best points need not lie in the record's basin. The model is fitted from the quasi-static fit's
+own values and the grid's :data:`HEALTHY_STARTS` best points, and from one more start: the :data:`HEALTHY_SCREEN`
+points after those are each fitted for :data:`SCREEN_NFEV` steps (the screen: a few Gauss-Newton steps fit the
+offsets and often show the basin), and the best end starts a full fit. A screen alone does not replace the grid's best
+points: a start far from its basin (90 um against a record's 73) may end a few steps worse than a start in another
+basin and end best after the full fit (feasibility draw 22 of validation/bearing_feasibility.py).
 """
 
 from __future__ import annotations
@@ -30,12 +32,15 @@ from .effects import CATALOGUE
 #: x/÷ 2 of the file's: where the shaft rests on one or two rollers (a light load in a wide clearance) the dynamic
 #: chain's misfit has local minima a fit from the rig file's values does not leave.
 HEALTHY_GRID = ((0.0, 15e-6, 30e-6, 45e-6, 60e-6, 90e-6), (0.5, 0.7, 1.0, 1.4, 2.0))
-#: How many full fits of the dynamic healthy model start from the screen's best ends: each fit runs the dynamic chain
-#: some 20 times per step (every free parameter's difference, the rollers' offsets among them).
+#: How many of the grid's best points the dynamic healthy model is fitted from besides the quasi-static fit's own
+#: values: each fit runs the dynamic chain some 20 times per step (every free parameter's difference, the rollers'
+#: offsets among them). With one, 2 of 7 healthy draws far off were left at 11-12 % NRMSE against a 1 % floor and
+#: named faulty (validation/bearing_fault_lines.py).
 HEALTHY_STARTS = 2
-#: How many of the grid's best points are screened (:func:`screen`). Healthy draw 3 of
-#: validation/bearing_fault_lines.py (256 N in 48 um at 25.6 kHz): the point in the record's basin (45 um at half the
-#: rig file's load) is the grid's sixth; after four steps its chi2 is 204 where the five before it stay above 1.4e4.
+#: How many of the grid's points after its :data:`HEALTHY_STARTS` best are screened (:func:`screen`). Healthy draw 3
+#: of validation/bearing_fault_lines.py (256 N in 48 um at 25.6 kHz): the point in the record's basin (45 um at half
+#: the rig file's load) is the grid's sixth; after four steps its chi2 is 204 where the five before it stay above
+#: 1.4e4, and the full fits from the two best points end in a local minimum at 11.6 % NRMSE (a floor of 4.86 %).
 HEALTHY_SCREEN = 8
 #: The residual evaluations of each screening fit (one Jacobian each besides): four steps, 3 s of CPU a point on a
 #: 1 s record at 25.6 kHz.
@@ -96,14 +101,15 @@ def dynamic_model(qs, rec, v: np.ndarray) -> tuple:
 
 
 def dynamic_healthy(d, qs):
-    """:func:`dynamic_model` of the quasi-static healthy fit ``qs``, fitted from the :data:`HEALTHY_STARTS` best ends
-    of the screen of ``qs``'s own values and the grid's :data:`HEALTHY_SCREEN` best points (the speed, slip and
-    offsets at ``qs``'s); the best fit is kept."""
+    """:func:`dynamic_model` of the quasi-static healthy fit ``qs``, fitted from ``qs``'s own values, from the grid's
+    :data:`HEALTHY_STARTS` best points and from the best end of the screen of the :data:`HEALTHY_SCREEN` points after
+    them (the speed, slip and offsets at ``qs``'s); the best fit is kept."""
     rec, v = d.record, np.asarray(d.voltage_V, dtype=float)
     model, base = dynamic_model(qs, rec, v)
     grid = grid_points(model, base, rec, v - v.mean())
-    ends = screen(model, rec, v, d.floor, base, [{}, *(pt for _, pt in grid[:HEALTHY_SCREEN])])
-    f = fit_model(model, rec, v, d.floor, start=base, starts=[vals for _, vals in ends[:HEALTHY_STARTS]],
-                  max_nfev=d.settings.max_nfev, ftol=d.settings.ftol)
+    ends = screen(model, rec, v, d.floor, base, [pt for _, pt in grid[HEALTHY_STARTS:HEALTHY_STARTS + HEALTHY_SCREEN]])
+    starts = [{}, *(pt for _, pt in grid[:HEALTHY_STARTS]), *(vals for _, vals in ends[:1])]
+    f = fit_model(model, rec, v, d.floor, start=base, starts=starts, max_nfev=d.settings.max_nfev,
+                  ftol=d.settings.ftol)
     f.model.release()
     return f
