@@ -3,6 +3,7 @@ added to the grid's two best points (:func:`piezobearing.diagnosis.bearing.healt
 from the grid's two best points alone, the method before (``baselines/healthy_grid_starts.py``), on the healthy
 records of ``validation/bearing_fault_lines.py`` whose lines rule fits it (1 s at 30 dB of the dynamic LPM, the paper
 rig; draw 3, 256 N in 48 um at 25.6 kHz, is the record the screen's size was chosen on).
+
 For each record the quasi-static diagnosis runs once (``dynamic_rung: off``) and its quasi-static best healthy model is
 the start of both methods: each method's CPU seconds (one core), NRMSE and the floor's, and the ratio old / new of
 the CPU.
