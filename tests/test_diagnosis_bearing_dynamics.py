@@ -355,8 +355,8 @@ def test_the_screen_finds_the_basin_the_grids_best_points_miss_on_one_or_two_rol
 def test_a_healthy_bearing_on_one_or_two_rollers_is_not_named_faulty_from_its_roller_passage(paper_config,
                                                                                          paper_influence):
     """Hide and find, nothing to find, the whole diagnosis of the record above (the default ``dynamic_rung``): the
-    best healthy model is below the floor and no fault is named (330 CPU s; the outer race from its lines, at 11.6 %,
-    without the screen's start)."""
+    best healthy model is below the floor and no fault is named (its dynamic healthy fits alone 325 CPU s,
+    benchmarks/bench_healthy_screen.py; the outer race from its lines, at 11.6 %, without the screen's start)."""
     c, influence = copy.deepcopy(paper_config), paper_influence
     rec = lpm_records.lpm_record(c, influence, LIGHT_WIDE_HEALTHY, 25600.0, 1.0, 30.0, 3, tachometer=True)
     d = SUBJECT.diagnose((rec, influence), copy.deepcopy(c))[1]
