@@ -87,17 +87,24 @@ def screen(model, rec, v: np.ndarray, floor, base: dict, points: list[dict]) -> 
     return out
 
 
+def healthy_start_values(model, qs, rec, v: np.ndarray) -> tuple[dict, dict]:
+    """The start of a dynamic healthy ``model`` (:func:`dynamic_model`, :func:`~.joint.healthy_model`) from the
+    quasi-static fit ``qs``: its values where the model has them, the shaft's mass and damping at the rig file's
+    (``shaft_dynamics``' start, not the effect's neutral mass 0); returns (the start, the shaft's values)."""
+    own = CATALOGUE["shaft_dynamics"].starts(StartContext(rec, v, qs.model_V, qs.values))[0]
+    defaults = model.defaults(rec)
+    return {**defaults, **{k: x for k, x in qs.values.items() if k in defaults}, **own}, own
+
+
 def dynamic_model(qs, rec, v: np.ndarray) -> tuple:
     """The quasi-static healthy fit ``qs``'s model with the shaft's dynamics, the load, the clearance, the load share
-    and the rollers' scatter (those it lacks added), and its start: ``qs``'s values, the shaft's mass and damping at
-    the rig file's (``shaft_dynamics``' start, not the effect's neutral mass 0)."""
+    and the rollers' scatter (those it lacks added), and its start (:func:`healthy_start_values`)."""
     present = {e.name for e in qs.model.effects}
     model = qs.model
     for name in ("radial_load", "clearance", "load_share", "roller_scatter", "shaft_dynamics"):
         if name not in present:
             model = model.with_effect(CATALOGUE[name])
-    own = CATALOGUE["shaft_dynamics"].starts(StartContext(rec, v, qs.model_V, qs.values))[0]
-    return model, {**model.defaults(rec), **qs.values, **own}
+    return model, healthy_start_values(model, qs, rec, v)[0]
 
 
 def dynamic_healthy(d, qs):

@@ -41,7 +41,7 @@ from .effects import CATALOGUE, FAULT_TYPES
 from .effects.outer_race_defect import TRIAL_WIDTH_M
 from .effects.shaft_dynamics import LaggedMatch
 from .floor import noise_floor
-from .healthy import HEALTHY_GRID, HEALTHY_STARTS, grid_points, share_misfit
+from .healthy import HEALTHY_GRID, HEALTHY_STARTS, grid_points, healthy_start_values, share_misfit
 from .model import BearingModel
 from .representations import fitted_kinematics
 from .rung import RUNG_PROFILE_EVALUATIONS, unidentified_defects, unidentified_reason
@@ -113,15 +113,6 @@ def defects_against_dynamics(d, config: dict) -> dict:
     return {"tried": True, "accepted": False, "evidence": [], "hold_defects": True, "against_dynamics": check,
             "why": f"the quasi-static verdict is explained, but {said}: each defect is held to the rule with the "
                    "shaft's dynamics on"}
-
-
-def healthy_start_values(model: BearingModel, qs: ModelFit, rec, v: np.ndarray) -> tuple[dict, dict]:
-    """The start of the dynamic healthy ``model`` (:func:`healthy_model`) from the quasi-static fit ``qs``: its
-    values where the model has them, the shaft's mass and damping at the rig file's (``shaft_dynamics``' start, not
-    the effect's neutral mass 0); returns (the start, the shaft's values)."""
-    own = CATALOGUE["shaft_dynamics"].starts(StartContext(rec, v, qs.model_V, qs.values))[0]
-    defaults = model.defaults(rec)
-    return {**defaults, **{k: x for k, x in qs.values.items() if k in defaults}, **own}, own
 
 
 def screen(effect, model: BearingModel, base: dict, points: list[dict], rec, v: np.ndarray) -> list[tuple[float, dict]]:
