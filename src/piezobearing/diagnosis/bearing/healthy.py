@@ -4,8 +4,8 @@ Where the quasi-static best healthy model still leaves a fault family's lines wi
 rule judges them against a healthy bearing with the shaft's dynamics (:func:`dynamic_healthy`, called by
 :func:`~.answer.best_healthy`): at a light load in a wide clearance the shaft rings on its few loaded rollers at every
 passage, which the quasi-static chain does not hold, and its residual then holds the roller passage's own lines at
-k x BPFO, which are a healthy bearing's. The joint dynamic search (:mod:`.joint`) starts from the same grid
-(:func:`grid_points`).
+k x BPFO, which are a healthy bearing's. The joint dynamic search (:mod:`.joint`) fits its dynamic healthy model
+(the quasi-static final model without its defects) the same way (:func:`fit_from_grid`).
 
 The dynamic chain's misfit has local minima over (clearance, load): which rollers carry, and when, depends on the
 clearance, the load and each roller's offset. A grid point's misfit with the offsets at zero and the load share at its
@@ -107,16 +107,20 @@ def dynamic_model(qs, rec, v: np.ndarray) -> tuple:
     return model, healthy_start_values(model, qs, rec, v)[0]
 
 
-def dynamic_healthy(d, qs):
-    """:func:`dynamic_model` of the quasi-static healthy fit ``qs``, fitted from ``qs``'s own values, from the grid's
-    :data:`HEALTHY_STARTS` best points and from the best end of the screen of the :data:`HEALTHY_SCREEN` points after
-    them (the speed, slip and offsets at ``qs``'s); the best fit is kept."""
-    rec, v = d.record, np.asarray(d.voltage_V, dtype=float)
-    model, base = dynamic_model(qs, rec, v)
-    grid = grid_points(model, base, rec, v - v.mean())
-    ends = screen(model, rec, v, d.floor, base, [pt for _, pt in grid[HEALTHY_STARTS:HEALTHY_STARTS + HEALTHY_SCREEN]])
+def fit_from_grid(model, rec, v: np.ndarray, floor, base: dict, grid: list[tuple[float, dict]], settings):
+    """``model`` fitted from ``base`` (the quasi-static fit's values), from the ``grid``'s (:func:`grid_points`)
+    :data:`HEALTHY_STARTS` best points and from the best end of the screen (:func:`screen`) of the
+    :data:`HEALTHY_SCREEN` points after them; the best fit is kept."""
+    ends = screen(model, rec, v, floor, base, [pt for _, pt in grid[HEALTHY_STARTS:HEALTHY_STARTS + HEALTHY_SCREEN]])
     starts = [{}, *(pt for _, pt in grid[:HEALTHY_STARTS]), *(vals for _, vals in ends[:1])]
-    f = fit_model(model, rec, v, d.floor, start=base, starts=starts, max_nfev=d.settings.max_nfev,
-                  ftol=d.settings.ftol)
+    f = fit_model(model, rec, v, floor, start=base, starts=starts, max_nfev=settings.max_nfev, ftol=settings.ftol)
     f.model.release()
     return f
+
+
+def dynamic_healthy(d, qs):
+    """:func:`dynamic_model` of the quasi-static healthy fit ``qs``, fitted from the grid (:func:`fit_from_grid`;
+    the speed, slip and offsets at ``qs``'s)."""
+    rec, v = d.record, np.asarray(d.voltage_V, dtype=float)
+    model, base = dynamic_model(qs, rec, v)
+    return fit_from_grid(model, rec, v, d.floor, base, grid_points(model, base, rec, v - v.mean()), d.settings)

@@ -8,8 +8,9 @@ fits instead, with ``shaft_dynamics`` on:
 
 1. the dynamic healthy model: the quasi-static final model without its defects, with the load, the clearance and the
    load share (those it lacks added) and the shaft's dynamics at the rig file's mass and damping, fitted from its own
-   values and from the best points of a (clearance, load) grid (:data:`~.healthy.HEALTHY_GRID`, each point's misfit of
-   the dynamic chain with the load share at its least-squares value);
+   values, from the best points of a (clearance, load) grid (:data:`~.healthy.HEALTHY_GRID`, each point's misfit of
+   the dynamic chain with the load share at its least-squares value) and from the best end of a few steps' fits of
+   the grid's next points (:func:`~.healthy.fit_from_grid`, as the lines rule's dynamic healthy model);
 2. for each fault type (:data:`~.effects.FAULT_TYPES`): the defect's own starts (its angles one roller pitch apart,
    scanned with a trial width, :meth:`~piezobearing.diagnosis.effect.Effect.starts`) at each of the grid's
    :data:`SCREEN_POINTS` best points and at the healthy fit, each start's misfit of the dynamic chain evaluated (the
@@ -41,7 +42,15 @@ from .effects import CATALOGUE, FAULT_TYPES
 from .effects.outer_race_defect import TRIAL_WIDTH_M
 from .effects.shaft_dynamics import LaggedMatch
 from .floor import noise_floor
-from .healthy import HEALTHY_GRID, HEALTHY_STARTS, grid_points, healthy_start_values, share_misfit
+from .healthy import (
+    HEALTHY_GRID,
+    HEALTHY_SCREEN,
+    HEALTHY_STARTS,
+    fit_from_grid,
+    grid_points,
+    healthy_start_values,
+    share_misfit,
+)
 from .model import BearingModel
 from .representations import fitted_kinematics
 from .rung import RUNG_PROFILE_EVALUATIONS, unidentified_defects, unidentified_reason
@@ -241,10 +250,9 @@ def joint_search(d, settings, progress=None) -> tuple[dict, dict]:
     base, own = healthy_start_values(model, qs, rec, v)
     grid = grid_points(model, base, rec, vc)
     evaluations = len(HEALTHY_GRID[0]) * len(HEALTHY_GRID[1])
-    note(f"joint search: dynamic healthy model ({model.label}) from {HEALTHY_STARTS} of {len(grid)} grid points")
-    healthy = fit_model(model, rec, v, floor, start=base, starts=[{}, *(pt for _, pt in grid[:HEALTHY_STARTS])],
-                        max_nfev=settings.max_nfev, ftol=settings.ftol)
-    healthy.model.release()
+    note(f"joint search: dynamic healthy model ({model.label}) from {HEALTHY_STARTS} of {len(grid)} grid points "
+         f"and the best of {HEALTHY_SCREEN} screened")
+    healthy = fit_from_grid(model, rec, v, floor, base, grid, settings)
     # the shaft's mass and damping at the rig file's values at every point: the healthy fit may take a damping
     # as a stand-in for a groove's ring (draw 2 of validation/bearing_feasibility.py: 26 N s/m against the file's
     # 1500, where a groove placed with the file's damping explains 40 % of the misfit and one with the fit's none)
