@@ -317,11 +317,9 @@ def light_wide(paper_config, paper_influence):
         caught.update(d=d, qs=qs)
         return qs
 
-    real, answer_module.dynamic_healthy = answer_module.dynamic_healthy, catch
-    try:
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(answer_module, "dynamic_healthy", catch)
         dj = SUBJECT.diagnose((rec, influence), c)[1]
-    finally:
-        answer_module.dynamic_healthy = real
     return caught["d"], caught["qs"], dj
 
 
