@@ -367,7 +367,8 @@ def test_a_healthy_bearing_on_one_or_two_rollers_is_not_named_faulty_from_its_ro
 
 def test_the_kinematic_grid_kept_by_the_rig_gives_the_same_forces(setup):
     """A step in the damping reuses the rig's roller angles, normals and influence: the same numbers as a rig
-    that computes them anew."""
+    that computes them anew. After a step in the start phase the point's grid is served again; at most
+    ``GRID_KEEP`` grids are kept."""
     c, influence = setup
     t = np.arange(int(0.25 * 2550.0)) / 2550.0
     values = {"start_phase_rad": 0.1, "shaft_speed_Hz": c["bearing"]["shaft_speed_rpm"] / 60.0, **GROOVE_20DEG,
@@ -380,6 +381,16 @@ def test_the_kinematic_grid_kept_by_the_rig_gives_the_same_forces(setup):
                                   chain.sensor_force(rig_from_config(c, influence, t), step)[0])
     finer = replace(warm, steps_per_period=2 * warm.steps_per_period, cache={}, grid={})
     assert not np.array_equal(chain.sensor_force(finer, step)[0], chain.sensor_force(warm, step)[0])
+    # a finite-difference step in the start phase (a grid of its own), then back at the point: the point's grid is
+    # served again, not computed anew
+    (point,) = [psi for _, psi, _, _ in warm.grid.values()]
+    chain.sensor_force(warm, {**step, "start_phase_rad": 0.1 + 1e-8})
+    assert len(warm.grid) == 2
+    chain.sensor_force(warm, {**step, "bearing_damping_N_s_per_m": 1502.0})
+    assert any(psi is point for _, psi, _, _ in warm.grid.values()) and len(warm.grid) == 2
+    for k in range(2 * chain.GRID_KEEP):  # at most GRID_KEEP grids are kept
+        chain.sensor_force(warm, {**step, "start_phase_rad": 0.2 + 0.01 * k})
+    assert len(warm.grid) == chain.GRID_KEEP
 
 
 def test_a_run_without_intervals_given_them_afterwards_is_the_run_with_them(setup):
