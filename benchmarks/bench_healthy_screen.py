@@ -21,6 +21,7 @@ import os
 import sys
 import time
 from pathlib import Path
+from unittest import mock
 
 import numpy as np
 from baselines import healthy_grid_starts
@@ -47,12 +48,8 @@ def one(config: dict, influence, i: int) -> dict:
         caught.update(d=d, qs=qs)
         return qs
 
-    real = answer.dynamic_healthy
-    answer.dynamic_healthy = catch
-    try:
+    with mock.patch.object(answer, "dynamic_healthy", catch):
         SUBJECT.diagnose((rec, influence), c)
-    finally:
-        answer.dynamic_healthy = real
     row = {"draw": i, "sample_rate_Hz": rate}
     if not caught:
         return {**row, "fitted": False}
