@@ -338,8 +338,7 @@ def test_the_screen_finds_the_basin_the_grids_best_points_miss_on_one_or_two_rol
     basin = next(k for k, (_, pt) in enumerate(grid) if pt["radial_clearance_m"] == 45e-6
                  and pt["radial_load_N"] == 0.5 * rec.rig.radial_load_N)
     assert basin >= healthy.HEALTHY_STARTS, basin  # the grid's two best points are not the basin's
-    ends = healthy.screen(model, rec, v, d.floor, base,
-                          [pt for _, pt in grid[healthy.HEALTHY_STARTS:healthy.HEALTHY_STARTS + healthy.HEALTHY_SCREEN]])
+    ends = healthy.screen(model, rec, v, d.floor, base, healthy.screened(grid))
     assert ends[0][0] < 0.05 * np.median([e[0] for e in ends]), [e[0] for e in ends]  # 204 against 1.3e4
     f = fit_model(model, rec, v, d.floor, start=base, starts=[ends[0][1]], max_nfev=d.settings.max_nfev,
                   ftol=d.settings.ftol)

@@ -72,6 +72,12 @@ def grid_points(model, base: dict, rec, vc: np.ndarray) -> list[tuple[float, dic
     return out
 
 
+def screened(grid: list[tuple[float, dict]]) -> list[dict]:
+    """The points of ``grid`` (:func:`grid_points`, best first) the screen fits: the :data:`HEALTHY_SCREEN` after its
+    :data:`HEALTHY_STARTS` best."""
+    return [pt for _, pt in grid[HEALTHY_STARTS:HEALTHY_STARTS + HEALTHY_SCREEN]]
+
+
 def screen(model, rec, v: np.ndarray, floor, base: dict, points: list[dict]) -> list[tuple[float, dict]]:
     """Each of ``points`` fitted for :data:`SCREEN_NFEV` steps from ``base``: (chi2, the fit's values), best first;
     points without a solution of the model left out."""
@@ -111,7 +117,7 @@ def fit_from_grid(model, rec, v: np.ndarray, floor, base: dict, grid: list[tuple
     """``model`` fitted from ``base`` (the quasi-static fit's values), from the ``grid``'s (:func:`grid_points`)
     :data:`HEALTHY_STARTS` best points and from the best end of the screen (:func:`screen`) of the
     :data:`HEALTHY_SCREEN` points after them; the best fit is kept."""
-    ends = screen(model, rec, v, floor, base, [pt for _, pt in grid[HEALTHY_STARTS:HEALTHY_STARTS + HEALTHY_SCREEN]])
+    ends = screen(model, rec, v, floor, base, screened(grid))
     starts = [{}, *(pt for _, pt in grid[:HEALTHY_STARTS]), *(vals for _, vals in ends[:1])]
     f = fit_model(model, rec, v, floor, start=base, starts=starts, max_nfev=settings.max_nfev, ftol=settings.ftol)
     f.model.release()
