@@ -62,8 +62,9 @@ CACHE_BYTES = 64e6
 #: Most bytes of the dynamic rung's kinematic grids a rig keeps (:func:`kinematic_grid`: roller angles, their
 #: normals and the influence line at them; 4 arrays of steps x rollers each); a larger grid is computed at every call.
 GRID_BYTES = 256e6
-#: Most kinematic grids a rig keeps, the last used first: a finite-difference Jacobian steps the start phase, the
-#: speed and the slip one after another (a grid each) and returns to its point's grid for every other parameter.
+#: Most kinematic grids a rig keeps (the least recently used goes first): a finite-difference Jacobian steps the start
+#: phase, the speed and the slip one after another (a grid each) and returns to its point's grid for every other
+#: parameter.
 GRID_KEEP = 4
 
 
