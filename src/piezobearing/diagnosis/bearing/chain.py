@@ -344,7 +344,7 @@ def kinematic_grid(rig: Rig, e: np.ndarray, s: int) -> tuple[np.ndarray, np.ndar
     step in those (the same numbers as computed anew).
     """
     z = rig.geometry.n_rollers
-    key = (s, np.ascontiguousarray(e, dtype=float).tobytes())
+    key = (s, e.tobytes())
     hit = rig.grid.pop(key, None)
     if hit is not None:
         rig.grid[key] = hit  # the last used last
@@ -366,10 +366,8 @@ def kinematic_grid(rig: Rig, e: np.ndarray, s: int) -> tuple[np.ndarray, np.ndar
     if size <= GRID_BYTES:
         for a in (phi, psi, *normals, g):
             a.flags.writeable = False
-        while rig.grid and (len(rig.grid) >= GRID_KEEP
-                            or size + sum(4 * kept[1].nbytes for kept in rig.grid.values()) > GRID_BYTES):
-            del rig.grid[next(iter(rig.grid))]  # the least recently used
         rig.grid[key] = (phi, psi, normals, g)
+        _trim(rig.grid, min(GRID_KEEP, int(GRID_BYTES // size)))
     return phi, psi, normals, g
 
 
@@ -451,9 +449,15 @@ def unit_voltage(rig: Rig, values: dict) -> np.ndarray:
     v = circuit_voltage(rig, sensor_force(rig, values)[0])
     v.flags.writeable = False
     rig.cache[key] = v
-    while len(rig.cache) > int(np.clip(CACHE_BYTES / (8 * v.size), 2, CACHE_SIZE)):
-        rig.cache.pop(next(iter(rig.cache)))
+    _trim(rig.cache, int(np.clip(CACHE_BYTES / (8 * v.size), 2, CACHE_SIZE)))
     return v
+
+
+def _trim(cache: dict, most: int) -> None:
+    """Drop ``cache``'s first entries (the oldest; the least recently used where a hit moves its entry last) until it
+    holds at most ``most``."""
+    while len(cache) > most:
+        cache.pop(next(iter(cache)))
 
 
 def circuit_voltage(rig: Rig, force_N: np.ndarray) -> np.ndarray:
