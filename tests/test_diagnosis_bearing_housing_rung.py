@@ -47,11 +47,13 @@ def _err(f, ref):
     return float(np.sqrt(np.mean((f - f.mean() - r) ** 2) / np.mean(r**2)))
 
 
-@pytest.mark.parametrize(("mode", "tol"), [((1100.0, 0.02), 0.005), ((2731.0, 0.0116), 0.015)])
+@pytest.mark.parametrize(("mode", "tol"), [((1100.0, 0.02), 0.008), ((2731.0, 0.0116), 0.015)])
 def test_the_chain_through_a_mode_follows_the_lpm_through_it(setup, mode, tol):
     """The box-averaged sensor force with the mode against the LPM's records through it (the LPM at 10.9 us, the
-    mode discretised there; the rung at 24 steps per period of the shaft's mode): measured 0.24 % for 1.1 kHz and
-    1.0 % for 2731 Hz, where the same chain without the mode is 81 % and 39 % off."""
+    mode discretised there; the rung at the search's 16 steps per period of the shaft's mode, and at least
+    ``chain.MODE_STEPS_PER_PERIOD`` (24) of the housing mode's): measured 0.55 % for 1.1 kHz (the shaft's own step
+    error there; 0.24 % at 24 steps of the shaft's mode) and 1.0 % for 2731 Hz (3.2 % at 16 steps of the housing
+    mode's), where the same chain without the mode is 81 % and 39 % off."""
     c, influence = setup
     hidden = {**GROOVE, "housing_mode_Hz": mode[0], "housing_mode_damping_ratio": mode[1]}
     t = np.arange(int(0.25 * 2550.0)) / 2550.0

@@ -90,8 +90,12 @@ def main() -> None:
     ap.add_argument("--no-grooves", action="store_true")
     ap.add_argument("--groove-rate", type=float, action="append", help="the grooves' sample rates [Hz] (default 2550 "
                     "and 25600)")
+    ap.add_argument("--steps-per-period", type=int, default=None,
+                    help="bearing_diagnosis.dynamic_steps_per_period, the dynamic rung's search step (default: the config's)")
     args = ap.parse_args()
     config = cfg.load()
+    if args.steps_per_period:
+        config["bearing_diagnosis"]["dynamic_steps_per_period"] = args.steps_per_period
     influence = read_influence(args.influence) if args.influence else influence_from_config(config)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)

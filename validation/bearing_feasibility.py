@@ -140,11 +140,15 @@ def main() -> None:
                     help="measure whether each record shows its defect and which model holds it, instead of the diagnosis")
     ap.add_argument("--envelope-only", action="store_true",
                     help="run the envelope detector on each record instead of the diagnosis")
+    ap.add_argument("--steps-per-period", type=int, default=None,
+                    help="bearing_diagnosis.dynamic_steps_per_period, the dynamic rung's search step (default: the config's)")
     args = ap.parse_args()
     config = cfg.load()
     config["diagnostics"]["max_steps"] = args.max_steps
     config["bearing_diagnosis"]["joint_search"] = args.joint
     config["bearing_diagnosis"]["interval_correlation"] = args.interval_correlation
+    if args.steps_per_period:
+        config["bearing_diagnosis"]["dynamic_steps_per_period"] = args.steps_per_period
     influence = read_influence(args.influence) if args.influence else influence_from_config(config)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -33,13 +33,15 @@ from .lpm import contact_law, line_contact_stiffness, shaft_pedestal_matrices
 from .lpm_kernel import newmark_lpm
 from .surrogate import NoEquilibriumError, quasi_static_loads
 
-#: Integration steps per period of the shaft's mode on its rollers (:func:`modes_Hz`) of the diagnosis's search: 24
-#: keeps the box-averaged sensor force within 0.2 % (rms) of the LPM at a 2.7 us step on the paper's rig (12: 0.7 %)
-#: with a groove 20 deg from the sensor (benchmarks/bench_shaft_dynamics.py); the config's
-#: ``bearing_diagnosis.dynamic_steps_per_period``.
-STEPS_PER_PERIOD = 24
+#: Integration steps per period of the shaft's mode on its rollers (:func:`modes_Hz`) of the diagnosis's search: 16
+#: keeps the box-averaged sensor force within 0.12-0.42 % (rms) of the LPM at a 2.7 us step on the paper's rig (12:
+#: 0.2-0.8 %, 24: 0.06-0.2 %; benchmarks/bench_shaft_dynamics.py --accuracy), enough to choose the model and find its
+#: basin; the final refit (:data:`FINAL_STEPS_PER_PERIOD`) gives the values and intervals. Chosen for the search's cost
+#: (two thirds of 24's); 12 ends a 0.9 mm groove with a 40 um clearance in another basin (docs/validation/
+#: bearing_diagnosis.md); the config's ``bearing_diagnosis.dynamic_steps_per_period``.
+STEPS_PER_PERIOD = 16
 #: Steps per period of the final refit of a selected dynamic model and its intervals: 48 keeps the force within
-#: 0.05 % of that LPM, and a 0.6 mm groove's width interval holds the LPM's hidden width where 24 misses it
+#: 0.05 % of that LPM, and a 0.6 mm groove's width interval holds the LPM's hidden width where the search's step misses it
 #: (docs/validation/bearing_diagnosis.md); the config's ``bearing_diagnosis.dynamic_final_steps_per_period``.
 FINAL_STEPS_PER_PERIOD = 48
 #: Newton tolerance of the kernel's step on the displacement [m] (the LPM's).

@@ -66,6 +66,11 @@ GRID_BYTES = 256e6
 #: phase, the speed and the slip one after another (a grid each) and returns to its point's grid for every other
 #: parameter.
 GRID_KEEP = 4
+#: Fewest steps per period of a housing mode (the ``housing_mode`` effect) on the dynamic rung's grid, whatever the
+#: shaft's mode asks (:data:`~piezobearing.bearing.shaft_dynamics.STEPS_PER_PERIOD`): the lightly damped mode's
+#: first-order hold (:func:`~piezobearing.housing.one_mode.through_mode`) needs them; at 16 the force through a
+#: 2731 Hz mode is 3.2 % off the LPM, at 24 1.0 % (tests/test_diagnosis_bearing_housing_rung.py).
+MODE_STEPS_PER_PERIOD = 24
 
 
 @dataclass(frozen=True, eq=False)
@@ -378,7 +383,8 @@ def fine_grid(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, o
 
     Each sample window from ``first`` on (its cage phase from ``edges``) is cut into S equal steps
     (:func:`~piezobearing.bearing.shaft_dynamics.steps_per_sample` at the shaft's mode, at least the moving
-    defects' :meth:`Rig.substeps` and as many per period of a ``housing_mode_Hz`` as of the shaft's mode); ``first`` lies :data:`DYNAMICS_SETTLE_S`, or ten decay times of the shaft's
+    defects' :meth:`Rig.substeps` and as many per period of a ``housing_mode_Hz`` as of the shaft's mode, at least
+    :data:`MODE_STEPS_PER_PERIOD`); ``first`` lies :data:`DYNAMICS_SETTLE_S`, or ten decay times of the shaft's
     mode where that is longer, before the record's first sample (within the circuit's pre-roll). An outer-race
     groove narrower than a roller pitch holds one roller at a time: its drop is computed for the roller nearest
     to it only (the same numbers as for every roller).
@@ -387,7 +393,7 @@ def fine_grid(rig: Rig, values: dict, edges: np.ndarray, op: Operating, outer, o
     dt = rig.dt_s
     moving = values.get("inner_defect_width_m", 0.0) > 0 or values.get("roller_defect_width_m", 0.0) > 0
     s = max(steps_per_sample(f_mode, dt, rig.steps_per_period), rig.substeps() if moving else 1,
-            steps_per_sample(values.get("housing_mode_Hz", 0.0), dt, rig.steps_per_period))
+            steps_per_sample(values.get("housing_mode_Hz", 0.0), dt, max(rig.steps_per_period, MODE_STEPS_PER_PERIOD)))
     settle = max(DYNAMICS_SETTLE_S, 10.0 / max(zeta * 2 * np.pi * f_mode, 1e-12))
     n_ext = edges.size - 1
     first = max(0, n_ext - rig.n - int(np.ceil(settle / dt)))

@@ -16,9 +16,9 @@ Model
 -----
 The 4-DOF equations of the LPM (:mod:`piezobearing.bearing.shaft_dynamics`: shaft and pedestal, Hertz line
 contacts that open, viscous damping) integrated on the chain's kinematics and drops at
-``bearing_diagnosis.dynamic_steps_per_period`` (24) steps per period of the shaft's mode in the search and
+``bearing_diagnosis.dynamic_steps_per_period`` (16) steps per period of the shaft's mode in the search and
 ``dynamic_final_steps_per_period`` (48) in the final refit of the model it selects, the sensor force averaged
-over each DAQ sample; within 0.06-0.20 % (24) and 0.01-0.05 % (48) (rms) of the LPM at a finer step where the
+over each DAQ sample; within 0.12-0.42 % (16) and 0.01-0.05 % (48) (rms) of the LPM at a finer step where the
 quasi-static chain is 2-13 % off (``benchmarks/bench_shaft_dynamics.py --accuracy``).
 
 Parameters: ``shaft_mass_kg`` in [0, 50] kg (0: the quasi-static chain, the effect off; the rig file's
